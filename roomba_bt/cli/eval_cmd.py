@@ -70,10 +70,13 @@ from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
+    from collections.abc import Sequence
+
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, MissionNotCompiled
     from roomba_bt.evaluate.parallel import Engine, Evaluation, Interruption, Progress
     from roomba_bt.evaluate.records import PartialResults
     from roomba_bt.evaluate.stats import Comparison, Summary
+    from roomba_bt.mission import Diagnostic
     from roomba_bt.sim.world import World
 
 
@@ -711,17 +714,22 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
 
     missions = []
     invalid: list[str] = []
+    failed: list[Diagnostic] = []
     for v in chosen:
         if v.mission in invalid:
             continue
         loaded = load(v.path, dict(v.params), get_profile(args.profile),
-                      granted=permissions(args, v.path))  # fmt: skip
+                      granted=permissions(args, v.path), failed=failed)  # fmt: skip
         if isinstance(loaded, int):
             invalid.append(v.mission)
         missions.append(loaded)
     if invalid or args.not_found:
         _say_not_found(args.not_found)
         count, given = len(invalid) + len(args.not_found), len(args.mission_paths)
+        said = (f"{count} of {given + len(args.not_found)} missions cannot be evaluated; "
+                "no episode runs")  # fmt: skip
+        if args.json:
+            _refusal_as_json(said, failed, args.not_found)
         if given + len(args.not_found) == 1:
             return ExitCode.INVALID  # its errors are the whole story
         return _error(_cannot_be_evaluated(count, given + len(args.not_found)))
@@ -731,7 +739,28 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
     for v, mission in warned:
         said = failed_strict(v.label, mission.warnings)
         print(f"roomba-bt eval: {said}; no episode runs", file=sys.stderr)
+    if args.json:
+        fails = "; ".join(failed_strict(v.label, m.warnings) for v, m in warned)
+        _refusal_as_json(f"{fails}; no episode runs", [w for _, m in warned for w in m.warnings])
     return ExitCode.STRICT
+
+
+def _refusal_as_json(
+    said: str, diagnostics: list[Diagnostic], problems: Sequence[str] = ()
+) -> None:
+    """``eval --json`` refusing to start, on stdout as data a script reads (its ``json.load``
+    of an empty stdout raised): ``{"error": what stops it, "errors": [...]}``, each error as
+    ``validate --format json`` gives a diagnostic (``file``, ``line``, ``column``,
+    ``message``, ...), a mission not found at no line or column. stderr says the same as
+    without ``--json``; the exit code is the same."""
+    import json
+
+    from roomba_bt.cli.validate_report import diagnostic_as_json
+
+    errors = [diagnostic_as_json(d) for d in diagnostics]
+    errors += [{"file": None, "line": None, "column": None, "severity": "error",
+                "message": problem} for problem in problems]  # fmt: skip
+    print(json.dumps({"error": said, "errors": errors}, indent=2))
 
 
 def _reading_keys(

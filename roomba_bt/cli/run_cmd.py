@@ -72,7 +72,7 @@ from roomba_bt.runtime.summary import (
 if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
 
-    from roomba_bt.mission import Permissions
+    from roomba_bt.mission import Diagnostic, Permissions
     from roomba_bt.runtime.claimed import ClaimedFile
     from roomba_bt.runtime.loop import TickObserver
     from roomba_bt.runtime.provenance import AbsentPlugin
@@ -264,11 +264,14 @@ def load(
     baud: int = 115200,
     granted: Permissions | None = None,
     absent: Sequence[AbsentPlugin] = (),
+    failed: list[Diagnostic] | None = None,
 ) -> Any:
     """The compiled mission, or an int exit code after printing every diagnostic (``run``,
     ``replay``, and ``eval`` before its workers start). ``absent``: plugins a record's run
     used that are not here as they were, said first when the mission does not compile
-    (its unknown nodes are most likely theirs: no "did you mean" for them)."""
+    (its unknown nodes are most likely theirs: no "did you mean" for them). ``failed``: a
+    list that the diagnostics of a mission that does not compile are added to (``eval
+    --json`` prints them as data too)."""
     from roomba_bt.behaviours import default_registry
     from roomba_bt.cli.mission_cmds import warn_of_broken_plugins
     from roomba_bt.mission import MissionError, Permissions, load_mission, reported
@@ -280,6 +283,8 @@ def load(
             registry=registry,
         )  # fmt: skip
     except MissionError as exc:
+        if failed is not None:
+            failed += exc.diagnostics
         for plugin in absent:
             print(f"roomba-bt: {plugin.said()}", file=sys.stderr)
         for line in reported(exc.diagnostics):

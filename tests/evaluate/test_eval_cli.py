@@ -631,6 +631,42 @@ def test_several_missions_not_found_are_said_one_line_each(
     ]
 
 
+def test_json_says_why_no_episode_runs_as_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``eval --json`` of a mission that does not compile left stdout empty (exit 2), and a
+    nightly script's ``json.load`` of it raised. stdout holds an object now, each error with
+    its file, line and column; stderr and the exit code are as without ``--json``; so for a
+    mission not found, and for ``--strict``'s warnings (exit 7)."""
+    from roomba_bt.runtime.summary import ExitCode
+
+    typo = tmp_path / "typo.yaml"
+    typo.write_text("tree: {wal: {}}\n")
+    options = ["--runs", "1", "--no-progress", "--json"]
+    assert main(["eval", str(typo), *options]) == ExitCode.INVALID
+    out, err = capsys.readouterr()
+    said = json.loads(out)
+    assert said["error"] == "1 of 1 missions cannot be evaluated; no episode runs"
+    [error] = said["errors"]
+    assert (error["file"], error["line"], error["column"]) == (str(typo), 1, 8)
+    assert error["message"].startswith("unknown node 'wal' (did you mean 'wall'?)")
+    assert err.startswith(f"{typo}:1:8: unknown node 'wal'")
+    missing = str(tmp_path / "nope.yaml")
+    assert main(["eval", BUMP, missing, *options]) == ExitCode.INVALID
+    said = json.loads(capsys.readouterr().out)
+    assert said["error"] == "1 of 2 missions cannot be evaluated; no episode runs"
+    [error] = said["errors"]
+    assert error["file"] is None and error["message"].startswith(f"{missing}: no such mission")
+    warned = tmp_path / "w1.yaml"
+    warned.write_text("tree:\n  sequence:\n    - mode: full\n"
+                      "    - drive: {velocity: 100 mm/s, duration: 1s}\n")  # fmt: skip
+    assert main(["eval", str(warned), *options, "--strict"]) == ExitCode.STRICT
+    said = json.loads(capsys.readouterr().out)
+    assert said["error"] == f"{warned}: failed --strict (1 warning); no episode runs"
+    [warning] = said["errors"]
+    assert (warning["line"], warning["column"], warning["severity"]) == (4, 7, "warning")
+
+
 def test_a_mission_given_twice_is_evaluated_once(capsys: pytest.CaptureFixture[str]) -> None:
     """``eval dock.yaml ./dock.yaml`` ran an A/B of the file against itself, and ``eval dock
     dock`` refused "the same variant twice": each file once now, the other warned about."""
