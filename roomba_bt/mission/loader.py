@@ -96,6 +96,7 @@ from roomba_bt.mission.values import (
     SubtreeDef,
     parameters_used,
     parse_type_name,
+    read_literal,
     record_type,
     resolve,
     substituted,
@@ -107,10 +108,10 @@ from roomba_bt.printable import path_written
 from roomba_bt.yamlsource import too_many_digits, yaml11_number_problem
 
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
-             "subtrees", "tree")  # fmt: skip
+             "subtrees", "tree", "literal")  # fmt: skip
 _IDENT = re.compile(r"^[a-z_][a-z0-9_]*$")
 _PARAM_TYPES = [*(n for n in VALUE_TYPES if n != "mark"), "enum"]
-_INCLUDED_KEYS = ("description", "plugins", "include", "blackboard", "subtrees")
+_INCLUDED_KEYS = ("description", "plugins", "include", "blackboard", "subtrees", "literal")
 
 #: Folders every mission may include from, wherever it lives: the shipped missions' folder
 #: (package data, named ``roomba-bt:lib/docking.yaml`` in an include), wherever installed.
@@ -228,6 +229,7 @@ class Loader:
             *(folder.resolve() for folder in self.permissions.include_dirs),
         )
         self._include_stack.append(resolved)
+        self._literal(sections)  # before any text of the file is read
         # the parameters first: a blackboard key's initial value may be one ("${speed}"),
         # and read before them it was an "unknown parameter" the declaration had just made
         params = bind_parameters(self.ctx, sections.get("parameters"), overrides, root_loc)
@@ -501,9 +503,16 @@ class Loader:
         if sections is None:
             return False
         self._include_stack.append(target)
+        self._literal(sections)
         self._file_sections(target, sections)
         self._include_stack.pop()
         return True
+
+    def _literal(self, sections: dict[str, tuple[yaml.Node, Loc, Loc]]) -> None:
+        """The file's ``literal:``, if any (:func:`~roomba_bt.mission.values.read_literal`)."""
+        if "literal" in sections:
+            node, _, vloc = sections["literal"]
+            read_literal(self.ctx, node, vloc)
 
     def _each(
         self,
