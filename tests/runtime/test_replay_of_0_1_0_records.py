@@ -13,6 +13,9 @@ import pytest
 
 from roomba_bt import __version__
 from roomba_bt.cli import main
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.sim import SimLink, Simulator, load_world
+from runtime.simrun import record_run  # tests/runtime: a run recorded
 
 Capsys = pytest.CaptureFixture[str]
 
@@ -35,25 +38,22 @@ def _mission(path: Path, parameters: str = "", wait: str = "0.1s") -> Path:
     return path
 
 
-def _recorded_as_0_1_0(tmp_path: Path, mission: Path, capsys: Capsys) -> Path:
-    """A record of ``mission``, its header as 0.1.0 wrote it: no release, sources, plugins."""
-    record = tmp_path / "m.jsonl"
-    argv = ["run", str(mission), "--fast", "--display", "none", "--record", str(record)]
-    assert main(argv) == 0
-    capsys.readouterr()
-    lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
-    header = json.loads(lines[0])
-    for newer in ("roomba_bt_version", "sources", "plugins"):
-        header.pop(newer, None)
-    record.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
-    return record
+def _recorded_as_0_1_0(tmp_path: Path, parameters: str = "") -> tuple[Path, Path]:
+    """A record of the mission (``tmp_path/m.yaml``, returned too), its header as 0.1.0
+    wrote it: no release, no sources, no plugins."""
+    record = record_run(tmp_path, SimLink(Simulator(load_world("empty-room"), CREATE2, 0)),
+                        MISSION.format(parameters=parameters, wait="0.1s"))  # fmt: skip
+    header, *rest = record.read_text(encoding="utf-8").splitlines(keepends=True)
+    made = {k: v for k, v in json.loads(header).items()
+            if k not in ("roomba_bt_version", "sources", "plugins")}  # fmt: skip
+    record.write_text("".join([json.dumps(made) + "\n", *rest]), encoding="utf-8")
+    return record, tmp_path / "m.yaml"
 
 
 def test_a_0_1_0_record_that_differs_says_which_release_made_it(
     tmp_path: Path, capsys: Capsys
 ) -> None:
-    mission = _mission(tmp_path / "m.yaml")
-    record = _recorded_as_0_1_0(tmp_path, mission, capsys)
+    record, mission = _recorded_as_0_1_0(tmp_path)
     assert main(["replay", str(record)]) == 0
     assert "recorded by" not in capsys.readouterr().out  # the same bytes: nothing to say
     _mission(mission, wait="0.2s")
@@ -65,8 +65,7 @@ def test_a_0_1_0_record_that_differs_says_which_release_made_it(
 def test_a_0_1_0_record_whose_mission_is_refused_says_to_pass_the_fixed_file(
     tmp_path: Path, capsys: Capsys
 ) -> None:
-    mission = _mission(tmp_path / "m.yaml", FIXED)
-    record = _recorded_as_0_1_0(tmp_path, mission, capsys)
+    record, mission = _recorded_as_0_1_0(tmp_path, FIXED)
     _mission(mission, REFUSED)  # the file as 0.1.0 took it
     assert main(["replay", str(record)]) == 2  # the exit code of a mission that is invalid
     err = capsys.readouterr().err
