@@ -372,7 +372,7 @@ def test_a_misspelt_parameters_section_is_one_error_not_one_per_use(
     )
     assert _problems(path) == [
         f"2:1: unknown top-level key {spelt!r} (did you mean 'parameters'?); known: mission, "
-        "description, parameters, blackboard, plugins, include, subtrees, tree"
+        "description, parameters, blackboard, plugins, include, subtrees, tree, literal"
     ]
 
 
