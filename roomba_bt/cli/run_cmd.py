@@ -900,12 +900,15 @@ def _refused_recorded_mission(header: dict[str, Any], found: str) -> str:
     ``--mission``, with which such a record replays byte for byte."""
     from roomba_bt import __version__
     from roomba_bt.runtime.provenance import UPGRADING, made_by_said
+    from roomba_bt.runtime.recording import MADE_BY
 
+    # the upgrade notes only where another release made the record (a file edited since is
+    # refused by the release that made it too)
+    notes = "" if header.get(MADE_BY) == __version__ else f' (the CHANGELOG\'s "{UPGRADING}")'
     return (
         f"replay: the record's mission {found} is refused by roomba-bt {__version__}; the "
-        f"record was made by {made_by_said(header)}: fix a copy as said above (the "
-        f'CHANGELOG\'s "{UPGRADING}" lists the changes) and pass --mission FILE with the '
-        "fixed file to replay this record"
+        f"record was made by {made_by_said(header)}: fix a copy as said above{notes} and "
+        "pass --mission FILE with the fixed file to replay this record"
     )
 
 

@@ -73,11 +73,25 @@ def test_a_0_1_0_record_whose_mission_is_refused_says_to_pass_the_fixed_file(
     assert err.endswith(
         f"replay: the record's mission {mission} is refused by roomba-bt {__version__}; the "
         "record was made by roomba-bt 0.1.0 or earlier, as the record names no release: fix a "
-        'copy as said above (the CHANGELOG\'s "Upgrading from 0.1.0" lists the changes) and '
-        "pass --mission FILE with the fixed file to replay this record\n"
+        'copy as said above (the CHANGELOG\'s "Upgrading from 0.1.0") and pass --mission FILE '
+        "with the fixed file to replay this record\n"
     )
     fixed = _mission(tmp_path / "fixed.yaml", FIXED)
     assert main(["replay", str(record), "--mission", str(fixed)]) == 0  # byte for byte
     assert "the tree wrote the same" in capsys.readouterr().out
     assert main(["replay", str(record), "--mission", str(mission)]) == 2
     assert "--mission FILE" not in capsys.readouterr().err  # the file given is the one refused
+
+
+def test_a_record_of_this_release_whose_mission_was_edited_since_is_not_sent_to_the_notes(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """The same ``replay:`` line for a record this release made, without the upgrade notes:
+    its mission was refused by an edit, not by an upgrade."""
+    record = record_run(tmp_path, SimLink(Simulator(load_world("empty-room"), CREATE2, 0)),
+                        MISSION.format(parameters=FIXED, wait="0.1s"))  # fmt: skip
+    mission = _mission(tmp_path / "m.yaml", REFUSED)
+    assert main(["replay", str(record)]) == 2
+    err = capsys.readouterr().err
+    assert f"record was made by roomba-bt {__version__}: fix a copy as said above and " in err
+    assert f"replay: the record's mission {mission} is refused" in err and "CHANGELOG" not in err
