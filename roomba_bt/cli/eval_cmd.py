@@ -226,7 +226,12 @@ def near_dock_distance(text: str) -> float:
     return metres(text, *NEAR_DOCK_RANGE_M)
 
 
-def _error(message: str) -> int:
+def _error(message: str, args: argparse.Namespace | None = None) -> int:
+    """``message`` on stderr, exit 2; under ``--json`` (``args`` given) also on stdout as
+    :func:`_refusal_as_json` writes it, so a script's ``json.load`` reads why nothing ran."""
+    if args is not None and getattr(args, "json", False):
+        said_alone = message.replace(" (said above)", "")  # stdout holds the errors too
+        _refusal_as_json(said_alone, [], getattr(args, "not_found", []))
     print(f"roomba-bt eval: {message}", file=sys.stderr)
     return ExitCode.INVALID
 
@@ -348,7 +353,7 @@ def eval_command(args: argparse.Namespace) -> int:
 
     problem = _check_arguments(args)
     if problem is not None:
-        return _error(problem)
+        return _error(problem, args)
     plan = _plan(args)
     if isinstance(plan, int):
         return plan
@@ -381,7 +386,7 @@ def eval_command(args: argparse.Namespace) -> int:
                   f"finished are in {kept}", file=sys.stderr)  # fmt: skip
         raise
     if unwritten is not None:
-        return _error(unwritten)
+        return _error(unwritten, args)
     interruption = interruption_of(done)
     if interruption is not None:
         failed = interruption.environment_failed
@@ -655,16 +660,16 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
 
     params = parse_params(args.param)
     if isinstance(params, str):
-        return _error(params)
+        return _error(params, args)
     timeout = parse_timeout(args.timeout)
     if isinstance(timeout, str) or timeout is None:
-        return _error(str(timeout))
+        return _error(str(timeout), args)
     dock = parse_dock(args.dock)
     if isinstance(dock, str):
-        return _error(dock)
+        return _error(dock, args)
     chosen = variants(args, params)
     if isinstance(chosen, str):
-        return _error(chosen)
+        return _error(chosen, args)
     batches = [
         episode_specs(
             v.mission,
@@ -694,7 +699,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         start_pose(world, batches[0][0])
         batches = _reading_keys(args, chosen, missions, batches)
     except EvaluationError as exc:
-        return _error(str(exc))
+        return _error(str(exc), args)
     args.made_by = made_by(args, chosen, missions, world)
     _warn_if_one_start(args, world)
     return chosen, batches, world
@@ -854,7 +859,7 @@ def _partial(args: argparse.Namespace) -> PartialResults | int | None:
     try:
         return PartialResults(out, getattr(args, "made_by", None), reproducible=args.reproducible)
     except OSError as exc:
-        return _error(f"--out {out}: {exc.strerror or exc}")
+        return _error(f"--out {out}: {exc.strerror or exc}", args)
 
 
 def _run(

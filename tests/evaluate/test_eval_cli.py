@@ -667,6 +667,22 @@ def test_json_says_why_no_episode_runs_as_json(
     assert (warning["line"], warning["column"], warning["severity"]) == (4, 7, "warning")
 
 
+def test_json_says_why_when_no_mission_is_found_or_an_option_is_wrong(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Refusals before any mission compiles (every mission missing, a number out of range)
+    left stdout empty under ``--json`` as well; each is an object now, exit 2."""
+    missing = [str(tmp_path / "a.yaml"), str(tmp_path / "b.yaml")]
+    assert main(["eval", *missing, "--runs", "1", "--no-progress", "--json"]) == 2
+    said = json.loads(capsys.readouterr().out)
+    assert said["error"] == "2 of 2 missions cannot be evaluated; no episode runs"
+    assert [e["message"].split(": no such")[0] for e in said["errors"]] == missing
+    assert main(["eval", BUMP, "--runs", "0", "--no-progress", "--json"]) == 2
+    said = json.loads(capsys.readouterr().out)
+    assert said == {"error": "--runs 0: expected 1..1,000,000 (more: several evaluations)",
+                    "errors": []}  # fmt: skip
+
+
 def test_a_mission_given_twice_is_evaluated_once(capsys: pytest.CaptureFixture[str]) -> None:
     """``eval dock.yaml ./dock.yaml`` ran an A/B of the file against itself, and ``eval dock
     dock`` refused "the same variant twice": each file once now, the other warned about."""
