@@ -27,9 +27,8 @@ import contextlib
 import logging
 import weakref
 from collections import Counter
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import ParamSpec, TypeVar
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_CODES, Command, turns_wheels
@@ -74,6 +73,7 @@ from roomba_bt.robot.startup import (
     stream_zeros,
 )
 from roomba_bt.robot.wake import KeepAwake, keep_awake_for, named_stall
+from roomba_bt.robot.weak import weakly
 from roomba_bt.robot.writer import RESYNC_ZEROS, CommandWriter
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.link_kind import link_of
@@ -90,9 +90,6 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
-
-P = ParamSpec("P")
-R = TypeVar("R")
 
 
 @dataclass(frozen=True, slots=True)
@@ -158,20 +155,6 @@ def _stop_dropped(ending: SafeStop) -> None:
         stop_left_open(ending, "the connection was dropped without close()")
 
 
-def _weakly(method: Callable[P, R], dead: R) -> Callable[P, R]:
-    """``method`` called through a weak reference (``dead`` once its object is gone): a
-    part's callback into the connection (the link's halt and mode report) would make a
-    cycle, and a connection in one is freed only by the collector, not when its last
-    reference goes: a dropped connection drove on until a collector pass."""
-    ref = weakref.WeakMethod(method)
-
-    def call(*args: P.args, **kwargs: P.kwargs) -> R:
-        bound = ref()
-        return dead if bound is None else bound(*args, **kwargs)
-
-    return call
-
-
 # Long on purpose (a line past the guide's 400): the session's facade, where a program finds
 # the robot's state, each part in its own module (link.py, writer.py, ending.py, startup.py,
 # silence.py); what stays here is the start-up, the reads and one-line views of the parts.
@@ -208,8 +191,8 @@ class Connection:
         self.modes = ModeModel(self.profile, settle=settle)
         self.link = StreamLink(
             transport, self.profile, watchdog=watchdog, reconcile=self.modes.reconcile,
-            report=_weakly(self._report_change, None), halt=_weakly(self.stop_on_stall, False),
-            ask_again=_weakly(self._stream_again, False),
+            report=weakly(self._report_change, None), halt=weakly(self.stop_on_stall, False),
+            ask_again=weakly(self._stream_again, False),
         )  # fmt: skip
         if baud is None:
             baud = int(getattr(transport, "baud", DEFAULT_BAUD))
@@ -221,7 +204,7 @@ class Connection:
         self.ending.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
         # a stop written through a port that came back is heard if the stream falls quiet
         # and the robot answers, as after a stop at a rate the port followed (silence.py)
-        self.ending.port_return.heard = _weakly(self._stop_heard, False)
+        self.ending.port_return.heard = weakly(self._stop_heard, False)
         #: when garbage was last judged (listened at other rates, or noise) and the bytes
         #: read by then (link clock; silence.follow_baud judges again while garbage comes)
         self.baud_listened: tuple[float, int] | None = None
