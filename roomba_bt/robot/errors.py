@@ -33,8 +33,13 @@ class ConnectionClosed(RobotError, RuntimeError):
     """The connection was used after :meth:`~roomba_bt.robot.connection.Connection.close`
     (it read as a port gone: an unplugged cable)."""
 
-    def __init__(self, port: str) -> None:
-        super().__init__(f"{port}: the connection is closed (close() was called): open a new one")
+    def __init__(self, port: str, given_to: str = "") -> None:
+        """``given_to``: what it was handed to, said first (``RunStack(mission,
+        connection)``, which refuses it when made, before the run blamed a cable)."""
+        was = f"{given_to}: " if given_to else ""
+        super().__init__(
+            f"{port}: {was}the connection is closed (close() was called): open a new one"
+        )
 
 
 def format_wall_time(wall_time: float) -> str:
