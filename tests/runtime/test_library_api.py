@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
 
 import py_trees
@@ -22,6 +23,7 @@ import roomba_bt
 from roomba_bt import CREATE2, Outcome, RunStack, SimLink, Simulator, TreeMission, load_world
 from roomba_bt.behaviours import DISTANCE, Condition, Param, declare
 from roomba_bt.robot.interface import Snapshot
+from roomba_bt.sim import Faults
 
 from .simrun import wait_for_the_guard
 
@@ -110,6 +112,38 @@ def test_a_behaviours_exception_is_kept_too_and_a_clean_run_keeps_none() -> None
     assert "Mine: sensor fusion failed" in summary.reason  # the text the CLI prints, as it was
     with _stack(roomba_bt.load_mission_text(TO_THE_WALL), _simulator()) as stack:
         assert stack.run().raise_for_outcome().exception is None
+
+
+def _asleep() -> Simulator:
+    simulator = _simulator()
+    simulator.fall_asleep("test")  # deaf at every rate: no Query List answered
+    return simulator
+
+
+def _unplugged() -> Simulator:
+    return Simulator(load_world("empty-room"), CREATE2, seed=0, faults=Faults(disconnect_at=1.0))
+
+
+@pytest.mark.parametrize(
+    ("robot", "outcome", "link_error"),
+    [(_asleep, Outcome.NO_CONNECTION, roomba_bt.NoAnswer),
+     (_unplugged, Outcome.CONNECTION_LOST, roomba_bt.LinkDown)],
+)  # fmt: skip
+def test_a_run_the_link_ended_raises_from_the_links_exception(
+    robot: Callable[[], Simulator], outcome: Outcome, link_error: type[Exception]
+) -> None:
+    """A robot that does not answer, a port that goes: ``raise_for_outcome()`` raises
+    ``RunFailed`` from the link's own exception (``NoAnswer``, a ``ConnectionFailed``, as
+    ``Connection.start()`` raises it; ``PortLost``, a ``LinkDown``), which a program tests
+    as it tests its own; it was raised with no cause."""
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), robot()) as stack:
+        summary = stack.run()
+    assert summary.outcome is outcome and summary.exception is None
+    with pytest.raises(roomba_bt.RunFailed) as failed:
+        summary.raise_for_outcome()
+    assert isinstance(failed.value.__cause__, link_error), repr(failed.value.__cause__)
+    assert failed.value.__cause__ is summary.link_error is failed.value.link_error
+    assert str(failed.value.__cause__) in summary.reason
 
 
 # ------------------------------------------------------------------ 2. tick by tick
