@@ -20,7 +20,7 @@ import contextlib
 import logging
 import threading
 from collections import deque
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Generator, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -340,7 +340,7 @@ class RunStack:
                 summary.record_stopped = self.transport.stopped or ""
             self._ended.set()
 
-    def ticks(self) -> Iterator[Tick]:
+    def ticks(self) -> Generator[Tick, None, None]:
         """The run tick by tick: ``for tick in stack.ticks():`` runs the mission as
         :meth:`run` does, and after each tick of its tree yields a
         :class:`~roomba_bt.runtime.stepping.Tick` (the snapshot, the root's status, the
@@ -355,7 +355,9 @@ class RunStack:
         raised again as :meth:`run` raises it, the robot stopped. The run itself goes on
         in a worker thread (so the tree is ticked as :meth:`run` ticks it, frame by
         frame, at the same cost); on a robot the robot drives on while the body runs, and
-        the tick guard watches the body as it watches a tick. Runs once, as :meth:`run`."""
+        the tick guard watches the body as it watches a tick. Runs once, as :meth:`run`.
+        A generator (typed so): a program that keeps it between its own steps (a gym-like
+        env's ``step()``) ends the run with ``gen.close()``."""
         return ticks(self)
 
     @property

@@ -548,7 +548,9 @@ def test_signatures_show_a_shipped_profile_by_its_name() -> None:
 def test_the_typed_interrupt_pattern_passes_mypy_strict(tmp_path: Path, mypy_cache: Path) -> None:
     """``interrupt.summary`` is a RunSummary to mypy (a bare KeyboardInterrupt has none), and
     a name the package does not have is an error, not Any (the package's ``__getattr__``
-    made every name Any to a type checker)."""
+    made every name Any to a type checker); ``stack.ticks()`` is a generator a program may
+    close, and ``RobotHandle`` and ``NoAnswer`` are the package's (an embedder's mypy
+    --strict findings)."""
     program = tmp_path / "typed.py"
     program.write_text(
         textwrap.dedent("""\
@@ -561,6 +563,17 @@ def test_the_typed_interrupt_pattern_passes_mypy_strict(tmp_path: Path, mypy_cac
                 print(interrupt.summary.outcome)
                 planted: int = interrupt.summary
                 raise
+
+        def step(stack: roomba_bt.RunStack, robot: roomba_bt.RobotHandle) -> float:
+            steps = stack.ticks()
+            time = next(steps).time + robot.snapshot.time
+            steps.close()  # a generator to mypy (typed Iterator, it had no close())
+            return time
+
+        try:
+            roomba_bt.Connection.open("/dev/ttyUSB0").start()
+        except roomba_bt.NoAnswer as silent:
+            print(silent.likely_causes)
 
         roomba_bt.RunStak
     """)
