@@ -22,6 +22,7 @@ from typing import NoReturn
 from roomba_bt import __version__
 from roomba_bt.cli.streams import guard_std_streams, stdout_problem
 from roomba_bt.installation import IncompleteInstallation, missing_from_installation
+from roomba_bt.robot.wording import COMMAND_LINE, spoken
 
 # Nothing heavier at the top: the process's signal handlers (:func:`_as_the_process`) are set
 # once this module has loaded, and each module imported here delays them. The exit codes'
@@ -134,7 +135,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if process:
         _as_the_process()
     try:
-        return _command(argv)
+        with spoken(COMMAND_LINE):  # the connections' messages name the flags, not arguments
+            return _command(argv)
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP before a run took them
         if process:
             _signals_end_the_process()  # only the last words are left

@@ -23,6 +23,7 @@ from roomba_bt.oi.errors import OIError
 from roomba_bt.oi.identify import ProfileMismatch
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+from roomba_bt.robot import wording
 
 
 class RobotError(RoombaBtError):
@@ -405,7 +406,10 @@ class RobotAsleep(LinkDown):
         self.woken_by = woken_by
         words = link_of(port)
         if not keep_awake:
-            fix = "leave keep-awake on (drop --no-keep-awake): it pulses BRC once a minute"
+            fix = (
+                f"leave keep-awake on ({wording.current.keep_awake_on}): it pulses BRC once a "
+                "minute"
+            )
         elif not pulses:
             # woken by a hang-up, it was told this link cannot pulse BRC: keep-awake cannot
             hang_up = (
