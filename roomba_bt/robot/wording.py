@@ -35,7 +35,7 @@ class ConnectionWording:
 #: arguments, and the ``roomba_bt`` logger
 PYTHON = ConnectionWording(
     keep_awake_off="keep_awake=False",
-    keep_awake_on="leave keep_awake out (not False)",
+    keep_awake_on="keep_awake left out, not False",
     why="logging DEBUG: why",
 )
 

@@ -61,7 +61,7 @@ def test_without_keep_awake_it_sleeps_and_is_reported_asleep(tmp_path: Path) -> 
     assert summary.outcome is Outcome.CONNECTION_LOST
     assert "the robot fell asleep" in summary.reason
     # said to a Python caller in its words (it has no --no-keep-awake to drop)
-    assert "leave keep-awake on (leave keep_awake out (not False))" in summary.reason
+    assert "leave keep-awake on (keep_awake left out, not False)" in summary.reason
     assert "--no-keep-awake" not in summary.reason
     assert "release-3.8.2 / release-stm32-3.7.7" in summary.reason
     assert "(roomba-bt doctor --allow-reset reads the version)" in summary.reason
