@@ -180,6 +180,14 @@ class ParsedFile:
     root_loc: Loc
 
 
+def _literal_section(ctx: Context, sections: dict[str, tuple[yaml.Node, Loc, Loc]]) -> None:
+    """A file's ``literal:``, if any (:func:`~roomba_bt.mission.values.read_literal`): read
+    before any text of the file, for the mission and each included library alike."""
+    if "literal" in sections:
+        node, _, vloc = sections["literal"]
+        read_literal(ctx, node, vloc)
+
+
 class Loader:
     """Reads one mission file and what it includes: sections, plugins, parameters, the
     blackboard and subtree definitions; the trees go to the :class:`NodeParser`."""
@@ -229,7 +237,7 @@ class Loader:
             *(folder.resolve() for folder in self.permissions.include_dirs),
         )
         self._include_stack.append(resolved)
-        self._literal(sections)  # before any text of the file is read
+        _literal_section(self.ctx, sections)  # before any text of the file is read
         # the parameters first: a blackboard key's initial value may be one ("${speed}"),
         # and read before them it was an "unknown parameter" the declaration had just made
         params = bind_parameters(self.ctx, sections.get("parameters"), overrides, root_loc)
@@ -503,16 +511,10 @@ class Loader:
         if sections is None:
             return False
         self._include_stack.append(target)
-        self._literal(sections)
+        _literal_section(self.ctx, sections)
         self._file_sections(target, sections)
         self._include_stack.pop()
         return True
-
-    def _literal(self, sections: dict[str, tuple[yaml.Node, Loc, Loc]]) -> None:
-        """The file's ``literal:``, if any (:func:`~roomba_bt.mission.values.read_literal`)."""
-        if "literal" in sections:
-            node, _, vloc = sections["literal"]
-            read_literal(self.ctx, node, vloc)
 
     def _each(
         self,
