@@ -57,13 +57,26 @@ def _start_run(
 RUN_WAIT_S = 60.0
 
 
+#: Frames the robot sent after the run's first Drive, in its record, before a test takes the
+#: run for driving on (its tick loop running, the stream coming): 75 ms of the stream. Before,
+#: a fixed 0.3 s after the Drive was seen, which the record (flushed every 0.25 s) had mostly
+#: passed already, and which a loaded machine could pass with no frame read.
+FRAMES_DRIVING = 5
+
+
+def _frames_after_the_first_drive(record: Path) -> int:
+    """Frames read after the record's first Drive (-1 before it has one)."""
+    text = record.read_text() if record.exists() else ""
+    drive = text.find('"out", "b": "89')
+    return -1 if drive < 0 else text.count('"d": "in"', drive)
+
+
 def _wait_for_driving(record: Path, proc: subprocess.Popen[str] | None = None) -> None:
-    """Until the run's record has its first Drive, and a little more (it drives on); fails
-    at once with what ``proc`` said if it ended first."""
+    """Until the run's record has its first Drive and :data:`FRAMES_DRIVING` frames after it
+    (it drives on); fails at once with what ``proc`` said if it ended first."""
     deadline = time.monotonic() + RUN_WAIT_S
     while time.monotonic() < deadline:
-        if record.exists() and '"out", "b": "89' in record.read_text():
-            time.sleep(0.3)
+        if _frames_after_the_first_drive(record) >= FRAMES_DRIVING:
             return
         if proc is not None and proc.poll() is not None:
             out, err = proc.communicate()
