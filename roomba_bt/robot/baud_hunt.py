@@ -11,7 +11,10 @@ not confirmed is followed by::
     garbage came:  for each other rate of the table (Baud (129)'s codes, 300 first)
       rate         [0] x n  the stop  [149]...   zeros (at most HUNT_ZEROS_S of them), the
                                                  stop from the mode last seen, a Query List
-                   answered Passive -> found: the port stays at that rate (said)
+                   answered Passive -> found, then put back (:func:`put_back`):
+      found rate   [129][run's code]              Baud to the run's rate, 100 ms (the spec)
+      run's rate   [149][3][35][21][34]           answered Passive -> back at the run's rate;
+                                                  else the port stays at the found rate (said)
 
 The probe is :func:`~roomba_bt.robot.discovery.probe`'s (the quiet, the query, an answer
 read as Passive): the stop's Start is what makes Passive the answer. Silence alone (a cable,
@@ -31,7 +34,7 @@ import contextlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from roomba_bt.oi.encode import BAUD_CODES
+from roomba_bt.oi.encode import BAUD_CODES, baud_rate
 from roomba_bt.robot.discovery import (
     DRAIN_LIMIT_S,
     PROBE_PACKETS,
@@ -39,10 +42,12 @@ from roomba_bt.robot.discovery import (
     QUIET_S,
     REPLY_TIMEOUT_S,
     Probe,
+    drain,
     line_seconds,
     probe,
 )
 from roomba_bt.robot.link import LINK_ERRORS, StreamLink
+from roomba_bt.robot.writer import BAUD_CHANGE_WAIT
 
 #: Seconds of zeros at most before the stop at each rate of the search: all
 #: ``STOP_RESYNC_ZEROS`` from 19200 up, 15 at 300 baud.
@@ -118,6 +123,32 @@ def hunt(link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled:
     return Hunt(tuple(probes))
 
 
+def put_back(link: StreamLink, found: int, run_rate: int) -> bool:
+    """Send a robot the search found at ``found`` baud back to ``run_rate``: Baud (129) with
+    the run's code, written at ``found``; the 100 ms the spec asks before the new rate
+    (:data:`~roomba_bt.robot.writer.BAUD_CHANGE_WAIT`, read away on the link's clock); then
+    a Query List at ``run_rate``. Left at 300 baud, the robot answered nothing to the next
+    run at 115200 until it was powered off. True if it answered there in Passive: the port
+    is then at ``run_rate``; else it is left at ``found``, where the robot last answered
+    (also on a port that fails meanwhile, and on Ctrl-C)."""
+    transport = link.transport
+    back = False
+    link.port_rate = None  # as in :func:`hunt`: the rate is the probes' until done
+    try:
+        transport.write(baud_rate(run_rate).data)
+        link.drain_output()  # the Baud leaves at ``found`` before the port changes
+        drain(transport, quiet=BAUD_CHANGE_WAIT, limit=BAUD_CHANGE_WAIT)
+        back = probe(transport, run_rate, b"").answered
+    except LINK_ERRORS:  # the port failed: the next write sets the rate again
+        return False
+    finally:
+        if not back:
+            with contextlib.suppress(*LINK_ERRORS):
+                link.switch_rate(found)
+    link.port_rate = run_rate
+    return True
+
+
 def asks_after(link: StreamLink) -> bool:
     """Whether a stop not confirmed is asked after on this link: on the wall clock, and on
     the simulator's virtual one where its line loses bytes to the robot (as
@@ -129,11 +160,17 @@ def asks_after(link: StreamLink) -> bool:
     return bool(getattr(transport, "wall_clock", True) or getattr(transport, "loses_bytes", False))
 
 
-def found_words(found: int, run_rate: int) -> str:
+def found_words(found: int, run_rate: int, *, back: bool) -> str:
     """What a stop that reached the robot only at ``found`` baud says, in the summary and the
-    log."""
-    return (
+    log; ``back``: whether :func:`put_back` brought the robot back to ``run_rate``."""
+    said = (
         f"the robot had moved to {found} baud (a Baud (129) made of lost bytes, most likely): "
-        f"stopped there, it answered in Passive at {found}; the port is left at {found} (the "
-        f"robot talks at {found}, not {run_rate}, until it is powered off or sent Baud)"
+        f"stopped there, it answered in Passive at {found}; "
+    )
+    if back:
+        return said + f"sent Baud back to {run_rate}, it answered in Passive at {run_rate}"
+    return said + (
+        f"sent Baud back to {run_rate}, it did not answer there: the port is left at {found} "
+        f"(the robot talks at {found}, not {run_rate}, until it is powered off; "
+        "`--baud auto` or roomba-bt doctor finds it)"
     )

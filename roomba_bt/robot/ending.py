@@ -43,7 +43,7 @@ from roomba_bt.oi.opcodes import Effect, longest_data_bytes
 from roomba_bt.oi.packets import packet_ids
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, stream_period
-from roomba_bt.robot.baud_hunt import asks_after, found_words, hunt
+from roomba_bt.robot.baud_hunt import asks_after, found_words, hunt, put_back
 from roomba_bt.robot.errors import PortLost, RobotError, WaitCutShort
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink
 from roomba_bt.robot.modes import OffsetDetector
@@ -848,8 +848,11 @@ def asked_after(ending: SafeStop, unconfirmed: str) -> str | None:
             return f"{unconfirmed}; {RESET_STOPPED}"
         return unconfirmed
     if found != writer.baud:
-        ending.found_at = found_words(found, writer.baud)
+        with signals_deferred():
+            back = put_back(link, found, writer.baud)
+        ending.found_at = found_words(found, writer.baud, back=back)
         log.warning("%s: %s", link.name, ending.found_at)
-        writer.baud = found
+        if not back:
+            writer.baud = found
     ending.answered = True
     return None

@@ -52,9 +52,12 @@ def test_the_hunt_tries_every_rate_of_the_baud_table_but_the_runs() -> None:
     assert 12.0 < hunt_seconds(115200, bytes(11), STOP_RESYNC_ZEROS) < 12.5
 
 
-def test_a_robot_a_lost_byte_put_on_300_baud_is_stopped_there(tmp_path: Path) -> None:
+def test_a_robot_a_lost_byte_put_on_300_baud_is_stopped_there_and_put_back(
+    tmp_path: Path,
+) -> None:
     """Before, the run said ``NOT DELIVERED: ... the line is garbled`` and the simulated robot
-    spun on at 300 baud."""
+    spun on at 300 baud; then it was stopped there and left at 300, where the next run at
+    115200 could not reach it. Now it is sent Baud back to the run's rate and asked there."""
     path = tmp_path / "m.yaml"
     path.write_text(SPINS)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
@@ -62,12 +65,13 @@ def test_a_robot_a_lost_byte_put_on_300_baud_is_stopped_there(tmp_path: Path) ->
     stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
     summary = stack.run()
     stack.close()
-    assert link.lost and simulator.baud == 300
+    assert link.lost and simulator.baud == 115200 == link.baud
     assert simulator.mode is OIMode.PASSIVE
     assert simulator.requested_left == simulator.requested_right == 0
     assert summary.stop_delivered, summary.safe_stop
     assert "the robot had moved to 300 baud" in summary.safe_stop, summary.safe_stop
     assert "stopped there" in summary.safe_stop
+    assert "sent Baud back to 115200, it answered in Passive at 115200" in summary.safe_stop
 
 
 def dock_at_one_percent_lost(seed: int, monkeypatch: pytest.MonkeyPatch) -> tuple[Any, RunSummary]:
@@ -89,12 +93,13 @@ def dock_at_one_percent_lost(seed: int, monkeypatch: pytest.MonkeyPatch) -> tupl
     return kept[0]
 
 
-def test_seed_50_a_baud_made_of_lost_bytes_ends_stopped_in_passive_at_300(
+def test_seed_50_a_baud_made_of_lost_bytes_ends_stopped_in_passive_back_at_115200(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """Before: NOT DELIVERED, the simulated robot in Safe at 300 baud, driving 228/370 mm/s."""
+    """Before: NOT DELIVERED, the simulated robot in Safe at 300 baud, driving 228/370 mm/s;
+    then stopped in Passive but left at 300 baud."""
     simulator, summary = dock_at_one_percent_lost(50, monkeypatch)
-    assert simulator.baud == 300 and simulator.mode is OIMode.PASSIVE
+    assert simulator.baud == 115200 and simulator.mode is OIMode.PASSIVE
     assert simulator.requested_left == simulator.requested_right == 0
     assert "the robot had moved to 300 baud" in summary.safe_stop, summary.safe_stop
 
