@@ -34,6 +34,7 @@ import contextlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_CODES, baud_rate
 from roomba_bt.robot.discovery import (
     DRAIN_LIMIT_S,
@@ -49,6 +50,9 @@ from roomba_bt.robot.discovery import (
 from roomba_bt.robot.link import LINK_ERRORS, StreamLink
 from roomba_bt.robot.writer import BAUD_CHANGE_WAIT
 
+#: What a robot that reset is sent before it is asked at the run's rate: Start (128), its OI
+#: Off after the reset (:func:`hunt`)
+RESTART = oi.start().data
 #: Seconds of zeros at most before the stop at each rate of the search: all
 #: ``STOP_RESYNC_ZEROS`` from 19200 up, 15 at 300 baud.
 HUNT_ZEROS_S = 0.5
@@ -95,10 +99,15 @@ class Hunt:
         return next((p.baud for p in self.probes if p.answered), None)
 
 
-def hunt(link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled: bool) -> Hunt:
+def hunt(
+    link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled: bool, reset: bool
+) -> Hunt:
     """Ask at ``run_rate`` whether the robot heard the stop; if not and the line was
     ``garbled``, write ``stop`` after :func:`zeros_at` at each of :func:`hunt_rates` and ask
-    there, until one answers. The port is left at the rate that answered, else put back at
+    there, until one answers. A robot that ``reset`` (its banner read) is sent Start again
+    first, once its banner is over (the line quiet): its OI is Off, where it answers nothing
+    but Start, and the stop's Start may have been lost too (seed 51 of the dock's 1 % sweep)
+    or come while it booted. The port is left at the rate that answered, else put back at
     ``run_rate`` (also on a port that fails meanwhile, and on Ctrl-C)."""
     transport = link.transport
     probes: list[Probe] = []
@@ -106,7 +115,9 @@ def hunt(link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled:
     link.port_rate = None  # the probes set the port's rate themselves: unknown until done
     found = False
     try:
-        probes.append(probe(transport, run_rate, b""))
+        if reset:  # the banner's last bytes first: a Start within them may be lost
+            drain(transport, quiet=QUIET_S, limit=DRAIN_LIMIT_S)
+        probes.append(probe(transport, run_rate, RESTART if reset else b""))
         rates: Sequence[int] = hunt_rates(run_rate) if garbled else ()
         for rate in rates:
             if probes[-1].answered:

@@ -109,6 +109,12 @@ RESET_STOPPED = (
     "the robot reset (its start-up banner was read): its OI is Off, where its wheels and "
     "motors are stopped"
 )
+#: What a stop says of a robot whose reset banner was read and that answered in Passive to
+#: the Start sent again after it (``baud_hunt.hunt``)
+RESET_RESTARTED = (
+    "the robot reset (its start-up banner was read; a Reset (7) made of lost bytes, most "
+    "likely): sent Start again after its banner, it answered in Passive"
+)
 #: Reads at most of what waits unread in the port before a stop (each read takes all there
 #: is: one is the rule; the bound is for a line that never runs dry)
 BACKLOG_READS = 16
@@ -842,7 +848,12 @@ def asked_after(ending: SafeStop, unconfirmed: str) -> str | None:
     )  # fmt: skip
     garbled = link.bytes_since_frame > 0 and not ending.reset_seen
     with signals_deferred():
-        found = hunt(link, writer.baud, stop, STOP_RESYNC_ZEROS, garbled=garbled).found
+        found = hunt(
+            link, writer.baud, stop, STOP_RESYNC_ZEROS, garbled=garbled, reset=ending.reset_seen
+        ).found
+    if found == writer.baud and ending.reset_seen:
+        ending.found_at = RESET_RESTARTED
+        log.warning("%s: %s", link.name, RESET_RESTARTED)
     if found is None:
         if ending.reset_seen:
             return f"{unconfirmed}; {RESET_STOPPED}"

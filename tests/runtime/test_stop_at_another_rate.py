@@ -104,16 +104,18 @@ def test_seed_50_a_baud_made_of_lost_bytes_ends_stopped_in_passive_back_at_11520
     assert "the robot had moved to 300 baud" in summary.safe_stop, summary.safe_stop
 
 
-def test_seed_51_a_reset_made_of_lost_bytes_is_said_stopped(
+def test_seed_51_a_reset_made_of_lost_bytes_is_started_again_after_its_banner(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """The robot reset (its banner read) and stays Off, where its wheels are stopped: said so,
-    not NOT DELIVERED in capitals."""
+    """The robot reset (its banner read) and the stop's Start, its last byte, was lost on the
+    line too: the Query List after it found an Off robot, which answers nothing. Start is
+    now sent again once the banner is over, and the robot answers in Passive. Before: said
+    stopped in Off (unconfirmed), the simulated robot left in Off."""
     simulator, summary = dock_at_one_percent_lost(51, monkeypatch)
-    assert simulator.mode is OIMode.OFF
+    assert simulator.mode is OIMode.PASSIVE
     assert simulator.requested_left == simulator.requested_right == 0
-    assert not summary.safe_stop.startswith("NOT DELIVERED"), summary.safe_stop
-    assert "the robot reset (its start-up banner was read): its OI is Off" in summary.safe_stop
+    assert summary.stop_delivered and summary.safe_stop.startswith("sent "), summary.safe_stop
+    assert "sent Start again after its banner, it answered in Passive" in summary.safe_stop
 
 
 def test_seed_4_a_stop_after_a_stream_stopped_is_confirmed_by_a_query(
