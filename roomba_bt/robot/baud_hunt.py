@@ -8,6 +8,8 @@ run's rate reaches nothing (the simulator's seed 50 at 1 % lost drove on at 300 
 not confirmed is followed by::
 
     run's rate     [149][3][35][21][34]          Query List: Passive answered -> heard
+                   [0] x n  the stop  [149]...   again, zeros first: a byte of the stop or
+                                                 of the query lost on the line
     garbage came:  for each other rate of the table (Baud (129)'s codes, 300 first)
       rate         [0] x n  the stop  [149]...   zeros (at most HUNT_ZEROS_S of them), the
                                                  stop from the mode last seen, a Query List
@@ -25,7 +27,7 @@ Decided (session 33): slowest first. A lost opcode's data bytes are most often a
 a radius' high byte (0, 1, 255), and Baud's codes 0 and 1 are 300 and 600 baud. Zeros are
 capped by time (:data:`HUNT_ZEROS_S`), not the full :data:`~roomba_bt.robot.ending.
 STOP_RESYNC_ZEROS`: 512 zeros take 17 s at 300 baud, a robot driving meanwhile. The search
-is bounded by :func:`hunt_seconds` (12.4 s from 115200, most of it at the slow rates).
+is bounded by :func:`hunt_seconds` (13.9 s from 115200, most of it at the slow rates).
 """
 
 from __future__ import annotations
@@ -80,11 +82,19 @@ def probe_seconds(rate: int, written: int) -> float:
 
 
 def hunt_seconds(run_rate: int, stop: bytes, zeros: bytes) -> float:
-    """The search's bound on the link's clock, each rate's probe at its longest (docs/robot.md
-    says it: 12.4 s from 115200 with a stop from Safe)."""
-    asked = probe_seconds(run_rate, 0)
-    return asked + sum(
-        probe_seconds(rate, len(zeros_at(rate, zeros)) + len(stop)) for rate in hunt_rates(run_rate)
+    """The search's bound on the link's clock, each rate's probe at its longest: a reset's
+    drain, the first ask and the stop again at the run's rate, the other rates, and the Baud
+    back with its wait and a probe at the run's rate (:func:`put_back`). docs/robot.md says
+    it: 13.9 s from 115200 with a stop from Safe."""
+    asked = DRAIN_LIMIT_S + probe_seconds(run_rate, 0)
+    back = BAUD_CHANGE_WAIT + probe_seconds(run_rate, 0)
+    return (
+        asked
+        + back
+        + sum(
+            probe_seconds(rate, len(zeros_at(rate, zeros)) + len(stop))
+            for rate in (run_rate, *hunt_rates(run_rate))
+        )
     )
 
 
@@ -102,9 +112,11 @@ class Hunt:
 def hunt(
     link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled: bool, reset: bool
 ) -> Hunt:
-    """Ask at ``run_rate`` whether the robot heard the stop; if not and the line was
-    ``garbled``, write ``stop`` after :func:`zeros_at` at each of :func:`hunt_rates` and ask
-    there, until one answers. A robot that ``reset`` (its banner read) is sent Start again
+    """Ask at ``run_rate`` whether the robot heard the stop; if not, write ``stop`` after
+    :func:`zeros_at` there and ask again (the stop's Start, or the query's count, lost on the
+    line: seed 67 of the dock's 1 % sweep asked ``[149][35][21][34]``, a query of 35 packets
+    the robot waited on), and if the line was ``garbled``, at each of :func:`hunt_rates` too,
+    until one answers. A robot that ``reset`` (its banner read) is sent Start again
     first, once its banner is over (the line quiet): its OI is Off, where it answers nothing
     but Start, and the stop's Start may have been lost too (seed 51 of the dock's 1 % sweep)
     or come while it booted. The port is left at the rate that answered, else put back at
@@ -118,7 +130,8 @@ def hunt(
         if reset:  # the banner's last bytes first: a Start within them may be lost
             drain(transport, quiet=QUIET_S, limit=DRAIN_LIMIT_S)
         probes.append(probe(transport, run_rate, RESTART if reset else b""))
-        rates: Sequence[int] = hunt_rates(run_rate) if garbled else ()
+        # the run's rate once more first: a byte of the stop or of the query lost there
+        rates: Sequence[int] = (run_rate, *(hunt_rates(run_rate) if garbled else ()))
         for rate in rates:
             if probes[-1].answered:
                 break

@@ -56,6 +56,7 @@ from roomba_bt.robot.silence import (
     another_model,
     answers_elsewhere,
     asleep_by_idle,
+    bytes_lost_said,
     dead_connection,
     explain_silence,
     follow_baud,
@@ -566,15 +567,11 @@ class Connection:
         Start: the robot drops to Passive, its frame showing no cliff, wheel drop or
         charger. "" without that evidence: a fall is not blamed on a cable never seen to
         lose a byte."""
-        lost = self.lost_on_the_way
+        lost = bytes_lost_said(self)
         if not lost:
             return ""
-        said = ", ".join(
-            f"{what} {'once' if times == 1 else f'{times} times'}" for what, times in lost.items()
-        )
         return (
-            f"bytes from the computer to the robot were lost in this run ({said}, put right): "
-            "a data byte after a lost one can be read as Start (128), so "
+            f"{lost}: a data byte after a lost one can be read as Start (128), so "
             f"{link_of(self.name).serial_side} is a likely cause"
         )
 

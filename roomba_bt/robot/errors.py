@@ -312,7 +312,10 @@ class StreamLost(LinkDown):
     holds their values (the profile is wrong: a Roomba 500 read as a Create 2, its wall
     signal over 1023); the message then names the model, the packet or the rule, and the fix,
     for where the profile was set (``setting``, :func:`profile_fix`), or else for the
-    command line (``--profile``) and for Python (the ``profile`` argument)."""
+    command line (``--profile``) and for Python (the ``profile`` argument). ``lost_before``:
+    the bytes to the robot this run found lost, when it answers nothing after a silence
+    (``silence.bytes_lost_said``): the silence is then said a Stop or Power made of lost
+    bytes, not a bare "the sensor stream stopped" (seed 67 of the dock's 1 % sweep)."""
 
     def __init__(
         self,
@@ -327,6 +330,7 @@ class StreamLost(LinkDown):
         mismatch: ProfileMismatch | None = None,
         came_back: float | None = None,
         setting: str | None = None,
+        lost_before: str = "",
     ) -> None:
         self.silent_for = silent_for
         self.grace = grace
@@ -352,6 +356,12 @@ class StreamLost(LinkDown):
             what = (
                 f"the line is garbled: no valid sensor frame for {silent_for:.1f} s while "
                 f"{bytes_seen} bytes arrived (noise on the line, or a wrong baud rate)"
+            )
+        elif lost_before:
+            what = (
+                "the robot's OI went Off mid-run: most likely a Stop (173) or Power (133) made "
+                f"of lost bytes on this line: {lost_before}; nothing arrived for "
+                f"{silent_for:.1f} s"
             )
         else:
             what = (
