@@ -357,17 +357,8 @@ class StreamLost(LinkDown):
                 f"the line is garbled: no valid sensor frame for {silent_for:.1f} s while "
                 f"{bytes_seen} bytes arrived (noise on the line, or a wrong baud rate)"
             )
-        elif lost_before:
-            what = (
-                "the robot's OI went Off mid-run: most likely a Stop (173) or Power (133) made "
-                f"of lost bytes on this line: {lost_before}; nothing arrived for "
-                f"{silent_for:.1f} s"
-            )
         else:
-            what = (
-                f"the sensor stream stopped: nothing arrived for {silent_for:.1f} s (the robot "
-                f"switched off or stopped streaming, or {words.line})"
-            )
+            what = nothing_arrived(silent_for, lost_before, words.line)
         action = (
             f"the watchdog sent drive 0 after {watchdog * 1000:.0f} ms"
             if halted
@@ -384,6 +375,21 @@ class StreamLost(LinkDown):
             f"{what}; {action}, then the run waited the {grace:g} s grace{tail}",
             headline,
         )
+
+
+def nothing_arrived(silent_for: float, lost_before: str, line: str) -> str:
+    """What :class:`StreamLost` says of a silence that not a byte broke: the OI gone Off by
+    a lost byte where the run found bytes to the robot lost (``lost_before``), else the
+    stream stopped, ``line`` (the link's words for its wire) among the causes."""
+    if lost_before:
+        return (
+            "the robot's OI went Off mid-run: most likely a Stop (173) or Power (133) made of "
+            f"lost bytes on this line: {lost_before}; nothing arrived for {silent_for:.1f} s"
+        )
+    return (
+        f"the sensor stream stopped: nothing arrived for {silent_for:.1f} s (the robot "
+        f"switched off or stopped streaming, or {line})"
+    )
 
 
 def idle_said(idle_s: float | None) -> str:
