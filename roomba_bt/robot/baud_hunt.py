@@ -169,8 +169,9 @@ def put_back(link: StreamLink, found: int, run_rate: int) -> bool:
         if not back:
             with contextlib.suppress(*LINK_ERRORS):
                 link.switch_rate(found)
-    link.port_rate = run_rate
-    return True
+    if back:
+        link.port_rate = run_rate
+    return back
 
 
 def asks_after(link: StreamLink) -> bool:

@@ -74,6 +74,35 @@ def test_a_robot_a_lost_byte_put_on_300_baud_is_stopped_there_and_put_back(
     assert "sent Baud back to 115200, it answered in Passive at 115200" in summary.safe_stop
 
 
+class LosesTheBaudBackToo(LosesTheOpcodeOf):
+    """:class:`LosesTheOpcodeOf`, and every Baud (129) back to 115200 lost on the line too."""
+
+    def write(self, data: bytes) -> None:
+        if bytes(data) != oi.baud_rate(115200).data:
+            super().write(data)
+
+
+def test_a_robot_that_does_not_come_back_to_the_runs_rate_is_left_where_it_answered(
+    tmp_path: Path,
+) -> None:
+    """The Baud back lost: the robot still talks at 300, and the port is left there, the
+    summary saying so and how to find it."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPINS)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    link = LosesTheBaudBackToo(simulator, BAUD_MAKER)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
+    summary = stack.run()
+    stack.close()
+    assert simulator.baud == 300 == link.baud and simulator.mode is OIMode.PASSIVE
+    assert summary.stop_delivered, summary.safe_stop
+    assert (
+        "sent Baud back to 115200, it did not answer there: the port is left at 300"
+        in summary.safe_stop
+    ), summary.safe_stop
+    assert "`--baud auto` or roomba-bt doctor finds it" in summary.safe_stop
+
+
 def dock_at_one_percent_lost(seed: int, monkeypatch: pytest.MonkeyPatch) -> tuple[Any, RunSummary]:
     """The dock episode ``seed`` of ``eval dock --host-drop-rate 0.01``: its simulator and
     the run's summary, kept as the episode measures them."""
