@@ -64,6 +64,7 @@ from roomba_bt.robot.silence import (
 )
 from roomba_bt.robot.stall_asks import StallAsks, ask_in_stall
 from roomba_bt.robot.startup import (
+    NO_ANSWER_CAUSES,
     STREAM_ASKS_AGAIN,
     ModeName,
     agreed_mode_reply,
@@ -82,6 +83,7 @@ from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 
 __all__ = [
     "no_answer_causes",  # where the CLI has them from
+    "NO_ANSWER_CAUSES",  # 0.1.0's, a device path's
     "port_not_opened",
     "Connection",
     "EndMode",

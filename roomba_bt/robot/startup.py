@@ -56,6 +56,11 @@ def no_answer_causes(port: str) -> tuple[str, str, str]:
     return (WRONG_RATE, NOT_AWAKE, link_of(port).wiring)
 
 
+#: 0.1.0's name (in ``robot.connection.__all__``): the causes said for a device path, a
+#: cable's wiring; a URL's are :func:`no_answer_causes` of it (a bridge's serial side).
+NO_ANSWER_CAUSES = no_answer_causes("/dev/ttyUSB0")
+
+
 def port_not_opened(url: str, exc: TransportError) -> ConnectionFailed:
     """Why ``url`` could not be opened, with what to check; a cause the error number told
     (another program holds it, permissions, no such device:
