@@ -619,11 +619,11 @@ DISPLAYS = {
 def add_display_option(parser: argparse.ArgumentParser, *, live: bool) -> None:
     """``--display``, one wording for ``run`` (``live``: every choice, ``auto`` its default)
     and ``replay``, which reads the record as fast as it can: a live tree would only flicker,
-    so its ``tree`` is the tree with its final statuses, drawn once, and ``none``, the
+    so its ``tree`` is the tree as its last tick replayed left it, drawn once, and ``none``, the
     summary alone as before the option, its default. ``replay --display none`` was a usage
     error (its top-level usage) while ``run`` had the option."""
     choices = tuple(DISPLAYS) if live else ("tree", "log", "none")
-    shown = {**DISPLAYS, "tree": "the tree" if live else "the tree with its final statuses"}
+    shown = {**DISPLAYS, "tree": "the tree" if live else "the tree as the last tick left it"}
     default = "auto" if live else "none"
     said = ", ".join(f"{shown[choice]} ({choice})" for choice in choices)
     parser.add_argument(

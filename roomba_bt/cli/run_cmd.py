@@ -787,14 +787,16 @@ def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSum
         print(f"refused: ... and {more} more (the summary counts them)", file=sys.stderr)
 
 
-def _render_tree(mission: Any, status: bool = False) -> str:
+def _render_tree(mission: Any, status: bool = False, as_ticked: Any = None) -> str:
     """The tree as py_trees draws it, each name and message escaped to one line (a plugin's
     ``feedback_message`` reached the terminal raw: :func:`~roomba_bt.runtime.display.text_tree`),
     in the symbols and colours stdout can show (:func:`~roomba_bt.runtime.display.tree_symbols`:
-    ``[ok]`` on an ASCII stdout, no colour with ``NO_COLOR``)."""
+    ``[ok]`` on an ASCII stdout, no colour with ``NO_COLOR``); ``as_ticked``: the statuses
+    of the run's last tick (a :class:`~roomba_bt.runtime.display.TreeAsTicked`)."""
     from roomba_bt.runtime.display import text_tree, tree_symbols
 
-    return text_tree(mission.root, show_status=status, symbols=tree_symbols(sys.stdout))
+    symbols = tree_symbols(sys.stdout)
+    return text_tree(mission.root, show_status=status, symbols=symbols, as_ticked=as_ticked)
 
 
 def _where_it_ended(simulator: Any) -> str:
@@ -986,7 +988,7 @@ def shipped_mission_at(path: object) -> str | None:
 
 def replay_command(args: argparse.Namespace) -> int:
     from roomba_bt.monitor.recorded import operator_replay
-    from roomba_bt.runtime.display import StatusChangeLogger
+    from roomba_bt.runtime.display import StatusChangeLogger, TreeAsTicked
     from roomba_bt.runtime.recording import ending_text
     from roomba_bt.runtime.stack import replay_record
 
@@ -997,18 +999,21 @@ def replay_command(args: argparse.Namespace) -> int:
     if isinstance(recorded, int):
         return recorded
     record = recorded.record
+    # the tree as its last tick left it: a replay ended by a difference stops it (all INVALID)
+    as_ticked = TreeAsTicked() if args.display == "tree" else None
+    observer = StatusChangeLogger() if args.display == "log" else as_ticked
     summary, transport = replay_record(
         record, recorded.mission, profile=recorded.profile, packets=recorded.packets,
         baud=recorded.baud, name=args.record, raise_interrupts=False,
         progress=replay_progress("replay", record),
         gate=operator_replay(record, recorded.mission),  # the monitor's pauses, steps, forces
         until=window[1],
-        observer=StatusChangeLogger() if args.display == "log" else None,
+        observer=observer,
     )  # fmt: skip
     summary.strict_named = "run --strict"  # its warning of refusals: what would fail a run
     summary.label = record.label  # replays of several robots' runs told apart, as the runs
     if args.display == "tree":
-        print(_render_tree(recorded.mission, status=True))
+        print(_render_tree(recorded.mission, status=True, as_ticked=as_ticked))
     print(summary)
     code = _replay_verdict(summary, transport, recorded)
     ending = record.ending  # its end note, said last (a record made before has none)

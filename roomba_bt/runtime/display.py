@@ -19,6 +19,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from functools import partial
 from typing import TYPE_CHECKING, Literal, TextIO
+from uuid import UUID
 
 import py_trees
 
@@ -246,6 +247,7 @@ def text_tree(
     *,
     show_status: bool = False,
     symbols: dict[object, str] | None = None,
+    as_ticked: TreeAsTicked | None = None,
 ) -> str:
     """The tree as ``py_trees.display.unicode_tree`` draws it (the run's tree before it
     starts, and with ``show_status`` each node's status and message at its end), each
@@ -256,11 +258,13 @@ def text_tree(
     cleared the screen and faked a line under the tree. Drawn here, where the text is
     printed, so the behaviour keeps its message as it set it (a ``failure_reason`` or the
     monitor read it too, and escape it where they print it). ``symbols``: py_trees' unicode
-    ones by default, the stream's own from :func:`tree_symbols`."""
+    ones by default, the stream's own from :func:`tree_symbols`. ``as_ticked``: the statuses,
+    messages and tip its last tick left (the tree's stop since marked every node INVALID)."""
     if symbols is None:
         symbols = py_trees.display.unicode_symbols
+    ticked = as_ticked.nodes if as_ticked is not None else {}
     tip = root.tip()
-    tip_id = tip.id if tip is not None else None
+    tip_id = as_ticked.tip_id if as_ticked is not None and ticked else tip and tip.id
     lines: list[str] = []
 
     def walk(node: py_trees.behaviour.Behaviour, depth: int) -> None:
@@ -268,9 +272,10 @@ def text_tree(
         name = escaped(node.name, ANY_CONTROL)
         line = f"{'    ' * depth}{bold}{symbols[node_kind(node)]}{reset} "
         if show_status:  # py_trees' three bold spans, so that a terminal shows the same
-            said = escaped(node.feedback_message, ANY_CONTROL)
+            status, feedback = ticked.get(node.id) or (node.status, node.feedback_message)
+            said = escaped(feedback, ANY_CONTROL)
             message = f" -- {said}" if said else ""
-            mark = symbols[node.status]
+            mark = symbols[status]
             line += f"{bold}{name} [{reset}{bold}{mark}{reset}{bold}]{message}{reset}"
         else:
             line += f"{bold}{name}{reset}"
@@ -578,6 +583,28 @@ class StatusChangeLogger:
                 if status is not py_trees.common.Status.INVALID or node.id in last:
                     self.logger.info("%s -> %s", node.name, status.value, extra={"mission_time": t})
                 last[node.id] = status
+
+
+class TreeAsTicked:
+    """The tree's statuses and messages as each tick leaves them (an observer), for a tree
+    printed after the run (``replay --display tree``, :func:`text_tree`'s ``as_ticked``).
+
+    A run that does not end with its tree (a replay's first difference, ``--to``, an
+    interrupt) stops the tree first, and a stopped node is INVALID: the replay's tree showed
+    every node ``[-]``, even ``mode(safe)`` which had run. Kept per tick, not drawn: the
+    drawing is done once, at the end."""
+
+    def __init__(self) -> None:
+        #: each node's (status, feedback message) after the last tick; empty before one
+        self.nodes: dict[UUID, tuple[py_trees.common.Status, str]] = {}
+        #: the node the last tick ended at (drawn bold), None where none ran
+        self.tip_id: UUID | None = None
+
+    def __call__(self, runner: MissionRunner) -> None:
+        root = runner.mission.root
+        self.nodes = {node.id: (node.status, node.feedback_message) for node in root.iterate()}
+        tip = root.tip()
+        self.tip_id = tip.id if tip is not None else None
 
 
 def observer_for(

@@ -343,6 +343,25 @@ def test_replay_stops_at_the_first_difference_and_names_it(
     assert "outcome      INPUT ENDED (first difference from the record)" in out
 
 
+def test_replay_s_tree_after_a_difference_is_the_tree_as_its_last_tick_left_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``replay --display tree`` printed the tree after the run's end had stopped it: every
+    node ``[-]``, even ``mode(safe)``, which had run (an upgrader's report). It shows the
+    statuses of the last tick replayed: the mode done, the wait where the bytes differed."""
+    record = _record_a_drive(tmp_path, capsys)
+    slower = tmp_path / "slower.yaml"
+    slower.write_text(
+        "tree:\n  sequence:\n    - mode: safe\n    - wait: 1s\n"
+        "    - drive: {velocity: 100 mm/s, distance: 20 cm}\n"
+    )
+    assert main(["replay", str(record), "--mission", str(slower), "--display", "tree"]) == 1
+    out = capsys.readouterr().out
+    assert "--> mode(safe) [✓]" in out, out
+    assert "--> wait(1s) [✓]" in out, out
+    assert "--> drive(velocity=100 mm/s, distance=20 cm) [*]" in out, out
+
+
 def test_a_replay_s_summary_says_the_run_s_label(
     mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
