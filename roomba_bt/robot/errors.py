@@ -463,8 +463,8 @@ def firmware_read(profile: RobotProfile) -> str:
     (``doctor --allow-reset``), where the robot has Reset; the Roomba 500 has none, and its
     OI tells its release no other way (the advice named ``doctor --allow-reset`` to a 500
     owner, whose doctor then says "the Roomba 500 has no Reset")."""
-    if profile.has_command("reset"):
-        return "roomba-bt doctor --allow-reset reads the version"
+    if profile.has_command("reset"):  # in the caller's words: a program has no doctor flags
+        return wording.current.firmware_read
     return (
         f"the {profile.title} has no Reset (7), the one way its OI tells the version: a robot "
         "asleep on the dock that a BRC pulse does not wake has such firmware; take it off the "

@@ -29,6 +29,11 @@ class ConnectionWording:
     keep_awake_on: str
     #: where the caller reads why (the debug log)
     why: str
+    #: how the caller reads the firmware's release (the banner Reset (7) prints), said to the
+    #: owner of a robot that a BRC pulse does not wake on the dock
+    firmware_read: str
+    #: what the caller set to limit a record's size, as "... 64 kB reached" says it
+    record_max: str
 
 
 #: A Python program's words: ``Connection``'s, ``Connection.open``'s and ``RunStack``'s
@@ -37,11 +42,20 @@ PYTHON = ConnectionWording(
     keep_awake_off="keep_awake=False",
     keep_awake_on="keep_awake left out, not False",
     why="logging DEBUG: why",
+    firmware_read=(
+        "the banner Reset (7) prints names the version: write "
+        "roomba_bt.oi.commands.reset().data and read it with roomba_bt.oi.identify.parse_banner"
+    ),
+    record_max="Recording's max_bytes",
 )
 
 #: The ``roomba-bt`` command's words: its flags
 COMMAND_LINE = ConnectionWording(
-    keep_awake_off="--no-keep-awake", keep_awake_on="drop --no-keep-awake", why="-v: why"
+    keep_awake_off="--no-keep-awake",
+    keep_awake_on="drop --no-keep-awake",
+    why="-v: why",
+    firmware_read="roomba-bt doctor --allow-reset reads the version",
+    record_max="--record-max",
 )
 
 #: the words this process's connection messages use now

@@ -120,6 +120,7 @@ from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.robot import wording
 from roomba_bt.runtime.claimed import ClaimedFile, held_by_a_writer
 from roomba_bt.transport.base import Transport
 
@@ -330,7 +331,8 @@ class RecordingTransport:
         self._file.flush()
         limit = self.max_bytes
         if limit is not None and os.fstat(self._file.fileno()).st_size > limit:
-            self._stop(f"--record-max {size_text(limit)} reached", within=limit)
+            option = wording.current.record_max  # the caller's: a flag, or a Python argument
+            self._stop(f"{option} {size_text(limit)} reached", within=limit)
 
     def _stop(self, why: str, within: int | None = None) -> None:
         """The file cannot be written (``why``: the error's words), or may not grow past

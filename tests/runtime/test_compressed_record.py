@@ -284,6 +284,25 @@ def test_a_record_stops_at_its_size_limit_and_the_run_goes_on(
     assert "the recording stopped (--record-max 64 kB reached)" in replayed
 
 
+def test_a_python_caller_s_record_size_limit_is_said_in_its_words(tmp_path: Path) -> None:
+    """``RunStack(record=Recording(..., max_bytes=...))``: the stop names the argument the
+    program set, not ``--record-max``, a flag it never gave (in the summary and the record)."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.stack import Recording, RunStack
+    from roomba_bt.sim import SimLink, Simulator, load_world
+
+    path = tmp_path / "run.jsonl"
+    mission = load_mission(BUMP_AND_TURN, {"duration": "20s"}, profile=CREATE2)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    limited = Recording(path, BUMP_AND_TURN, max_bytes=64_000)
+    stack = RunStack(mission, SimLink(simulator), profile=CREATE2, record=limited)
+    summary = stack.run()
+    stack.close()
+    assert load_record(path).recording_stopped == "Recording's max_bytes 64 kB reached"
+    assert "--record-max" not in str(summary)
+
+
 def test_a_record_size_limit_below_the_least_is_refused_before_the_file_is_made(
     tmp_path: Path,
 ) -> None:

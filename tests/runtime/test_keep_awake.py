@@ -64,11 +64,22 @@ def test_without_keep_awake_it_sleeps_and_is_reported_asleep(tmp_path: Path) -> 
     assert "leave keep-awake on (keep_awake left out, not False)" in summary.reason
     assert "--no-keep-awake" not in summary.reason
     assert "release-3.8.2 / release-stm32-3.7.7" in summary.reason
-    assert "(roomba-bt doctor --allow-reset reads the version)" in summary.reason
+    # how the version is read, in its words too (it named doctor's flag)
+    assert "read it with roomba_bt.oi.identify.parse_banner)" in summary.reason
+    assert "--allow-reset" not in summary.reason
     assert "no valid sensor frame" not in summary.reason
     # the stop met the robot asleep, and says so (not "no valid frame for 0.5 s")
     assert "unconfirmed: the robot was asleep (300 s in Passive" in summary.safe_stop
     assert summary.exit_code == 3
+
+
+def test_the_command_line_is_told_its_own_words_for_a_sleeping_robot(tmp_path: Path) -> None:
+    """The words a Python caller gets are the flags under the ``roomba-bt`` command."""
+    with spoken(COMMAND_LINE):
+        summary, _ = _run(tmp_path, False)
+    assert "leave keep-awake on (drop --no-keep-awake)" in summary.reason
+    assert "(roomba-bt doctor --allow-reset reads the version)" in summary.reason
+    assert "parse_banner" not in summary.reason
 
 
 def test_a_roomba500_asleep_is_not_told_to_read_its_version_by_reset(tmp_path: Path) -> None:
