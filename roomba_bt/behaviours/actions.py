@@ -17,6 +17,7 @@ from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
+from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours.base import Action
@@ -927,14 +928,33 @@ class Wait(Action):
     primary="message",
 )
 class Log(Action):
-    """Write a message to the mission log (logger ``roomba_bt.mission``)."""
+    """Write a message to the mission log (logger ``roomba_bt.mission``); the last one said
+    at ``info`` or above is the run summary's ``mission said`` line."""
+
+    #: the mission time this leaf last said its message at (info or above); None: not yet
+    said_at: float | None = None
 
     def update(self) -> Status:
         level = getattr(logging, str(self.value("level")).upper())
         log.log(level, "%s", self.value("message"))
         # one line: the tree shown at the end puts it on the leaf's own
         self.feedback_message = escaped(str(self.value("message")), ANY_CONTROL)
+        if level >= logging.INFO:  # debug is the author's own tracing, not the run's story
+            self.said_at = self.snapshot.time
         return _OK
+
+
+def last_said(root: Behaviour) -> str | None:
+    """The message of the ``log`` leaf the run said last (info or above), for the summary;
+    None where none spoke. A mission that succeeds by a way out (the patrol docked on a low
+    battery before any lap) read ``outcome SUCCESS`` and nothing else: its own ``log`` says
+    which way it ended. Two said in one tick are ordered as the tick went, depth first."""
+    said = [
+        (node.said_at, order, node.feedback_message)
+        for order, node in enumerate(root.iterate())
+        if isinstance(node, Log) and node.said_at is not None
+    ]
+    return max(said)[2] if said else None
 
 
 @declare(

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import py_trees
 
+from roomba_bt.behaviours.actions import last_said
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.connection import Connection
@@ -94,6 +95,8 @@ class RunEnding:
         """The tree's stop at the run's end (:meth:`stop_tree`, its failures in the
         summary), drive 0 and motors off before it if the wheels move (:meth:`wheels_first`:
         True if they were sent), and a warning if it blocked (:meth:`_said_slow_stop`)."""
+        # the mission's last words, whatever ended it (the summary's "mission said")
+        self.summary.said = last_said(root) or ""
         first = self.wheels_first(root, tick_guard, guard)
         began = time.monotonic()
         note_stop_failures(self.summary, self.stop_tree(root, raised_in))

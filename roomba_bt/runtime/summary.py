@@ -323,6 +323,10 @@ class RunSummary:
     link_error: BaseException | None = field(default=None, repr=False, compare=False)
     #: ``--record``: why and when the record stopped before the run's end ("" if it did not)
     record_stopped: str = ""
+    #: the message of the mission's ``log`` leaf said last (info or above; "" for none), the
+    #: ``mission said`` line under the outcome: which way a mission ended, in its own words
+    #: (a patrol that docked on a low battery before any lap read as "SUCCESS" alone)
+    said: str = ""
     #: whether :meth:`lines` says the wall-clock measurements (the wall time, the ticks over
     #: the slot and the slowest): other on every run of the same mission; ``run
     #: --reproducible`` leaves them out, so the summary of a run made again is the same
@@ -472,6 +476,7 @@ class RunSummary:
             *([f"profile      {self.profile}"] if self.profile else []),
             *([f"robot        {self.robot}"] if self.robot else []),
             f"outcome      {self.outcome.value.upper()}{reason}",
+            *([f"mission said {self.said}"] if self.said else []),
             *([f"forced       by the operator: {'; '.join(self.forced)}"] if self.forced else []),
             f"duration     {self.mission_time_s:.2f} s mission time"
             f"{long_duration_said(self.mission_time_s)}{_wall_said(self)}",

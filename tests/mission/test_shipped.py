@@ -193,3 +193,14 @@ def test_the_listing_reads_a_description_s_escape_as_a_mission_does() -> None:
     assert _with_defaults("at ${speed}, not $${speed}; ${other}", (speed,)) == (
         "at 200 mm/s, not ${speed}; ${other}"
     )
+
+
+def test_a_patrol_that_docks_on_a_low_battery_says_so_under_its_success(capsys: Capsys) -> None:
+    """At 3 % the patrol docks at once, no lap done: a success as its file says, which the
+    owner read in the evening as a patrol done (a Pi owner's report). Its own words, the
+    summary's ``mission said``, tell which way it ended."""
+    argv = ["run", "patrol", "--battery", "3%", "--fast", "--display", "none"]
+    assert main([*argv, "--profile", "roomba600"]) == 0
+    out = capsys.readouterr().out
+    assert "outcome      SUCCESS\nmission said the battery is below 15%: the patrol ended " in out
+    assert "before its 2 laps were done; docking" in out

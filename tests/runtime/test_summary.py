@@ -116,6 +116,29 @@ def test_the_robot_s_own_falls_are_counted_by_cause(
     assert "falls        the robot fell to Passive by itself 2 times (cliff)" in str(run.summary)
 
 
+#: three ``log`` leaves: the last said at info or above is the summary's
+SAYS = """
+tree:
+  sequence:
+    - log: first
+    - wait: 0.1s
+    - log: "second, said last"
+    - log: {message: tracing, level: debug}
+"""
+
+
+def test_the_mission_s_last_log_is_said_under_its_outcome(run_mission: RunMission) -> None:
+    """A success by a way out (a patrol docked on a low battery before any lap) read as any
+    success: the mission's own last words (a ``log`` leaf, not one at ``debug``, the
+    author's tracing) are the ``mission said`` line; a mission that says nothing has none."""
+    summary = run_mission(SAYS).summary
+    assert summary.outcome is Outcome.SUCCESS
+    assert summary.said == "second, said last"
+    lines = summary.lines()
+    assert lines[lines.index("outcome      SUCCESS") + 1] == "mission said second, said last"
+    assert "mission said" not in str(run_mission(DRIVE_TO_WALL).summary)
+
+
 def test_a_run_without_falls_has_no_falls_line(run_mission: RunMission) -> None:
     run = run_mission(DRIVE_TO_WALL)
     assert run.summary.outcome is Outcome.SUCCESS
