@@ -16,6 +16,9 @@ Every figure is measured in this process, beside its baseline:
   own do-nothing behaviours, same frames: the share of the tick that is our leaves' work.
   The like-for-like target (compiled tree <= 1.15x the same tree built by hand in py_trees,
   same leaves) is measured by bench_mission.
+* ``ticks()`` against ``run()``: a tick of a run stepped by the program's own loop over the
+  run's (a worker thread's hand-off each tick), the same minute of bump-and-turn on the
+  virtual clock; a ratio. ``python -m bench.bench_runtime ticks`` prints it alone.
 * memory: RSS after 10^5 .. 10^6 ticks of a mission on the virtual clock (about 4 h of robot
   time); the simulator's trajectory trace is cleared as it goes, since it is the simulator's
   record, not the runtime's.
@@ -391,8 +394,60 @@ def memory_episodes(episodes: int = 1000) -> list[tuple[int, float]]:
     return samples
 
 
+def ticks_against_run(runs: int = 7) -> tuple[float, float, int]:
+    """CPU seconds (the process's, both threads) a tick of ``stack.run()`` and of ``for tick
+    in stack.ticks():`` (an empty loop body), the same bump-and-turn minute on the
+    simulator's virtual clock, and the ticks of one run; medians of ``runs`` runs of each,
+    taken in turn. CPU, not wall, time: on a shared machine the wall time of the same runs
+    went from 0.65x to 2.1x. What a program
+    that steps a run itself (a gym-like env's ``step()``) pays: ``ticks()`` runs the tree
+    in a worker thread and hands each tick over to the loop and back (an embedder measured
+    about 2-4x, asked for the figure). The simulator's step is in both."""
+    from roomba_bt.runtime.stack import RunStack
+    from roomba_bt.sim import SimLink, Simulator, load_world
+
+    world = load_world("empty-room")
+
+    def one(stepped: bool) -> tuple[float, int]:
+        mission = load_mission("bump-and-turn", profile=CREATE2)
+        sim = Simulator(world, CREATE2, seed=1, trace=False)
+        with RunStack(mission, SimLink(sim), profile=CREATE2, timeout_s=120.0) as stack:
+            started = time.process_time()
+            if stepped:
+                for _ in stack.ticks():
+                    continue
+            else:
+                stack.run(raise_interrupts=False)
+            took = time.process_time() - started
+        return took, stack.summary.ticks
+
+    by_run, by_ticks = [], []
+    for _ in range(runs):
+        by_run.append(one(stepped=False))
+        by_ticks.append(one(stepped=True))
+    ticks = by_run[0][1]
+    if any(n != ticks for _, n in by_run + by_ticks):  # then no ratio of the same work
+        raise RuntimeError(f"run() and ticks() ran other ticks: {by_run + by_ticks}")
+    per_run = statistics.median(t for t, _ in by_run) / ticks
+    per_ticks = statistics.median(t for t, _ in by_ticks) / ticks
+    return per_run, per_ticks, ticks
+
+
+def print_ticks_against_run(runs: int) -> None:
+    """The line of :func:`ticks_against_run`, a ratio first."""
+    per_run, per_ticks, ticks = ticks_against_run(runs)
+    print(
+        f"   stack.ticks() against stack.run(), {ticks} ticks of bump-and-turn on the virtual "
+        f"clock, simulator included: {per_ticks / per_run:.2f}x ({per_ticks * 1e6:.1f} us of CPU "
+        f"a tick against {per_run * 1e6:.1f} us; medians of {runs} runs each)"
+    )
+
+
 def main() -> None:
     quick = os.environ.get("BENCH_QUICK") == "1"
+    if sys.argv[1:] == ["ticks"]:  # python -m bench.bench_runtime ticks: that figure alone
+        print_ticks_against_run(3 if quick else 7)
+        return
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
         lat = reaction_latency(tmp, 6.0 if quick else 15.0)
@@ -429,6 +484,7 @@ def main() -> None:
                 f"py_trees with do-nothing leaves {bare * 1e6:.1f} us ({compiled / bare:.2f}x: "
                 f"the difference is the leaves' own work)"
             )
+        print_ticks_against_run(3 if quick else 7)
         samples = memory_run(tmp, 200_000 if quick else 1_000_000)
         extra = {t: v for t, v in samples if t < 0}
         samples = [(t, v) for t, v in samples if t >= 0]
