@@ -34,6 +34,8 @@ class ConnectionWording:
     firmware_read: str
     #: what the caller set to limit a record's size, as "... 64 kB reached" says it
     record_max: str
+    #: what the caller set to end a replay before its record does
+    replay_until: str
 
 
 #: A Python program's words: ``Connection``'s, ``Connection.open``'s and ``RunStack``'s
@@ -47,6 +49,7 @@ PYTHON = ConnectionWording(
         "roomba_bt.oi.commands.reset().data and read it with roomba_bt.oi.identify.parse_banner"
     ),
     record_max="Recording's max_bytes",
+    replay_until="replay_record's until",
 )
 
 #: The ``roomba-bt`` command's words: its flags
@@ -56,6 +59,7 @@ COMMAND_LINE = ConnectionWording(
     why="-v: why",
     firmware_read="roomba-bt doctor --allow-reset reads the version",
     record_max="--record-max",
+    replay_until="--to",
 )
 
 #: the words this process's connection messages use now

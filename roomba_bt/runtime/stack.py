@@ -32,6 +32,7 @@ from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.lean import check_updates
 from roomba_bt.mission.build import blackboard_within, set_up_tree
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
+from roomba_bt.robot import wording
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG, ConnectionClosed
 from roomba_bt.robot.stall_asks import STREAM_AGAIN_NOTE
@@ -669,7 +670,8 @@ def replay_record(
         if transport.difference is not None or transport.starved():
             return "first difference from the record"
         if transport.ended_early:
-            return f"the end of the window, mission time {until:g} s (--to)"
+            given = wording.current.replay_until  # --to, or a program's argument
+            return f"the end of the window, mission time {until:g} s ({given})"
         return "end of the record" if transport.exhausted else None
 
     stack = RunStack(

@@ -18,6 +18,7 @@ import pytest
 from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.wording import COMMAND_LINE, spoken
 from roomba_bt.runtime.recording import RecordingTransport, load_record
 from roomba_bt.runtime.stack import Recording, RunStack, replay_record
 from roomba_bt.runtime.summary import Outcome, RunSummary
@@ -222,6 +223,27 @@ def _replayed(path: Path) -> tuple[RunSummary, tuple[int, str, str] | None, int]
         name=str(path),
     )  # fmt: skip
     return summary, transport.first_difference(), transport.written
+
+
+def test_a_replay_ended_early_from_python_names_its_argument(tmp_path: Path) -> None:
+    """``replay_record(..., until=1.0)``: the summary's reason named ``--to``, a flag of
+    ``roomba-bt replay`` the program never gave; it names the argument (and ``--to`` while
+    a ``roomba-bt`` command runs)."""
+    path = record_run(tmp_path, stream_gap_link())
+    record = load_record(path)
+
+    def reason() -> str:
+        mission = load_mission(record.mission_file or "", {}, profile=CREATE2)
+        summary, transport = replay_record(
+            record, mission, profile=CREATE2, packets=record.header["packets"], baud=115200,
+            name=str(path), until=1.0,
+        )  # fmt: skip
+        assert transport.ended_early
+        return summary.reason
+
+    assert reason() == "the end of the window, mission time 1 s (replay_record's until)"
+    with spoken(COMMAND_LINE):
+        assert reason() == "the end of the window, mission time 1 s (--to)"
 
 
 def test_a_run_whose_watchdog_stopped_the_wheels_replays_byte_for_byte(tmp_path: Path) -> None:
