@@ -262,9 +262,11 @@ def text_tree(
     messages and tip its last tick left (the tree's stop since marked every node INVALID)."""
     if symbols is None:
         symbols = py_trees.display.unicode_symbols
-    ticked = as_ticked.nodes if as_ticked is not None else {}
-    tip = root.tip()
-    tip_id = as_ticked.tip_id if as_ticked is not None and ticked else tip and tip.id
+    if as_ticked is not None and as_ticked.nodes:
+        ticked, tip_id = as_ticked.nodes, as_ticked.tip_id
+    else:  # the tree as it stands (before a run, or after one that ended with its tree)
+        tip = root.tip()
+        ticked, tip_id = {}, (tip.id if tip is not None else None)
     lines: list[str] = []
 
     def walk(node: py_trees.behaviour.Behaviour, depth: int) -> None:
