@@ -642,6 +642,12 @@ def recorded_end(
     return RecordedEnd(note, gate, transport)
 
 
+def _window_end(until: float | None) -> str:
+    """Why a replay ended at the end of its window, naming the caller's way of setting it
+    (``--to``, or a program's ``until``: it was told of a flag it never gave)."""
+    return f"the end of the window, mission time {until:g} s ({wording.current.replay_until})"
+
+
 def replay_record(
     record: Record,
     mission: MissionLike,
@@ -670,8 +676,7 @@ def replay_record(
         if transport.difference is not None or transport.starved():
             return "first difference from the record"
         if transport.ended_early:
-            given = wording.current.replay_until  # --to, or a program's argument
-            return f"the end of the window, mission time {until:g} s ({given})"
+            return _window_end(until)
         return "end of the record" if transport.exhausted else None
 
     stack = RunStack(
