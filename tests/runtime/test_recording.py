@@ -213,14 +213,16 @@ def test_a_malformed_line_before_the_last_or_ended_is_still_an_error(
     assert f"{damaged}:41: malformed chunk" in capsys.readouterr().err
 
 
-def _replayed(path: Path) -> tuple[RunSummary, tuple[int, str, str] | None, int]:
-    """``path`` replayed as ``roomba-bt replay`` does: its summary, its first difference and
-    the bytes the tree wrote."""
+def _replayed(
+    path: Path, until: float | None = None
+) -> tuple[RunSummary, tuple[int, str, str] | None, int]:
+    """``path`` replayed as ``roomba-bt replay`` does (up to mission time ``until``, as
+    ``--to`` does): its summary, its first difference and the bytes the tree wrote."""
     record = load_record(path)
     mission = load_mission(record.mission_file or "", {}, profile=CREATE2)
     summary, transport = replay_record(
         record, mission, profile=CREATE2, packets=record.header["packets"], baud=115200,
-        name=str(path),
+        name=str(path), until=until,
     )  # fmt: skip
     return summary, transport.first_difference(), transport.written
 
@@ -230,20 +232,11 @@ def test_a_replay_ended_early_from_python_names_its_argument(tmp_path: Path) -> 
     ``roomba-bt replay`` the program never gave; it names the argument (and ``--to`` while
     a ``roomba-bt`` command runs)."""
     path = record_run(tmp_path, stream_gap_link())
-    record = load_record(path)
-
-    def reason() -> str:
-        mission = load_mission(record.mission_file or "", {}, profile=CREATE2)
-        summary, transport = replay_record(
-            record, mission, profile=CREATE2, packets=record.header["packets"], baud=115200,
-            name=str(path), until=1.0,
-        )  # fmt: skip
-        assert transport.ended_early
-        return summary.reason
-
-    assert reason() == "the end of the window, mission time 1 s (replay_record's until)"
+    summary, _, _ = _replayed(path, until=1.0)
+    assert summary.reason == "the end of the window, mission time 1 s (replay_record's until)"
     with spoken(COMMAND_LINE):
-        assert reason() == "the end of the window, mission time 1 s (--to)"
+        summary, _, _ = _replayed(path, until=1.0)
+    assert summary.reason == "the end of the window, mission time 1 s (--to)"
 
 
 def test_a_run_whose_watchdog_stopped_the_wheels_replays_byte_for_byte(tmp_path: Path) -> None:
