@@ -104,10 +104,13 @@ def _add_run_parser(sub: Any) -> None:
 
         Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
         virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
-        3 connection or stream failure, 4 a behaviour raised an exception (sys.exit() too) or
+        3 not started: the port could not be opened or the robot did not answer (nothing of
+        the mission sent: safe to retry), 4 a behaviour raised an exception (sys.exit() too) or
         the run hung past --wall-limit, 7
         succeeded but failed --strict (or, with --strict, not started: the mission has
-        warnings), {INTERNAL_ERROR_SAID}, 130 interrupted (Ctrl-C, a signal).
+        warnings), 8 the link was lost after the run started (the robot may have moved: the
+        summary's safe stop line says whether the stop reached it), {INTERNAL_ERROR_SAID},
+        130 interrupted (Ctrl-C, a signal).
         """,
     )
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
@@ -749,7 +752,12 @@ def _report_on_stdout(
 def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSummary) -> None:
     if (
         summary.outcome.exit_code
-        in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
+        in (
+            ExitCode.CONNECTION,
+            ExitCode.LINK_LOST,
+            ExitCode.MISSION_FAILED,
+            ExitCode.BEHAVIOUR_ERROR,
+        )
         and summary.reason
     ):
         # a node's name in it: one line; a long reason's short first line where it has one,

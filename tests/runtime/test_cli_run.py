@@ -380,10 +380,10 @@ def test_a_robot_whose_battery_went_flat_is_named_as_such(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The simulated robot switches itself off at an empty battery; the run ends as a lost
-    connection (exit 3), and the cause it gives first is the battery the last frame read."""
+    connection (exit 8), and the cause it gives first is the battery the last frame read."""
     go = "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s}\n"
     options = ["--display", "none", "--battery", "0.0002", "--world", "corridor"]
-    assert _run_file(tmp_path, "go.yaml", go, *options) == 3
+    assert _run_file(tmp_path, "go.yaml", go, *options) == 8
     err = capsys.readouterr().err
     assert "most likely a flat battery (the last frame read 0.0 %: it switched itself off" in err
 

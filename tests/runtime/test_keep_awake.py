@@ -65,7 +65,7 @@ def test_without_keep_awake_it_sleeps_and_is_reported_asleep(tmp_path: Path) -> 
     assert "no valid sensor frame" not in summary.reason
     # the stop met the robot asleep, and says so (not "no valid frame for 0.5 s")
     assert "unconfirmed: the robot was asleep (300 s in Passive" in summary.safe_stop
-    assert summary.exit_code == 3
+    assert summary.exit_code == 8
 
 
 def test_a_roomba500_asleep_is_not_told_to_read_its_version_by_reset(tmp_path: Path) -> None:
