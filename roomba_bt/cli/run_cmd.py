@@ -482,6 +482,8 @@ def _stack(
     summary.robot = args.robot
     summary.label = args.label or ""
     summary.timings = not getattr(args, "reproducible", False)  # wall-clock lines vary
+    if summary.timings:  # local time, as the morning's cron line and the reader's clock read
+        summary.started = args.started.astimezone().isoformat(timespec="seconds")
     return stack
 
 

@@ -360,6 +360,11 @@ class RunSummary:
     #: runs' summaries in one terminal, of one mission, could not be told apart); "" says
     #: nothing (a replay, an evaluation's episode)
     robot: str = ""
+    #: when the run started, local time in ISO 8601 with its offset (``run`` sets it,
+    #: ``2026-12-07T09:00:02+01:00``): a cron job's runs appended to one log file, every
+    #: line in mission time, could not be told apart; "" says nothing (a Python program's
+    #: run, ``--reproducible``, a replay)
+    started: str = ""
     #: the run's label (``run --label``: ``robot 3``), said on the summary's first line:
     #: several robots run from one laptop, one mission each, the summaries alike; "" for none
     label: str = ""
@@ -467,6 +472,7 @@ class RunSummary:
             f"mission      {self.mission}",
             *([f"profile      {self.profile}"] if self.profile else []),
             *([f"robot        {self.robot}"] if self.robot else []),
+            *([f"started      {self.started}"] if self.started else []),
             f"outcome      {self.outcome.value.upper()}{reason}",
             *([f"forced       by the operator: {'; '.join(self.forced)}"] if self.forced else []),
             f"duration     {self.mission_time_s:.2f} s mission time"

@@ -45,6 +45,19 @@ def test_run_fast_succeeds(mission: Path, capsys: pytest.CaptureFixture[str]) ->
     assert "safe stop    sent drive, motors, pause_resume_stream, start" in out
 
 
+def test_the_summary_says_when_the_run_started_in_local_time(
+    mission: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A cron job's runs, appended to one log file every morning, each line in mission time,
+    could not be told apart: the summary says the start's date and time, local, ISO 8601
+    with its offset; ``--reproducible`` leaves it out, as its other wall-clock lines."""
+    assert main(["run", str(mission), "--fast", "--display", "none"]) == 0
+    [started] = [line for line in capsys.readouterr().out.splitlines() if "started" in line]
+    assert re.fullmatch(r"started      \d{4}-\d\d-\d\dT\d\d:\d\d:\d\d[+-]\d\d:\d\d", started)
+    assert main(["run", str(mission), "--fast", "--display", "none", "--reproducible"]) == 0
+    assert "started" not in capsys.readouterr().out
+
+
 def test_parameter_from_the_command_line(
     mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
