@@ -8,7 +8,6 @@ by another program, permissions" listed three guesses where the errno names the 
 
 from __future__ import annotations
 
-import contextlib
 import errno
 import importlib.util
 import os

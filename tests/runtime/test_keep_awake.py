@@ -206,6 +206,33 @@ class _Levels:
         self.levels.append(low)
 
 
+class _NamedLevels(_Levels):
+    def __init__(self, name: str) -> None:
+        super().__init__()
+        self.name = name
+
+
+@pytest.mark.parametrize(
+    ("port", "said"),
+    [("/dev/ttyUSB0", True), ("rfc2217://pi.local:7000", True), ("sim://empty-room", False)],
+)
+def test_the_first_pulse_says_it_wakes_a_robot_that_slept(
+    caplog: pytest.LogCaptureFixture, port: str, said: bool
+) -> None:
+    """A robot asleep on its dock overnight was woken at a 9:00 run's start by BRC pulled
+    low, and the log said nothing of it (docs/robot.md said the start-up could not wake it).
+    Said once, at the first pulse; not of the simulator in this process, every run's."""
+    wake = KeepAwake(_NamedLevels(port), period=60.0, length=1.0)
+    with caplog.at_level("INFO", logger="roomba_bt"):
+        for now in (0.0, 1.0, 60.0, 61.0):
+            wake.tick(now)
+    woken = [r.getMessage() for r in caplog.records if "is woken by it" in r.getMessage()]
+    assert woken == (
+        [f"{port}: BRC pulled low (RTS and DTR: the port's open and keep-awake's first pulse): "
+         "a robot that slept (on its dock overnight) is woken by it"] if said else []
+    )  # fmt: skip
+
+
 def test_due_is_when_a_tick_next_has_something_to_do() -> None:
     line = _Levels()
     wake = KeepAwake(line, period=60.0, length=1.0)
