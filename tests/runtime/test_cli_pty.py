@@ -270,9 +270,9 @@ def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
     assert load_record(record).outbound.endswith(SAFE_END)
 
 
-def _run_on(port: str, tmp_path: Path) -> subprocess.CompletedProcess[str]:
+def _run_on(port: str, tmp_path: Path, *options: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [*CLI, "run", str(write_mission(tmp_path, SPIN)), "--port", port],
+        [*CLI, "run", str(write_mission(tmp_path, SPIN)), "--port", port, *options],
         capture_output=True,
         text=True,
         timeout=30,
@@ -436,6 +436,26 @@ def test_missing_port_is_exit_3(tmp_path: Path) -> None:
     result = _run_on("/dev/does-not-exist", tmp_path)
     assert result.returncode == 3
     assert "/dev/does-not-exist" in result.stderr
+    assert "Traceback" not in result.stderr
+    # the summary as every other ending has it: a cron job's log had no outcome line
+    assert "outcome      NO CONNECTION (/dev/does-not-exist: could not open" in result.stdout
+    assert "safe stop    nothing sent: the port was not opened" in result.stdout
+
+
+def test_no_robot_at_any_rate_has_its_summary_and_names_its_port(
+    tmp_path: Path, silent_port: str
+) -> None:
+    """``--baud auto`` finding no robot was one line on stderr, with no summary (no
+    ``outcome`` line for the evening's reader of a cron job's log to find), a hint to run
+    ``doctor --port URL``, and a pty's hang-up called "a BRC pulse"."""
+    result = _run_on(silent_port, tmp_path, "--baud", "auto")
+    assert result.returncode == 3, result.stderr
+    assert "outcome      NO CONNECTION (" in result.stdout
+    assert "--baud auto: no answer at any OI rate" in result.stdout
+    assert "safe stop    nothing of the mission sent, only the probe's" in result.stdout
+    assert f"run roomba-bt doctor --port {silent_port} for each step" in result.stderr
+    assert "URL" not in result.stderr
+    assert "(the last 2 after the wake: pulsed BRC by a 1 s hang-up (" in result.stderr
     assert "Traceback" not in result.stderr
 
 
