@@ -786,8 +786,7 @@ def run_ended_by(
 def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None:
     """The outcome and reason of a run that ``exc`` ended (Ctrl-C aside): the operator's
     stop, the link (its own errors, :class:`LinkDown` and :class:`ConnectionFailed`;
-    ``answered``: the robot had streamed, so it was not merely never there: a lost
-    connection, exit 8; else no connection, exit 3, nothing of the mission sent), or an
+    ``answered``: the robot had streamed, so it was not merely never there), or an
     exception in a behaviour, an ``OSError`` too, or its ``sys.exit()``, a
     ``KeyboardInterrupt`` it raised itself (no signal came), a ``BaseException`` of its own
     (its path, method and file:line, the traceback: not ours to exit, as at a plugin's
@@ -798,10 +797,9 @@ def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None
     elif isinstance(exc, ConnectionFailed):
         summary.outcome = Outcome.CONNECTION_LOST if answered else Outcome.NO_CONNECTION
         summary.reason = str(exc)
-    elif isinstance(exc, LinkDown):  # before any frame (a bridge that turned the run away
-        # at once): the run never started, as a robot that never answered (exit 3, retried)
-        summary.outcome = Outcome.CONNECTION_LOST if answered else Outcome.NO_CONNECTION
-        summary.reason, summary.headline = str(exc), exc.headline
+    elif isinstance(exc, LinkDown):
+        summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
+        summary.headline = exc.headline
     else:  # a bug in a behaviour must still end in a safe stop. An OSError is one too: the
         # link turns its own I/O errors into LinkDown (PortLost) and ConnectionFailed where
         # it reads and writes (robot/link.py), so a bare one came from a behaviour's code
