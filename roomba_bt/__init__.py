@@ -44,6 +44,7 @@ __all__ = [
     "CompiledMission",
     "Condition",
     "Connection",
+    "ConnectionClosed",
     "ConnectionFailed",
     "DeclarationError",
     "EncodeError",
@@ -54,6 +55,7 @@ __all__ = [
     "MissionError",
     "MissionRunner",
     "ModeError",
+    "NoAnswer",
     "OIMode",
     "Outcome",
     "Param",
@@ -61,6 +63,7 @@ __all__ = [
     "Permissions",
     "RealtimeSimLink",
     "RobotError",
+    "RobotHandle",
     "RobotProfile",
     "RoombaBtError",
     "RunFailed",
@@ -106,9 +109,10 @@ _MODULE_OF: dict[str, str] = {
     "MissingPacket": "oi.frames",
     **dict.fromkeys(("CREATE2", "PROFILES", "ROOMBA500", "ROOMBA600", "RobotProfile",
                      "get_profile"), "oi.profiles"),
-    **dict.fromkeys(("Connection", "ConnectionFailed", "LinkDown", "ModeError", "RobotError",
-                     "StreamStalled", "Terminated", "sigterm_raises"), "robot"),
-    "Snapshot": "robot.interface",
+    **dict.fromkeys(("Connection", "ConnectionClosed", "ConnectionFailed", "LinkDown",
+                     "ModeError", "NoAnswer", "RobotError", "StreamStalled", "Terminated",
+                     "sigterm_raises"), "robot"),
+    **dict.fromkeys(("RobotHandle", "Snapshot"), "robot.interface"),
     **dict.fromkeys(("Interrupted", "MissionRunner", "TickObserver", "stream_request"),
                     "runtime.loop"),
     **dict.fromkeys(("RunStack", "TreeMission"), "runtime.stack"),
@@ -152,15 +156,17 @@ if TYPE_CHECKING:
     )
     from roomba_bt.robot import (
         Connection,
+        ConnectionClosed,
         ConnectionFailed,
         LinkDown,
         ModeError,
+        NoAnswer,
         RobotError,
         StreamStalled,
         Terminated,
         sigterm_raises,
     )
-    from roomba_bt.robot.interface import Snapshot
+    from roomba_bt.robot.interface import RobotHandle, Snapshot
     from roomba_bt.runtime.loop import Interrupted, MissionRunner, TickObserver, stream_request
     from roomba_bt.runtime.stack import RunStack, TreeMission
     from roomba_bt.runtime.stepping import Tick

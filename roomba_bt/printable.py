@@ -57,7 +57,14 @@ def path_written(text: str) -> str:
     """A path a stranger wrote, quoted in a message: ``repr``'s quotes and escapes, but each
     backslash as the file writes it. ``'lib\\moves.yaml'``, doubled, sent a student searching
     the file for two, and a Windows path ``'C:\\lab\\x.py'`` read as no path they wrote."""
-    return repr(text).replace("\\\\", "\\")
+    return repr_written(text)
+
+
+def repr_written(value: object) -> str:
+    """``repr(value)`` with each backslash as it was written (:func:`path_written`): a
+    value a message quotes, a text or a list of them; its control characters stay escaped
+    (``'\\x1b'``), which a terminal would obey."""
+    return repr(value).replace("\\\\", "\\")
 
 
 def encodes(stream: object, text: str) -> bool:

@@ -40,6 +40,7 @@ from roomba_bt.behaviours.units import (
     ItemErrors,
     UnitError,
     ValueType,
+    closest,
     described,
     enum,
     parse_quantity,
@@ -532,12 +533,44 @@ class Turn(Drive):
     halts_only=True,  # Drive 0
 )
 class Stop(Action):
-    """Stop the wheels (Drive 0: ``[137][0][0][0][0]``), and the motors if asked."""
+    """Stop the wheels (Drive 0: ``[137][0][0][0][0]``), and the motors if asked.
+
+    Out of Safe and Full (the robot fell to Passive by itself: a cliff, a wheel drop, the
+    charger), where the mode guard refuses Drive and Motors, it sends nothing. It succeeds
+    there, said, when no built-in cycle may be driving: both specs say the robot "stops all
+    motors and reverts to the Passive mode" on such a fall, and ``mode: passive`` switches
+    the wheels and motors off before its Start, so what ``stop`` asks for holds already (its
+    SUCCESS is the truth, and the refused bytes counted as a refusal, failing ``--strict``,
+    said nothing more). It fails, said, while a cycle (Clean, Spot, Max, Seek Dock) may be
+    driving: Drive 0 cannot stop that in Passive; ``mode: safe`` does. ``validate`` still
+    refuses a ``stop`` the tree itself can reach in Passive (after ``clean``, say), as it
+    cannot know that no cycle runs there; decided in session 33 (docs/protocol.md)."""
 
     def update(self) -> Status:
-        self.send(oi.halt())
+        halt = oi.halt()
+        if self.will_be_refused(halt):
+            return self._out_of_safe(halt)
+        self.send(halt)
         if self.value("motors"):
             self.send(oi.motors_off())
+        return _OK
+
+    def _out_of_safe(self, halt: oi.Command) -> Status:
+        """The tick out of Safe and Full (the class's docstring says why)."""
+        robot = self.robot
+        mode = self.snapshot.mode.label
+        if robot is not None and cycle_may_run(robot):
+            self.feedback_message = (
+                f"the robot is in {mode} and its own cycle may be driving it: Drive 0 is "
+                "refused there and cannot stop it; put `mode: safe` before stop (Safe ends "
+                "the cycle)"
+            )
+            return _FAIL
+        self.feedback_message = (
+            f"the robot is in {mode}: its wheels and motors are stopped already (the OI "
+            f"stops them when it leaves Safe/Full), so stop sent nothing ({halt.spec.title} "
+            f"{halt.spec.opcode} is refused there)"
+        )
         return _OK
 
 
@@ -671,6 +704,50 @@ def _led_intensity(value: object) -> float:
 LED_INTENSITY = replace(PERCENT, parse=_led_intensity)
 
 
+#: the power LED's colours by name, as the byte LEDs (139) sends: "0 = green, 255 = red.
+#: Intermediate values are intermediate colors (orange, yellow, etc)" (both specs); orange
+#: (amber, the other name makers use for it) is the middle of that range
+POWER_COLORS: dict[str, int] = {
+    "green": _LED_COLOR.minimum,
+    "orange": (_LED_COLOR.minimum + _LED_COLOR.maximum + 1) // 2,
+    "amber": (_LED_COLOR.minimum + _LED_COLOR.maximum + 1) // 2,
+    "red": _LED_COLOR.maximum,
+}
+#: the names, those of one byte together: ``green (0), orange or amber (128), red (255)``
+_COLORS_SAID = ", ".join(
+    f"{' or '.join(n for n, b in POWER_COLORS.items() if b == byte)} ({byte})"
+    for byte in dict.fromkeys(POWER_COLORS.values())
+)
+
+
+def _power_color(value: object) -> int:
+    """A colour's name (:data:`POWER_COLORS`) or the spec's byte as a number: the byte.
+    Only a number was taken until session 33, and ``power_color: red`` said "expected an
+    integer" with no word of what 0 and 255 are. Every refusal lists both ways to write it."""
+    if isinstance(value, str) and value in POWER_COLORS:
+        return POWER_COLORS[value]
+    if isinstance(value, int) and not isinstance(value, bool):
+        return int(INT.parse(value))  # the range is the parameter's to check, and say
+    hint = closest(value, tuple(POWER_COLORS)) if isinstance(value, str) else ""
+    raise UnitError(
+        f"expected a power LED colour, got {described(value)}{hint}: one of {_COLORS_SAID}, "
+        f"or a number {_LED_COLOR.minimum}..{_LED_COLOR.maximum} (the spec's byte: 0 green .. "
+        "255 red, the colours between)"
+    )
+
+
+#: the schema's bounds hold the numbers only (JSON Schema's minimum ignores a text)
+POWER_COLOR = ValueType(
+    "power_color",
+    _power_color,
+    json_schema=(
+        ("anyOf", [{"enum": list(POWER_COLORS)}, *INT.schema()["anyOf"]]),
+        ("minimum", _LED_COLOR.minimum),
+        ("maximum", _LED_COLOR.maximum),
+    ),
+)
+
+
 @declare(
     "leds",
     kind="action",
@@ -678,8 +755,9 @@ LED_INTENSITY = replace(PERCENT, parse=_led_intensity)
     params=(
         *(Param(name, BOOL, default=False, spec_name=LED_SPEC_NAMES.get(name, ""))
           for name in LED_NAMES),
-        Param("power_color", INT, default=0, minimum=_LED_COLOR.minimum,
-              maximum=_LED_COLOR.maximum, doc="0 green .. 255 red"),
+        Param("power_color", POWER_COLOR, default="green", minimum=_LED_COLOR.minimum,
+              maximum=_LED_COLOR.maximum,
+              doc=f"{', '.join(POWER_COLORS)}, or 0 green .. 255 red (the spec's byte)"),
         Param("power_intensity", LED_INTENSITY, default="0%", minimum=0, maximum=100,
               doc="0% off .. 100% full (the spec's byte 0..255)"),
     ),
@@ -691,8 +769,9 @@ class Leds(Action):
     def update(self) -> Status:
         names = [n for n in LED_NAMES if self.value(n)]
         intensity = _intensity_byte(float(self.value("power_intensity")))
-        self.send(oi.leds(led_bits(*names), int(self.value("power_color")), intensity))
-        return _OK
+        return self.send_accepted(
+            oi.leds(led_bits(*names), int(self.value("power_color")), intensity)
+        )
 
 
 #: the slot ``song`` stores a song in (Song 140) and ``play`` plays it from (Play 141): one
@@ -725,6 +804,11 @@ class Song(Action):
 #: how long after its Play a song must show in packet 37 (when streamed): the robot shows it
 #: in the frame after the one the Play went out with; the rest is a real link's slack
 SONG_START_S = 0.25
+#: a song this short (s) may never show in packet 37: the robot updates its values every
+#: 15 ms (600 spec, "Input Commands") and streams them every 15 ms, not in step, so one or
+#: two of the shortest notes (1/64 s each) can start and end between two frames' values.
+#: Three frames: any longer song spans an update the stream carries
+SHORT_SONG_S = 3 * SLOT_SECONDS
 _SONG_PLAYING = PACKETS_BY_NAME["song_playing"].id
 _SONG_NUMBER = PACKETS_BY_NAME["song_number"].id
 
@@ -740,7 +824,10 @@ class Play(Action):
     """Play a defined song (Play 141 ``[141][number]``): SUCCESS once the robot shows it
     playing (packet 37, when the mission reads ``song_playing``, and packet 36 showing its
     slot, when the mission reads ``song_number``: FAILURE if no frame shows it within
-    0.25 s), else on the next frame.
+    0.25 s), else on the next frame. A song of at most 45 ms that this run defined and no
+    frame showed succeeds once its length and a frame have passed: the stream can miss a
+    song that short. FAILURE at once out of Safe and Full, where the robot refuses Play,
+    nothing sent (it said SUCCESS until session 33).
 
     Packet 37 alone cannot tell this song from one still playing, which the robot goes on
     with, ignoring the Play: a mission that reads ``song_number`` too has that told apart.
@@ -748,24 +835,31 @@ class Play(Action):
     So ``play`` then ``wait ... until: {sensor: song_playing == 0}`` waits for the song's
     end. Until session 32 ``play`` succeeded on the tick it was sent: the wait read that
     tick's frame, from before the Play, passed at once, and the next ``play`` went out in
-    the same tick. :data:`SONG_START_S` is the 0.25 s."""
+    the same tick. :data:`SONG_START_S` is the 0.25 s; :data:`SHORT_SONG_S` the 45 ms."""
 
     def start(self) -> None:
         self._sent_at: float | None = None
+        #: whether a frame since the Play showed a song playing (this one or another)
+        self._seen_playing = False
 
     def update(self) -> Status:
         snap = self.snapshot
+        number = int(self.value("number"))
         if self._sent_at is None:
-            self.send(oi.play(int(self.value("number"))))
+            if self.send_accepted(oi.play(number)) is _FAIL:
+                return _FAIL
             self._sent_at = snap.time
             return _RUN
         frame = snap.frame
-        number = int(self.value("number"))
         playing = _SONG_PLAYING not in frame or frame.song_playing
         other = None if _SONG_NUMBER not in frame else frame.song_number
         if playing and other in (None, number):
             return _OK
-        if snap.time - self._sent_at < SONG_START_S:
+        self._seen_playing = self._seen_playing or playing
+        elapsed = snap.time - self._sent_at
+        if not self._seen_playing and self._played_unseen(number, elapsed):
+            return _OK
+        if elapsed < SONG_START_S:
             return _RUN
         after = f"{duration_said(SONG_START_S)} after Play"
         if playing:
@@ -780,6 +874,24 @@ class Play(Action):
                 "Play then)"
             )
         return _FAIL
+
+    def _played_unseen(self, number: int, elapsed: float) -> bool:
+        """Whether the song in slot ``number``, never shown by packet 37, has played: this
+        run defined it no longer than :data:`SHORT_SONG_S`, and its length and a frame have
+        passed since the tick of the Play (written after that tick, the Play may reach the
+        robot a frame later), so the frame read now was taken after its end, and a ``play``
+        after this one is not ignored for it. Said, in the feedback message."""
+        robot = self.robot
+        seconds = None if robot is None else robot.outbox.song_seconds(number)
+        if seconds is None or seconds > SHORT_SONG_S + 1e-9:
+            return False
+        if elapsed < seconds + SLOT_SECONDS - 1e-9:
+            return False
+        self.feedback_message = (
+            f"song {number} lasts {seconds * 1000:g} ms, too short for packet 37 to show it "
+            "for sure: taken as played once that and a frame had passed"
+        )
+        return True
 
 
 # --------------------------------------------------------------------------- time, log, data

@@ -300,17 +300,36 @@ class Action(RobotBehaviour):
         mode, the fall and the fix (:meth:`refused_motion`). The guard refused it after the
         tick, and the leaf had said SUCCESS for a vacuum that never ran. A halt or motors
         off is queued as before: out of Safe/Full nothing of them runs."""
-        takes = command.spec.modes
-        robot = self.robot
-        if (
-            self.snapshot.mode not in takes
-            and sets_going(command)
-            and (robot is None or queued_mode(robot.outbox) not in takes)
-        ):
+        if sets_going(command) and self.will_be_refused(command):
             self.feedback_message = self.refused_motion(command)
             return _FAILURE
         self.send(command)
         return _SUCCESS
+
+    def send_accepted(self, command: Command) -> py_trees.common.Status:
+        """An at-once action's tick for a command that sets nothing going but does nothing
+        if refused (the LEDs, the display, a Play): ``command`` queued, SUCCESS; or FAILURE,
+        nothing queued, where the guard will refuse it (:meth:`will_be_refused`), saying the
+        command, the mode, the fall and the fix. Until session 33 ``leds`` and ``play`` in
+        Passive (after a cliff) said SUCCESS for LEDs never lit and a song never played: the
+        guard kept the bytes off the wire and the mission went on as if it had not."""
+        if self.will_be_refused(command):
+            spec = command.spec
+            what = f"{self.declaration.name} ({spec.title} {spec.opcode})"
+            self.feedback_message = needs_mode_message(what, spec.modes, self.snapshot)
+            return _FAILURE
+        self.send(command)
+        return _SUCCESS
+
+    def will_be_refused(self, command: Command) -> bool:
+        """Whether the mode guard will refuse ``command`` queued now: the robot is in a mode
+        that does not take it, and no mode command that does is queued before it in this
+        tick (a ``parallel``'s ``mode: safe`` beside it, written first)."""
+        takes = command.spec.modes
+        robot = self.robot
+        return self.snapshot.mode not in takes and (
+            robot is None or queued_mode(robot.outbox) not in takes
+        )
 
     def terminate(self, new_status: py_trees.common.Status) -> None:
         """However the action ends (success, failure, or preempted: INVALID), wheels it

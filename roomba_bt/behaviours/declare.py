@@ -217,14 +217,20 @@ class Param:
     #: "Home"): a mission that writes the spec's word is pointed to ``name``
     spec_name: str = ""
 
-    def check_range(self, value: Any) -> str | None:
-        """An error message if ``value`` is outside the range, else None."""
+    def check_range(self, value: Any, written: str = "") -> str | None:
+        """An error message if ``value`` is outside the range, else None. ``written``: the
+        value as the mission writes it, said first where it is not the canonical text
+        (``velocity 1.5 m/s (1500 mm/s) is out of range``: ``1500 mm/s`` alone was no
+        text the file held)."""
         if not isinstance(value, int | float) or isinstance(value, bool):
             return None
         lo, hi = self.minimum, self.maximum
         if (lo is not None and value < lo) or (hi is not None and value > hi):
             unit = f" {self.type.unit}" if self.type.unit else ""
             shown = f"{value:g}{unit}"
+            written = written.strip()
+            if written and written.replace(" ", "") != shown.replace(" ", ""):
+                shown = f"{written} ({shown})"
             why = ""
             if lo is not None and 0 <= value < lo:  # a negative one is refused for its sign
                 why = self.minimum_why

@@ -204,6 +204,9 @@ class Held(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
     def __init__(self, name: str, child: Behaviour, duration: float) -> None:
         super().__init__(name=name, child=child)
         self.duration = _seconds("Held", name, "duration", duration, SLOT_SECONDS)
+        #: the duration as its messages say it (``2 min``: ``120 s`` was no text the mission
+        #: held), made once rather than at every tick
+        self._duration_said = duration_said(self.duration)
         #: the mission time the child's run of successes began (None: not succeeding)
         self.since: float | None = None
         #: ``snapshot.tick`` of this node's last tick (None: never ticked)
@@ -228,9 +231,9 @@ class Held(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
             self.since = now
         held = now - self.since
         if held >= self.duration - 1e-9:  # 1 ns of slack, as _MissionClock.lasted
-            self.feedback_message = f"held for {self.duration:g} s"
+            self.feedback_message = f"held for {self._duration_said}"
             return _SUCCESS
-        self.feedback_message = f"held {held:.3g} s of {self.duration:g} s so far"
+        self.feedback_message = f"held {held:.3g} s of {self._duration_said} so far"
         return _FAILURE
 
 

@@ -132,8 +132,7 @@ class Display(Action):
     """Show text on the four-digit display (Digit LEDs ASCII 164); Roomba 500/600 only."""
 
     def update(self) -> Status:
-        self.send(oi.digit_leds_ascii(str(self.value("text"))))
-        return Status.SUCCESS
+        return self.send_accepted(oi.digit_leds_ascii(str(self.value("text"))))
 
 
 @declare(
@@ -156,8 +155,7 @@ class ScheduleLeds(Action):
     def update(self) -> Status:
         days = day_bits(*(self.value("days") or ()))
         leds = scheduling_led_bits(*(self.value("leds") or ()))
-        self.send(oi.scheduling_leds(days, leds))
-        return Status.SUCCESS
+        return self.send_accepted(oi.scheduling_leds(days, leds))
 
 
 @declare(

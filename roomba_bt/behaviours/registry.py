@@ -126,9 +126,21 @@ class PluginError:
     #: import, or a class declared itself wrongly. ``schema`` and ``behaviours`` fail on these
     #: (a schema without them marks every mission that uses them wrong in an editor)
     loses_behaviours: bool = True
+    #: the name the one refused class declares, when its plugin's other classes loaded: a
+    #: half-loaded plugin, whose loaded behaviours missions use; "" when none of it loaded
+    refused: str = ""
 
     def __str__(self) -> str:
         return f"plugin {self.plugin}: {self.cause}"
+
+    @property
+    def lost(self) -> str:
+        """What no command has for this error, said exactly: a half-loaded plugin's one
+        refused behaviour (0.2.0's ``behaviours`` said "its behaviours are not listed" and
+        then listed the others), or every behaviour of a plugin that did not load."""
+        if self.refused:
+            return f"{self.refused!r} (refused alone: the plugin's other behaviours loaded)"
+        return f"the behaviours of plugin {self.plugin}"
 
 
 class Registry:
@@ -322,10 +334,13 @@ class Registry:
                 )
                 self._errors.append(PluginError(said, word, names=names, loses_behaviours=False))
             except _NotABehaviour as exc:
-                self._errors.append(PluginError(said, f"{_where(cls)}: {exc}", names=names))
+                refused = names[0] if isinstance(declared, Declaration) else ""
+                wrong = f"{_where(cls)}: {exc}"
+                self._errors.append(PluginError(said, wrong, names=names, refused=refused))
             except DeclarationError as exc:
+                refused = names[0] if isinstance(declared, Declaration) else ""
                 wrong = f"{_where(cls)} declares itself wrongly: {exc}"
-                self._errors.append(PluginError(said, wrong, names=names))
+                self._errors.append(PluginError(said, wrong, names=names, refused=refused))
         return registered
 
     # ------------------------------------------------------------------ lazy plugin loading
@@ -550,6 +565,12 @@ class Registry:
     def errors(self) -> list[PluginError]:
         self._ensure_loaded()
         return list(self._errors)
+
+    @property
+    def plugins_loaded(self) -> bool:
+        """Whether the installed plugins were looked for (on first use, :meth:`get`): a
+        command that did not has none of their errors to say, and need not scan for them."""
+        return self._loaded
 
     @property
     def broken(self) -> list[PluginError]:

@@ -146,16 +146,51 @@ _ANY_UNIT = re.compile(rf"^[ \t]*({_NUMBER})[ \t]*([^\s\d.,]+)[ \t]*$")
 _SHORTER_THAN_MS = {"us": 1e-6, "\u00b5s": 1e-6, "\u03bcs": 1e-6, "ns": 1e-9}
 
 
+#: units a person writes as words, plurals or another abbreviation, each with the unit of
+#: the same size a mission writes (``2 mins``, ``90 degrees``, ``3 hours`` were unknown units
+#: and no more); a unit in capitals (``30 S``, ``5 MM``) is its lower-case one
+_WRITTEN_OTHERWISE: dict[str, dict[str, str]] = {
+    "duration": {
+        **dict.fromkeys(("msec", "msecs", "millisecond", "milliseconds"), "ms"),
+        **dict.fromkeys(("secs", "second", "seconds"), "s"),
+        **dict.fromkeys(("mins", "minute", "minutes"), "min"),
+        **dict.fromkeys(("hr", "hrs", "hour", "hours"), "h"),
+        **dict.fromkeys(("day", "days"), "d"),
+    },
+    "speed": {"mm/sec": "mm/s", "cm/sec": "cm/s", "m/sec": "m/s"},
+    "distance": {
+        **dict.fromkeys(("millimeter", "millimeters", "millimetre", "millimetres"), "mm"),
+        **dict.fromkeys(("centimeter", "centimeters", "centimetre", "centimetres"), "cm"),
+        **dict.fromkeys(("meter", "meters", "metre", "metres"), "m"),
+    },
+    "angle": {
+        **dict.fromkeys(("degs", "degree", "degrees"), "deg"),
+        **dict.fromkeys(("rads", "radian", "radians"), "rad"),
+    },
+    "percent": {},
+}
+
+
 def _unknown_unit(dimension: str, value: str, number: str, unit: str) -> str:
-    """The message for a unit ``dimension`` has not: the units it has, and a microsecond's
-    duration in milliseconds (``100µs`` is 0.1ms: the shortest unit is ms)."""
+    """The message for a unit ``dimension`` has not: the units it has, a microsecond's
+    duration in milliseconds (``100µs`` is 0.1ms: the shortest unit is ms), and the unit of
+    the same size a mission writes for a word, a plural or capitals (``2 mins``: write
+    ``2 min``); ``2m`` for a duration is two metres to roomba-bt: a minute is ``min``."""
     message = (
         f"unknown {dimension} unit {unit!r} in {quoted(value)}; use one of: "
         f"{', '.join(UNITS[dimension])}"
     )
+    number = number.strip()
     if dimension == "duration" and unit in _SHORTER_THAN_MS:
         in_ms = float(number) * _SHORTER_THAN_MS[unit] * 1000
-        message += f" ({number.strip()}{unit} is {in_ms:g}ms)"
+        message += f" ({number}{unit} is {in_ms:g}ms)"
+    elif dimension == "duration" and unit.lower() == "m":
+        message += f" (m is metres: for minutes write {number} min)"
+    else:
+        lower = unit.lower()
+        instead = lower if lower in UNITS[dimension] else _WRITTEN_OTHERWISE[dimension].get(lower)
+        if instead is not None:
+            message += f" (write {number} {instead})"
     return message
 
 
@@ -193,8 +228,10 @@ def compound_duration(value: str) -> float | None:
     return total
 
 
-#: a unit followed by another number: a duration in several units meant (``1h30``)
-_SEVERAL_PARTS = re.compile(r"[0-9.]\s*[A-Za-z]+\s*[-+]?[0-9.]", re.ASCII)
+#: a unit followed by another number: a duration in several units meant (``1h30``, ``1h .5``);
+#: a point alone after the unit is none (``2 min.``, a sentence's full stop, was said to be
+#: several units)
+_SEVERAL_PARTS = re.compile(r"[0-9.]\s*[A-Za-z]+\s*[-+]?\.?[0-9]", re.ASCII)
 
 
 def _compound_hint(dimension: str, value: str) -> str:

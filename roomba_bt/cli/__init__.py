@@ -15,12 +15,14 @@ import logging
 import re
 import signal
 import sys
+import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
 from roomba_bt import __version__
 from roomba_bt.cli.streams import guard_std_streams, stdout_problem
 from roomba_bt.installation import IncompleteInstallation, missing_from_installation
+from roomba_bt.robot.wording import COMMAND_LINE, spoken
 
 # Nothing heavier at the top: the process's signal handlers (:func:`_as_the_process`) are set
 # once this module has loaded, and each module imported here delays them. The exit codes'
@@ -133,7 +135,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if process:
         _as_the_process()
     try:
-        return _command(argv)
+        with spoken(COMMAND_LINE):  # the connections' messages name the flags, not arguments
+            return _command(argv)
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP before a run took them
         if process:
             _signals_end_the_process()  # only the last words are left
@@ -203,7 +206,11 @@ def _as_the_process() -> None:
       run's own handlers make it) from here on: in the half second of imports and loading
       before a run installs its handlers they ended the process with 143 (129), not the
       130 the exit-code table says. One the process was started with ignored (``nohup``'s
-      SIGHUP) stays ignored."""
+      SIGHUP) stays ignored;
+    * a 0.1.0 plugin's call of the encoder's module shown on stderr, at the plugin's line
+      (:data:`~roomba_bt.oi.encode.ENCODE_MODULE_CALLED`): Python hides a DeprecationWarning
+      outside ``__main__``, and this one's reader is whoever runs the plugin. Not when
+      ``-W`` or ``PYTHONWARNINGS`` chose what to show (``error`` makes the call fail)."""
     guard_std_streams()
     from roomba_bt.robot.safety import IGNORED_AT_START, raise_terminated
 
@@ -214,6 +221,10 @@ def _as_the_process() -> None:
         with contextlib.suppress(ValueError):  # not the main thread
             if signal.getsignal(signum) is signal.SIG_DFL:
                 signal.signal(signum, raise_terminated)
+    if not sys.warnoptions:
+        from roomba_bt.oi.encode import ENCODE_MODULE_CALLED
+
+        warnings.filterwarnings("default", re.escape(ENCODE_MODULE_CALLED), DeprecationWarning)
 
 
 def _signals_end_the_process() -> None:

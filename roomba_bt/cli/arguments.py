@@ -684,14 +684,16 @@ def add_wall_limit_option(parser: Any, per: str, then: str) -> None:
 
 def mission_file(text: str) -> str | tuple[str]:
     """A mission argument as a path: an existing file, else the shipped mission of that name
-    (``roomba-bt run dock``); ``(problem,)`` when neither exists. The mission package (its
+    (``roomba-bt run dock``); ``(problem,)`` when neither exists, the name's control
+    characters escaped (``run`` and ``eval`` printed a newline in it, a line of their own
+    faked after it, where ``validate`` and ``show`` escaped it). The mission package (its
     compiler, the behaviours, py_trees and YAML) is imported here, when a command names a
     mission, not with the parser every command builds: ``roomba-bt --version`` or ``sim``
     need none of it."""
     from roomba_bt.mission.shipped import find_mission
 
     found = find_mission(text)
-    return str(found.path) if found.path is not None else (found.problem,)
+    return str(found.path) if found.path is not None else (escaped(found.problem, ANY_CONTROL),)
 
 
 def given_once(command: str, found: list[tuple[str, str]], done: str) -> list[tuple[str, str]]:

@@ -208,8 +208,8 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--listen", type=duration, default=None, metavar="DURATION",
         help="how long the stream step listens (default 0.5 s; 10s or more to judge an "
-        "intermittent cable: a line losing 5 %% of the frames or more is warned about, as "
-        "run calls it poor)",
+        "intermittent line, a cable or a network bridge's Wi-Fi: a line losing 5 %% of the "
+        "frames or more is warned about, as run calls it poor)",
     )  # fmt: skip
     parser.add_argument(
         "--allow-reset", action="store_true",
@@ -293,8 +293,7 @@ def doctor_command(args: argparse.Namespace) -> int:
             f"could not open {url}: {exc.cause}",
             ""  # a cause its error number told says what to do (transport/open_failure.py)
             if isinstance(exc.cause, str)
-            else "check the device path (ls /dev/ttyUSB* /dev/serial/by-id/), that no other "
-            "program has it open, and that you may use it (the dialout group on Linux)",
+            else report.link.open_fix,
         )
         return DoctorExit.PORT
     report.ok("port", f"opened {url} (8N1, no flow control; RTS and DTR released: BRC high)")

@@ -70,10 +70,13 @@ from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
+    from collections.abc import Sequence
+
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, MissionNotCompiled
     from roomba_bt.evaluate.parallel import Engine, Evaluation, Interruption, Progress
     from roomba_bt.evaluate.records import PartialResults
     from roomba_bt.evaluate.stats import Comparison, Summary
+    from roomba_bt.mission import Diagnostic
     from roomba_bt.sim.world import World
 
 
@@ -223,7 +226,12 @@ def near_dock_distance(text: str) -> float:
     return metres(text, *NEAR_DOCK_RANGE_M)
 
 
-def _error(message: str) -> int:
+def _error(message: str, args: argparse.Namespace | None = None) -> int:
+    """``message`` on stderr, exit 2; under ``--json`` (``args`` given) also on stdout as
+    :func:`_refusal_as_json` writes it, so a script's ``json.load`` reads why nothing ran."""
+    if args is not None and getattr(args, "json", False):
+        said_alone = message.replace(" (said above)", "")  # stdout holds the errors too
+        _refusal_as_json(said_alone, [], getattr(args, "not_found", []))
     print(f"roomba-bt eval: {message}", file=sys.stderr)
     return ExitCode.INVALID
 
@@ -345,7 +353,7 @@ def eval_command(args: argparse.Namespace) -> int:
 
     problem = _check_arguments(args)
     if problem is not None:
-        return _error(problem)
+        return _error(problem, args)
     plan = _plan(args)
     if isinstance(plan, int):
         return plan
@@ -378,7 +386,7 @@ def eval_command(args: argparse.Namespace) -> int:
                   f"finished are in {kept}", file=sys.stderr)  # fmt: skip
         raise
     if unwritten is not None:
-        return _error(unwritten)
+        return _error(unwritten, args)
     interruption = interruption_of(done)
     if interruption is not None:
         failed = interruption.environment_failed
@@ -554,10 +562,14 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     message."""
     args.key = list(dict.fromkeys(args.key))  # a key named twice is reported once
     found = [(mission, mission_file(mission)) for mission in args.missions]
-    args.not_found = list(dict.fromkeys(f[0] for _, f in found if isinstance(f, tuple)))
+    not_found: list[str] = list(dict.fromkeys(f[0] for _, f in found if isinstance(f, tuple)))
+    args.not_found = not_found
     named = [(mission, f) for mission, f in found if not isinstance(f, tuple)]
-    if not named:
-        return "; ".join(args.not_found)
+    if not named:  # each on its line, as validate says them: they were joined with "; "
+        if len(not_found) == 1:
+            return not_found[0]
+        _say_not_found(not_found)
+        return _cannot_be_evaluated(len(not_found), len(not_found))
     args.mission_paths = dict(given_once("eval", named, "evaluated"))
     args.missions = list(args.mission_paths)
     problem = _profile_of_the_missions(args)
@@ -585,6 +597,17 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
         except ValueError as exc:
             return f"--out {exc}"
     return None
+
+
+def _say_not_found(problems: list[str]) -> None:
+    """Each mission not found on its own line, as ``validate`` says each."""
+    for problem in problems:
+        print(f"roomba-bt eval: {problem}", file=sys.stderr)
+
+
+def _cannot_be_evaluated(count: int, given: int) -> str:
+    """The line after the missions that cannot run, each said on its own."""
+    return f"{count} of {given} missions cannot be evaluated (said above); no episode runs"
 
 
 def _profile_of_the_missions(args: argparse.Namespace) -> str | None:
@@ -637,16 +660,16 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
 
     params = parse_params(args.param)
     if isinstance(params, str):
-        return _error(params)
+        return _error(params, args)
     timeout = parse_timeout(args.timeout)
     if isinstance(timeout, str) or timeout is None:
-        return _error(str(timeout))
+        return _error(str(timeout), args)
     dock = parse_dock(args.dock)
     if isinstance(dock, str):
-        return _error(dock)
+        return _error(dock, args)
     chosen = variants(args, params)
     if isinstance(chosen, str):
-        return _error(chosen)
+        return _error(chosen, args)
     batches = [
         episode_specs(
             v.mission,
@@ -676,7 +699,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         start_pose(world, batches[0][0])
         batches = _reading_keys(args, chosen, missions, batches)
     except EvaluationError as exc:
-        return _error(str(exc))
+        return _error(str(exc), args)
     args.made_by = made_by(args, chosen, missions, world)
     _warn_if_one_start(args, world)
     return chosen, batches, world
@@ -696,29 +719,53 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
 
     missions = []
     invalid: list[str] = []
+    failed: list[Diagnostic] = []
     for v in chosen:
         if v.mission in invalid:
             continue
         loaded = load(v.path, dict(v.params), get_profile(args.profile),
-                      granted=permissions(args, v.path))  # fmt: skip
+                      granted=permissions(args, v.path), failed=failed)  # fmt: skip
         if isinstance(loaded, int):
             invalid.append(v.mission)
         missions.append(loaded)
     if invalid or args.not_found:
-        for problem in args.not_found:
-            print(f"roomba-bt eval: {problem}", file=sys.stderr)
+        _say_not_found(args.not_found)
         count, given = len(invalid) + len(args.not_found), len(args.mission_paths)
+        said = (f"{count} of {given + len(args.not_found)} missions cannot be evaluated; "
+                "no episode runs")  # fmt: skip
+        if args.json:
+            _refusal_as_json(said, failed, args.not_found)
         if given + len(args.not_found) == 1:
             return ExitCode.INVALID  # its errors are the whole story
-        return _error(f"{count} of {given + len(args.not_found)} missions cannot be evaluated "
-                      "(said above); no episode runs")  # fmt: skip
+        return _error(_cannot_be_evaluated(count, given + len(args.not_found)))
     warned = [(v, m) for v, m in zip(chosen, missions, strict=True) if m.warnings]
     if not (args.strict and warned):
         return missions
     for v, mission in warned:
         said = failed_strict(v.label, mission.warnings)
         print(f"roomba-bt eval: {said}; no episode runs", file=sys.stderr)
+    if args.json:
+        fails = "; ".join(failed_strict(v.label, m.warnings) for v, m in warned)
+        _refusal_as_json(f"{fails}; no episode runs", [w for _, m in warned for w in m.warnings])
     return ExitCode.STRICT
+
+
+def _refusal_as_json(
+    said: str, diagnostics: list[Diagnostic], problems: Sequence[str] = ()
+) -> None:
+    """``eval --json`` refusing to start, on stdout as data a script reads (its ``json.load``
+    of an empty stdout raised): ``{"error": what stops it, "errors": [...]}``, each error as
+    ``validate --format json`` gives a diagnostic (``file``, ``line``, ``column``,
+    ``message``, ...), a mission not found at no line or column. stderr says the same as
+    without ``--json``; the exit code is the same."""
+    import json
+
+    from roomba_bt.cli.validate_report import diagnostic_as_json
+
+    errors = [diagnostic_as_json(d) for d in diagnostics]
+    errors += [{"file": None, "line": None, "column": None, "severity": "error",
+                "message": problem} for problem in problems]  # fmt: skip
+    print(json.dumps({"error": said, "errors": errors}, indent=2))
 
 
 def _reading_keys(
@@ -812,7 +859,7 @@ def _partial(args: argparse.Namespace) -> PartialResults | int | None:
     try:
         return PartialResults(out, getattr(args, "made_by", None), reproducible=args.reproducible)
     except OSError as exc:
-        return _error(f"--out {out}: {exc.strerror or exc}")
+        return _error(f"--out {out}: {exc.strerror or exc}", args)
 
 
 def _run(

@@ -18,7 +18,7 @@ from dataclasses import replace
 from roomba_bt.cli.profile_choice import AUTO_PROFILE, ProfileChoice, profile_said
 from roomba_bt.oi.identify import Identification
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.robot.connection import NO_ANSWER_CAUSES, port_not_opened
+from roomba_bt.robot.connection import no_answer_causes, port_not_opened
 from roomba_bt.robot.discovery import OI_RATES, describe_silence, find_robot, identify_robot
 from roomba_bt.robot.errors import ConnectionFailed
 from roomba_bt.sim import Faults, RealtimeSimLink, SimLink, Simulator, load_world
@@ -52,7 +52,7 @@ def open_port(url: str, baud: int | None) -> SerialTransport:
         raise ConnectionFailed(
             url,
             f"--baud auto: no answer at any OI rate ({describe_silence(found)})",
-            (*NO_ANSWER_CAUSES[1:], f"run roomba-bt doctor --port {url} for each step"),
+            (*no_answer_causes(url)[1:], f"run roomba-bt doctor --port {url} for each step"),
         )
     log.info("%s: the robot answers at %d baud (--baud auto)", url, found.baud)
     return transport

@@ -12,6 +12,7 @@ import json
 import os
 import shutil
 import sys
+import weakref
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -225,6 +226,9 @@ def validate_command(args: argparse.Namespace) -> int:
             own = {k: v for k, v in params.items() if k in one.parameters or k not in declared}
             if found and own != params:
                 checked[index] = _checked(one.file, found, own, args)
+    from roomba_bt.behaviours import default_registry
+
+    warn_of_broken_plugins("roomba-bt validate", default_registry())
     if args.format != "text":
         for one in checked:  # said on stderr too, as in text: a reader of the log sees it
             if one.problem is not None:
@@ -581,9 +585,7 @@ def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -
             else:
                 _print_behaviour(entry)
     # after the listing, where a terminal leaves it in view
-    if _plugins_broken(
-        "behaviours", installed, args.skip_broken_plugins, "{its} behaviours are not listed"
-    ):
+    if _plugins_broken("behaviours", installed, args.skip_broken_plugins, "not listed: {lost}"):
         return ExitCode.INVALID
     return said
 
@@ -650,7 +652,7 @@ def schema_command(args: argparse.Namespace) -> int:
         "schema",
         registry,
         args.skip_broken_plugins,
-        "no schema printed: it would lack {its} behaviours",
+        "no schema printed: it would lack {lost}",
     ):
         return ExitCode.INVALID
     print(json.dumps(mission_schema(registry), indent=2))
@@ -668,7 +670,8 @@ def _plugins_broken(command: str, registry: Registry, skip: bool, consequence: s
     the error in one line) and whether the command must fail for it: True unless ``skip``
     (``--skip-broken-plugins``), when they are warnings, as a name two plugins declare
     always is (nothing is missing: each is reached by ``package:name``). ``consequence``:
-    what the command leaves undone, ``{its}`` where it names the plugin's behaviours."""
+    what the command leaves undone, ``{lost}`` where it names exactly the behaviours it
+    lacks (:attr:`PluginError.lost`: a half-loaded plugin's refused one, not "its")."""
     broken = registry.broken
     for error in registry.errors:
         kind = "error" if error in broken and not skip else "warning"
@@ -677,10 +680,34 @@ def _plugins_broken(command: str, registry: Registry, skip: bool, consequence: s
         return False
     one = len(broken) == 1
     what = "an installed plugin" if one else f"{len(broken)} installed plugins"
-    it, its = ("it", "its") if one else ("them", "their")
+    it = "it" if one else "them"
+    lost = escaped("; ".join(error.lost for error in broken), ANY_CONTROL)
     print(
-        f"roomba-bt {command}: {what} did not load ({consequence.format(its=its)}): fix or "
+        f"roomba-bt {command}: {what} did not load ({consequence.format(lost=lost)}): fix or "
         f"uninstall {it}, or pass --skip-broken-plugins to go on without {it}",
         file=sys.stderr,
     )
     return True
+
+
+#: the registries whose broken plugins a command said (:func:`warn_of_broken_plugins`):
+#: ``eval`` compiles each variant, and the warning is said once
+_WARNED: weakref.WeakSet[Registry] = weakref.WeakSet()
+
+
+def warn_of_broken_plugins(speaker: str, registry: Registry) -> None:
+    """A warning on stderr, once, for each installed plugin whose behaviours a mission cannot
+    use, naming exactly which (:attr:`PluginError.lost`); the loaded ones stay usable. For
+    ``validate``, ``run``, ``replay`` and ``eval``, which said nothing of a half-loaded plugin
+    while ``behaviours`` failed for it: a nightly ``validate`` hid it until a mission used
+    the refused name. Only when the command looked for plugins
+    (:attr:`Registry.plugins_loaded`): it does not scan for them to say this. A warning, not
+    a failure (``--strict`` included): a mission that does not use the refused behaviour is
+    right, and one that does gets its own error. ``speaker`` begins each line
+    (``roomba-bt validate``)."""
+    if registry in _WARNED or not registry.plugins_loaded:
+        return
+    _WARNED.add(registry)
+    for error in registry.broken:
+        said = escaped(f"{error}; a mission cannot use {error.lost}", ANY_CONTROL)
+        print(f"{speaker}: warning: {said}", file=sys.stderr)

@@ -73,7 +73,7 @@ from roomba_bt.runtime.summary import (
 if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
 
-    from roomba_bt.mission import Permissions
+    from roomba_bt.mission import Diagnostic, Permissions
     from roomba_bt.runtime.claimed import ClaimedFile
     from roomba_bt.runtime.loop import TickObserver
     from roomba_bt.runtime.provenance import AbsentPlugin
@@ -267,12 +267,16 @@ def load(
     baud: int = 115200,
     granted: Permissions | None = None,
     absent: Sequence[AbsentPlugin] = (),
+    failed: list[Diagnostic] | None = None,
 ) -> Any:
     """The compiled mission, or an int exit code after printing every diagnostic (``run``,
     ``replay``, and ``eval`` before its workers start). ``absent``: plugins a record's run
     used that are not here as they were, said first when the mission does not compile
-    (its unknown nodes are most likely theirs: no "did you mean" for them)."""
+    (its unknown nodes are most likely theirs: no "did you mean" for them). ``failed``: a
+    list that the diagnostics of a mission that does not compile are added to (``eval
+    --json`` prints them as data too)."""
     from roomba_bt.behaviours import default_registry
+    from roomba_bt.cli.mission_cmds import warn_of_broken_plugins
     from roomba_bt.mission import MissionError, Permissions, load_mission, reported
 
     registry = default_registry().expecting(p.short for p in absent) if absent else None
@@ -282,11 +286,15 @@ def load(
             registry=registry,
         )  # fmt: skip
     except MissionError as exc:
+        if failed is not None:
+            failed += exc.diagnostics
         for plugin in absent:
             print(f"roomba-bt: {plugin.said()}", file=sys.stderr)
         for line in reported(exc.diagnostics):
             print(line, file=sys.stderr)
         return ExitCode.INVALID
+    finally:  # the compile looked for the installed plugins if the mission names one
+        warn_of_broken_plugins("roomba-bt", registry or default_registry())
     for warning in mission.warnings:
         print(str(warning), file=sys.stderr)
     return mission
@@ -915,11 +923,32 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     )
     mission = load(found, params, profile, baud, granted, absent_plugins(header))
     if isinstance(mission, int):
+        if not args.mission:  # the errors above say what to write; this, where it goes
+            print(_refused_recorded_mission(header, found), file=sys.stderr)
         return mission
     packets = _recorded_packets(args.record, header, mission, found)
     if isinstance(packets, str):
         return _error(packets)
     return Recorded(record, mission, profile, baud, packets)
+
+
+def _refused_recorded_mission(header: dict[str, Any], found: str) -> str:
+    """What ``replay`` adds when the record's own mission no longer compiles (a 0.1.0
+    mission that this release refuses): that the record is not at fault, and how to replay it
+    after fixing the file. The validation errors alone left the upgrader to find
+    ``--mission``, with which such a record replays byte for byte."""
+    from roomba_bt import __version__
+    from roomba_bt.runtime.provenance import UPGRADING, made_by_said
+    from roomba_bt.runtime.recording import MADE_BY
+
+    # the upgrade notes only where another release made the record (a file edited since is
+    # refused by the release that made it too)
+    notes = "" if header.get(MADE_BY) == __version__ else f' (the CHANGELOG\'s "{UPGRADING}")'
+    return (
+        f"replay: the record's mission {found} is refused by roomba-bt {__version__}; the "
+        f"record was made by {made_by_said(header)}: fix a copy as said above{notes} and "
+        "pass --mission FILE with the fixed file to replay this record"
+    )
 
 
 def _recorded_mission(record_path: str, mission_path: object, *, given: bool) -> str | int:

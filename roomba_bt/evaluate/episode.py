@@ -488,7 +488,10 @@ def _mission(
     path: Path, params: tuple[tuple[str, str], ...], profile: RobotProfile, granted: Permissions
 ) -> CompiledMission:
     """The compiled mission for an episode, a tree of its own: compiled once per process
-    while the texts of its files stay the same (each is read again and compared)."""
+    while the texts of its files stay the same (each is read again and compared). The one
+    kept is never run, each episode its own :meth:`~CompiledMission.rebuilt` tree: a run's
+    leaves hold its robot handle, and the kept tree, run by the first episode, held that
+    episode's connection and simulator for as long as the worker lived."""
     key = (path.resolve(), params, profile.name, granted)
     cached = _COMPILED.get(key)
     if cached is not None:
@@ -499,7 +502,7 @@ def _mission(
     if len(_COMPILED) >= _COMPILED_KEPT:
         del _COMPILED[next(iter(_COMPILED))]  # the oldest
     _COMPILED[key] = (mission, tuple((file, _text_of(file)) for file in mission.files))
-    return mission
+    return mission.rebuilt()
 
 
 def _text_of(path: Path) -> str | None:

@@ -46,7 +46,7 @@ from roomba_bt.mission.loader import NO_PERMISSIONS, Loader, Permissions
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import find_mission, shipped_name
 from roomba_bt.mission.source import Loc
-from roomba_bt.mission.values import Context, shown
+from roomba_bt.mission.values import Context
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 
@@ -204,9 +204,8 @@ def _checked(
         packets=tuple(sorted(packets)),
         modes_needed=frozenset(needed),
         parameters={name: bound.value for name, bound in parsed.params.items()},
-        parameters_shown={
-            name: shown(bound.type, bound.value) for name, bound in parsed.params.items()
-        },
+        # as written (``time_limit=2min``, not ``120 s``), as the nodes' names say them
+        parameters_shown={name: bound.text for name, bound in parsed.params.items()},
         source=path,
         files=tuple(dict.fromkeys(loader.files)),
         blackboard_initial={k: d.initial for k, d in ctx.keys.items() if d.has_initial},

@@ -96,6 +96,7 @@ from roomba_bt.mission.values import (
     SubtreeDef,
     parameters_used,
     parse_type_name,
+    read_literal,
     record_type,
     resolve,
     substituted,
@@ -107,10 +108,10 @@ from roomba_bt.printable import path_written
 from roomba_bt.yamlsource import too_many_digits, yaml11_number_problem
 
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
-             "subtrees", "tree")  # fmt: skip
+             "subtrees", "tree", "literal")  # fmt: skip
 _IDENT = re.compile(r"^[a-z_][a-z0-9_]*$")
 _PARAM_TYPES = [*(n for n in VALUE_TYPES if n != "mark"), "enum"]
-_INCLUDED_KEYS = ("description", "plugins", "include", "blackboard", "subtrees")
+_INCLUDED_KEYS = ("description", "plugins", "include", "blackboard", "subtrees", "literal")
 
 #: Folders every mission may include from, wherever it lives: the shipped missions' folder
 #: (package data, named ``roomba-bt:lib/docking.yaml`` in an include), wherever installed.
@@ -179,6 +180,14 @@ class ParsedFile:
     root_loc: Loc
 
 
+def _literal_section(ctx: Context, sections: dict[str, tuple[yaml.Node, Loc, Loc]]) -> None:
+    """A file's ``literal:``, if any (:func:`~roomba_bt.mission.values.read_literal`): read
+    before any text of the file, for the mission and each included library alike."""
+    if "literal" in sections:
+        node, _, vloc = sections["literal"]
+        read_literal(ctx, node, vloc)
+
+
 class Loader:
     """Reads one mission file and what it includes: sections, plugins, parameters, the
     blackboard and subtree definitions; the trees go to the :class:`NodeParser`."""
@@ -228,6 +237,7 @@ class Loader:
             *(folder.resolve() for folder in self.permissions.include_dirs),
         )
         self._include_stack.append(resolved)
+        _literal_section(self.ctx, sections)  # before any text of the file is read
         # the parameters first: a blackboard key's initial value may be one ("${speed}"),
         # and read before them it was an "unknown parameter" the declaration had just made
         params = bind_parameters(self.ctx, sections.get("parameters"), overrides, root_loc)
@@ -501,6 +511,7 @@ class Loader:
         if sections is None:
             return False
         self._include_stack.append(target)
+        _literal_section(self.ctx, sections)
         self._file_sections(target, sections)
         self._include_stack.pop()
         return True
@@ -549,6 +560,7 @@ class Loader:
             raise Bad(key_loc.at(f"subtree name {name!r} is already a node name"))
         fields = known_fields(node, loc, f"subtree {name!r}", ("parameters", "tree", "doc"))
         params: dict[str, tuple[ValueType, Any, Loc]] = {}
+        default_texts: dict[str, str] = {}
         broken: set[str] = set()
         if "parameters" in fields:
             pnode, _, ploc = fields["parameters"]
@@ -562,14 +574,17 @@ class Loader:
                     broken.add(pname)  # not reported again at its uses and arguments
                     continue
                 params[pname] = (vtype, default if has_default else None, pkloc)
+                if has_default:
+                    default_texts[pname] = _default_text(vtype, pvalue, default)
         if "tree" not in fields:
             self.ctx.error(loc.at(f"subtree {name!r} needs a tree:"))
             body, body_loc = None, loc
         else:
             body, _, body_loc = fields["tree"]
         self.ctx.subtrees[name] = SubtreeDef(
-            name, key_loc, params, body, body_loc, broken=frozenset(broken)
-        )
+            name, key_loc, params, body, body_loc, broken=frozenset(broken),
+            default_texts=default_texts,
+        )  # fmt: skip
 
 
 def bind_parameters(
@@ -606,10 +621,12 @@ def bind_parameters(
                 )
                 env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                 continue
-            # a text's value as its uses insert it: "$$" already one "$"
-            text = default if vtype is STR else _text(value, vloc, default)
             env[name] = Bound(
-                vtype, default, text, default_at=_default_at(value, vloc), wording=wording
+                vtype,
+                default,
+                _default_text(vtype, value, default),
+                default_at=_default_at(value, vloc),
+                wording=wording,
             )
     for name, text in overrides.items():
         if name not in broken:
@@ -1036,8 +1053,13 @@ def _default_at(node: yaml.Node, loc: Loc) -> Loc:
     return loc
 
 
-def _text(node: yaml.Node, loc: Loc, default: Any) -> str:
-    for key, value in getattr(node, "value", []):
+def _default_text(vtype: ValueType, declaration: yaml.Node, default: Any) -> str:
+    """A parameter's default as its declaration writes it (``10min``, not ``600 s``): the
+    text its uses insert and its nodes' names show; a text's default is its value, whose
+    ``$$`` is already one ``$``."""
+    if vtype is STR:
+        return str(default)
+    for key, value in getattr(declaration, "value", []):
         if getattr(key, "value", None) == "default" and isinstance(value, yaml.ScalarNode):
             return str(value.value)
     return str(default)

@@ -27,12 +27,12 @@ from roomba_bt.mission.values import (
     Context,
     SubtreeDef,
     Written,
+    as_written,
     given_to,
     name_text,
     origin_of,
     parameters_used,
     resolve,
-    shown,
     unknown,
     warn_escaped,
 )
@@ -427,7 +427,7 @@ class NodeParser:
             sub_env[pname] = Bound(
                 vtype,
                 resolved,
-                shown(vtype, resolved) if resolved is not UNKNOWN else "?",
+                as_written(vtype, resolved, pvalue, env) if resolved is not UNKNOWN else "?",
                 origin_of(pvalue, env) or given_to(pvalue, pvloc, name),
             )
         given = {a[0] for a in args}
@@ -438,7 +438,7 @@ class NodeParser:
                 self.ctx.error(key_loc.at(f"subtree {name!r} needs parameter {pname!r}"))
                 sub_env[pname] = Bound(vtype, UNKNOWN, "?")
             else:
-                sub_env[pname] = Bound(vtype, default, shown(vtype, default))
+                sub_env[pname] = Bound(vtype, default, sub.default_texts[pname])
         return sub_env
 
     def check_unused_subtrees(self) -> None:

@@ -243,6 +243,7 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
             "include": {"type": "array", "items": {"type": "string"}},
             "subtrees": _named(_subtree_schema(parameter)),
             "tree": _NODE,
+            "literal": {"type": "array", "items": {"type": "string"}},
         },
         "additionalProperties": False,
         "$defs": defs,

@@ -193,6 +193,16 @@ def _with_defaults(text: str, params: tuple[ShippedParameter, ...]) -> str:
     return substituted(text, defaults.get)
 
 
+def _default_written(default: object) -> str:
+    """A default as the file writes it and ``-p`` takes it: ``true``, where ``str`` said
+    Python's ``True`` (``-p go_home=false`` is how it is given)."""
+    if default is None:
+        return "none"
+    if isinstance(default, bool):
+        return "true" if default else "false"
+    return str(default)
+
+
 def describe_shipped() -> list[ShippedMission]:
     """Each shipped mission's name, description and parameter declarations, read as plain
     data (the files are checked by the tests; listing them compiles nothing)."""
@@ -204,7 +214,7 @@ def describe_shipped() -> list[ShippedMission]:
             ShippedParameter(
                 pname,
                 str(decl.get("type", "")),
-                "none" if decl.get("default") is None else str(decl.get("default")),
+                _default_written(decl.get("default")),
                 str(decl.get("doc", "")),
             )
             for pname, decl in declared.items()

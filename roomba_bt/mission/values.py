@@ -37,7 +37,7 @@ from roomba_bt.behaviours.units import (
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.foreign import port_remapping, suggestion
 from roomba_bt.mission.plan import KeyDecl
-from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
+from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text, sequence
 from roomba_bt.mission.wording import PYTHON, Wording
 from roomba_bt.printable import path_written
 from roomba_bt.yamlsource import quoted, yaml12_number_problem
@@ -95,11 +95,43 @@ def escaped_parameters(text: str, names: Collection[str]) -> list[tuple[int, str
 
 
 def escape_warning(where: Loc, what: str, name: str) -> Diagnostic:
-    """The warning of a ``$${name}`` naming a parameter (:func:`escaped_parameters`)."""
+    """The warning of a ``$${name}`` naming a parameter (:func:`escaped_parameters`), with
+    both answers: the spelling of a ``$`` and the value, and ``literal:`` for the text."""
     return where.at(
         f'{what}: "$${{{name}}}" is the text "${{{name}}}"; a "$" before the value is written '
-        f'"$$${{{name}}}" (in 0.1.0, "$${{{name}}}" was a "$" and then the value)'
+        f'"$$${{{name}}}" (in 0.1.0, "$${{{name}}}" was a "$" and then the value); if the '
+        f"text is meant, say so at the top of the file: literal: [{name}]"
     ).as_warning()
+
+
+def read_literal(ctx: Context, node: yaml.Node, loc: Loc) -> None:
+    """A file's ``literal: [laps]``: in that file, ``$${laps}`` is meant as the text
+    ``${laps}``, and :func:`escape_warning` is not said of it. ``$${`` is the only way to
+    write a literal ``${``, so without this a mission that means the text warned on every
+    run and could never pass ``--strict``. By name, not for the whole file: another
+    ``$${name}`` there, written for 0.1.0, is still said."""
+    names: set[str] = set()
+    try:
+        entries = sequence(node, loc, "literal")
+    except Bad as bad:
+        ctx.report(bad)
+        return
+    for item, iloc in entries:
+        try:
+            name = scalar_text(item, iloc, "literal")
+        except Bad as bad:
+            ctx.report(bad)
+            continue
+        if _BRACED_NAME.fullmatch(f"{{{name}}}") is None:
+            ctx.error(
+                iloc.at(
+                    f"literal: {name!r} is no parameter name (a letter or _, then "
+                    "letters, digits or _): list the names of ${name} meant as text"
+                )
+            )
+            continue
+        names.add(name)
+    ctx.literal[loc.file] = frozenset(names)
 
 
 #: Two dollars alone (no ``$`` before or after them) and before anything but a ``{``: one
@@ -150,9 +182,11 @@ def warn_escaped(
         (offset, doubled_warning(at(offset), what, text, offset))
         for offset in doubled_dollars(text)
     ]
+    meant = ctx.literal.get(loc.file, frozenset())
     said += [
         (offset, escape_warning(at(offset), what, name))
         for offset, name in escaped_parameters(text, names or ())
+        if name not in meant
     ]
     for _, warning in sorted(said, key=lambda each: each[0]):
         if warning not in ctx.warnings:
@@ -246,6 +280,9 @@ class SubtreeDef:
     #: the definition itself was refused (reported there): its uses compile to nothing and
     #: say nothing more, its parameters being unknown
     written_wrongly: bool = False
+    #: each default as the library writes it (``10min``), the text a use that gives none
+    #: names its nodes with
+    default_texts: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass
@@ -267,6 +304,9 @@ class Context:
     #: what compiles but is likely a mistake, found while parsing (a plugin's behaviour of a
     #: built-in's name): the compiled mission's warnings, with the whole-tree checks' own
     warnings: list[Diagnostic] = field(default_factory=list)
+    #: each file's ``literal:`` names, by the file as its places name it: the ``$${name}``
+    #: written there that mean the text ``${name}``, not warned of (:func:`read_literal`)
+    literal: dict[str, frozenset[str]] = field(default_factory=dict)
     #: ``diagnostics`` as a set: an error is reported once, and looking it up in the list
     #: made N errors cost N**2/2 comparisons (20,000 aliases took 40 s to validate)
     _reported: set[Diagnostic] = field(default_factory=set, init=False, repr=False)
@@ -441,7 +481,8 @@ def resolve(
                 return UNKNOWN
         if raw.startswith("@") or (port_remapping(raw) and vtype.name not in ("str", "any")):
             return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref))
-    return _check_range(_parsed(vtype, raw, loc, what, param, node), loc, what, param)
+    parsed = _parsed(vtype, raw, loc, what, param, node)
+    return _check_range(parsed, loc, what, param, written=raw if isinstance(raw, str) else "")
 
 
 def number_as_text_problem(node: yaml.Node | None, number: float) -> str | None:
@@ -589,9 +630,11 @@ def _parameters_used(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) ->
     return names
 
 
-def _check_range(value: Any, loc: Loc, what: str, param: Param | None, origin: str = "") -> Any:
+def _check_range(
+    value: Any, loc: Loc, what: str, param: Param | None, origin: str = "", written: str = ""
+) -> Any:
     if param is not None:
-        problem = param.check_range(value)
+        problem = param.check_range(value, written)
         if problem is not None:
             owner = what.rsplit(".", 1)[0] if "." in what else what
             raise Bad(loc.at(f"{owner}: {problem}{origin}"))
@@ -746,3 +789,25 @@ def shown(vtype: ValueType, value: Any) -> str:
     if vtype.name in CANONICAL and isinstance(value, int | float):
         return format_quantity(vtype.name, value)
     return str(value)
+
+
+def as_written(vtype: ValueType, value: Any, node: yaml.Node, env: Mapping[str, Bound]) -> str:
+    """``value`` as ``node`` writes it, each ``${parameter}`` as that parameter's own text:
+    a subtree's ``time_limit: "${time_limit}"`` passes on the ``2min`` its user wrote, where
+    the canonical ``120 s`` named the node ``dock_time_limit(120 s)`` in ``show``, the live
+    tree and the failure. :func:`shown` where the node is no scalar, the value is a text
+    (its ``$$`` already one ``$``), or the written text does not read back as ``value``
+    (``40`` for an int: YAML's number, which a text is not)."""
+    if vtype is STR or not isinstance(node, yaml.ScalarNode):
+        return shown(vtype, value)
+
+    def text_of(name: str) -> str | None:
+        bound = env.get(name)
+        return None if bound is None or bound.value is UNKNOWN else bound.text
+
+    text = substituted(str(node.value), text_of).strip()
+    try:
+        reads_back = vtype.parse(text) == value
+    except ValueError:  # UnitError: the written text is no value of this type alone
+        reads_back = False
+    return text if reads_back else shown(vtype, value)

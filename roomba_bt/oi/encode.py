@@ -13,6 +13,9 @@ Drive (137), velocity -200 mm/s, radius 500 mm (the spec's example)::
 from __future__ import annotations
 
 import struct
+import sys
+import types
+import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
@@ -22,6 +25,7 @@ from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.opcodes import (
     COMMANDS,
     COMMANDS_BY_NAME,
+    NOTE_STEPS_PER_SECOND,
     PLAYABLE_NOTES,  # noqa: F401  (the name's old home: roomba_bt.oi.encode.PLAYABLE_NOTES)
     SONG_LENGTH,
     ArgSpec,
@@ -441,6 +445,14 @@ def song(song_number: int, notes: Sequence[Note | tuple[int, int]]) -> Command:
     return encode(140, song_number, len(notes), tail=tail)
 
 
+def song_seconds(command: Command) -> float:
+    """How long the song a Song (140) command defines plays: its notes' durations (every
+    second byte of the tail, in 1/64 s) summed. ``song_seconds(song(0, [(60, 32)])) == 0.5``."""
+    if command.spec.opcode != 140:
+        raise EncodeError("song_seconds", "command", "a Song (140) command", command)
+    return sum(command.data[4::2]) / NOTE_STEPS_PER_SECOND
+
+
 def play(song_number: int) -> Command:
     return encode(141, song_number)
 
@@ -514,3 +526,29 @@ def set_day_time(day: int | str, hour: int, minute: int) -> Command:
     if isinstance(day, str):
         day = _DAYS.index(_day_name("set_day_time", day))
     return encode(168, day, hour, minute)
+
+
+#: What a 0.1.0 spelling's call says (the CLI shows this one DeprecationWarning, which Python
+#: hides by default outside ``__main__``: its readers are plugin authors running roomba-bt).
+ENCODE_MODULE_CALLED = (
+    "roomba_bt.oi.encode is the encoder's module since 0.2.0, and calling it as 0.1.0's "
+    "function is deprecated (it goes in a later release): call "
+    "roomba_bt.oi.encode.encode(...) (`from roomba_bt.oi.encode import encode`) or a named "
+    "helper such as roomba_bt.commands.leds(...)"
+)
+
+
+class _CallableForOldPlugins(types.ModuleType):
+    """This module's class: a module that 0.1.0's ``from roomba_bt.oi import encode`` (then
+    the function) can still call, as the plugins written for 0.1.0 do, with a warning that
+    names the new spelling. Without it their first ``encode(...)`` raised Python's bare
+    "'module' object is not callable" mid-run (on a robot, maybe an hour into a mission)."""
+
+    def __call__(
+        self, command: int | str | CommandSpec, *args: int, tail: Sequence[int] = ()
+    ) -> Command:
+        warnings.warn(ENCODE_MODULE_CALLED, DeprecationWarning, stacklevel=2)
+        return encode(command, *args, tail=tail)
+
+
+sys.modules[__name__].__class__ = _CallableForOldPlugins

@@ -8,10 +8,15 @@ run's rate reaches nothing (the simulator's seed 50 at 1 % lost drove on at 300 
 not confirmed is followed by::
 
     run's rate     [149][3][35][21][34]          Query List: Passive answered -> heard
+                   [0] x n  the stop  [149]...   again, zeros first: a byte of the stop or
+                                                 of the query lost on the line
     garbage came:  for each other rate of the table (Baud (129)'s codes, 300 first)
       rate         [0] x n  the stop  [149]...   zeros (at most HUNT_ZEROS_S of them), the
                                                  stop from the mode last seen, a Query List
-                   answered Passive -> found: the port stays at that rate (said)
+                   answered Passive -> found, then put back (:func:`put_back`):
+      found rate   [129][run's code]              Baud to the run's rate, 100 ms (the spec)
+      run's rate   [149][3][35][21][34]           answered Passive -> back at the run's rate;
+                                                  else the port stays at the found rate (said)
 
 The probe is :func:`~roomba_bt.robot.discovery.probe`'s (the quiet, the query, an answer
 read as Passive): the stop's Start is what makes Passive the answer. Silence alone (a cable,
@@ -22,7 +27,7 @@ Decided (session 33): slowest first. A lost opcode's data bytes are most often a
 a radius' high byte (0, 1, 255), and Baud's codes 0 and 1 are 300 and 600 baud. Zeros are
 capped by time (:data:`HUNT_ZEROS_S`), not the full :data:`~roomba_bt.robot.ending.
 STOP_RESYNC_ZEROS`: 512 zeros take 17 s at 300 baud, a robot driving meanwhile. The search
-is bounded by :func:`hunt_seconds` (12.4 s from 115200, most of it at the slow rates).
+is bounded by :func:`hunt_seconds` (13.9 s from 115200, most of it at the slow rates).
 """
 
 from __future__ import annotations
@@ -31,7 +36,8 @@ import contextlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from roomba_bt.oi.encode import BAUD_CODES
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.encode import BAUD_CODES, baud_rate
 from roomba_bt.robot.discovery import (
     DRAIN_LIMIT_S,
     PROBE_PACKETS,
@@ -39,11 +45,16 @@ from roomba_bt.robot.discovery import (
     QUIET_S,
     REPLY_TIMEOUT_S,
     Probe,
+    drain,
     line_seconds,
     probe,
 )
 from roomba_bt.robot.link import LINK_ERRORS, StreamLink
+from roomba_bt.robot.writer import BAUD_CHANGE_WAIT
 
+#: What a robot that reset is sent before it is asked at the run's rate: Start (128), its OI
+#: Off after the reset (:func:`hunt`)
+RESTART = oi.start().data
 #: Seconds of zeros at most before the stop at each rate of the search: all
 #: ``STOP_RESYNC_ZEROS`` from 19200 up, 15 at 300 baud.
 HUNT_ZEROS_S = 0.5
@@ -71,11 +82,19 @@ def probe_seconds(rate: int, written: int) -> float:
 
 
 def hunt_seconds(run_rate: int, stop: bytes, zeros: bytes) -> float:
-    """The search's bound on the link's clock, each rate's probe at its longest (docs/robot.md
-    says it: 12.4 s from 115200 with a stop from Safe)."""
-    asked = probe_seconds(run_rate, 0)
-    return asked + sum(
-        probe_seconds(rate, len(zeros_at(rate, zeros)) + len(stop)) for rate in hunt_rates(run_rate)
+    """The search's bound on the link's clock, each rate's probe at its longest: a reset's
+    drain, the first ask and the stop again at the run's rate, the other rates, and the Baud
+    back with its wait and a probe at the run's rate (:func:`put_back`). docs/robot.md says
+    it: 13.9 s from 115200 with a stop from Safe."""
+    asked = DRAIN_LIMIT_S + probe_seconds(run_rate, 0)
+    back = BAUD_CHANGE_WAIT + probe_seconds(run_rate, 0)
+    return (
+        asked
+        + back
+        + sum(
+            probe_seconds(rate, len(zeros_at(rate, zeros)) + len(stop))
+            for rate in (run_rate, *hunt_rates(run_rate))
+        )
     )
 
 
@@ -90,10 +109,17 @@ class Hunt:
         return next((p.baud for p in self.probes if p.answered), None)
 
 
-def hunt(link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled: bool) -> Hunt:
-    """Ask at ``run_rate`` whether the robot heard the stop; if not and the line was
-    ``garbled``, write ``stop`` after :func:`zeros_at` at each of :func:`hunt_rates` and ask
-    there, until one answers. The port is left at the rate that answered, else put back at
+def hunt(
+    link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled: bool, reset: bool
+) -> Hunt:
+    """Ask at ``run_rate`` whether the robot heard the stop; if not, write ``stop`` after
+    :func:`zeros_at` there and ask again (the stop's Start, or the query's count, lost on the
+    line: seed 67 of the dock's 1 % sweep asked ``[149][35][21][34]``, a query of 35 packets
+    the robot waited on), and if the line was ``garbled``, at each of :func:`hunt_rates` too,
+    until one answers. A robot that ``reset`` (its banner read) is sent Start again
+    first, once its banner is over (the line quiet): its OI is Off, where it answers nothing
+    but Start, and the stop's Start may have been lost too (seed 51 of the dock's 1 % sweep)
+    or come while it booted. The port is left at the rate that answered, else put back at
     ``run_rate`` (also on a port that fails meanwhile, and on Ctrl-C)."""
     transport = link.transport
     probes: list[Probe] = []
@@ -101,8 +127,11 @@ def hunt(link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled:
     link.port_rate = None  # the probes set the port's rate themselves: unknown until done
     found = False
     try:
-        probes.append(probe(transport, run_rate, b""))
-        rates: Sequence[int] = hunt_rates(run_rate) if garbled else ()
+        if reset:  # the banner's last bytes first: a Start within them may be lost
+            drain(transport, quiet=QUIET_S, limit=DRAIN_LIMIT_S)
+        probes.append(probe(transport, run_rate, RESTART if reset else b""))
+        # the run's rate once more first: a byte of the stop or of the query lost there
+        rates: Sequence[int] = (run_rate, *(hunt_rates(run_rate) if garbled else ()))
         for rate in rates:
             if probes[-1].answered:
                 break
@@ -118,6 +147,33 @@ def hunt(link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled:
     return Hunt(tuple(probes))
 
 
+def put_back(link: StreamLink, found: int, run_rate: int) -> bool:
+    """Send a robot the search found at ``found`` baud back to ``run_rate``: Baud (129) with
+    the run's code, written at ``found``; the 100 ms the spec asks before the new rate
+    (:data:`~roomba_bt.robot.writer.BAUD_CHANGE_WAIT`, read away on the link's clock); then
+    a Query List at ``run_rate``. Left at 300 baud, the robot answered nothing to the next
+    run at 115200 until it was powered off. True if it answered there in Passive: the port
+    is then at ``run_rate``; else it is left at ``found``, where the robot last answered
+    (also on a port that fails meanwhile, and on Ctrl-C)."""
+    transport = link.transport
+    back = False
+    link.port_rate = None  # as in :func:`hunt`: the rate is the probes' until done
+    try:
+        transport.write(baud_rate(run_rate).data)
+        link.drain_output()  # the Baud leaves at ``found`` before the port changes
+        drain(transport, quiet=BAUD_CHANGE_WAIT, limit=BAUD_CHANGE_WAIT)
+        back = probe(transport, run_rate, b"").answered
+    except LINK_ERRORS:  # the port failed: the next write sets the rate again
+        return False
+    finally:
+        if not back:
+            with contextlib.suppress(*LINK_ERRORS):
+                link.switch_rate(found)
+    if back:
+        link.port_rate = run_rate
+    return back
+
+
 def asks_after(link: StreamLink) -> bool:
     """Whether a stop not confirmed is asked after on this link: on the wall clock, and on
     the simulator's virtual one where its line loses bytes to the robot (as
@@ -129,11 +185,17 @@ def asks_after(link: StreamLink) -> bool:
     return bool(getattr(transport, "wall_clock", True) or getattr(transport, "loses_bytes", False))
 
 
-def found_words(found: int, run_rate: int) -> str:
+def found_words(found: int, run_rate: int, *, back: bool) -> str:
     """What a stop that reached the robot only at ``found`` baud says, in the summary and the
-    log."""
-    return (
+    log; ``back``: whether :func:`put_back` brought the robot back to ``run_rate``."""
+    said = (
         f"the robot had moved to {found} baud (a Baud (129) made of lost bytes, most likely): "
-        f"stopped there, it answered in Passive at {found}; the port is left at {found} (the "
-        f"robot talks at {found}, not {run_rate}, until it is powered off or sent Baud)"
+        f"stopped there, it answered in Passive at {found}; "
+    )
+    if back:
+        return said + f"sent Baud back to {run_rate}, it answered in Passive at {run_rate}"
+    return said + (
+        f"sent Baud back to {run_rate}, it did not answer there: the port is left at {found} "
+        f"(the robot talks at {found}, not {run_rate}, until it is powered off; "
+        "`--baud auto` or roomba-bt doctor finds it)"
     )

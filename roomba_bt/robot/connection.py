@@ -27,9 +27,8 @@ import contextlib
 import logging
 import weakref
 from collections import Counter
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import ParamSpec, TypeVar
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_CODES, Command, turns_wheels
@@ -57,6 +56,7 @@ from roomba_bt.robot.silence import (
     another_model,
     answers_elsewhere,
     asleep_by_idle,
+    bytes_lost_said,
     dead_connection,
     explain_silence,
     follow_baud,
@@ -64,22 +64,24 @@ from roomba_bt.robot.silence import (
 )
 from roomba_bt.robot.stall_asks import StallAsks, ask_in_stall
 from roomba_bt.robot.startup import (
-    NO_ANSWER_CAUSES,
     STREAM_ASKS_AGAIN,
     ModeName,
     agreed_mode_reply,
     as_mode,
+    no_answer_causes,
     not_a_mode,
     port_not_opened,
     stream_zeros,
 )
 from roomba_bt.robot.wake import KeepAwake, keep_awake_for, named_stall
+from roomba_bt.robot.weak import weakly
 from roomba_bt.robot.writer import RESYNC_ZEROS, CommandWriter
 from roomba_bt.transport.base import Transport, TransportError
+from roomba_bt.transport.link_kind import link_of
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 
 __all__ = [
-    "NO_ANSWER_CAUSES",  # where the CLI has them from
+    "no_answer_causes",  # where the CLI has them from
     "port_not_opened",
     "Connection",
     "EndMode",
@@ -89,9 +91,6 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
-
-P = ParamSpec("P")
-R = TypeVar("R")
 
 
 @dataclass(frozen=True, slots=True)
@@ -157,20 +156,6 @@ def _stop_dropped(ending: SafeStop) -> None:
         stop_left_open(ending, "the connection was dropped without close()")
 
 
-def _weakly(method: Callable[P, R], dead: R) -> Callable[P, R]:
-    """``method`` called through a weak reference (``dead`` once its object is gone): a
-    part's callback into the connection (the link's halt and mode report) would make a
-    cycle, and a connection in one is freed only by the collector, not when its last
-    reference goes: a dropped connection drove on until a collector pass."""
-    ref = weakref.WeakMethod(method)
-
-    def call(*args: P.args, **kwargs: P.kwargs) -> R:
-        bound = ref()
-        return dead if bound is None else bound(*args, **kwargs)
-
-    return call
-
-
 # Long on purpose (a line past the guide's 400): the session's facade, where a program finds
 # the robot's state, each part in its own module (link.py, writer.py, ending.py, startup.py,
 # silence.py); what stays here is the start-up, the reads and one-line views of the parts.
@@ -207,8 +192,8 @@ class Connection:
         self.modes = ModeModel(self.profile, settle=settle)
         self.link = StreamLink(
             transport, self.profile, watchdog=watchdog, reconcile=self.modes.reconcile,
-            report=_weakly(self._report_change, None), halt=_weakly(self.stop_on_stall, False),
-            ask_again=_weakly(self._stream_again, False),
+            report=weakly(self._report_change, None), halt=weakly(self.stop_on_stall, False),
+            ask_again=weakly(self._stream_again, False),
         )  # fmt: skip
         if baud is None:
             baud = int(getattr(transport, "baud", DEFAULT_BAUD))
@@ -220,7 +205,7 @@ class Connection:
         self.ending.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
         # a stop written through a port that came back is heard if the stream falls quiet
         # and the robot answers, as after a stop at a rate the port followed (silence.py)
-        self.ending.port_return.heard = _weakly(self._stop_heard, False)
+        self.ending.port_return.heard = weakly(self._stop_heard, False)
         #: when garbage was last judged (listened at other rates, or noise) and the bytes
         #: read by then (link clock; silence.follow_baud judges again while garbage comes)
         self.baud_listened: tuple[float, int] | None = None
@@ -353,8 +338,8 @@ class Connection:
         log.log(
             logging.WARNING if self.stream_asked_again == 1 else logging.INFO,
             "%s: no sensor data came within %.0f ms of asking the robot for it: a byte of "
-            "the request may have been lost on the way to the robot (a loose or noisy "
-            "cable?); asking again (%d of %d)", self.name, self.watchdog * 1000,
+            "the request may have been lost on the way to the robot (%s?); asking again "
+            "(%d of %d)", self.name, self.watchdog * 1000, link_of(self.name).lossy,
             self.stream_asked_again, STREAM_ASKS_AGAIN,
         )  # fmt: skip
         self.writer.send_many([oi.stream(ids)], prefix=stream_zeros(ids))
@@ -556,8 +541,8 @@ class Connection:
         if self.stream_asked_again and link.stream_unanswered:
             cause.also(
                 f"no frame came though the stream was asked for {self.stream_asked_again + 1} "
-                "times: bytes from the computer to the robot may be lost (check the cable and "
-                "its adapter: roomba-bt doctor)"
+                "times: bytes from the computer to the robot may be lost (check "
+                f"{link_of(self.name).byte_check}: roomba-bt doctor)"
             )
         raise cause
 
@@ -582,16 +567,12 @@ class Connection:
         Start: the robot drops to Passive, its frame showing no cliff, wheel drop or
         charger. "" without that evidence: a fall is not blamed on a cable never seen to
         lose a byte."""
-        lost = self.lost_on_the_way
+        lost = bytes_lost_said(self)
         if not lost:
             return ""
-        said = ", ".join(
-            f"{what} {'once' if times == 1 else f'{times} times'}" for what, times in lost.items()
-        )
         return (
-            f"bytes from the computer to the robot were lost in this run ({said}, put right): "
-            "a data byte after a lost one can be read as Start (128), so the cable is a likely "
-            "cause"
+            f"{lost}: a data byte after a lost one can be read as Start (128), so "
+            f"{link_of(self.name).serial_side} is a likely cause"
         )
 
     @property

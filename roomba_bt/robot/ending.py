@@ -43,7 +43,7 @@ from roomba_bt.oi.opcodes import Effect, longest_data_bytes
 from roomba_bt.oi.packets import packet_ids
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, stream_period
-from roomba_bt.robot.baud_hunt import asks_after, found_words, hunt
+from roomba_bt.robot.baud_hunt import asks_after, found_words, hunt, put_back
 from roomba_bt.robot.errors import PortLost, RobotError, WaitCutShort
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink
 from roomba_bt.robot.modes import OffsetDetector
@@ -108,6 +108,12 @@ STOP_TAKEN_AGAIN = (
 RESET_STOPPED = (
     "the robot reset (its start-up banner was read): its OI is Off, where its wheels and "
     "motors are stopped"
+)
+#: What a stop says of a robot whose reset banner was read and that answered in Passive to
+#: the Start sent again after it (``baud_hunt.hunt``)
+RESET_RESTARTED = (
+    "the robot reset (its start-up banner was read; a Reset (7) made of lost bytes, most "
+    "likely): sent Start again after its banner, it answered in Passive"
 )
 #: Reads at most of what waits unread in the port before a stop (each read takes all there
 #: is: one is the rule; the bound is for a line that never runs dry)
@@ -845,14 +851,22 @@ def asked_after(ending: SafeStop, unconfirmed: str) -> str | None:
     )  # fmt: skip
     garbled = link.bytes_since_frame > 0 and not ending.reset_seen
     with signals_deferred():
-        found = hunt(link, writer.baud, stop, STOP_RESYNC_ZEROS, garbled=garbled).found
+        found = hunt(
+            link, writer.baud, stop, STOP_RESYNC_ZEROS, garbled=garbled, reset=ending.reset_seen
+        ).found
+    if found == writer.baud and ending.reset_seen:
+        ending.found_at = RESET_RESTARTED
+        log.warning("%s: %s", link.name, RESET_RESTARTED)
     if found is None:
         if ending.reset_seen:
             return f"{unconfirmed}; {RESET_STOPPED}"
         return unconfirmed
     if found != writer.baud:
-        ending.found_at = found_words(found, writer.baud)
+        with signals_deferred():
+            back = put_back(link, found, writer.baud)
+        ending.found_at = found_words(found, writer.baud, back=back)
         log.warning("%s: %s", link.name, ending.found_at)
-        writer.baud = found
+        if not back:
+            writer.baud = found
     ending.answered = True
     return None

@@ -23,6 +23,7 @@ from roomba_bt.oi.errors import OIError
 from roomba_bt.oi.identify import ProfileMismatch
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+from roomba_bt.robot import wording
 
 
 class RobotError(RoombaBtError):
@@ -33,8 +34,13 @@ class ConnectionClosed(RobotError, RuntimeError):
     """The connection was used after :meth:`~roomba_bt.robot.connection.Connection.close`
     (it read as a port gone: an unplugged cable)."""
 
-    def __init__(self, port: str) -> None:
-        super().__init__(f"{port}: the connection is closed (close() was called): open a new one")
+    def __init__(self, port: str, given_to: str = "") -> None:
+        """``given_to``: what it was handed to, said first (``RunStack(mission,
+        connection)``, which refuses it when made, before the run blamed a cable)."""
+        was = f"{given_to}: " if given_to else ""
+        super().__init__(
+            f"{port}: {was}the connection is closed (close() was called): open a new one"
+        )
 
 
 def format_wall_time(wall_time: float) -> str:
@@ -282,9 +288,12 @@ class RobotReset(LinkDown):
 
     def __init__(self, port: str, halted: bool, after_write: float | None = None) -> None:
         action = "drive 0 sent" if halted else "it was not driving"
+        # imported here: validate loads this module, and the transport package pyserial
+        from roomba_bt.transport.link_kind import link_of
+
         cable = (
-            f", or a byte of our command {after_write:.2f} s before lost on the line (a bad "
-            "cable: a data byte 7 after it is read as Reset)"
+            f", or a byte of our command {after_write:.2f} s before lost on the line "
+            f"({link_of(port).bad_line}: a data byte 7 after it is read as Reset)"
             if after_write is not None and 0.0 <= after_write <= RESET_AFTER_WRITE_S
             else ""
         )
@@ -303,7 +312,10 @@ class StreamLost(LinkDown):
     holds their values (the profile is wrong: a Roomba 500 read as a Create 2, its wall
     signal over 1023); the message then names the model, the packet or the rule, and the fix,
     for where the profile was set (``setting``, :func:`profile_fix`), or else for the
-    command line (``--profile``) and for Python (the ``profile`` argument)."""
+    command line (``--profile``) and for Python (the ``profile`` argument). ``lost_before``:
+    the bytes to the robot this run found lost, when it answers nothing after a silence
+    (``silence.bytes_lost_said``): the silence is then said a Stop or Power made of lost
+    bytes, not a bare "the sensor stream stopped" (seed 67 of the dock's 1 % sweep)."""
 
     def __init__(
         self,
@@ -318,6 +330,7 @@ class StreamLost(LinkDown):
         mismatch: ProfileMismatch | None = None,
         came_back: float | None = None,
         setting: str | None = None,
+        lost_before: str = "",
     ) -> None:
         self.silent_for = silent_for
         self.grace = grace
@@ -345,10 +358,7 @@ class StreamLost(LinkDown):
                 f"{bytes_seen} bytes arrived (noise on the line, or a wrong baud rate)"
             )
         else:
-            what = (
-                f"the sensor stream stopped: nothing arrived for {silent_for:.1f} s (the robot "
-                f"switched off or stopped streaming, or {words.line})"
-            )
+            what = nothing_arrived(silent_for, lost_before, words.line)
         action = (
             f"the watchdog sent drive 0 after {watchdog * 1000:.0f} ms"
             if halted
@@ -365,6 +375,21 @@ class StreamLost(LinkDown):
             f"{what}; {action}, then the run waited the {grace:g} s grace{tail}",
             headline,
         )
+
+
+def nothing_arrived(silent_for: float, lost_before: str, line: str) -> str:
+    """What :class:`StreamLost` says of a silence that not a byte broke: the OI gone Off by
+    a lost byte where the run found bytes to the robot lost (``lost_before``), else the
+    stream stopped, ``line`` (the link's words for its wire) among the causes."""
+    if lost_before:
+        return (
+            "the robot's OI went Off mid-run: most likely a Stop (173) or Power (133) made of "
+            f"lost bytes on this line: {lost_before}; nothing arrived for {silent_for:.1f} s"
+        )
+    return (
+        f"the sensor stream stopped: nothing arrived for {silent_for:.1f} s (the robot "
+        f"switched off or stopped streaming, or {line})"
+    )
 
 
 def idle_said(idle_s: float | None) -> str:
@@ -390,10 +415,17 @@ class RobotAsleep(LinkDown):
         woken_by: str | None = None,
         profile: RobotProfile = DEFAULT_PROFILE,
     ) -> None:
+        # imported here: validate loads this module, and the transport package pyserial
+        from roomba_bt.transport.link_kind import link_of
+
         self.idle_s = idle_s
         self.woken_by = woken_by
+        words = link_of(port)
         if not keep_awake:
-            fix = "leave keep-awake on (drop --no-keep-awake): it pulses BRC once a minute"
+            fix = (
+                f"leave keep-awake on ({wording.current.keep_awake_on}): it pulses BRC once a "
+                "minute"
+            )
         elif not pulses:
             # woken by a hang-up, it was told this link cannot pulse BRC: keep-awake cannot
             hang_up = (
@@ -401,11 +433,11 @@ class RobotAsleep(LinkDown):
                 "once a minute" if woken_by is not None else ""
             )  # fmt: skip
             fix = (
-                f"keep-awake cannot pulse BRC on this port (no modem lines{hang_up}): use a "
-                "USB cable with BRC on RTS or DTR, or an rfc2217:// bridge"
+                f"keep-awake cannot pulse BRC on this port (no modem lines{hang_up}): "
+                f"{words.pulse_fix}"
             )
         else:
-            fix = "check that the cable wires BRC to RTS or DTR"
+            fix = f"check that {words.between} wires BRC to RTS or DTR"
         idle = idle_said(idle_s)
         if woken_by is None:
             what = (

@@ -260,6 +260,7 @@ class Snapshot(NamedTuple):
 CYCLE_END: tuple[Command, ...] = (oi.safe(), oi.halt(), oi.motors_off(), oi.start())
 _SEEK_DOCK = COMMANDS_BY_NAME["seek_dock"]
 _STATE = Delivery.STATE
+_SONG = COMMANDS_BY_NAME["song"]
 
 
 def docked_by_seek_dock(cycle: Command | None, frame: SensorFrame | None) -> bool:
@@ -319,7 +320,9 @@ class Outbox:
     kept its own copy of the second (``last_sent``).
     """
 
-    __slots__ = ("_ender", "_last", "_queue", "_senders", "_standing", "queued", "standing")
+    __slots__ = (
+        "_ender", "_last", "_queue", "_senders", "_songs", "_standing", "queued", "standing",
+    )  # fmt: skip
 
     def __init__(self) -> None:
         self._queue: dict[object, Command] = {}
@@ -334,6 +337,9 @@ class Outbox:
         #: the last command written on each channel ("wheels", "motors", ...) that the robot
         #: still obeys, read-only (:meth:`written`, :meth:`robot_stopped`)
         self.standing: Mapping[str, Command] = self._standing
+        #: how long the song last written to each slot plays (s): what ``play`` waits for
+        #: when the stream never shows a song that short (:meth:`song_seconds`)
+        self._songs: dict[int, float] = {}
 
     def send(self, command: Command, sender: object = None) -> None:
         """Queue ``command`` for this tick's flush: a state replaces the one queued on its
@@ -459,6 +465,14 @@ class Outbox:
         channel = command.spec.channel
         if channel is not None:
             self._standing[channel] = command
+        elif command.spec is _SONG:  # the robot holds it until it is switched off
+            self._songs[command.args[0]] = oi.song_seconds(command)
+
+    def song_seconds(self, slot: int) -> float | None:
+        """How long the song this run last wrote to ``slot`` (Song 140) plays, in seconds;
+        None when it wrote none there (the slot may hold an earlier program's song, or
+        none: the robot keeps its songs until it is switched off)."""
+        return self._songs.get(slot)
 
     def robot_stopped(self, channels: Iterable[str]) -> None:
         """The robot stopped these channels by itself (a fall to Passive stops the wheels and

@@ -154,10 +154,11 @@ def explain_silence(
     cause to raise (see the module docstring). Writing may raise
     :class:`~roomba_bt.robot.errors.PortLost`: then that is the cause."""
 
-    def lost(probed: str) -> StreamLost:
+    def lost(probed: str, *, answers_nothing: bool = True) -> StreamLost:
         return StreamLost(
             connection.name, silent_for, grace, 0, watchdog=connection.watchdog,
             halted=halted, probed=probed,
+            lost_before=bytes_lost_said(connection) if answers_nothing else "",
         )  # fmt: skip
 
     # how long it had been without a command or a pulse when the stream stopped
@@ -167,10 +168,11 @@ def explain_silence(
     try:
         connection.send(oi.pause_stream())
     except ModeError:  # the model says Off: nothing to ask
-        return lost("")
+        return lost("", answers_nothing=False)
     if _answers(connection):
         return lost(
-            "the robot still answers a query (its OI is on): it stopped streaming by itself"
+            "the robot still answers a query (its OI is on): it stopped streaming by itself",
+            answers_nothing=False,
         )
     connection.unheard = "the robot answers nothing"  # unless a pulse wakes it
     if not connection.profile.sleeps_in_passive:
@@ -181,10 +183,11 @@ def explain_silence(
     pulse = wake_pulse(connection.transport)
     if pulse.gone is not None:  # unplugged meanwhile: the silence was the cable's
         return connection.link.lost("a BRC pulse", pulse.gone)
-    if pulse.problem is not None:
+    if pulse.problem is not None:  # nothing known of the robot: not said Off
         return lost(
             "it answered no query either, and no BRC pulse could wake it to tell sleep from "
-            f"the rest ({pulse.problem})"
+            f"the rest ({pulse.problem})",
+            answers_nothing=False,
         )
     if _answers(connection):
         connection.unheard = None
@@ -235,6 +238,7 @@ def _asked_again(
             connection.name, silent_for, grace, 0, watchdog=connection.watchdog, halted=halted,
             probed=f"it answered no query, asked twice {ASK_AGAIN_AFTER_S:g} s apart, and it "
             f"was in {mode}, which never sleeps: {_silent_causes(connection)}",
+            lost_before=bytes_lost_said(connection),
         )  # fmt: skip
     connection.unheard = None
     # the mode the robot answered with, not the model's: it may have fallen to Passive
@@ -273,6 +277,22 @@ def garbled_line(
         connection.name, silent_for, grace, garbled, watchdog=link.watchdog, halted=halted,
         mismatch=mismatch, setting=connection.profile_setting,
     )  # fmt: skip
+
+
+def bytes_lost_said(connection: Connection) -> str:
+    """The bytes to the robot this run found lost and put right
+    (:attr:`~roomba_bt.robot.connection.Connection.lost_on_the_way`), in words: "bytes from
+    the computer to the robot were lost in this run (a wheel command 2 times, put right)";
+    "" if none were. A robot that answers nothing after such a run most likely took a lost
+    byte's neighbours for Stop (173) or Power (133) (``StreamLost``'s ``lost_before``; a
+    fall to Passive, for Start: ``Connection.cable_suspected``)."""
+    lost = connection.lost_on_the_way
+    if not lost:
+        return ""
+    said = ", ".join(
+        f"{what} {'once' if times == 1 else f'{times} times'}" for what, times in lost.items()
+    )
+    return f"bytes from the computer to the robot were lost in this run ({said}, put right)"
 
 
 #: At or below this charge (%) in the last frame, a robot that answers nothing most likely

@@ -41,12 +41,19 @@ log = logging.getLogger(__name__)
 
 #: Most Query Lists of packet 35 at start-up, looking for two consecutive replies that agree.
 START_QUERIES = 4
-NO_ANSWER_CAUSES = (
+#: why a robot may not answer at all, whatever the link: its rate, its power or sleep
+WRONG_RATE = (
     "wrong baud rate (115200 by default; 19200 after Clean held at power-on on a Roomba 500, "
-    "at power-off on a 600 or Create 2, or three BRC pulses after power-on)",
-    "no power or the robot asleep (press Clean or the power button)",
-    "wrong cable or wiring (TX/RX swapped, adapter not a 5 V TTL serial)",
+    "at power-off on a 600 or Create 2, or three BRC pulses after power-on)"
 )
+NOT_AWAKE = "no power or the robot asleep (press Clean or the power button)"
+
+
+def no_answer_causes(port: str) -> tuple[str, str, str]:
+    """Why the robot on ``port`` may not answer: the rate, its power or sleep, and the
+    link's wiring, a cable's or a bridge's serial side (a bridge's user was told to check
+    a cable there is none of)."""
+    return (WRONG_RATE, NOT_AWAKE, link_of(port).wiring)
 
 
 def port_not_opened(url: str, exc: TransportError) -> ConnectionFailed:
@@ -119,7 +126,7 @@ def agreed_mode_reply(
             raise NoAnswer(
                 port,
                 f"the robot did not answer {asked} for packet 35 within {timeout:g} s",
-                NO_ANSWER_CAUSES,
+                no_answer_causes(port),
             )
         replies.append(reply[OI_MODE_PACKET])
         if len(replies) >= 2:
@@ -130,7 +137,7 @@ def agreed_mode_reply(
         port,
         f"{START_QUERIES} replies to a Query List for packet 35 never agreed twice in a row "
         f"({replies})",
-        ("a noisy line", *NO_ANSWER_CAUSES[:1], "another program talking to the robot"),
+        ("a noisy line", WRONG_RATE, "another program talking to the robot"),
     )
 
 
@@ -147,12 +154,11 @@ def not_a_mode(port: str, raw: int) -> ConnectionFailed:
             port,
             f"the port gives back what is written to it (it answered {raw}, the first byte of "
             "the Query List just sent, for the OI mode): a loopback, not a robot",
-            ("loop:// or another test port given as the robot's", "a cable or adapter whose "
-             "transmit and receive lines are joined", "the wrong device"),
-        )  # fmt: skip
+            link_of(port).echo_causes,
+        )
     return ConnectionFailed(
         port,
         f"the robot answered {raw} for its OI mode right after Start, "
         f"which is no mode (Passive reads 1, or 2 on firmware that reports mode + 1)",
-        (*NO_ANSWER_CAUSES[:1], "another program talking to the robot"),
+        (WRONG_RATE, "another program talking to the robot"),
     )

@@ -82,11 +82,13 @@ class StubRobot(BaseHandle):
         return self._snapshot
 
     def flush(self) -> list[Command]:
-        """What the runtime would write after this tick (no guard): recorded in ``sent``.
+        """What the runtime would write after this tick (no guard): recorded in ``sent``, and
+        written to the outbox's record (:meth:`Outbox.written`, the songs ``play`` times).
         A built-in cycle among them may drive until a command ends it, as the runtime's
         writer keeps it (the next frame's ``snapshot.cycle_may_run``)."""
         out = self._outbox.drain()
         self.sent.extend(out)
         for command in out:
             self._cycle_may_run = command.spec.cycle_may_run_after(self._cycle_may_run)
+            self._outbox.written(command)  # as the runtime's flush: the robot obeys it now
         return out

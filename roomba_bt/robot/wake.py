@@ -30,6 +30,7 @@ from collections.abc import Callable
 from contextlib import AbstractContextManager
 from typing import Protocol, runtime_checkable
 
+from roomba_bt.robot import wording
 from roomba_bt.robot.errors import StreamStalled
 from roomba_bt.transport.link_kind import LinkKind, link_of
 
@@ -122,19 +123,18 @@ class KeepAwake:
             # what keep-awake is, whether it matters and how to silence it: "keep-awake off
             # (...: [Errno 25] Inappropriate ioctl for device): Passive sleeps after 5 min
             # (-v: why; --no-keep-awake)" on every pty run said none of it to a hobbyist
-            words = link_of(getattr(self.line, "name", ""))
+            words, caller = link_of(getattr(self.line, "name", "")), wording.current
             log.warning(
                 "keep-awake (a BRC pulse a minute: Passive never sleeps) is off: %s; %s; "
-                "--no-keep-awake silences this (-v: why)",
-                words.no_modem_lines, words.sleep_advice,
+                "%s silences this (%s)",
+                words.no_modem_lines, words.sleep_advice, caller.keep_awake_off, caller.why,
             )  # fmt: skip
             log.debug(
                 "keep-awake off (%s): no hang-up pulse instead (it would blank the stream for its "
                 "second). A pty or a plain socket has no modem lines: the simulator serves "
-                "them with --rfc2217; run --no-keep-awake (from Python: Connection.open(..., "
-                "keep_awake=False) or RunStack(..., keep_awake=False)) says it is meant",
-                exc.strerror or exc,
-            )
+                "them with --rfc2217; %s says it is meant",
+                exc.strerror or exc, caller.keep_awake_off,
+            )  # fmt: skip
 
     def _say_the_wake(self) -> None:
         """Said once, at the first pulse the line took: a robot that slept on its dock

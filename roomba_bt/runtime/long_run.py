@@ -39,6 +39,7 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT, encoder_delta
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.interface import Odometer, Odometry, Snapshot
+from roomba_bt.robot.weak import weakly
 from roomba_bt.runtime.motion_watch import MotionWatch
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
@@ -183,8 +184,11 @@ class RobotCycleWatch:
         self.odometer = odometer
         self.clock = clock
         writer = connection.writer
-        writer.on_passive = self._entered_passive
-        writer.on_cycle_end = self.leaving_passive
+        # weakly: the writer is the connection's, which its finalizer's safe stop reaches;
+        # a strong hook back to this watch (which holds the connection) kept every run's
+        # connection, simulator and tree alive for ever (robot/weak.py)
+        writer.on_passive = weakly(self._entered_passive, None)
+        writer.on_cycle_end = weakly(self.leaving_passive, None)
         #: the robot is in a Passive the run's commands or its own fall put it in (the run
         #: starts there), until a Safe, Full or Stop of the run's is written
         self._in_passive = True

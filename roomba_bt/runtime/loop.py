@@ -796,10 +796,10 @@ def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None
         summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
     elif isinstance(exc, ConnectionFailed):
         summary.outcome = Outcome.CONNECTION_LOST if answered else Outcome.NO_CONNECTION
-        summary.reason = str(exc)
+        summary.reason, summary.link_error = str(exc), exc
     elif isinstance(exc, LinkDown):
         summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
-        summary.headline = exc.headline
+        summary.headline, summary.link_error = exc.headline, exc
     else:  # a bug in a behaviour must still end in a safe stop. An OSError is one too: the
         # link turns its own I/O errors into LinkDown (PortLost) and ConnectionFailed where
         # it reads and writes (robot/link.py), so a bare one came from a behaviour's code

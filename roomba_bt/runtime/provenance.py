@@ -322,6 +322,19 @@ def changed_since(
     return [*changed_sources(header, files, record), *changed_plugins(header, root)]
 
 
+#: the CHANGELOG's section for a 0.1.0 set-up (records, missions and plugins of 0.1.0)
+UPGRADING = "Upgrading from 0.1.0"
+
+
+def made_by_said(header: Mapping[str, Any]) -> str:
+    """The release that made the record, as a replay says it: ``roomba-bt 0.2.0``, or for a
+    header that names none (``roomba_bt_version`` is written since 0.2.0) what that tells."""
+    made_by = header.get(MADE_BY)
+    if isinstance(made_by, str):
+        return f"roomba-bt {made_by}"
+    return "roomba-bt 0.1.0 or earlier, as the record names no release"
+
+
 def drift_line(
     header: Mapping[str, Any], sources: list[str], plugins: list[str], *, same_bytes: bool
 ) -> str | None:
@@ -332,10 +345,17 @@ def drift_line(
     wrote the recorded bytes, and a release alone is not said then (the bytes are the news:
     an older record that still replays is the common case, and a line on every one would be
     noise); when they differ it is, for a runtime that changed may be the cause where no
-    file did. A record made before ``roomba_bt_version`` was written says nothing."""
+    file did. A record made before ``roomba_bt_version`` was written (by 0.1.0) is said as
+    such when its bytes differ, with where its changes are listed: its replay said only the
+    opcode of the first difference, and the upgrader had to work out the cause from it."""
     made_by = header.get(MADE_BY)
     if not isinstance(made_by, str):
-        return None
+        if same_bytes:
+            return None
+        return (
+            f"recorded by {made_by_said(header)}; this is {__version__}: what replays "
+            f'differently is in the CHANGELOG, "{UPGRADING}"'
+        )
     release = made_by != __version__
     if not sources and not plugins and (same_bytes or not release):
         return None

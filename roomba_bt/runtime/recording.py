@@ -421,13 +421,18 @@ class RecordingTransport:
         try:
             self._inner.close()
         finally:
-            if not self._file.closed:
-                now = self._inner.now()
-                t = now - (self._t0 if self._t0 is not None else now)
-                self._put(f'{{"t": {t:.6f}, "d": "end"}}\n', now)
-            self.flush()
-            if not self._file.closed:
-                self._file.close()
+            self.end_record()
+
+    def end_record(self) -> None:
+        """End the record with its end line and close its file, the link left as it is (a
+        connection a program handed to the run stays open: ``RunStack.close``)."""
+        if not self._file.closed:
+            now = self._inner.now()
+            t = now - (self._t0 if self._t0 is not None else now)
+            self._put(f'{{"t": {t:.6f}, "d": "end"}}\n', now)
+        self.flush()
+        if not self._file.closed:
+            self._file.close()
 
     @property
     def is_open(self) -> bool:

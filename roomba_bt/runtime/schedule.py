@@ -59,6 +59,17 @@ WIDEST_SPREAD = 0.1
 #: the least of a jittery run sits a few ms above the schedule (0-80 ms of jitter: 2 frames
 #: made in 10 min, against 13 at half a slot, every one lost frame of 40 counted)
 COUNT_LATE = 2 / 3 * SLOT_SECONDS
+#: A run of this many batches, each spaced as the stream is and all later than the link's
+#: jitter reaches (:attr:`SlotSchedule.spread`, and :data:`PROMPT_MARGIN`), is counted at
+#: once, not after its window
+PROMPT_BATCHES = 8
+PROMPT_MARGIN = 0.2 * SLOT_SECONDS
+#: ... on a link whose jitter reaches less than this (0.8 slot): its least lateness over
+#: those batches is then a whole number of slots lost and less jitter than the count's
+#: COUNT_LATE
+PROMPT_REACH = 0.8 * SLOT_SECONDS
+#: How fast the runs' reach is forgotten: a ms a second
+REACH_DECAY = 0.001
 #: How far the schedule follows a late frame, per frame (0.5 % of a slot, 75 us)
 DRIFT = 0.005 * SLOT_SECONDS
 #: How fast :attr:`SlotSchedule.spread` forgets a late frame, per frame (12 s from 12 ms)
@@ -76,7 +87,8 @@ class SlotSchedule:
     """When the robot's frames are due on the link's clock, and what a batch spans."""
 
     __slots__ = (
-        "_run_began", "_run_last", "_run_late", "_run_least", "_run_restart", "_run_tick",
+        "_reach", "_run_batches", "_run_began", "_run_last", "_run_late", "_run_least",
+        "_run_most", "_run_restart", "_run_tick",
         "due", "spread", "tick",
     )  # fmt: skip
 
@@ -93,6 +105,11 @@ class SlotSchedule:
         self._run_last = 0.0  # when its last batch came
         self._run_began = 0.0  # and its first
         self._run_restart = False  # it began after a long gap or a stall ridden through
+        self._run_batches = 0  # its batches spaced as the stream is
+        self._run_most = 0.0  # the greatest lateness of its batches
+        #: how late jitter made the runs before this one (the most of each, less what it
+        #: lost), forgetting by REACH_DECAY a second
+        self._reach = 0.0
 
     def run_window(self) -> float:
         """How long a run of late batches lasts before it is counted as frames lost: a
@@ -144,6 +161,8 @@ class SlotSchedule:
                 else:  # what is still late goes on as a run of its own (frames lost since)
                     self._run_tick, self._run_began = tick + count + lost, arrival
                     self._run_least = self._run_late = late - lost * SLOT_SECONDS
+                    self._run_most = self._run_most - lost * SLOT_SECONDS
+                    self._run_batches = 1
                     self.due = on_time + lost * SLOT_SECONDS
                 return count + lost
         on_time += lost * SLOT_SECONDS
@@ -153,6 +172,23 @@ class SlotSchedule:
             spread = self.spread
             self.spread = late if late > spread else spread - SPREAD_DECAY
         return count + lost
+
+    def _beyond_jitter(self) -> bool:
+        """Whether the run's batches have all come later than the link's jitter reaches
+        (:attr:`spread`, and the runs before: :attr:`_reach`) by :data:`PROMPT_MARGIN`, for
+        :data:`PROMPT_BATCHES` batches: frames lost, told without waiting for the window
+        (jitter holds back a few frames, never every one beyond its reach). Only on a link
+        whose jitter is known (past its first half second) and under :data:`PROMPT_REACH`:
+        on a jitterier one, a run's least lateness over a few batches holds jitter of a slot
+        or more, which could be read as a frame lost; nor after a gap, where the stream may
+        have come back at another phase."""
+        jitter = max(self.spread, self._reach)
+        return (
+            self._run_batches >= PROMPT_BATCHES
+            and START_SPREAD < jitter < PROMPT_REACH
+            and not self._run_restart
+            and self._run_least >= jitter + PROMPT_MARGIN
+        )
 
     def _run_on(
         self, count: int, arrival: float, tick: int, late: float, restart: bool, calm: bool
@@ -165,15 +201,21 @@ class SlotSchedule:
         link's :attr:`spread` to the fall (a lost frame makes none), as a late frame on time
         does; else the spread decays, as on time."""
         if self._run_tick != tick:  # the first of the run
+            forgot = (arrival - self._run_last) * REACH_DECAY
+            self._reach = max(self._run_most, self._reach - forgot)
             self._run_began, self._run_restart, self._run_least = arrival, restart, late
+            self._run_batches, self._run_most = 1, late
         else:
             fall = self._run_late - late  # (a backlog's is no jitter)
             spread = self.spread
             self.spread = fall if fall > spread and not self._run_restart else spread - SPREAD_DECAY
             self._run_least = min(late, self._run_least)
+            self._run_most = max(late, self._run_most)
             self._run_restart = self._run_restart or restart
             window = 0.0 if calm else self.run_window()
-            if arrival - self._run_began >= window and arrival - self._run_last >= LOST_LATE:
-                return self._run_least
+            if arrival - self._run_last >= LOST_LATE:
+                self._run_batches += 1
+                if arrival - self._run_began >= window or self._beyond_jitter():
+                    return self._run_least
         self._run_tick, self._run_late, self._run_last = tick + count, late, arrival
         return None

@@ -20,7 +20,7 @@ import contextlib
 import logging
 import threading
 from collections import deque
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Generator, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -33,7 +33,7 @@ from roomba_bt.behaviours.lean import check_updates
 from roomba_bt.mission.build import blackboard_within, set_up_tree
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
-from roomba_bt.robot.errors import DEFAULT_WATCHDOG
+from roomba_bt.robot.errors import DEFAULT_WATCHDOG, ConnectionClosed
 from roomba_bt.robot.stall_asks import STREAM_AGAIN_NOTE
 from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.clock import mission_time_after
@@ -202,9 +202,10 @@ class RunStack:
     a :class:`~roomba_bt.robot.connection.Connection` a program opened and drove by hand:
     the run takes it over as it was made (its profile, watchdog, ending, baud, keep-awake:
     giving them here too is a ValueError), starts it again (:meth:`Connection.start`: Start,
-    the mode asked, the mission's stream) and leaves it stopped, in Passive, and open:
-    :meth:`close` closes it, or the program drives on and closes it itself
-    (``docs/runtime.md``, From Python: a connection driven by hand, then a mission).
+    the mode asked, the mission's stream) and leaves it stopped, in Passive, and open, even
+    through :meth:`close` (a ``with`` block's end): who opens closes, the program drives on
+    and closes it itself (``docs/runtime.md``, From Python: a connection driven by hand,
+    then a mission). A closed one is refused (:class:`ConnectionClosed`).
 
     ``tick_limit``: seconds a tick may run while the wheels move before the tick guard sends
     drive 0 (``runtime/tick_guard.py``). ``"default"``, as ``roomba-bt run`` has it:
@@ -267,6 +268,9 @@ class RunStack:
             )
         self.link = link
         self.transport = transport
+        #: whether the stack made its connection, and so closes it (:meth:`close`): who
+        #: opens closes, and a connection the program handed over stays the program's
+        self.owns_connection = connection is None
         if connection is None:
             settings = {name: value for name, value in made.items() if value is not None}
             connection = Connection(transport, profile, **{**settings, "baud": baud})
@@ -336,7 +340,7 @@ class RunStack:
                 summary.record_stopped = self.transport.stopped or ""
             self._ended.set()
 
-    def ticks(self) -> Iterator[Tick]:
+    def ticks(self) -> Generator[Tick, None, None]:
         """The run tick by tick: ``for tick in stack.ticks():`` runs the mission as
         :meth:`run` does, and after each tick of its tree yields a
         :class:`~roomba_bt.runtime.stepping.Tick` (the snapshot, the root's status, the
@@ -351,7 +355,9 @@ class RunStack:
         raised again as :meth:`run` raises it, the robot stopped. The run itself goes on
         in a worker thread (so the tree is ticked as :meth:`run` ticks it, frame by
         frame, at the same cost); on a robot the robot drives on while the body runs, and
-        the tick guard watches the body as it watches a tick. Runs once, as :meth:`run`."""
+        the tick guard watches the body as it watches a tick. Runs once, as :meth:`run`.
+        A generator (typed so): a program that keeps it between its own steps (a gym-like
+        env's ``step()``) ends the run with ``gen.close()``."""
         return ticks(self)
 
     @property
@@ -404,8 +410,12 @@ class RunStack:
             self.stepper.release()
 
     def close(self) -> None:
-        """Close the connection (and the record); a link already gone is no error here: the
-        run's summary has said what happened to it.
+        """Close the connection the stack made (and the record); a link already gone is no
+        error here: the run's summary has said what happened to it. A connection the program
+        handed over (``RunStack(mission, connection)``) stays open, the program's to drive
+        on or close: who opens closes (a ``with RunStack`` per episode over one connection
+        had closed it after the first, and the next run blamed a pulled cable); its record,
+        if any, is ended and taken from under it.
 
         Called from another thread while :meth:`run` goes on (a ``finally:`` in the main
         thread or an asyncio coroutine): :meth:`stop` first, and the run's end awaited (up to
@@ -421,8 +431,13 @@ class RunStack:
                     "blocks?): the connection is closed under it, its safe stop sent from here",
                     self.connection.name, CLOSE_WAIT_S,
                 )  # fmt: skip
-        with contextlib.suppress(Exception):
-            self.connection.close()
+                self.owns_connection = True  # the robot stopped first, whoever opened it
+        if self.owns_connection:
+            with contextlib.suppress(Exception):
+                self.connection.close()
+        elif isinstance(self.transport, RecordingTransport):
+            self.connection.transport = self.link  # the program's link, without the tap
+            self.transport.end_record()
 
 
 def _given(
@@ -446,7 +461,11 @@ def _taken_over(
     connection: Connection, profile: RobotProfile | None, made: Mapping[str, object]
 ) -> Connection:
     """``connection``, which a :class:`RunStack` runs as it was made: the settings given to
-    the stack as well would have been silently another's (its watchdog, say)."""
+    the stack as well would have been silently another's (its watchdog, say). A closed one
+    is refused here: its run failed at the start-up's first write, "the port is gone (the
+    cable was pulled ...)", and sent the user to check a cable the program had closed."""
+    if connection.ending.closed:
+        raise ConnectionClosed(connection.name, "RunStack(mission, connection)")
     given = sorted(name for name, value in made.items() if value is not None)
     if given:
         raise ValueError(

@@ -25,6 +25,7 @@ from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import StreamStalled
 from roomba_bt.robot.hazards import sets_going
 from roomba_bt.robot.interface import Outbox
+from roomba_bt.runtime.schedule import LOST_LATE
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.runtime.tick_guard import TickGuardLike
 
@@ -63,6 +64,9 @@ class StallRide:
         #: (how long it had run then, where): the next batch's gap is that tick's, the robot
         #: at rest (set by :meth:`tick_halted`, read once as ``gap_explained``)
         self.blocked: tuple[float, str] | None = None
+        #: once frames are back, while the frames that waited are read (the stall's
+        #: backlog, over several reads): when the last of its batches came (None: not back)
+        self._backlog_read_at: float | None = None
 
     def tripped(self, stalled: StreamStalled) -> Sequence[SensorFrame]:
         """The watchdog tripped (drive 0 sent): the ride begins, no frames this read; or,
@@ -78,6 +82,7 @@ class StallRide:
             raise stalled
         link = self.connection.link
         self.stall = (link.bytes_read, stalled.halted, link.silent_since)
+        self._backlog_read_at = None
         log.warning(
             "%s%s; waiting up to %g s for valid frames", stalled,
             ", and motors off" if self._motors_off() is not None else "", self.grace,
@@ -86,21 +91,24 @@ class StallRide:
         return ()
 
     def carry_on(self, batch: Sequence[SensorFrame]) -> None:
-        """During a ride, after a read: frames back end it; none raise the stall's cause once
-        the grace is over. (The run's loop reads the stream itself, and calls this only while
-        :attr:`stall` is set: a call a frame less on the tick path.)"""
+        """During a ride, after a read: frames back end the wait; none raise the stall's
+        cause once the grace is over. The wheels and the motors get their commands back once
+        the frames that waited are read (:meth:`_backlog_read`). (The run's loop reads the
+        stream itself, and calls this only while :attr:`stall` is set: a call a frame less
+        on the tick path.)"""
         stall = self.stall
         assert stall is not None
-        if batch:
+        read_at = self._backlog_read_at
+        if read_at is not None:
+            self._backlog_read(batch, read_at)
+        elif batch:
             self._back(stall[2])
         else:
             self.connection.check_stall(stall[0], self.grace, stall[1])
 
     def _back(self, silent_since: float) -> None:
-        """Valid frames came back within the grace: the tree goes on, and the wheels and the
-        motors (which the watchdog turned off with the wheels) get their last commands
-        again unless the tick sends others."""
-        self.stall = None
+        """Valid frames came back within the grace: the tree goes on, on the frames that
+        waited first (a stall's backlog, read over several reads: a network bridge's)."""
         self.gap_explained = True
         self.summary.stalls_ridden += 1
         connection = self.connection
@@ -109,6 +117,21 @@ class StallRide:
             "%s: valid frames are back after %.0f ms; the mission goes on", connection.name,
             gap * 1000, extra={"mission_time": self._clock(gap)},
         )  # fmt: skip
+        self._backlog_read_at = connection.link.arrival
+
+    def _backlog_read(self, batch: Sequence[SensorFrame], read_at: float) -> None:
+        """While the stall's backlog is read: once a batch comes spaced as the stream is (half
+        a slot or more after the one before) or none comes, the frames that waited are
+        read, and the wheels and the motors (which the watchdog turned off with the wheels)
+        get their last commands again unless the tree sent others meanwhile. Given back at
+        the first batch, a turn the backlog's later frames showed done went to the robot
+        once before the tree's next command, the robot on its way back to a stale
+        command."""
+        arrival = self.connection.link.arrival
+        if batch and arrival - read_at < LOST_LATE:
+            self._backlog_read_at = arrival
+            return
+        self.stall = self._backlog_read_at = None
         self._given_back(self._motors_off())
 
     def tick_halted(
@@ -175,6 +198,7 @@ class StallRide:
         if (
             wheels is not None
             and turns_wheels(wheels)
+            and self.connection.writer.last_wheels != wheels  # the tree's own since: it stands
             and self.connection.mode in DRIVING_MODES
             and all(c.spec.channel != "wheels" for c in outbox)
         ):

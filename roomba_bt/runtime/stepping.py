@@ -23,7 +23,7 @@ from __future__ import annotations
 import contextlib
 import queue
 import threading
-from collections.abc import Iterator, Mapping
+from collections.abc import Generator, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -154,7 +154,7 @@ class TickStepper:
         self._go_on.release()
 
 
-def ticks(stack: RunStack) -> Iterator[Tick]:
+def ticks(stack: RunStack) -> Generator[Tick, None, None]:
     """:meth:`RunStack.ticks`: the run in a worker thread, each tick yielded; the run
     stopped, its safe stop written, on every way out of the loop."""
     stepper = TickStepper(stack, stack.runner.observer)

@@ -116,7 +116,8 @@ class RunFailed(RoombaBtError):
     exit with) say how it ended; ``summary`` is the whole report. The robot was stopped
     before it was raised: the run had ended. A run that a behaviour's or an observer's
     exception ended has that exception as ``__cause__`` (and as :attr:`exception`), so
-    Python shows its traceback under this one and a program can test its class."""
+    Python shows its traceback under this one and a program can test its class; a run the
+    link ended, the link's (:attr:`link_error`: ``NoAnswer``, ``PortLost``, ...)."""
 
     def __init__(self, summary: RunSummary) -> None:
         self.summary = summary
@@ -126,6 +127,9 @@ class RunFailed(RoombaBtError):
         #: the exception that ended the run as ERROR (also ``__cause__`` when raised by
         #: :meth:`RunSummary.raise_for_outcome`); None for any other ending
         self.exception = summary.exception
+        #: the link's exception that ended the run (a ``ConnectionFailed`` or a
+        #: ``LinkDown``; also ``__cause__``); None for any other ending
+        self.link_error = summary.link_error
         #: what failed ``--strict`` (``RunStack(..., strict=True)``) in a run whose tree
         #: succeeded; empty for any other failure
         self.findings = tuple(summary.strict_findings()) if summary.failed_strict else ()
@@ -317,6 +321,13 @@ class RunSummary:
     #: caller's own class; None for every other ending. Not shown, not compared: the
     #: summary's text and the CLI say it through :attr:`reason` and :attr:`traceback`
     exception: BaseException | None = field(default=None, repr=False, compare=False)
+    #: the link's own exception that ended the run (a :class:`~roomba_bt.robot.errors.
+    #: ConnectionFailed`: :class:`~roomba_bt.robot.errors.NoAnswer`, the robot not
+    #: answering at the start; a :class:`~roomba_bt.robot.errors.LinkDown`: the port gone,
+    #: the stream stopped), :class:`RunFailed`'s cause, so a program tests its class as a
+    #: ``Connection.start()`` caller does; None for every other ending (lost bytes the
+    #: motion watch gave up on, a safe stop not delivered: no exception said them)
+    link_error: BaseException | None = field(default=None, repr=False, compare=False)
     #: ``--record``: why and when the record stopped before the run's end ("" if it did not)
     record_stopped: str = ""
     #: whether :meth:`lines` says the wall-clock measurements (the wall time, the ticks over
@@ -407,8 +418,8 @@ class RunSummary:
         """This summary, if the run succeeded (and passed ``--strict``, when the run was
         strict); else :class:`RunFailed` carrying it (its outcome, reason and exit code):
         ``stack.run().raise_for_outcome()``."""
-        if self.exit_code != ExitCode.OK:
-            raise RunFailed(self) from self.exception  # the caller's own, when it raised
+        if self.exit_code != ExitCode.OK:  # from the caller's own exception, or the link's
+            raise RunFailed(self) from self.exception or self.link_error
         return self
 
     def take_last(self, snapshot: Snapshot | None) -> None:

@@ -52,6 +52,27 @@ class LinkWords:
     check: str
     #: the likely causes of a port that could not be opened, when its error tells none
     open_causes: tuple[str, ...]
+    #: doctor's fix for a port that could not be opened, its error telling no cause
+    open_fix: str
+    #: why a port was refused (ECONNREFUSED): nothing listens at its address
+    refused: str
+    #: why a port's address could not be reached (no route, the connect timed out); "" where
+    #: no address is crossed
+    unreachable: str
+    #: where bytes between this computer and the robot are lost ("a loose or noisy cable?")
+    lossy: str
+    #: what a byte read wrong after a lost one points at ("a bad cable: a data byte 7 ...")
+    bad_line: str
+    #: what to check when bytes to the robot were found lost ("check the cable and ...")
+    byte_check: str
+    #: what a fall to Passive after such lost bytes points at ("so the cable is a likely cause")
+    serial_side: str
+    #: the robot's silence at start-up laid on the line's wiring (beside a wrong rate, sleep)
+    wiring: str
+    #: why a port gives back what is written to it (a loopback, not a robot)
+    echo_causes: tuple[str, ...]
+    #: how BRC reaches the robot where keep-awake could not pulse it on this port
+    pulse_fix: str
     #: what to do to reach the robot again after a stop that did not get through (then doctor)
     reach: str
     #: what comes back when a port that failed is opened again
@@ -72,10 +93,15 @@ class LinkWords:
     sleep_advice: str
 
 
+# Long on purpose: one phrase a field, a table of the network's words read side by side with
+# the cable's below (a message is worded by reading both)
 def _network_words(port: str) -> LinkWords:
     """A bridge on the network: its address, its power and its Wi-Fi's reach."""
-    where = port.split("://", 1)[1].split("?", 1)[0].rstrip("/")
+    scheme, _, rest = port.partition("://")
+    where = rest.split("?", 1)[0].rstrip("/")
     bridge = f"the bridge at {where}"
+    serves = "--tcp" if scheme.lower() == "socket" else "--rfc2217"
+    serial_side = f"the serial side of {bridge}"
     return LinkWords(
         kind=LinkKind.NETWORK,
         between=bridge,
@@ -94,6 +120,35 @@ def _network_words(port: str) -> LinkWords:
             "a wrong address or port",
             f"{bridge} off, rebooting or out of Wi-Fi range",
             "another client holding it",
+        ),
+        open_fix=(
+            f"check the address, that {bridge} is powered and in Wi-Fi range on this "
+            "computer's network, and that no other client holds it"
+        ),
+        refused=(
+            f"nothing listens at {where}: is the bridge there running, and are its address and "
+            f"port right? (roomba-bt sim {serves} serves one)"
+        ),
+        unreachable=(
+            f"{bridge} cannot be reached: off, rebooting or out of Wi-Fi range, a wrong "
+            "address, or this computer on another network"
+        ),
+        lossy=f"a loose or noisy wire on {serial_side}",
+        bad_line=f"a bad wire on {serial_side}",
+        byte_check=f"{serial_side}, its wiring to the robot: the network delivers bytes whole",
+        serial_side=serial_side,
+        wiring=(
+            f"{serial_side} wired wrong (TX/RX swapped, a 3.3 V bridge without a level shifter on "
+            "the robot's 5 V line) or at another rate than the robot's"
+        ),
+        echo_causes=(
+            f"{bridge} gives back what it is sent (an echo service, or its serial side's "
+            "transmit and receive lines joined)",
+            "the wrong address",
+        ),
+        pulse_fix=(
+            f"BRC must cross {bridge}: rfc2217:// to a bridge that wires BRC to RTS or DTR "
+            "(esp-link can), or BRC on a pin of the bridge"
         ),
         reach=f"wait for {bridge} to come back (it reset, or the Wi-Fi dropped)",
         reopened="the connection",
@@ -129,6 +184,23 @@ def _cable_words(kind: LinkKind, reopens: bool) -> LinkWords:
             "the port in use by another program",
             "permissions",
         ),
+        open_fix=(
+            "check the device path (ls /dev/ttyUSB* /dev/serial/by-id/), that no other "
+            "program has it open, and that you may use it (the dialout group on Linux)"
+        ),
+        refused="nothing listens there (is the bridge, or roomba-bt sim --tcp, running?)",
+        unreachable="",
+        lossy="a loose or noisy cable",
+        bad_line="a bad cable",
+        byte_check="the cable and its adapter",
+        serial_side="the cable",
+        wiring="wrong cable or wiring (TX/RX swapped, adapter not a 5 V TTL serial)",
+        echo_causes=(
+            "loop:// or another test port given as the robot's",
+            "a cable or adapter whose transmit and receive lines are joined",
+            "the wrong device",
+        ),
+        pulse_fix="use a USB cable with BRC on RTS or DTR, or an rfc2217:// bridge",
         reach="reseat the cable",
         reopened="the port",
         # never said: a device path's silence is the stream's or the robot's (the port

@@ -16,7 +16,7 @@ import stat
 
 from serial.tools import list_ports
 
-from roomba_bt.transport.link_kind import NETWORK_PORTS
+from roomba_bt.transport.link_kind import NETWORK_PORTS, link_of
 
 #: why a device that another process holds (``flock``) was not opened
 IN_USE = (
@@ -48,6 +48,9 @@ CLOSED_AT_ONCE = (
 )
 #: the error numbers of a connection the far end closed (a write after its close, a reset)
 CLOSED_ERRORS = (errno.EPIPE, errno.ECONNRESET, errno.ECONNABORTED)
+#: the error numbers of an address that could not be reached: no route to it, or its
+#: connect unanswered (a bridge off, rebooting or out of Wi-Fi range)
+UNREACHABLE_ERRORS = (errno.EHOSTUNREACH, errno.ENETUNREACH, errno.EHOSTDOWN, errno.ETIMEDOUT)
 #: pyserial's ``socket://`` read of a connection the far end closed (no error number)
 SOCKET_CLOSED_TEXT = "socket disconnected"
 
@@ -120,7 +123,9 @@ def open_failure(device: str, code: int | None) -> str | None:
     if code == errno.ENOTTY:
         return "not a serial port: a device, but no terminal (a USB serial adapter is /dev/ttyUSB*)"
     if code == errno.ECONNREFUSED:
-        return "nothing listens there (is the bridge, or roomba-bt sim --tcp, running?)"
+        return link_of(device).refused
+    if code in UNREACHABLE_ERRORS:
+        return link_of(device).unreachable or None
     if code in CLOSED_ERRORS and device.lower().startswith(NETWORK_PORTS):
         return CLOSED_AT_ONCE  # an rfc2217:// server closed it while it was negotiated
     if code == errno.ENOENT:
@@ -186,7 +191,8 @@ def no_such_device() -> str:
 
 def error_number(exc: BaseException) -> int | None:
     """The error number of ``exc`` or of the error it was raised from: pyserial wraps a
-    refused socket or a termios failure in a SerialException that has none of its own."""
+    refused socket or a termios failure in a SerialException that has none of its own; a
+    connect that timed out (no number of its own) is ETIMEDOUT."""
     seen: BaseException | None = exc
     for _ in range(4):  # the chain, a few links deep
         if seen is None:
@@ -194,6 +200,8 @@ def error_number(exc: BaseException) -> int | None:
         code = getattr(seen, "errno", None)
         if isinstance(code, int):
             return code
+        if isinstance(seen, TimeoutError):  # a connect unanswered: socket.timeout, no number
+            return errno.ETIMEDOUT
         args = getattr(seen, "args", ())
         if seen is not exc and args and isinstance(args[0], int):  # termios.error(25, ...)
             return args[0]

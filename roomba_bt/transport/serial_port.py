@@ -28,7 +28,7 @@ from collections.abc import Iterator
 from typing import Any
 
 import serial
-from serial import rfc2217
+from serial import rfc2217, serialutil
 from serial.urlhandler import protocol_socket
 
 from roomba_bt.transport.base import TransportError
@@ -214,26 +214,46 @@ class _ConnectWithin:
         return getattr(socket, name)
 
 
-#: one reconnection's bound on the handlers' connect at a time (:func:`_connect_within`)
-_CONNECT_BOUND = threading.Lock()
-#: pyserial's network handlers, whose connect :func:`_connect_within` bounds
+class _TimeoutBefore:
+    """pyserial's ``Timeout`` as its RFC 2217 handler makes them while a reconnection tries:
+    each ends by ``deadline`` (``time.monotonic``) at the latest. The handler's negotiation
+    waits its network timeout (3 s, a URL's ``?timeout=``) for each step (the Telnet
+    options, the port's settings, flow control, the modem lines), whatever a caller has
+    left: a bridge that connects and does not answer the options held the safe stop 3 s
+    past the grace."""
+
+    def __init__(self, deadline: float) -> None:
+        self._deadline = deadline
+
+    def __call__(self, duration: float | None) -> serialutil.Timeout:
+        left = max(self._deadline - time.monotonic(), 0.0)
+        return serialutil.Timeout(left if duration is None else min(duration, left))
+
+
+#: one reconnection's bound on the handlers' open at a time (:func:`_open_within`)
+_OPEN_BOUND = threading.Lock()
+#: pyserial's network handlers, whose connect :func:`_open_within` bounds
 _NETWORK_HANDLERS = (protocol_socket, rfc2217)
 
 
 @contextlib.contextmanager
-def _connect_within(seconds: float) -> Iterator[None]:
-    """pyserial's network handlers connect within ``seconds`` inside the block
-    (:class:`_ConnectWithin`): a bridge that does not answer at all (an ESP8266 still
-    rebooting, out of Wi-Fi range: no refusal, the SYN unanswered) held one try of the safe
-    stop's reconnection 5 s, past a 2 s grace. The handlers' module name is swapped for the
-    block, under a lock; another thread's connect meanwhile is bounded too, and nothing
-    else changes for it."""
-    with _CONNECT_BOUND:
+def _open_within(seconds: float) -> Iterator[None]:
+    """pyserial's network handlers open within ``seconds`` inside the block: their connect
+    (:class:`_ConnectWithin`; a bridge that does not answer at all, an ESP8266 still
+    rebooting or out of Wi-Fi range, no refusal, the SYN unanswered, held one try of the
+    safe stop's reconnection 5 s, past a 2 s grace), and the RFC 2217 handler's
+    negotiation after it (:class:`_TimeoutBefore`). The handlers' module names are swapped
+    for the block, under a lock; another thread's open meanwhile is bounded too, and
+    nothing else changes for it."""
+    deadline = time.monotonic() + seconds
+    with _OPEN_BOUND:
         for handler in _NETWORK_HANDLERS:
             handler.socket = _ConnectWithin(seconds)  # type: ignore[attr-defined]
+        rfc2217.Timeout = _TimeoutBefore(deadline)  # type: ignore[attr-defined]
         try:
             yield
         finally:
+            rfc2217.Timeout = serialutil.Timeout  # type: ignore[attr-defined]
             for handler in _NETWORK_HANDLERS:
                 handler.socket = socket  # type: ignore[attr-defined]
 
@@ -548,9 +568,10 @@ class SerialTransport:
         that rebooted or a network that dropped the connection. The seconds it took, or None
         if it did not come back. A device is tried every :data:`REOPEN_EVERY_S`; a bridge
         with a backoff (:data:`RECONNECT_FIRST_S` doubling to :data:`RECONNECT_MOST_S`), each
-        try's TCP connect waiting what is left of ``within`` (:data:`CONNECT_LEAST_S` at
-        least; pyserial's own is 5 s, for a host that does not answer at all). An RFC 2217
-        server that connects may still take pyserial's 3 s to negotiate.
+        try's TCP connect, and an RFC 2217 server's negotiation after it, waiting what is
+        left of ``within`` (:data:`CONNECT_LEAST_S` at least; pyserial's own are 5 s for a
+        host that does not answer at all and 3 s for each step of a negotiation not
+        answered).
 
         The old port is closed first: while it is held open, Linux keeps the vanished
         device's number taken, and the adapter that comes back gets the next one
@@ -579,7 +600,7 @@ class SerialTransport:
                     port.open()
                 else:
                     left = within - (time.monotonic() - began)
-                    with _connect_within(max(left, CONNECT_LEAST_S)):
+                    with _open_within(max(left, CONNECT_LEAST_S)):
                         port.open()
                 if _closed_at_once(port):
                     _close_port(port)

@@ -26,7 +26,7 @@ from typing import Any, NoReturn
 
 import yaml
 
-from roomba_bt.printable import CONTROL
+from roomba_bt.printable import CONTROL, repr_written
 
 #: libyaml's parser where installed (much faster on large missions), else PyYAML's own
 FAST_LOADER: type[Any] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -55,9 +55,11 @@ QUOTE_LIMIT = 60
 
 
 def quoted(value: object, limit: int = QUOTE_LIMIT) -> str:
-    """``repr(value)`` for a diagnostic, a long one cut and its length said:
+    """``repr(value)`` for a diagnostic, each backslash as written (a Windows path
+    ``'C:\\missions\\a.yaml'`` was said with each one doubled) and a long one cut, its
+    length said:
     ``'root:x:0:0:root:/root:/bin/bash daemon:x:1:1:daemon:/usr/sb... (1,234 characters)``."""
-    text = repr(value)
+    text = repr_written(value)
     if len(text) <= limit:
         return text
     return f"{text[:limit]}... ({len(str(value)):,} characters)"

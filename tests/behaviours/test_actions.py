@@ -353,6 +353,32 @@ def test_leds(robot: StubRobot, make: Make) -> None:
     assert data(robot) == [[139, 4, 255, 255]]
 
 
+@pytest.mark.parametrize(
+    ("written", "byte"), [("green", 0), ("orange", 128), ("amber", 128), ("red", 255), (200, 200)]
+)
+def test_the_power_led_colour_is_a_name_or_the_spec_s_byte(
+    robot: StubRobot, make: Make, written: object, byte: int
+) -> None:
+    """``power_color: red`` said "expected an integer" until session 33."""
+    tick(make(a.Leds, power_color=a.POWER_COLOR.parse(written)))
+    assert data(robot) == [[139, 0, byte, 0]]
+
+
+@pytest.mark.parametrize(
+    ("written", "said"),
+    [("rde", "got 'rde' (did you mean 'red'?): "), ("blue", "got 'blue': "), (1.5, "got 1.5: ")],
+)
+def test_a_power_led_colour_it_does_not_have_is_refused_listing_what_it_has(
+    written: object, said: str
+) -> None:
+    with pytest.raises(a.UnitError) as caught:
+        a.POWER_COLOR.parse(written)
+    assert str(caught.value) == (
+        f"expected a power LED colour, {said}one of green (0), orange or amber (128), red "
+        "(255), or a number 0..255 (the spec's byte: 0 green .. 255 red, the colours between)"
+    )
+
+
 def test_song_and_play(robot: StubRobot, make: Make) -> None:
     tick(make(a.Song, number=1, notes=((60, 16), (0, 8))))
     tick(make(a.Play, number=1))
@@ -392,6 +418,60 @@ def test_play_fails_when_the_song_never_shows(robot: StubRobot, make: Make) -> N
     assert play.status is Status.FAILURE  # on the first frame SONG_START_S after the Play
     assert a.SONG_START_S <= robot.snapshot.time < a.SONG_START_S + SLOT_SECONDS
     assert play.feedback_message.startswith("song 3 did not start: packet 37 showed no song")
+
+
+def _defined(robot: StubRobot, make: Make, number: int, notes: tuple[tuple[int, int], ...]) -> None:
+    """Song ``number`` written to the robot (its length is what ``play`` goes by)."""
+    tick(make(a.Song, number=number, notes=notes))
+    robot.flush()
+
+
+@pytest.mark.parametrize("notes", [((60, 1),), ((60, 1), (62, 1))])
+def test_play_of_a_song_too_short_for_packet_37_succeeds_once_it_is_over(
+    robot: StubRobot, make: Make, notes: tuple[tuple[int, int], ...]
+) -> None:
+    """One or two notes of 1/64 s can start and end between two frames' values: packet 37
+    never shows them, and ``play`` failed after 0.25 s although the robot played the song.
+    It succeeds on the first frame taken after the song's end however late in its frame the
+    Play arrived (its length and a frame after the Play's tick), said."""
+    _defined(robot, make, 2, notes)
+    seconds = sum(d for _, d in notes) / 64
+    play = make(a.Play, number=2)
+    sent_at = robot.snapshot.time
+    while tick(play) is Status.RUNNING:
+        robot.set_frame({**SAFE, 37: 0})
+    assert play.status is Status.SUCCESS
+    elapsed = robot.snapshot.time - sent_at
+    assert seconds + SLOT_SECONDS <= elapsed < seconds + 2 * SLOT_SECONDS
+    assert play.feedback_message.startswith(f"song 2 lasts {seconds * 1000:g} ms, too short")
+
+
+def test_play_of_a_short_song_another_song_kept_off_fails(robot: StubRobot, make: Make) -> None:
+    """A frame showed a song playing (another slot's, packet 36): the robot ignored this
+    Play, whose song's length passing proves nothing."""
+    _defined(robot, make, 2, ((60, 1),))
+    play = make(a.Play, number=2)
+    assert tick(play) is Status.RUNNING
+    robot.set_frame({**SAFE, 36: 0, 37: 1})
+    assert tick(play) is Status.RUNNING
+    while tick(play) is Status.RUNNING:
+        robot.set_frame({**SAFE, 36: 0, 37: 0})
+    assert play.status is Status.FAILURE
+
+
+@pytest.mark.parametrize("defined", [None, ((60, 4),)])
+def test_play_of_a_song_unseen_fails_unless_this_run_defined_it_short(
+    robot: StubRobot, make: Make, defined: tuple[tuple[int, int], ...] | None
+) -> None:
+    """A slot this run wrote no song to (its length unknown) or a song of 1/16 s, which the
+    stream shows: not seen, not played."""
+    if defined is not None:
+        _defined(robot, make, 2, defined)
+    play = make(a.Play, number=2)
+    while tick(play) is Status.RUNNING:
+        robot.set_frame({**SAFE, 37: 0})
+    assert play.status is Status.FAILURE
+    assert play.feedback_message.startswith("song 2 did not start")
 
 
 def test_play_with_packet_36_waits_for_its_own_slot_and_fails_on_another(

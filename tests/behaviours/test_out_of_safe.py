@@ -1,5 +1,7 @@
 """Every wheel and motor action that would start out of Safe and Full, where the mode guard
-refuses its commands, fails at once, saying the mode, the robot's fall and the fix.
+refuses its commands, fails at once, saying the mode, the robot's fall and the fix; so do
+the LEDs, the display and ``play`` (they said SUCCESS for what never happened until session
+33), and ``stop`` says what holds there.
 
 A ``turn`` started after a wheel drop had dropped the robot to Passive sent nothing and
 waited for ever (maker finding 2, session 32): its run ended at ``--timeout`` with "ran out
@@ -15,7 +17,7 @@ import pytest
 from py_trees.common import Status
 
 from roomba_bt.behaviours import builtin_registry
-from roomba_bt.behaviours.actions import Vacuum
+from roomba_bt.behaviours.actions import Stop, Vacuum
 from roomba_bt.behaviours.declare import Declaration, RobotBehaviour
 from roomba_bt.behaviours.driving import needs_mode_message
 from roomba_bt.oi import commands as oi
@@ -179,3 +181,93 @@ def test_on_a_charger_that_refused_safe_the_message_says_how_to_start_off_it() -
     message = needs_mode_message("drive", DRIVING_MODES, snap)
     assert "(charger): drive needs Safe or Full" in message
     assert "undock" in message
+
+
+def _shows_in_safe_only(declaration: Declaration) -> bool:
+    """A leaf that sends only commands Safe and Full take, none of them on the wheels or
+    motors (the LEDs, the display, the speaker): nothing of it moves, and nothing of it
+    happens in Passive."""
+    specs = [COMMANDS[opcode] for opcode in declaration.sends]
+    return bool(specs) and all(
+        spec.modes == DRIVING_MODES and spec.channel not in ("wheels", "motors") for spec in specs
+    )
+
+
+SHOWS = sorted(d.name for d in builtin_registry() if _shows_in_safe_only(d))
+#: what each needs to be built (``schedule_leds`` and ``leds`` with none given still send)
+_SHOW_PARAMS: dict[str, dict[str, Any]] = {"display": {"text": "hi"}, "play": {"number": 1}}
+
+
+def test_the_shows_are_the_led_display_and_song_leaves() -> None:
+    assert set(SHOWS) >= {"leds", "display", "schedule_leds", "play"}
+
+
+@pytest.mark.parametrize("name", SHOWS)
+def test_a_show_in_passive_fails_at_once_naming_its_command_sending_nothing(
+    make: Make, name: str
+) -> None:
+    """The guard keeps the bytes off the wire (Passive takes no actuator command, both
+    specs); until session 33 the leaf said SUCCESS, and the mission went on as if the LEDs
+    had lit or the song had played."""
+    declaration = builtin_registry().get(name)
+    assert declaration is not None
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    robot.set_frame({35: OIMode.PASSIVE})
+    behaviour = make(declaration.cls, robot=robot, **_SHOW_PARAMS.get(name, {}))
+    assert tick(behaviour) is Status.FAILURE
+    assert robot.flush() == []
+    (spec,) = (COMMANDS[opcode] for opcode in declaration.sends)
+    assert behaviour.feedback_message == (
+        f"the robot is in Passive: {name} ({spec.title} {spec.opcode}) needs Safe or Full; "
+        "put `mode: safe` before it, e.g. in a retry"
+    )
+
+
+@pytest.mark.parametrize("name", SHOWS)
+def test_a_show_after_a_safe_queued_in_its_tick_is_sent(make: Make, name: str) -> None:
+    """A ``parallel``'s ``mode: safe`` queued before it in the same tick is written first."""
+    declaration = builtin_registry().get(name)
+    assert declaration is not None
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    robot.set_frame({35: OIMode.PASSIVE})
+    robot.outbox.send(oi.safe())
+    behaviour = make(declaration.cls, robot=robot, **_SHOW_PARAMS.get(name, {}))
+    assert tick(behaviour) is not Status.FAILURE, behaviour.feedback_message
+    assert [c.opcode for c in robot.flush()] == [131, *declaration.sends]
+
+
+@pytest.mark.parametrize("motors", [False, True])
+def test_stop_out_of_safe_succeeds_sending_nothing_the_robot_being_stopped(
+    make: Make, motors: bool
+) -> None:
+    """Decided (session 33, docs/protocol.md): both specs say the robot "stops all motors
+    and reverts to the Passive mode" when it falls, so what ``stop`` asks for holds; the
+    Drive 0 the guard would refuse is not queued (it was, and counted as a refusal)."""
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    robot.set_frame({35: OIMode.PASSIVE})
+    stop = make(Stop, robot=robot, motors=motors)
+    assert tick(stop) is Status.SUCCESS
+    assert robot.flush() == []
+    assert stop.feedback_message.startswith(
+        "the robot is in Passive: its wheels and motors are stopped already"
+    )
+
+
+def test_stop_out_of_safe_fails_while_a_cycle_may_drive(make: Make) -> None:
+    """Drive 0 cannot stop a Clean in Passive: FAILURE, with the way that does (Safe)."""
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    robot.outbox.send(oi.clean())
+    robot.flush()
+    robot.set_frame({35: OIMode.PASSIVE})
+    stop = make(Stop, robot=robot)
+    assert tick(stop) is Status.FAILURE
+    assert robot.flush() == []
+    assert "its own cycle may be driving it" in stop.feedback_message
+    assert "put `mode: safe` before stop" in stop.feedback_message
+
+
+def test_stop_in_safe_sends_drive_0(make: Make) -> None:
+    robot = StubRobot(mode=OIMode.SAFE)
+    robot.set_frame({35: OIMode.SAFE})
+    assert tick(make(Stop, robot=robot, motors=True)) is Status.SUCCESS
+    assert [list(c.data) for c in robot.flush()] == [[137, 0, 0, 0, 0], [138, 0]]

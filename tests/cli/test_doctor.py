@@ -700,3 +700,49 @@ def test_a_device_path_keeps_the_cable_s_words() -> None:
         assert _link_fix(OSError("gone"), report.fixes) == (
             "check the cable and the robot's power, then run doctor again"
         )
+
+
+class _OpenFailsUntold:
+    """A transport whose open fails with an error that tells no cause (no error number)."""
+
+    @classmethod
+    def open(cls, url: str, *args: Any, **kwargs: Any) -> SerialTransport:
+        raise TransportError(url, "open the port", RuntimeError("the handler gave up"))
+
+
+def test_a_bridge_that_does_not_open_is_told_by_its_address_not_a_device_path(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The fix of an open failure whose error told nothing was the device path's
+    (``ls /dev/ttyUSB*``, the dialout group) on a bridge's URL too."""
+    monkeypatch.setattr(transport_package, "SerialTransport", _OpenFailsUntold)
+    code = doctor_command(
+        argparse.Namespace(port=BRIDGE_PORT, baud=None, allow_reset=False, listen=None)
+    )
+    out = capsys.readouterr().out
+    assert code == DoctorExit.PORT
+    assert _fix_of(out, "port") == (
+        f"fix: check the address, that {BRIDGE} is powered and in Wi-Fi range on this "
+        "computer's network, and that no other client holds it"
+    )
+    assert "/dev/tty" not in out and "dialout" not in out
+
+
+@pytest.mark.parametrize(("scheme", "serves"), [("socket", "--tcp"), ("rfc2217", "--rfc2217")])
+def test_a_bridge_not_listening_is_named_by_its_address(scheme: str, serves: str) -> None:
+    """Refused: "nothing listens there (is the bridge, or roomba-bt sim --tcp, running?)"
+    named neither the address nor, on rfc2217://, the simulator's option that serves it."""
+    import socket
+
+    with socket.socket() as unused:  # a port nothing listens on
+        unused.bind(("127.0.0.1", 0))
+        closed = unused.getsockname()[1]
+    done = _doctor(f"{scheme}://127.0.0.1:{closed}")
+    assert done.returncode == DoctorExit.PORT
+    assert f"nothing listens at 127.0.0.1:{closed}: is the bridge there running" in done.stdout
+    assert f"(roomba-bt sim {serves} serves one)" in done.stdout
+
+
+def test_listen_s_help_names_a_network_bridge_beside_a_cable() -> None:
+    help_text = " ".join(_cli("doctor", "--help").stdout.split())
+    assert "an intermittent line, a cable or a network bridge's Wi-Fi" in help_text

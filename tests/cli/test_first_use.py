@@ -236,7 +236,9 @@ def test_show_prints_parameter_values_with_their_units(
     )
     assert main(["show", str(path), "-p", "side=50cm"]) == 0
     out = capsys.readouterr().out
-    assert "parameters: speed=200 mm/s, laps=2, side=500 mm" in out
+    # as written, as the leaf's name says it (it said side=500 mm beside distance=50cm)
+    assert "parameters: speed=200 mm/s, laps=2, side=50cm" in out
+    assert "drive(velocity=200 mm/s, distance=50cm)" in out
 
 
 RADII = """

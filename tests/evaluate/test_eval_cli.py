@@ -615,6 +615,74 @@ def test_every_mission_that_cannot_run_is_said_before_any_episode(
     ]
 
 
+def test_several_missions_not_found_are_said_one_line_each(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """When no mission was found, their messages were joined with "; " on one line; each
+    has its own now, as ``validate`` says them and as when some were found (exit 2)."""
+    missing = [str(tmp_path / "a.yaml"), str(tmp_path / "b.yaml")]
+    assert main(["eval", *missing, "--runs", "1", "--no-progress"]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert [line.split(": no such mission file")[0] for line in lines[:2]] == [
+        f"roomba-bt eval: {path}" for path in missing
+    ]
+    assert lines[2:] == [
+        "roomba-bt eval: 2 of 2 missions cannot be evaluated (said above); no episode runs"
+    ]
+
+
+def test_json_says_why_no_episode_runs_as_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``eval --json`` of a mission that does not compile left stdout empty (exit 2), and a
+    nightly script's ``json.load`` of it raised. stdout holds an object now, each error with
+    its file, line and column; stderr and the exit code are as without ``--json``; so for a
+    mission not found, and for ``--strict``'s warnings (exit 7)."""
+    from roomba_bt.runtime.summary import ExitCode
+
+    typo = tmp_path / "typo.yaml"
+    typo.write_text("tree: {wal: {}}\n")
+    options = ["--runs", "1", "--no-progress", "--json"]
+    assert main(["eval", str(typo), *options]) == ExitCode.INVALID
+    out, err = capsys.readouterr()
+    said = json.loads(out)
+    assert said["error"] == "1 of 1 missions cannot be evaluated; no episode runs"
+    [error] = said["errors"]
+    assert (error["file"], error["line"], error["column"]) == (str(typo), 1, 8)
+    assert error["message"].startswith("unknown node 'wal' (did you mean 'wall'?)")
+    assert err.startswith(f"{typo}:1:8: unknown node 'wal'")
+    missing = str(tmp_path / "nope.yaml")
+    assert main(["eval", BUMP, missing, *options]) == ExitCode.INVALID
+    said = json.loads(capsys.readouterr().out)
+    assert said["error"] == "1 of 2 missions cannot be evaluated; no episode runs"
+    [error] = said["errors"]
+    assert error["file"] is None and error["message"].startswith(f"{missing}: no such mission")
+    warned = tmp_path / "w1.yaml"
+    warned.write_text("tree:\n  sequence:\n    - mode: full\n"
+                      "    - drive: {velocity: 100 mm/s, duration: 1s}\n")  # fmt: skip
+    assert main(["eval", str(warned), *options, "--strict"]) == ExitCode.STRICT
+    said = json.loads(capsys.readouterr().out)
+    assert said["error"] == f"{warned}: failed --strict (1 warning); no episode runs"
+    [warning] = said["errors"]
+    assert (warning["line"], warning["column"], warning["severity"]) == (4, 7, "warning")
+
+
+def test_json_says_why_when_no_mission_is_found_or_an_option_is_wrong(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Refusals before any mission compiles (every mission missing, a number out of range)
+    left stdout empty under ``--json`` as well; each is an object now, exit 2."""
+    missing = [str(tmp_path / "a.yaml"), str(tmp_path / "b.yaml")]
+    assert main(["eval", *missing, "--runs", "1", "--no-progress", "--json"]) == 2
+    said = json.loads(capsys.readouterr().out)
+    assert said["error"] == "2 of 2 missions cannot be evaluated; no episode runs"
+    assert [e["message"].split(": no such")[0] for e in said["errors"]] == missing
+    assert main(["eval", BUMP, "--runs", "0", "--no-progress", "--json"]) == 2
+    said = json.loads(capsys.readouterr().out)
+    assert said == {"error": "--runs 0: expected 1..1,000,000 (more: several evaluations)",
+                    "errors": []}  # fmt: skip
+
+
 def test_a_mission_given_twice_is_evaluated_once(capsys: pytest.CaptureFixture[str]) -> None:
     """``eval dock.yaml ./dock.yaml`` ran an A/B of the file against itself, and ``eval dock
     dock`` refused "the same variant twice": each file once now, the other warned about."""

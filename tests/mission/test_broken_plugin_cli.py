@@ -55,8 +55,9 @@ def installed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def _said(err: str) -> list[str]:
-    """The lines of stderr that name the broken plugin."""
-    return [line for line in err.splitlines() if "s29_broken" in line]
+    """The lines of stderr that say the broken plugin's error (the last line names it too,
+    as what the command lacks)."""
+    return [line for line in err.splitlines() if ": plugin 's29_broken'" in line]
 
 
 @pytest.mark.usefixtures("installed")
@@ -70,7 +71,11 @@ def test_schema_fails_and_prints_no_schema_when_a_plugin_does_not_import(capsys:
         "to import: RuntimeError: the lab's calibration file is missing see README (at "
     )  # the entry point, its module, the distribution, the error on one line
     assert "s29_broken.py:1)" in line
-    assert "did not load (no schema printed" in err and "--skip-broken-plugins" in err
+    assert "--skip-broken-plugins" in err
+    assert (
+        "did not load (no schema printed: it would lack the behaviours of plugin 's29_broken'"
+        in err
+    )
 
 
 @pytest.mark.usefixtures("installed")
@@ -140,7 +145,7 @@ def test_what_else_an_import_raises_is_a_plugin_that_did_not_load(
     assert main(["validate", str(mission)]) == 0  # it does not use the plugin
     assert main(["behaviours"]) == 2
     out, err = capsys.readouterr()
-    [line] = [line for line in err.splitlines() if "s29_rude" in line]
+    [line] = [line for line in err.splitlines() if ": plugin 's29_rude'" in line]
     assert line.startswith(
         f"roomba-bt behaviours: error: plugin 's29_rude' (s29_rude, from bt-s29-rude): failed "
         f"to import: {said} (at "

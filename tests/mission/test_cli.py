@@ -60,6 +60,21 @@ def test_validate_a_missing_file(capsys: Capsys, tmp_path: Path) -> None:
     assert "nope.yaml: no such mission file, and no shipped mission" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    "command", [["validate"], ["show"], ["run", "--fast"], ["eval", "--runs", "1"]]
+)
+def test_a_missing_file_s_name_is_said_on_one_line_by_every_command(
+    command: list[str], capsys: Capsys, tmp_path: Path
+) -> None:
+    """A name holding a newline (a paste) was printed raw by ``run`` and ``eval``, and what
+    followed it read as a line of roomba-bt's own; ``validate`` and ``show`` escaped it."""
+    name = str(tmp_path / "x\n[ok] y.yaml")
+    assert main([command[0], name, *command[1:]]) == 2
+    err = capsys.readouterr().err
+    assert "x\\x0a[ok] y.yaml: no such mission file" in err
+    assert not any(line.startswith("[ok]") for line in err.splitlines()), err
+
+
 def test_show_prints_the_tree(capsys: Capsys) -> None:
     assert main(["show", str(EXAMPLES / "square.yaml"), "-p", "side=2m"]) == 0
     out, _ = capsys.readouterr()

@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 from runtime.simrun import SHORT_DRIVE  # tests/runtime: the short drive
 
-from roomba_bt.mission import CompiledMission
+from roomba_bt.mission import CompiledMission, load_mission
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
 
@@ -141,7 +142,8 @@ def test_a_dollar_before_a_value_is_written_with_three(
     said = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
     tail = (
         '"$${price}" is the text "${price}"; a "$" before the value is written "$$${price}" '
-        '(in 0.1.0, "$${price}" was a "$" and then the value)'
+        '(in 0.1.0, "$${price}" was a "$" and then the value); if the text is meant, say so '
+        "at the top of the file: literal: [price]"
     )
     assert said == [
         f"2:21: description: {tail}",
@@ -227,3 +229,38 @@ def test_the_spellings_a_doubled_dollar_warning_gives_are_not_warned_of(
     )
     assert _logged(mission, caplog) == ["cost $5", "cost $$5", "$$"]
     assert mission.warnings == ()
+
+
+def test_literal_says_the_text_is_meant_and_a_right_mission_passes_strict(
+    compile_text: Compile, caplog: pytest.LogCaptureFixture, errors_of: Errors
+) -> None:
+    """``$${`` is the only spelling of a literal ``${``: a mission that means the text
+    ``${price}`` (price a parameter) was warned of on every run and could never pass
+    ``--strict``. ``literal: [price]`` says it is meant: the texts read as before, and only
+    the names listed are not warned of (``$${dist}`` still is)."""
+    mission = compile_text("literal: [price]" + BUDGET.replace("for ${dist}", "for $${dist}"))
+    assert _logged(mission, caplog)[:1] == ["budget: ${price} for ${dist}"]
+    assert mission.description == "costs ${price}"
+    said = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    assert [line[:40] for line in said] == ['9:35: log.message: "$${dist}" is the tex']
+    (error,) = errors_of("literal: [price, 2x]" + BUDGET)
+    assert error.startswith("1:18: literal: '2x' is no parameter name"), error
+    (error,) = errors_of("literal: price" + BUDGET)
+    assert error.startswith("1:10: literal must be a list"), error
+
+
+def test_literal_is_the_file_s_own(tmp_path: Path) -> None:
+    """A library's ``literal:`` covers the texts written in it, a mission's its own: a
+    library that means ``${n}`` says so itself, and a mission that includes it is not
+    silenced by it."""
+    (tmp_path / "lib.yaml").write_text(
+        "literal: [n]\nsubtrees:\n  say:\n    parameters: {n: {type: int, default: 1}}\n"
+        '    tree: {log: "n is $${n}"}\n'
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "include: [lib.yaml]\nparameters:\n  n: {type: int, default: 2}\ntree:\n"
+        '  sequence:\n    - subtree: {id: say}\n    - log: "mine $${n}"\n'
+    )
+    warnings = load_mission(mission).warnings
+    assert [(Path(w.file).name, w.line) for w in warnings] == [("m.yaml", 7)]

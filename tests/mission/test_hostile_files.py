@@ -266,7 +266,7 @@ def test_includes_that_are_no_library_say_what_they_are_at_the_include(
     assert capsys.readouterr().out.splitlines() == [
         "m.yaml:1:11: included file 'roomba-bt:dock.yaml' is a mission (it has mission: or "
         "tree:), not a library: an included file may hold only description, plugins, include, "
-        "blackboard, subtrees [include[0]]",
+        "blackboard, subtrees, literal [include[0]]",
         "m.yaml:1:34: an include is an empty path: name a file [include[1]]",
         "m.yaml:1:38: included file 'pipe.yaml' is not a regular file; an include is a .yaml "
         "file [include[2]]",

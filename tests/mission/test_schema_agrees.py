@@ -68,8 +68,13 @@ def _validate_errors(mission: dict[str, Any], tmp_path: Path, name: str) -> list
     return [d.message for d in diagnostics if d.severity == "error"]
 
 
+#: the types whose parameters' bounds are numbers the schema holds (``power_color`` is a
+#: colour's name too, its number the byte: session 33)
+_NUMBERED = ("int", "float", "power_color")
+
+
 def _written(param: Param, value: float) -> Any:
-    if param.type.name == "int":
+    if param.type.name in ("int", "power_color"):
         return int(value)
     if param.type.name == "float":
         return value
@@ -88,7 +93,7 @@ def _edge_cases() -> list[tuple[str, dict[str, Any]]]:
         if decl.origin != "builtin":
             continue
         for param in decl.params:
-            if param.type.name not in ("int", "float", *UNITS):
+            if param.type.name not in (*_NUMBERED, *UNITS):
                 continue
             step = 1 if param.type.name == "int" else 0.5
             bounds = [("min", param.minimum, -step), ("max", param.maximum, step)]
@@ -185,7 +190,20 @@ REPORTED: list[tuple[str, dict[str, Any], bool]] = [
         {**_WAIT, "name": "a"}, {"wait": "2s", "name": "a"}]}}), False),
 ]  # fmt: skip
 
-_CASES = [(name, mission, None) for name, mission in _edge_cases()] + REPORTED
+
+def _leds(power_color: Any) -> dict[str, Any]:
+    return _tree({"sequence": [{"mode": "safe"}, {"leds": {"power_color": power_color}}]})
+
+
+#: the power LED's colour by name (session 33), or a name it does not have
+POWER_COLORS = [
+    ("power colour amber", _leds("amber"), True),
+    ("power colour red", _leds("red"), True),
+    ("power colour blue", _leds("blue"), False),
+    ("power colour as a quoted byte", _leds("128"), False),
+]
+
+_CASES = [(name, mission, None) for name, mission in _edge_cases()] + REPORTED + POWER_COLORS
 
 
 @pytest.mark.parametrize(("name", "mission", "validate_says"), _CASES, ids=[c[0] for c in _CASES])

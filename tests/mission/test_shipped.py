@@ -142,6 +142,8 @@ def test_describe_shipped_matches_the_compiled_missions() -> None:
         assert mission is not None, diagnostics
         assert entry.description == mission.description
         assert [p.name for p in entry.parameters] == list(mission.parameters)
+        # each default as show says it, as written: clean's go_home was listed "True"
+        assert {p.name: p.default for p in entry.parameters} == mission.parameters_shown
 
 
 def test_validate_and_show_take_names(

@@ -372,7 +372,7 @@ def test_a_misspelt_parameters_section_is_one_error_not_one_per_use(
     )
     assert _problems(path) == [
         f"2:1: unknown top-level key {spelt!r} (did you mean 'parameters'?); known: mission, "
-        "description, parameters, blackboard, plugins, include, subtrees, tree"
+        "description, parameters, blackboard, plugins, include, subtrees, tree, literal"
     ]
 
 
@@ -418,3 +418,66 @@ def test_a_plugin_file_written_the_windows_way_is_quoted_as_written(
         said,
         "3:8: unknown node 'lurch' (the plugin file 'lib\\moves.py' was not loaded)",
     ]
+
+
+def test_a_windows_path_where_a_value_goes_is_said_as_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``wait: 'C:\\missions\\a.yaml'`` (a path pasted in the wrong place) was said
+    ``got 'C:\\\\missions\\\\a.yaml'``: each backslash doubled, no text the file holds."""
+    path = _mission(tmp_path, "tree:\n  wait: 'C:\\missions\\a.yaml'\n")
+    assert main(["validate", str(path)]) == 2
+    assert "got 'C:\\missions\\a.yaml' [tree.wait]" in capsys.readouterr().out
+
+
+DURATION_UNITS = "use one of: ms, s, sec, min, h, d"
+
+
+@pytest.mark.parametrize(
+    ("step", "said"),
+    [("wait: 2m",
+      f"5:13: wait.duration: unknown duration unit 'm' in '2m'; {DURATION_UNITS} (m is metres: "
+      "for minutes write 2 min)"),
+     ("wait: 2 mins",
+      f"5:13: wait.duration: unknown duration unit 'mins' in '2 mins'; {DURATION_UNITS} (write "
+      "2 min)"),
+     ("wait: 3 hours",
+      f"5:13: wait.duration: unknown duration unit 'hours' in '3 hours'; {DURATION_UNITS} "
+      "(write 3 h)"),
+     ("wait: 30 S",
+      f"5:13: wait.duration: unknown duration unit 'S' in '30 S'; {DURATION_UNITS} (write 30 s)"),
+     ("turn: 90 degrees",
+      "5:13: turn.angle: unknown angle unit 'degrees' in '90 degrees'; use one of: deg, \u00b0, "
+      "rad, turn, turns (write 90 deg)"),
+     ("drive: {velocity: 200 mm/sec, distance: 1 m}",
+      "5:25: drive.velocity: unknown speed unit 'mm/sec' in '200 mm/sec'; use one of: mm/s, "
+      "cm/s, m/s (write 200 mm/s)"),
+     ("drive: {velocity: 200 mm/s, distance: 2 meters}",
+      "5:45: drive.distance: unknown distance unit 'meters' in '2 meters'; use one of: mm, cm, "
+      "m (write 2 m)")],
+    ids=["2m", "mins", "hours", "capital S", "degrees", "mm/sec", "meters"],
+)  # fmt: skip
+def test_a_unit_written_as_a_word_or_a_plural_is_given_the_one_to_write(
+    tmp_path: Path, step: str, said: str
+) -> None:
+    """``2 mins``, ``3 hours``, ``90 degrees`` said only the units there are, and a reader
+    had to guess which was meant; ``2m`` for two minutes reads as metres to roomba-bt."""
+    assert _problems(_one_step(tmp_path, step)) == [said]
+
+
+@pytest.mark.parametrize(
+    ("step", "said"),
+    [("drive: {velocity: 1.5 m/s, distance: 1 m}",
+      "5:25: drive: velocity 1.5 m/s (1500 mm/s) is out of range: allowed -500..500 mm/s"),
+     ("drive: {velocity: 600 mm/s, distance: 1 m}",
+      "5:25: drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s"),
+     ("wait: {duration: -2 min}",
+      "5:24: wait: duration -2 min (-120 s) is out of range: allowed 0.. s")],
+    ids=["m/s", "canonical already", "min"],
+)  # fmt: skip
+def test_a_value_out_of_range_is_said_as_written_with_the_unit_of_its_range(
+    tmp_path: Path, step: str, said: str
+) -> None:
+    """``velocity: 1.5 m/s`` was refused as ``velocity 1500 mm/s``: a value the file does not
+    hold. Said as written now, with the range's unit beside it to compare."""
+    assert _problems(_one_step(tmp_path, step)) == [said]

@@ -87,7 +87,7 @@ def test_clean_without_going_home_succeeds_and_without_a_dock_fails(tmp_path: Pa
                     params=(("duration", "1min"), ("dock_time_limit", "1min")))
     )  # fmt: skip
     assert homeless.outcome == "failure"
-    assert "dock_time_limit(60 s)" in homeless.reason
+    assert "dock_time_limit(1min)" in homeless.reason
     assert homeless.coverage is not None and homeless.coverage.overall > 0.3  # it cleaned
     assert not homeless.docked and 120.0 <= homeless.time_s < 200.0
 

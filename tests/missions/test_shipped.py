@@ -210,7 +210,7 @@ def test_patrol_dock_time_limit_ends_the_mission() -> None:
     )  # fmt: skip
     assert result.outcome == "failure", result.reason
     assert 120.0 <= result.time_s < 121.0
-    assert result.reason.startswith("dock_time_limit(120 s)"), result.reason
+    assert result.reason.startswith("dock_time_limit(2min)"), result.reason  # as written
     assert "gave up after the time limit of 2 min" in result.reason  # as given, not 120 s
 
 

@@ -84,7 +84,7 @@ def _wait_for_wheels_turning(page: Any) -> None:
 
 
 def test_pause_stops_the_wheels_within_two_frames_in_passive_and_resume_drives_again(
-    live: LiveRun, page: Any
+    live: LiveRun, page: Any, until: Callable[[Callable[[], bool]], None]
 ) -> None:
     page.goto(live.url)
     page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
@@ -104,11 +104,11 @@ def test_pause_stops_the_wheels_within_two_frames_in_passive_and_resume_drives_a
     page.click("#resume")
     page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
     resumed_at = len(live.steps)
-    page.wait_for_timeout(500)
-    assert any(s.left or s.right for s in live.steps[resumed_at:]), "it does not drive again"
-    events = page.inner_text("#events")
-    assert "pause (paused by the operator)" in events
-    assert "resume (resumed by the operator): back to Safe" in events
+    # until it drives again, and the page has said so (before, a fixed 0.5 s, then a look)
+    until(lambda: any(s.left or s.right for s in live.steps[resumed_at:]))
+    page.wait_for_selector('#events:has-text("resume (resumed by the operator): back to Safe")',
+                           timeout=WAIT_MS)  # fmt: skip
+    assert "pause (paused by the operator)" in page.inner_text("#events")
 
 
 def test_a_breakpoint_pauses_the_run_where_the_node_starts_and_step_ticks_once(

@@ -49,6 +49,9 @@ WHILE_GUARDS = [
      " while: {held: {for: 1s, do: {inverter: {bump: any}}}}}]",
      "stopped: held: held 0 s of 1 s so far,"
      " before 'drive(velocity=100 mm/s, duration=300ms)' started"),
+    # a minute and more in the unit the mission wrote it in: it said "of 120 s"
+    ("[{mode: safe}, {wait: 1s, while: {held: {for: 2min, do: {inverter: {bump: any}}}}}]",
+     "stopped: held: held 0 s of 2 min so far, before 'wait(1s)' started"),
     ("[{mode: safe}, {wait: 1s, while: {sensor: bumps_wheel_drops > 4}}]",
      "stopped: sensor(bumps_wheel_drops > 4) does not hold, before 'wait(1s)' started"),
     # an odometry guard with no mark counts from the run's start: it said "since a mark"

@@ -10,6 +10,7 @@ import pytest
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
 from roomba_bt.robot.wake import PULSE_PERIOD_S, KeepAwake
+from roomba_bt.robot.wording import COMMAND_LINE, PYTHON, ConnectionWording, spoken
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Simulator, load_world
@@ -59,7 +60,9 @@ def test_without_keep_awake_it_sleeps_and_is_reported_asleep(tmp_path: Path) -> 
     assert simulator.brc_pulses == 0
     assert summary.outcome is Outcome.CONNECTION_LOST
     assert "the robot fell asleep" in summary.reason
-    assert "drop --no-keep-awake" in summary.reason
+    # said to a Python caller in its words (it has no --no-keep-awake to drop)
+    assert "leave keep-awake on (keep_awake left out, not False)" in summary.reason
+    assert "--no-keep-awake" not in summary.reason
     assert "release-3.8.2 / release-stm32-3.7.7" in summary.reason
     assert "(roomba-bt doctor --allow-reset reads the version)" in summary.reason
     assert "no valid sensor frame" not in summary.reason
@@ -113,7 +116,8 @@ def test_the_shipped_patrol_with_a_ten_minute_charge_wait_never_sleeps() -> None
 
 
 def test_the_shipped_patrol_without_keep_awake_sleeps_on_the_charger_and_says_so() -> None:
-    summary, simulator = _patrol(False)
+    with spoken(COMMAND_LINE):  # as `roomba-bt run --no-keep-awake` says it
+        summary, simulator = _patrol(False)
     assert [e.detail for e in simulator.events if e.kind == "sleep"] == ["5 min idle"]
     assert summary.outcome is Outcome.CONNECTION_LOST
     assert "the robot fell asleep" in summary.reason
@@ -170,11 +174,17 @@ class _NoLines:
         raise OSError(25, "Inappropriate ioctl for device")
 
 
+@pytest.mark.parametrize(
+    ("caller", "silenced"),
+    [(COMMAND_LINE, "--no-keep-awake silences this (-v: why)"),
+     (PYTHON, "keep_awake=False silences this (logging DEBUG: why)")],
+)  # fmt: skip
 def test_a_port_without_modem_lines_turns_keep_awake_off_once(
-    caplog: pytest.LogCaptureFixture,
+    caller: ConnectionWording, silenced: str, caplog: pytest.LogCaptureFixture
 ) -> None:
+    """Said in the caller's words: a program has no ``--no-keep-awake`` nor ``-v``."""
     wake = KeepAwake(_NoLines())
-    with caplog.at_level("DEBUG", logger="roomba_bt"):
+    with caplog.at_level("DEBUG", logger="roomba_bt"), spoken(caller):
         wake.tick(0.0)
         wake.tick(61.0)
     wake.release()
@@ -184,18 +194,15 @@ def test_a_port_without_modem_lines_turns_keep_awake_off_once(
     # 40-column SSH screen), with what to do; the rest at -v (it named only the ioctl's error)
     [warned] = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
     assert "keep-awake (a BRC pulse a minute: Passive never sleeps) is off" in warned
-    assert "no modem lines on this port; Passive sleeps after 5 min; --no-keep-awake silences" in (
-        warned
-    )
+    assert f"no modem lines on this port; Passive sleeps after 5 min; {silenced}" in warned
     # a pty's simulator sleeps after 5 minutes in Passive as a robot does, and a device path
     # is no simulator: it said "a simulator never sleeps" of both, and the run then slept
     assert "simulator" not in warned
     assert "Errno" not in warned  # the port's error at -v: it said nothing to a hobbyist
-    assert len(warned) <= 160, warned
+    assert len(warned) <= 175, warned
     [said] = [r.getMessage() for r in caplog.records if r.levelname == "DEBUG"]
-    assert "--rfc2217" in said and "--no-keep-awake" in said and "Inappropriate ioctl" in said
-    # and what a Python program passes for it (a real argument: the connection's own)
-    assert "Connection.open(..., keep_awake=False)" in said
+    assert "--rfc2217" in said and "Inappropriate ioctl" in said
+    assert f"{caller.keep_awake_off} says it is meant" in said
 
 
 class _Levels:

@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
 
 import py_trees
@@ -22,6 +23,7 @@ import roomba_bt
 from roomba_bt import CREATE2, Outcome, RunStack, SimLink, Simulator, TreeMission, load_world
 from roomba_bt.behaviours import DISTANCE, Condition, Param, declare
 from roomba_bt.robot.interface import Snapshot
+from roomba_bt.sim import Faults
 
 from .simrun import wait_for_the_guard
 
@@ -110,6 +112,38 @@ def test_a_behaviours_exception_is_kept_too_and_a_clean_run_keeps_none() -> None
     assert "Mine: sensor fusion failed" in summary.reason  # the text the CLI prints, as it was
     with _stack(roomba_bt.load_mission_text(TO_THE_WALL), _simulator()) as stack:
         assert stack.run().raise_for_outcome().exception is None
+
+
+def _asleep() -> Simulator:
+    simulator = _simulator()
+    simulator.fall_asleep("test")  # deaf at every rate: no Query List answered
+    return simulator
+
+
+def _unplugged() -> Simulator:
+    return Simulator(load_world("empty-room"), CREATE2, seed=0, faults=Faults(disconnect_at=1.0))
+
+
+@pytest.mark.parametrize(
+    ("robot", "outcome", "link_error"),
+    [(_asleep, Outcome.NO_CONNECTION, roomba_bt.NoAnswer),
+     (_unplugged, Outcome.CONNECTION_LOST, roomba_bt.LinkDown)],
+)  # fmt: skip
+def test_a_run_the_link_ended_raises_from_the_links_exception(
+    robot: Callable[[], Simulator], outcome: Outcome, link_error: type[Exception]
+) -> None:
+    """A robot that does not answer, a port that goes: ``raise_for_outcome()`` raises
+    ``RunFailed`` from the link's own exception (``NoAnswer``, a ``ConnectionFailed``, as
+    ``Connection.start()`` raises it; ``PortLost``, a ``LinkDown``), which a program tests
+    as it tests its own; it was raised with no cause."""
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), robot()) as stack:
+        summary = stack.run()
+    assert summary.outcome is outcome and summary.exception is None
+    with pytest.raises(roomba_bt.RunFailed) as failed:
+        summary.raise_for_outcome()
+    assert isinstance(failed.value.__cause__, link_error), repr(failed.value.__cause__)
+    assert failed.value.__cause__ is summary.link_error is failed.value.link_error
+    assert str(failed.value.__cause__) in summary.reason
 
 
 # ------------------------------------------------------------------ 2. tick by tick
@@ -514,7 +548,9 @@ def test_signatures_show_a_shipped_profile_by_its_name() -> None:
 def test_the_typed_interrupt_pattern_passes_mypy_strict(tmp_path: Path, mypy_cache: Path) -> None:
     """``interrupt.summary`` is a RunSummary to mypy (a bare KeyboardInterrupt has none), and
     a name the package does not have is an error, not Any (the package's ``__getattr__``
-    made every name Any to a type checker)."""
+    made every name Any to a type checker); ``stack.ticks()`` is a generator a program may
+    close, and ``RobotHandle`` and ``NoAnswer`` are the package's (an embedder's mypy
+    --strict findings)."""
     program = tmp_path / "typed.py"
     program.write_text(
         textwrap.dedent("""\
@@ -527,6 +563,17 @@ def test_the_typed_interrupt_pattern_passes_mypy_strict(tmp_path: Path, mypy_cac
                 print(interrupt.summary.outcome)
                 planted: int = interrupt.summary
                 raise
+
+        def step(stack: roomba_bt.RunStack, robot: roomba_bt.RobotHandle) -> float:
+            steps = stack.ticks()
+            time = next(steps).time + robot.snapshot.time
+            steps.close()  # a generator to mypy (typed Iterator, it had no close())
+            return time
+
+        try:
+            roomba_bt.Connection.open("/dev/ttyUSB0").start()
+        except roomba_bt.NoAnswer as silent:
+            print(silent.likely_causes)
 
         roomba_bt.RunStak
     """)

@@ -113,3 +113,31 @@ def test_the_mode_guard_s_since_agrees_with_the_fall_s_mission_time(tmp_path: Pa
     assert fell is not None and said is not None, (summary.first_fall, last)
     assert float(said[1]) > float(fell[1]) + 1.0  # said after the hold
     assert float(said[2]) == pytest.approx(float(fell[1]), abs=0.1)  # the jitter at most
+
+
+#: a turn, then a drive: the turn ends while a hold keeps the frames back
+TURN_THEN_DRIVE = """
+mission: turn-then-drive
+tree:
+  sequence:
+    - mode: safe
+    - turn: {angle: 90deg}
+    - drive: {velocity: 150 mm/s, distance: 30 cm}
+"""
+TURN = oi.drive(100, oi.Radius.TURN_COUNTER_CLOCKWISE).data
+FORWARD = oi.drive(150, oi.Radius.STRAIGHT).data
+
+
+def test_after_a_stall_the_wheels_get_the_tree_s_command_not_one_its_backlog_ended() -> None:
+    # the bridge holds both ways for 1.5 s, 0.35 s into the turn: the robot turns on (the
+    # watchdog's drive 0 is held too) and the turn's end is in the frames that waited, read
+    # over several reads. The turn went out again at the first of them, the robot turning
+    # back to a stale command until the rest were read and the drive came
+    summary, link = through_a_bridge(TURN_THEN_DRIVE, hold=(0.6, 1.5), grace=3.0)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert summary.stalls == summary.stalls_ridden == 1
+    wheels = [(t, b) for t, b in link.writes if b[0] == oi.drive(0, 0).data[0]]
+    assert [b for t, b in wheels if t < 0.6] == [TURN]
+    after = [b for t, b in wheels if t >= 2.1]
+    assert after[0] == FORWARD, after
+    assert TURN not in after

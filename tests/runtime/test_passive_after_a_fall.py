@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import motor_bits
 from roomba_bt.runtime.loop import MissionRunner
@@ -109,3 +111,45 @@ tree:
     assert "(cliff): vacuum needs Safe or Full; put `mode: safe` before it" in summary.reason
     assert summary.refused_commands == 0
     assert oi.motors(motor_bits(vacuum=True)).data not in run.link.written
+
+
+def _lift_then(leaf: str) -> str:
+    return (
+        "mission: lift then a leaf\n"
+        "tree:\n"
+        "  sequence:\n"
+        "    - mode: safe\n"
+        "    - song: {number: 0, notes: [C4 250ms]}\n"
+        "    - wait: 3s\n"
+        f"    - {leaf}\n"
+    )
+
+
+@pytest.mark.parametrize(
+    ("leaf", "said"),
+    [("leds: {dock: true}", "leds (LEDs 139) needs Safe or Full"),
+     ("play: 0", "play (Play 141) needs Safe or Full")],
+)  # fmt: skip
+def test_leds_and_play_after_a_wheel_drop_fail_at_once_sending_nothing(
+    run_mission: RunMission, tmp_path: Path, leaf: str, said: str
+) -> None:
+    """They said SUCCESS until session 33: the guard refused their bytes after the tick,
+    and the run went on (and ended SUCCESS) as if the LEDs had lit or the song had played."""
+    (tmp_path / "lifted.yaml").write_text(LIFTED)
+    run = run_mission(_lift_then(leaf), world=str(tmp_path / "lifted.yaml"), timeout=30.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.FAILURE, summary.reason
+    assert "the robot is in Passive since t=" in summary.reason and said in summary.reason
+    assert summary.refused_commands == 0
+
+
+def test_stop_after_a_wheel_drop_succeeds_sending_nothing(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """The robot stopped its wheels and motors when it fell: ``stop``'s ask holds, and its
+    Drive 0 is not written for the guard to refuse (docs/protocol.md, "Actuators in
+    Passive")."""
+    (tmp_path / "lifted.yaml").write_text(LIFTED)
+    run = run_mission(_lift_then("stop: {motors: true}"), world=str(tmp_path / "lifted.yaml"))
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    assert run.summary.refused_commands == 0

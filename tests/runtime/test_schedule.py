@@ -9,7 +9,7 @@ from collections.abc import Iterable
 import pytest
 
 from roomba_bt.oi.stream import StreamParser
-from roomba_bt.runtime.schedule import SlotSchedule
+from roomba_bt.runtime.schedule import PROMPT_BATCHES, SlotSchedule
 from roomba_bt.sim import Faults
 
 from .simrun import RunMission
@@ -124,13 +124,36 @@ def test_real_gaps_are_counted_through_jitter() -> None:
     lost = {17, 18, 400, 401, 402, 999, 5000}
     slots = slots_of(jittered((k for k in range(6000) if k not in lost), 0.010, seed=2))
     assert sum(slots) == 6000  # every slot the robot sent, the lost ones too
-    # counted once the frames after the gap have all come late for a second and more: a
+    # counted once the frames after the gap have all come later than the jitter reaches, for
+    # eight batches (it was once they had all come late for a second and more, 1.3 s): a
     # lost frame delays every one after it, jitter only those around it
     assert [n for n in slots if n > 1] == [3, 4, 2, 2]
     counted = [i for i, n in enumerate(slots) if n > 1]
     assert [i - gap for i, gap in zip(counted, (17, 398, 994, 4993), strict=True)] == [
-        pytest.approx(1.3 / T, abs=20)
+        pytest.approx(PROMPT_BATCHES, abs=2)
     ] * 4
+
+
+def _counted_after(batches: list[tuple[int, float]], lost_slot: int) -> float:
+    """Seconds from the lost frame's slot to the batch whose slots count it."""
+    schedule = SlotSchedule()
+    for count, arrival in batches:
+        if schedule.slots(count, arrival) > count:
+            return arrival - lost_slot * T
+    raise AssertionError("the lost frame was never counted")
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_frame_lost_through_a_bridge_jittery_under_a_slot_is_counted_promptly(
+    seed: int,
+) -> None:
+    # 0-10 ms of jitter through a bridge: a lost frame was counted a run's window late (1.5 s
+    # and up to 2.9 s, the mission clock a slot behind meanwhile); every batch after it
+    # later than the link's jitter reaches tells it in eight batches
+    batches = through_a_bridge((k for k in range(2000) if k != 1000), 0.01, seed)
+    assert sum(count for count, _ in batches) == 1999
+    assert _counted_after(batches, 1000) < (PROMPT_BATCHES + 6) * T
+    assert slots_through(batches) == 2000
 
 
 def test_clock_drift_does_not_accumulate() -> None:

@@ -26,7 +26,7 @@ from roomba_bt.robot.safety import CLOSING_UNDER_WAY
 from roomba_bt.runtime.recording import load_record
 
 from .simrun import SPIN
-from .test_cli_pty import SAFE_END, _wait_for_driving
+from .test_cli_pty import _wait_for_driving, ends_with_the_safe_stop
 
 pytestmark = pytest.mark.skipif(
     not sys.platform.startswith("linux"), reason="a pty, and TIOCGEXCL is Linux's"
@@ -83,7 +83,7 @@ def test_a_second_ctrl_c_while_the_run_closes_leaves_the_port_free_and_the_recor
     assert CLOSING_UNDER_WAY in err  # what the second one waits for
     ran = load_record(record)
     assert ran.ending is not None  # the end note
-    assert ran.outbound.endswith(SAFE_END)
+    assert ends_with_the_safe_stop(ran.outbound)
     try:  # root's open ignores the exclusive mode: its TIOCGEXCL says it
         probe = os.open(port, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
     except OSError as exc:

@@ -14,6 +14,7 @@ import pytest
 from roomba_bt.mission import CompiledMission, load_mission
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500
 from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.errors import ConnectionClosed
 from roomba_bt.runtime.display import StatusChangeLogger, TerminalDisplay, observer_for
 from roomba_bt.runtime.loop import stream_request
 from roomba_bt.runtime.recording import ReplayTransport, load_record
@@ -204,8 +205,37 @@ def test_a_connection_taken_over_keeps_its_settings_and_records(tmp_path: Path) 
         stack.close()
     assert summary.outcome is Outcome.SUCCESS, summary
     assert stack.connection is connection and connection.watchdog == 0.2
-    record = load_record(path)
+    record = load_record(path)  # ended by stack.close(), the connection left open
     assert record.header["packets"] == list(stack.packets) and record.outbound
+    assert not connection.ending.closed and connection.transport is stack.link
+    connection.close()
+
+
+def test_a_closed_connection_is_refused_when_handed_over(tmp_path: Path) -> None:
+    """Its run had failed at the start-up's first write: "the port is gone (the cable was
+    pulled ...)", of a port the program had closed itself."""
+    connection = _connection()
+    connection.close()
+    said = "sim://empty-room: RunStack(mission, connection): the connection is closed"
+    with pytest.raises(ConnectionClosed, match=re.escape(said)):
+        RunStack(_mission(tmp_path), connection)
+
+
+def test_a_with_runstack_leaves_a_handed_over_connection_open(tmp_path: Path) -> None:
+    """Who opens closes: one connection, a ``with RunStack`` an episode (a gym-like env),
+    each episode's loop over ``ticks()`` left early; every run ends stopped in Passive and
+    the connection stays the program's."""
+    connection = _connection()
+    outcomes = []
+    for _ in range(3):
+        with RunStack(_mission(tmp_path), connection, timeout_s=60.0) as stack:
+            for tick in stack.ticks():
+                if tick.number == 20:
+                    break
+        outcomes.append(stack.summary.outcome)
+        assert not connection.ending.closed and connection.mode.label == "Passive"
+    assert outcomes == [Outcome.INTERRUPTED] * 3
+    assert connection.close()
 
 
 def test_a_link_needs_its_profile(tmp_path: Path) -> None:

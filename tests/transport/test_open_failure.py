@@ -94,7 +94,7 @@ def test_a_user_who_may_not_open_the_port_is_told_why(tmp_path: Path) -> None:
         ("{file}", "not a serial port but a file (--port takes a serial port's character device"),
         ("{folder}", "not a serial port but a folder"),
         ("/dev/null", "not a serial port: a device, but no terminal"),
-        ("socket://127.0.0.1:{closed}", "nothing listens there (is the bridge, or roomba-bt sim"),
+        ("socket://127.0.0.1:{closed}", "nothing listens at 127.0.0.1:{closed}: is the bridge"),
     ],
     ids=["address", "host-name", "file", "folder", "no-terminal", "refused"],
 )
@@ -112,6 +112,7 @@ def test_a_port_that_is_no_port_says_what_it_is(tmp_path: Path, port: str, said:
     url = port.format(file=mission, folder=tmp_path, closed=closed)
     with pytest.raises(TransportError) as refused:
         SerialTransport.open(url)
+    said = said.format(closed=closed)
     assert str(refused.value).startswith(f"{url}: could not open the port: {said}")
 
 

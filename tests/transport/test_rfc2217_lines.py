@@ -7,11 +7,13 @@ and returns; the simulator's server still sees BRC go low and high (a pulse)."""
 
 from __future__ import annotations
 
+import contextlib
+import socket
 import threading
 from collections.abc import Callable, Iterator
 
 import pytest
-from serial import rfc2217
+from serial import rfc2217, serialutil
 from sim.served import Served  # tests/sim: the simulator served in a thread
 
 from roomba_bt.sim.server import Rfc2217Endpoint
@@ -97,3 +99,77 @@ def test_a_server_gone_is_a_transport_error_not_silence(
                 transport.read(0.01)
     finally:
         transport.close()
+
+
+class _SwallowingProxy:
+    """A bridge between the client and the simulator's RFC 2217 server: its first
+    connection carried both ways; every later one reaches the server but swallows what the
+    client sends (a bridge back from a reboot whose serial server does not answer the
+    options yet), so no Telnet option is ever agreed."""
+
+    def __init__(self, upstream: tuple[str, int]) -> None:
+        self.listener = socket.create_server(("127.0.0.1", 0))
+        self.url = f"rfc2217://127.0.0.1:{self.listener.getsockname()[1]}"
+        self._upstream = upstream
+        self.clients: list[socket.socket] = []
+        self._sockets: list[socket.socket] = [self.listener]
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        with contextlib.suppress(OSError):
+            while True:
+                client, _ = self.listener.accept()
+                server = socket.create_connection(self._upstream)
+                self._sockets += [client, server]
+                swallowed = bool(self.clients)
+                self.clients.append(client)
+                threading.Thread(target=self._pipe, args=(server, client), daemon=True).start()
+                threading.Thread(
+                    target=self._pipe, args=(client, None if swallowed else server), daemon=True
+                ).start()
+
+    @staticmethod
+    def _pipe(source: socket.socket, sink: socket.socket | None) -> None:
+        with contextlib.suppress(OSError):
+            while data := source.recv(4096):
+                if sink is not None:
+                    sink.sendall(data)
+
+    def drop_first(self) -> None:
+        """The bridge's first connection reset (it rebooted)."""
+        self.clients[0].shutdown(socket.SHUT_RDWR)
+
+    def close(self) -> None:
+        for sock in self._sockets:
+            with contextlib.suppress(OSError):
+                sock.close()
+
+
+def test_a_reconnection_s_rfc2217_negotiation_waits_no_longer_than_asked(
+    served: Served, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A bridge that connects and does not answer the options held a reconnection
+    pyserial's own 3 s a step of the negotiation (its network timeout), past the grace the
+    stop waits: each wait now ends by what is left of it."""
+    host, port = served.endpoint.address.split("://")[1].split(":")
+    proxy = _SwallowingProxy((host, int(port)))
+    transport = SerialTransport.open(proxy.url)
+    waits: list[float | None] = []
+    real_init = serialutil.Timeout.__init__
+
+    def spied(self: serialutil.Timeout, duration: float | None) -> None:
+        if threading.current_thread() is threading.main_thread():
+            waits.append(duration)
+        real_init(self, duration)
+
+    try:
+        proxy.drop_first()
+        monkeypatch.setattr(serialutil.Timeout, "__init__", spied)
+        assert transport.reopen(within=0.5) is None
+        monkeypatch.undo()
+        assert len(proxy.clients) >= 2, "no reconnection reached the bridge"
+        assert waits and all(wait is not None and wait <= 0.5 for wait in waits), waits
+        assert rfc2217.Timeout is serialutil.Timeout  # as it was, for other opens
+    finally:
+        transport.close()
+        proxy.close()

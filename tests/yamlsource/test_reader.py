@@ -192,6 +192,15 @@ def test_a_long_value_is_quoted_cut_with_its_length() -> None:
     assert shown == repr(page)[: yamlsource.QUOTE_LIMIT] + "... (1,280 characters)"
 
 
+def test_a_quoted_value_keeps_its_backslashes_as_written() -> None:
+    """A Windows path given where a duration goes was said ``'C:\\\\missions\\\\a.yaml'``:
+    a user searching the file for two backslashes found none. A control character stays
+    escaped: the terminal would obey it."""
+    assert yamlsource.quoted("C:\\missions\\a.yaml") == "'C:\\missions\\a.yaml'"
+    assert yamlsource.quoted(["a\\b"]) == "['a\\b']"
+    assert yamlsource.quoted("a\x1b[2J") == "'a\\x1b[2J'"
+
+
 def test_a_tab_where_yaml_stops_is_named() -> None:
     text = "tree:\n\tsequence: []\n"
     assert yamlsource.tab_hint(text, 2, 1) == " (a tab: YAML indents with spaces)"

@@ -1,0 +1,61 @@
+"""How the robot layer's messages name what their caller changes: the command line's flags
+or a Python call's arguments (for connections what ``mission/wording.py`` is for missions).
+
+A message about keep-awake says how to turn it off (or leave it on) and where the longer
+story is. ``roomba-bt run``'s user types ``--no-keep-awake`` and ``-v``; a program passes
+``keep_awake=False`` and has no ``-v``, and was told both (an embedder's report). The robot
+layer cannot take the mission layer's :class:`~roomba_bt.mission.wording.Wording` (it sits
+below it), and a connection is made far from the command that knows whose it is (inside a
+``RunStack``, ``doctor``, ``sensors``): the process's command sets :data:`current` for as
+long as it runs (:func:`spoken`, ``cli/__init__.py``), and a program gets :data:`PYTHON`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+__all__ = ["COMMAND_LINE", "PYTHON", "ConnectionWording", "current", "spoken"]
+
+
+@dataclass(frozen=True, slots=True)
+class ConnectionWording:
+    """What the caller writes to change each thing a connection's message may name."""
+
+    #: how the caller turns keep-awake off (which also silences the warning that it is off)
+    keep_awake_off: str
+    #: how the caller leaves keep-awake on, having turned it off
+    keep_awake_on: str
+    #: where the caller reads why (the debug log)
+    why: str
+
+
+#: A Python program's words: ``Connection``'s, ``Connection.open``'s and ``RunStack``'s
+#: arguments, and the ``roomba_bt`` logger
+PYTHON = ConnectionWording(
+    keep_awake_off="keep_awake=False",
+    keep_awake_on="keep_awake left out, not False",
+    why="logging DEBUG: why",
+)
+
+#: The ``roomba-bt`` command's words: its flags
+COMMAND_LINE = ConnectionWording(
+    keep_awake_off="--no-keep-awake", keep_awake_on="drop --no-keep-awake", why="-v: why"
+)
+
+#: the words this process's connection messages use now
+current = PYTHON
+
+
+@contextmanager
+def spoken(wording: ConnectionWording) -> Iterator[None]:
+    """``wording`` for the messages of the connections made meanwhile (the command line's,
+    for its command), the words before put back after (a program that called the CLI's
+    ``main`` goes on in its own)."""
+    global current
+    before, current = current, wording
+    try:
+        yield
+    finally:
+        current = before

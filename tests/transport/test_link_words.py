@@ -1,0 +1,95 @@
+"""A network link's words: every message a ``socket://`` or ``rfc2217://`` run can reach
+names the network and the bridge by its HOST:PORT, never a cable, a device or a USB
+adapter there is none of (transport/link_kind.py)."""
+
+from __future__ import annotations
+
+import errno
+from dataclasses import fields
+
+import pytest
+
+from roomba_bt.robot.errors import RobotAsleep, RobotReset
+from roomba_bt.robot.startup import no_answer_causes, not_a_mode
+from roomba_bt.transport.link_kind import LinkWords, link_of
+from roomba_bt.transport.open_failure import error_number, open_failure
+
+#: what a serial adapter's words say and a network link's must not
+CABLE_WORDS = ("cable", "device", "usb", "adapter", "unplug")
+BRIDGES = ("socket://192.168.4.1:23", "rfc2217://192.168.4.1:23")
+#: the fields that say where the line is: each names the bridge at its address
+NAMING = (
+    "between", "line", "open_fix", "unreachable", "lossy", "bad_line", "byte_check",
+    "serial_side", "wiring", "pulse_fix", "reach", "check", "went_silent",
+)  # fmt: skip
+
+
+def _texts(words: LinkWords) -> dict[str, str]:
+    """Every phrase of ``words`` by its field (a tuple's joined)."""
+    said = {}
+    for field in fields(words):
+        value = getattr(words, field.name)
+        if isinstance(value, tuple):
+            said[field.name] = "; ".join(value)
+        elif isinstance(value, str):
+            said[field.name] = value
+    return said
+
+
+@pytest.mark.parametrize("port", BRIDGES)
+def test_no_network_phrase_names_a_cable_or_a_device(port: str) -> None:
+    for name, text in _texts(link_of(port)).items():
+        assert not any(word in text.lower() for word in CABLE_WORDS), (name, text)
+
+
+@pytest.mark.parametrize("port", BRIDGES)
+@pytest.mark.parametrize("name", NAMING)
+def test_a_network_phrase_about_the_line_names_the_bridge(port: str, name: str) -> None:
+    assert "the bridge at 192.168.4.1:23" in _texts(link_of(port))[name]
+
+
+@pytest.mark.parametrize("code", [errno.EHOSTUNREACH, errno.ENETUNREACH, errno.ETIMEDOUT])
+def test_a_bridge_that_cannot_be_reached_is_said_so_by_its_address(code: int) -> None:
+    """ "No route to host" had the device path's fix (ls /dev/ttyUSB*)."""
+    said = open_failure("socket://192.0.2.10:8888", code)
+    assert said is not None and said.startswith("the bridge at 192.0.2.10:8888 cannot be reached")
+    assert open_failure("/dev/ttyUSB0", code) is None  # a device's error says it itself
+
+
+def test_a_connect_that_timed_out_is_etimedout() -> None:
+    """pyserial's socket:// handler wraps the connect's ``socket.timeout`` (no number)."""
+    try:
+        try:
+            raise TimeoutError("timed out")
+        except TimeoutError as exc:
+            raise OSError("could not open port socket://192.0.2.10:8888") from exc
+    except OSError as wrapped:
+        assert error_number(wrapped) == errno.ETIMEDOUT
+
+
+@pytest.mark.parametrize("port", BRIDGES)
+def test_the_robot_s_errors_on_a_bridge_name_it(port: str) -> None:
+    bridge = "the bridge at 192.168.4.1:23"
+    messages = [
+        str(RobotReset(port, halted=True, after_write=0.05)),
+        str(RobotAsleep(port, 300.0, keep_awake=True, pulses=False)),
+        str(RobotAsleep(port, 300.0, keep_awake=True, pulses=True)),
+        no_answer_causes(port)[2],
+        str(not_a_mode(port, 149)),
+    ]
+    for message in messages:
+        assert bridge in message, message
+        assert not any(word in message.lower() for word in CABLE_WORDS), message
+
+
+def test_a_device_path_keeps_the_cable_s_words() -> None:
+    """The words docs/reliability.md and docs/doctor.md quote, on a device path."""
+    assert no_answer_causes("/dev/ttyUSB0")[2] == (
+        "wrong cable or wiring (TX/RX swapped, adapter not a 5 V TTL serial)"
+    )
+    assert "(a bad cable: a data byte 7 after it is read as Reset)" in str(
+        RobotReset("/dev/ttyUSB0", halted=True, after_write=0.05)
+    )
+    assert "check that the cable wires BRC to RTS or DTR" in str(
+        RobotAsleep("/dev/ttyUSB0", 300.0, keep_awake=True, pulses=True)
+    )
