@@ -371,10 +371,8 @@ class RunSummary:
     #: runs' summaries in one terminal, of one mission, could not be told apart); "" says
     #: nothing (a replay, an evaluation's episode)
     robot: str = ""
-    #: when the run started, local time in ISO 8601 with its offset (``run`` sets it,
-    #: ``2026-12-07T09:00:02+01:00``): a cron job's runs appended to one log file, every
-    #: line in mission time, could not be told apart; "" says nothing (a Python program's
-    #: run, ``--reproducible``, a replay)
+    #: when the run started, local ISO 8601 (``run`` sets it: a cron job's runs in one log
+    #: file told apart); "" says nothing (a Python program's run, ``--reproducible``)
     started: str = ""
     #: the run's label (``run --label``: ``robot 3``), said on the summary's first line:
     #: several robots run from one laptop, one mission each, the summaries alike; "" for none
