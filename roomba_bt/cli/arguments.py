@@ -120,11 +120,14 @@ def port_name(text: str) -> str:
     """``--port``: a device path as given, or a URL pyserial opens
     (:func:`~roomba_bt.transport.open_failure.url_problem`, which ``Connection.open`` asks
     too). A typo in a URL is a usage error here; it was "could not open" (exit 3) with a fix
-    about the device's group. Imported here: ``validate`` and ``show`` load no serial port
-    (tests/cli/test_imports)."""
-    from roomba_bt.transport.open_failure import url_problem
+    about the device's group. So is a path to a regular file or a folder
+    (:func:`~roomba_bt.transport.open_failure.not_a_device`): a retry cannot mend it. Imported
+    here: ``validate`` and ``show`` load no serial port (tests/cli/test_imports)."""
+    from roomba_bt.transport.open_failure import not_a_device, url_problem
 
     problem = url_problem(text)
+    if problem is None and "://" not in text:
+        problem = not_a_device(text)
     if problem is not None:
         raise argparse.ArgumentTypeError(problem)
     return text

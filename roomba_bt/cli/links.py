@@ -52,7 +52,7 @@ def open_port(url: str, baud: int | None) -> SerialTransport:
         raise ConnectionFailed(
             url,
             f"--baud auto: no answer at any OI rate ({describe_silence(found)})",
-            (*no_answer_causes(url)[1:], "run roomba-bt doctor --port URL for each step"),
+            (*no_answer_causes(url)[1:], f"run roomba-bt doctor --port {url} for each step"),
         )
     log.info("%s: the robot answers at %d baud (--baud auto)", url, found.baud)
     return transport

@@ -67,6 +67,7 @@ from roomba_bt.runtime.summary import (
     INTERNAL_ERROR_SAID,
     ExitCode,
     Outcome,
+    RunSummary,
 )
 
 if TYPE_CHECKING:
@@ -78,7 +79,6 @@ if TYPE_CHECKING:
     from roomba_bt.runtime.provenance import AbsentPlugin
     from roomba_bt.runtime.recording import Record, ReplayTransport
     from roomba_bt.runtime.stack import RunStack
-    from roomba_bt.runtime.summary import RunSummary
     from roomba_bt.sim import Simulator
     from roomba_bt.transport import Transport
 
@@ -104,10 +104,13 @@ def _add_run_parser(sub: Any) -> None:
 
         Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
         virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
-        3 connection or stream failure, 4 a behaviour raised an exception (sys.exit() too) or
+        3 not started: the port could not be opened or the robot did not answer (nothing of
+        the mission sent: safe to retry), 4 a behaviour raised an exception (sys.exit() too) or
         the run hung past --wall-limit, 7
         succeeded but failed --strict (or, with --strict, not started: the mission has
-        warnings), {INTERNAL_ERROR_SAID}, 130 interrupted (Ctrl-C, a signal).
+        warnings), 8 the link was lost after the run started (the robot may have moved: the
+        summary's safe stop line says whether the stop reached it), {INTERNAL_ERROR_SAID},
+        130 interrupted (Ctrl-C, a signal).
         """,
     )
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
@@ -345,6 +348,7 @@ def _claimed_run(
     from roomba_bt.robot.errors import ConnectionFailed
     from roomba_bt.runtime.display import observer_for
 
+    args.started = datetime.now(UTC)  # a run that never starts says when it tried, too
     prepared = _mission_at_its_rate(args, params)
     if isinstance(prepared, int):
         return prepared
@@ -356,7 +360,6 @@ def _claimed_run(
         return ExitCode.INVALID
     args.robot = robot_label(args.port, simulator)
     args.world_source = simulator.world.source if simulator is not None else None
-    args.started = datetime.now(UTC)
     monitor = None
     if args.monitor is not None or args.watch:
         monitor = _live_monitor(args, mission, simulator, packets, params, profile)
@@ -368,8 +371,7 @@ def _claimed_run(
     except ConnectionFailed as exc:
         if monitor is not None:
             monitor.finish(None)
-        print(f"roomba-bt: {exc}", file=sys.stderr)
-        return ExitCode.CONNECTION
+        return _not_started(args, exc, "nothing sent: the port was not opened")
     observer = observer_for(args.display, sys.stdout, label=args.label or "")
     try:
         stack = _stack(args, mission, link, packets, params, timeout, observer, claimed)
@@ -398,8 +400,7 @@ def _mission_at_its_rate(
     try:  # --profile auto: identified first, since the mission is compiled for a model
         opened = auto_profile(args, "run")
     except ConnectionFailed as exc:
-        print(f"roomba-bt: {exc}", file=sys.stderr)
-        return ExitCode.CONNECTION
+        return _not_started(args, exc, PROBED_ONLY)
     profile = get_profile(args.profile)
     ending = None if opened is None else end_in_problem(args.end_in, profile)
     if opened is not None and ending is not None:
@@ -412,8 +413,7 @@ def _mission_at_its_rate(
         try:
             args.baud, opened = auto_baud(args.port, profile)
         except ConnectionFailed as exc:
-            print(f"roomba-bt: {exc}", file=sys.stderr)
-            return ExitCode.CONNECTION
+            return _not_started(args, exc, PROBED_ONLY)
     mission = load(args.mission, params, profile, args.baud, permissions(args, args.mission))
     if isinstance(mission, int):
         return mission
@@ -430,6 +430,31 @@ def _mission_at_its_rate(
         print(f"roomba-bt: {said}; not started", file=sys.stderr)
         return ExitCode.STRICT
     return mission, packets, opened
+
+
+#: the safe stop line of a run whose ``--baud auto`` or ``--profile auto`` probe found no
+#: robot: the probe's Start and queries were all it wrote, and nothing of the mission
+PROBED_ONLY = "nothing of the mission sent, only the probe's Start and queries; the port closed"
+
+
+def _not_started(args: argparse.Namespace, exc: Exception, sent: str) -> int:
+    """A run that never started (the port not opened, or no robot found by ``--baud auto``
+    or ``--profile auto``): its summary, as every other run's ending has one, outcome NO
+    CONNECTION, exit 3 (nothing of the mission sent: safe to retry). It was one line on
+    stderr: a cron job's evening log had no ``outcome`` line to look for, and the hint said
+    ``doctor --port URL``, not the port."""
+    summary = RunSummary(Path(args.mission).stem, Outcome.NO_CONNECTION, reason=str(exc))
+    summary.profile = "" if args.profile == AUTO_PROFILE else profile_line(args)
+    summary.robot = robot_label(args.port, None)
+    summary.label = args.label or ""
+    summary.robot_answered = False
+    summary.safe_stop = sent
+    _timed(summary, args)
+    summary.wall_time_s = (datetime.now(UTC) - args.started).total_seconds()
+    print(summary)
+    sys.stdout.flush()
+    print(f"roomba-bt: {exc}", file=sys.stderr)
+    return summary.exit_code
 
 
 def robot_label(port: str | None, simulator: Simulator | None) -> str:
@@ -486,8 +511,17 @@ def _stack(
     summary.profile = profile_line(args)  # where it came from, unless the flag named it
     summary.robot = args.robot
     summary.label = args.label or ""
-    summary.timings = not getattr(args, "reproducible", False)  # wall-clock lines vary
+    _timed(summary, args)
     return stack
+
+
+def _timed(summary: RunSummary, args: argparse.Namespace) -> None:
+    """The summary's wall-clock lines, which vary from run to run: the wall time and when it
+    started (local time, as the morning's cron line and the reader's clock read); neither
+    with ``--reproducible``."""
+    summary.timings = not getattr(args, "reproducible", False)
+    if summary.timings:
+        summary.started = args.started.astimezone().isoformat(timespec="seconds")
 
 
 def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float | None] | int:
@@ -757,7 +791,12 @@ def _report_on_stdout(
 def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSummary) -> None:
     if (
         summary.outcome.exit_code
-        in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
+        in (
+            ExitCode.CONNECTION,
+            ExitCode.LINK_LOST,
+            ExitCode.MISSION_FAILED,
+            ExitCode.BEHAVIOUR_ERROR,
+        )
         and summary.reason
     ):
         # a node's name in it: one line; a long reason's short first line where it has one,

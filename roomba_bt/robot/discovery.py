@@ -288,6 +288,9 @@ class Found:
     before_wake: Search
     after_wake: Search | None
     wake_problem: str | None
+    #: how the wake pulse was given (:attr:`WakePulse.how`: by the modem lines, or by a
+    #: hang-up where they cannot be set), None where none was
+    wake_how: str | None = None
 
     @property
     def woken(self) -> bool:
@@ -314,7 +317,7 @@ def find_robot(transport: Transport, preferred: int | None = None, *, wake: bool
     if pulse.problem is not None:
         return Found(None, first, None, pulse.problem)
     second = search(transport, rates)
-    return Found(second.baud, first, second, None)
+    return Found(second.baud, first, second, None, pulse.how)
 
 
 #: How long doctor listens, writing nothing, for a stream a run left running (its stop not
@@ -375,8 +378,9 @@ def describe_silence(found: Found) -> str:
     seen = "; ".join(f"{p.baud}: {p.seen}" for p in found.probes)
     if found.wake_problem is not None:
         seen += f"; no BRC pulse possible ({found.wake_problem})"
-    elif found.after_wake is not None:
-        seen += " (the last after a BRC pulse)"
+    elif found.after_wake is not None:  # a pty's was a hang-up, not a BRC pulse by its lines
+        after = len(found.after_wake.probes)
+        seen += f" (the last {after} after the wake: {found.wake_how or 'a BRC pulse'})"
     return seen
 
 

@@ -394,6 +394,9 @@ class PortReturn:
             )
         elif took is None:
             self.said = f"{port} did not come back within {self.within:g} s"
+            elsewhere = getattr(link.transport, "other_device", None)
+            if elsewhere:  # its path leads to another device: nothing was written into it
+                self.said += f" ({link.name} leads to another device: {elsewhere}; not opened)"
         else:
             self.said = f"{port} came back after {took:.2f} s"
         if took is None:

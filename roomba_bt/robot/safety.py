@@ -72,6 +72,22 @@ IGNORED_AT_START: frozenset[int] = frozenset(
 )
 
 
+def _has_a_terminal() -> bool:
+    """Whether this process has a controlling terminal (``/dev/tty`` opens): one started by
+    systemd, cron or ``setsid`` has none, and a SIGHUP then comes from a program, not from a
+    terminal hung up."""
+    try:
+        os.close(os.open("/dev/tty", os.O_RDONLY | getattr(os, "O_NOCTTY", 0)))
+    except OSError:
+        return False
+    return True
+
+
+#: Whether the process had a controlling terminal when this module was first imported, as
+#: it starts: after an SSH session drops, its terminal is gone, and asking then would say none
+HAD_A_TERMINAL = _has_a_terminal()
+
+
 def _taken(signals: tuple[int, ...]) -> tuple[int, ...]:
     """``signals`` less those the process keeps ignored (:data:`IGNORED_AT_START`)."""
     return tuple(signum for signum in signals if signum not in IGNORED_AT_START)
@@ -90,10 +106,18 @@ class Terminated(KeyboardInterrupt):
         super().__init__(f"terminated by signal {signal.Signals(signum).name}")
 
 
-def signal_reason(signum: int) -> str:
-    """How a run's summary names the signal that ended it."""
+def signal_reason(signum: int, *, terminal: bool | None = None) -> str:
+    """How a run's summary names the signal that ended it. A SIGHUP is a terminal's hang-up
+    only where the process had one (``terminal``; :data:`HAD_A_TERMINAL` when not given):
+    under a service or cron it was sent by a program, and "the terminal was closed" sent
+    the reader of the evening's log after an SSH session that never was."""
     if signum == getattr(signal, "SIGHUP", None):
-        return "SIGHUP: the terminal was closed (an SSH session dropped?)"
+        if HAD_A_TERMINAL if terminal is None else terminal:
+            return "SIGHUP: the terminal was closed (an SSH session dropped?)"
+        return (
+            "SIGHUP, with no terminal to hang up: sent by a program (kill -HUP, a logrotate "
+            "postrotate script, systemctl reload?)"
+        )
     if signum == getattr(signal, "SIGTSTP", None):
         return "Ctrl-Z (SIGTSTP): a suspended run could not stop its robot, so it ended"
     if signum == getattr(signal, "SIGQUIT", None):

@@ -32,7 +32,7 @@ from typing import Protocol, runtime_checkable
 
 from roomba_bt.robot import wording
 from roomba_bt.robot.errors import StreamStalled
-from roomba_bt.transport.link_kind import link_of
+from roomba_bt.transport.link_kind import LinkKind, link_of
 
 log = logging.getLogger(__name__)
 
@@ -113,6 +113,8 @@ class KeepAwake:
                 self.last_pulse = now
                 self._low_until = self.due = now + self.length
                 self._next = now + self.period
+                if self.pulses == 1:
+                    self._say_the_wake()
         except OSError as exc:
             self.unavailable = str(exc)
             self._low_until = None
@@ -133,6 +135,21 @@ class KeepAwake:
                 "them with --rfc2217; %s says it is meant",
                 exc.strerror or exc, caller.keep_awake_off,
             )  # fmt: skip
+
+    def _say_the_wake(self) -> None:
+        """Said once, at the first pulse the line took: a robot that slept on its dock
+        overnight is woken by BRC pulled low (the port's open asserted the lines, and this
+        pulse holds them), which a 9:00 run's log did not say while docs/robot.md said the
+        start-up could not wake it. Whether it slept no byte tells (a robot woken says
+        nothing), so it is said as what the pulse does. Not on the simulator in this process
+        (``sim://``), whose runs would each get the line."""
+        name = getattr(self.line, "name", "")
+        if link_of(name).kind is not LinkKind.OTHER:
+            log.info(
+                "%s: BRC pulled low (RTS and DTR: the port's open and keep-awake's first "
+                "pulse): a robot that slept (on its dock overnight) is woken by it",
+                name,
+            )
 
     def _set(self, low: bool) -> None:
         """Drive the line, remembering a change that held the caller (:attr:`held`)."""

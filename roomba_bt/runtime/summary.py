@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
 
 #: Seconds a run waits, after the watchdog stopped the wheels, for valid frames to come back
-#: before it ends as a lost connection, exit 3 (``run --grace``).
+#: before it ends as a lost connection, exit 8 (``run --grace``).
 DEFAULT_GRACE = 2.0
 
 #: ``run --tick-limit`` default, seconds (runtime/tick_guard.py): 17 stream slots; at
@@ -33,11 +33,18 @@ class ExitCode(IntEnum):
     OK = 0  # mission succeeded / command did what was asked
     MISSION_FAILED = 1  # the tree ended in FAILURE (or the timeout ran out)
     INVALID = 2  # invalid mission, world or command-line usage
-    #: port could not be opened, robot did not answer, stream lost; the summary's "safe stop"
-    #: line says whether the stop reached the robot ("NOT DELIVERED: last seen in Safe at
-    #: 200 mm/s; the stop was not delivered: the port is gone"); also a run whose tree ended
-    #: well but whose stop did not reach the robot (``note_undelivered_stop``)
+    #: could not start: the port could not be opened or the robot did not answer the
+    #: start-up (``Outcome.NO_CONNECTION``); no command of the mission was sent, so trying
+    #: again is safe (systemd's ``Restart=on-failure``, docs/unattended.md). ``sensors``,
+    #: ``sim`` and ``eval`` exit 3 for their own connection's failure
     CONNECTION = 3
+    #: the link was lost after the run had started (``Outcome.CONNECTION_LOST``): the port
+    #: gone, the stream lost, the robot reset or asleep, commands not heard; also a run whose
+    #: tree ended well but whose stop did not reach the robot (``note_undelivered_stop``).
+    #: The robot may have moved, and the summary's "safe stop" line says whether the stop
+    #: reached it: a person should look before it runs again (``RestartPreventExitStatus=``).
+    #: Exit 3 said it too before 0.2.0, which a service could not tell from "not started"
+    LINK_LOST = 8
     #: a behaviour raised an exception (a bug in it or its plugin), its own ``sys.exit()``,
     #: ``KeyboardInterrupt`` or ``BaseException`` too (``robot/safety.py``: ``code_failure``)
     BEHAVIOUR_ERROR = 4
@@ -94,7 +101,7 @@ _EXIT = {
     Outcome.FAILURE: ExitCode.MISSION_FAILED,
     Outcome.TIMEOUT: ExitCode.MISSION_FAILED,
     Outcome.INTERRUPTED: ExitCode.INTERRUPTED,
-    Outcome.CONNECTION_LOST: ExitCode.CONNECTION,
+    Outcome.CONNECTION_LOST: ExitCode.LINK_LOST,
     Outcome.NO_CONNECTION: ExitCode.CONNECTION,
     Outcome.ERROR: ExitCode.BEHAVIOUR_ERROR,
     Outcome.HUNG: ExitCode.BEHAVIOUR_ERROR,
@@ -368,6 +375,9 @@ class RunSummary:
     #: runs' summaries in one terminal, of one mission, could not be told apart); "" says
     #: nothing (a replay, an evaluation's episode)
     robot: str = ""
+    #: when the run started, local ISO 8601 (``run`` sets it: a cron job's runs in one log
+    #: file told apart); "" says nothing (a Python program's run, ``--reproducible``)
+    started: str = ""
     #: the run's label (``run --label``: ``robot 3``), said on the summary's first line:
     #: several robots run from one laptop, one mission each, the summaries alike; "" for none
     label: str = ""
@@ -475,6 +485,7 @@ class RunSummary:
             f"mission      {self.mission}",
             *([f"profile      {self.profile}"] if self.profile else []),
             *([f"robot        {self.robot}"] if self.robot else []),
+            *([f"started      {self.started}"] if self.started else []),
             f"outcome      {self.outcome.value.upper()}{reason}",
             *([f"mission said {self.said}"] if self.said else []),
             *([f"forced       by the operator: {'; '.join(self.forced)}"] if self.forced else []),

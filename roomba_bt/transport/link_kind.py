@@ -209,7 +209,10 @@ def _cable_words(kind: LinkKind, reopens: bool) -> LinkWords:
         reopens=reopens,
         modem_lines=None,
         no_modem_lines="no modem lines on this port",
-        sleep_advice="a simulator never sleeps",
+        # what is known of any such port, a pty's or a device's: no pulse can be sent, and a
+        # robot (the simulator's too) left 5 minutes in Passive sleeps. It said "a simulator
+        # never sleeps" of every one, and the same run then ended as the simulator fell asleep
+        sleep_advice="Passive sleeps after 5 min",
     )
 
 

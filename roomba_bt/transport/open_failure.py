@@ -8,7 +8,6 @@ by another program, permissions" listed three guesses where the errno names the 
 
 from __future__ import annotations
 
-import contextlib
 import errno
 import importlib.util
 import os
@@ -118,14 +117,9 @@ def open_failure(device: str, code: int | None) -> str | None:
         return IN_USE_EXCLUSIVE
     if code == errno.EACCES:
         return IN_USE if os.name == "nt" else no_permission(device)  # Windows: held by another
-    with contextlib.suppress(OSError, ValueError):
-        mode = os.stat(device).st_mode
-        if not stat.S_ISCHR(mode):
-            what = "a folder" if stat.S_ISDIR(mode) else "a file"
-            return (
-                f"not a serial port but {what} (--port takes a device such as /dev/ttyUSB0, "
-                "or a URL such as socket://HOST:PORT)"
-            )
+    not_a_port = not_a_device(device)
+    if not_a_port is not None:
+        return not_a_port
     if code == errno.ENOTTY:
         return "not a serial port: a device, but no terminal (a USB serial adapter is /dev/ttyUSB*)"
     if code == errno.ECONNREFUSED:
@@ -137,6 +131,25 @@ def open_failure(device: str, code: int | None) -> str | None:
     if code == errno.ENOENT:
         return no_such_device()
     return None
+
+
+def not_a_device(device: str) -> str | None:
+    """Why ``device``, a path that exists, can be no serial port (a regular file, a folder,
+    a pipe: a serial port is a character device, /dev/ttyUSB0, or a URL); None for one that
+    may be (a character device, a name not there, a URL). ``--port`` says it as a usage
+    error (exit 2), since no retry mends it: it was exit 3, "could not start", which a
+    service told to retry that (systemd's ``Restart=on-failure``) did every minute."""
+    try:
+        mode = os.stat(device).st_mode
+    except (OSError, ValueError):
+        return None
+    if stat.S_ISCHR(mode):
+        return None
+    what = "a folder" if stat.S_ISDIR(mode) else "a file"
+    return (
+        f"not a serial port but {what} (--port takes a serial port's character device such "
+        "as /dev/ttyUSB0 or /dev/serial/by-id/..., or a URL such as socket://HOST:PORT)"
+    )
 
 
 def no_permission(device: str) -> str:

@@ -32,6 +32,7 @@ from serial import rfc2217, serialutil
 from serial.urlhandler import protocol_socket
 
 from roomba_bt.transport.base import TransportError
+from roomba_bt.transport.device_identity import another_device, device_identity
 from roomba_bt.transport.link_kind import LinkKind, link_of
 from roomba_bt.transport.open_failure import (
     CLOSED_AT_ONCE,
@@ -271,6 +272,10 @@ class SerialTransport:
         #: whether a read has given a byte yet: a connection closed before is a far end that
         #: turned this client away (:data:`~roomba_bt.transport.open_failure.CLOSED_AT_ONCE`)
         self._heard = False
+        #: the device the path named when opened (None for a URL): a reopen opens that one
+        self._identity = device_identity(self.name)
+        #: why the last :meth:`reopen` found the path naming another device, or None
+        self.other_device: str | None = None
 
     def _attach(self, port: serial.SerialBase) -> None:
         """Read and write through ``port`` (an open pyserial port: the first, or the one a
@@ -580,8 +585,15 @@ class SerialTransport:
         pause = RECONNECT_FIRST_S if network else REOPEN_EVERY_S
         began = time.monotonic()  # pyserial's close of a socket:// port sleeps 0.3 s
         self.close()
+        self.other_device = None
         while True:
             try:
+                # the path leading to another device (a pty's number reused by another
+                # program, another adapter at /dev/ttyUSB0): not opened, so not a byte, nor
+                # the open's RTS and DTR, reaches it; tried again until the grace is out
+                self.other_device = another_device(self._identity, device_identity(self.name))
+                if self.other_device is not None:
+                    raise FileNotFoundError(self.other_device)
                 port = _device_port(*settings)
                 if isinstance(port, serial.Serial):  # a device, not a URL
                     port.exclusive = True
@@ -603,6 +615,7 @@ class SerialTransport:
                 continue
             break
         self._attach(port)
+        self._identity = device_identity(self.name)
         return time.monotonic() - began
 
     def close(self) -> None:

@@ -9,6 +9,7 @@ import re
 import subprocess
 import sys
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
@@ -98,6 +99,14 @@ def test_a_bad_record_size_limit_says_what_is_allowed(text: str, found: str) -> 
         (["doctor", "--port", "bogus://x"], "'bogus://x', a URL of no scheme pyserial knows"),
         (["run", "dock", "--port", "socket://robot"], "allowed: socket://HOST:PORT"),
         (["sensors", "--port", "rfc2217://h:99999"], "a port in 1..65535"),
+        # a file or a folder given as the port was exit 3, "could not start", which a
+        # service retried for ever (Restart=on-failure); no retry mends it
+        (
+            ["run", "dock", "--port", __file__],
+            "--port: not a serial port but a file (--port takes a serial port's character "
+            "device such as /dev/ttyUSB0",
+        ),
+        (["doctor", "--port", str(Path(__file__).parent)], "not a serial port but a folder"),
         # argparse takes "-3s" for an option: it said only "expected one argument"
         (["run", "dock", "--timeout", "-3s"], "write --timeout=VALUE"),
         (["run", "dock", "-p"], "write --param=VALUE"),

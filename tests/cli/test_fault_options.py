@@ -46,7 +46,7 @@ def test_run_fast_meets_the_faults_it_is_given(capsys: pytest.CaptureFixture[str
     """A reset 1 s into the stream, on the virtual clock: the run ends as on a robot that
     reset."""
     argv = ["run", *BUMP, "--fast", "--display", "none", "--reset-at", "1", "--faults-from-stream"]
-    assert main(argv) == ExitCode.CONNECTION
+    assert main(argv) == ExitCode.LINK_LOST
     assert "the robot reset: its start-up banner was on the line" in capsys.readouterr().err
 
 

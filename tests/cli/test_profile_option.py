@@ -50,7 +50,7 @@ def test_the_run_summary_names_a_profile_other_than_the_default(
     assert main(["run", str(mission), "--fast", "--display", "none"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[:2] == ["mission      sit", "robot        simulator empty-room"]  # no profile
-    assert lines[2].startswith("outcome ")
+    assert lines[2].startswith("started ") and lines[3].startswith("outcome ")
 
 
 def test_the_eval_summary_names_a_profile_other_than_the_default(

@@ -49,7 +49,7 @@ def test_run_with_the_default_profile_on_a_roomba500_names_the_profile(
 ) -> None:
     mission = tmp_path / "sit.yaml"
     mission.write_text(MISSION)
-    assert main(["run", str(mission), "--port", roomba500_port, "--display", "none"]) == 3
+    assert main(["run", str(mission), "--port", roomba500_port, "--display", "none"]) == 8
     out, err = capsys.readouterr()
     _says_roomba500(out)  # the summary's outcome, whole for one who reads only the summary
     assert "then the run waited" not in out  # ended at the watchdog's trip: it was certain
@@ -82,7 +82,7 @@ def test_a_wrong_profile_set_elsewhere_is_fixed_where_it_was_set(
         fix = f'set profile = "roomba500" at {project}:2 (or "auto")'
     mission = tmp_path / "sit.yaml"
     mission.write_text(MISSION)
-    assert main(["run", str(mission), "--port", roomba500_port, "--display", "none"]) == 3
+    assert main(["run", str(mission), "--port", roomba500_port, "--display", "none"]) == 8
     out, err = capsys.readouterr()
     assert fix in out and fix in err, (out, err)
     assert "use --profile" not in out + err

@@ -150,7 +150,7 @@ def test_the_url_is_said_once_the_robot_s_port_is_open_with_the_mission_and_robo
         r"monitor: http://127\.0\.0\.1:\d+/ \(shuttle on simulator empty-room\)",
         out.splitlines()[0],
     ), out
-    assert "mission      shuttle\nrobot        simulator empty-room\noutcome" in out
+    assert "mission      shuttle\nrobot        simulator empty-room\nstarted      " in out
 
 
 def test_a_record_still_being_written_is_shown_as_such(

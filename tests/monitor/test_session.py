@@ -875,7 +875,7 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
 
     summary = rig.run_with(operator)
     assert rig.sim.asleep
-    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 8
     assert "the robot fell asleep" in summary.reason
     assert summary.safe_stop.startswith("NOT DELIVERED: last seen in Passive stopped; ")
     assert "the stop was written but is unconfirmed: the robot was asleep" in summary.safe_stop

@@ -182,3 +182,27 @@ def test_an_interrupt_raised_in_another_thread_is_never_a_signal_s() -> None:
         """As an evaluation's wall-clock limit: raised into the run from outside."""
 
     assert not code_failure(Limit())
+
+
+def test_a_hang_up_without_a_terminal_is_not_said_as_a_terminal_closed() -> None:
+    """Under systemd, cron or ``setsid`` the run has no controlling terminal, and a SIGHUP
+    comes from a program (``kill -HUP``, a logrotate ``postrotate``, ``systemctl reload``):
+    it was said as "the terminal was closed (an SSH session dropped?)" all the same."""
+    said = subprocess.run(
+        [sys.executable, "-c", "import signal; from roomba_bt.robot import safety; "
+         "print(safety.HAD_A_TERMINAL); print(safety.signal_reason(signal.SIGHUP))"],
+        capture_output=True, text=True, timeout=60, start_new_session=True, check=True,
+        stdin=subprocess.DEVNULL,
+    )  # fmt: skip
+    had, reason = said.stdout.splitlines()
+    assert had == "False"
+    assert reason.startswith("SIGHUP, with no terminal to hang up: sent by a program")
+    assert "SSH" not in reason and "kill -HUP" in reason and "logrotate" in reason
+
+
+def test_a_hang_up_of_a_run_in_a_terminal_says_the_terminal_was_closed() -> None:
+    from roomba_bt.robot.safety import signal_reason
+
+    assert signal_reason(signal.SIGHUP, terminal=True) == (
+        "SIGHUP: the terminal was closed (an SSH session dropped?)"
+    )

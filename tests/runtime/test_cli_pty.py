@@ -263,7 +263,7 @@ def test_a_run_that_followed_a_baud_change_over_the_pty_replays_byte_for_byte(
     served_sim: Callable[..., Any], tmp_path: Path
 ) -> None:
     """The robot changes its rate mid-run (a battery swap): the run follows it, stops it
-    there and ends, exit 3. Its replay listened at the new rate 15 ms short of the live
+    there and ends, exit 8. Its replay listened at the new rate 15 ms short of the live
     run's window (the live port settles a slot first), wrote the drive 0 a frame early (a
     difference), then its safe stop's wait for a quiet line read for ever at the record's
     end, its clock stuck at a float's last bit, deaf to Ctrl-C and SIGTERM. Now the replay
@@ -272,7 +272,7 @@ def test_a_run_that_followed_a_baud_change_over_the_pty_replays_byte_for_byte(
     record = tmp_path / "run.jsonl"
     proc = _start_run(sim.address, write_mission(tmp_path, SPIN), record, "--timeout", "5s")
     out, err = proc.communicate(timeout=30)
-    assert proc.returncode == 3, out + err
+    assert proc.returncode == 8, out + err
     assert "the robot now talks at another baud rate: 19200" in out
     replay = subprocess.run(
         [*CLI, "replay", str(record)], capture_output=True, text=True, timeout=30
@@ -294,9 +294,9 @@ def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
     assert ends_with_the_safe_stop(load_record(record).outbound)
 
 
-def _run_on(port: str, tmp_path: Path) -> subprocess.CompletedProcess[str]:
+def _run_on(port: str, tmp_path: Path, *options: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [*CLI, "run", str(write_mission(tmp_path, SPIN)), "--port", port],
+        [*CLI, "run", str(write_mission(tmp_path, SPIN)), "--port", port, *options],
         capture_output=True,
         text=True,
         timeout=30,
@@ -306,14 +306,14 @@ def _run_on(port: str, tmp_path: Path) -> subprocess.CompletedProcess[str]:
 def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undelivered(
     served_sim: Callable[..., Any], tmp_path: Path
 ) -> None:
-    """The cable pulled: exit 3 naming the port gone, the stop reported undeliverable with
+    """The cable pulled: exit 8 naming the port gone, the stop reported undeliverable with
     what the robot was last seen doing, logged once (close() tries the stop again)."""
     sim = served_sim("--pty")
     proc, _ = _driving(sim.address, tmp_path)
     sim.proc.kill()
     sim.proc.communicate()  # its pipes closed
     out, err = proc.communicate(timeout=30)
-    assert proc.returncode == 3, err
+    assert proc.returncode == 8, err
     assert "the port is gone" in err
     report = "last seen in Safe spinning left at 100 mm/s; the stop was not delivered"
     assert f"NOT DELIVERED: {report}: the port is gone" in out
@@ -344,7 +344,7 @@ def test_a_port_that_comes_back_within_the_grace_gets_the_stop_not_the_mission(
     back.symlink_to(second.address)
     back.replace(port)  # the adapter back, at the same path
     out, err = proc.communicate(timeout=30)
-    assert proc.returncode == 3, err
+    assert proc.returncode == 8, err
     assert "CONNECTION LOST" in out and "the cable was pulled or the adapter reset" in out
     assert re.search(
         r"safe stop    sent drive, motors, pause_resume_stream, start \(the port came back "
@@ -401,7 +401,7 @@ def test_a_bridge_that_drops_the_run_gets_the_stop_through_a_new_connection(
     proc, _ = _driving(proxy.url, tmp_path)
     fault(proxy)
     out, err = proc.communicate(timeout=30)
-    assert proc.returncode == 3, err
+    assert proc.returncode == 8, err
     assert said in out
     assert re.search(
         r"safe stop    sent drive, motors, pause_resume_stream, start \("
@@ -428,7 +428,7 @@ def test_a_bridge_that_stays_down_past_the_grace_is_said_in_the_network_s_words(
     proc, _ = _driving(proxy.url, tmp_path)
     proxy.reset(down_s=30.0)
     out, err = proc.communicate(timeout=30)
-    assert proc.returncode == 3, err
+    assert proc.returncode == 8, err
     assert "NOT DELIVERED" in out and "the connection did not come back within 2 s" in out
     where = proxy.url.removeprefix("socket://")
     assert (
@@ -460,6 +460,26 @@ def test_missing_port_is_exit_3(tmp_path: Path) -> None:
     result = _run_on("/dev/does-not-exist", tmp_path)
     assert result.returncode == 3
     assert "/dev/does-not-exist" in result.stderr
+    assert "Traceback" not in result.stderr
+    # the summary as every other ending has it: a cron job's log had no outcome line
+    assert "outcome      NO CONNECTION (/dev/does-not-exist: could not open" in result.stdout
+    assert "safe stop    nothing sent: the port was not opened" in result.stdout
+
+
+def test_no_robot_at_any_rate_has_its_summary_and_names_its_port(
+    tmp_path: Path, silent_port: str
+) -> None:
+    """``--baud auto`` finding no robot was one line on stderr, with no summary (no
+    ``outcome`` line for the evening's reader of a cron job's log to find), a hint to run
+    ``doctor --port URL``, and a pty's hang-up called "a BRC pulse"."""
+    result = _run_on(silent_port, tmp_path, "--baud", "auto")
+    assert result.returncode == 3, result.stderr
+    assert "outcome      NO CONNECTION (" in result.stdout
+    assert "--baud auto: no answer at any OI rate" in result.stdout
+    assert "safe stop    nothing of the mission sent, only the probe's" in result.stdout
+    assert f"run roomba-bt doctor --port {silent_port} for each step" in result.stderr
+    assert "URL" not in result.stderr
+    assert "(the last 2 after the wake: pulsed BRC by a 1 s hang-up (" in result.stderr
     assert "Traceback" not in result.stderr
 
 

@@ -45,6 +45,19 @@ def test_run_fast_succeeds(mission: Path, capsys: pytest.CaptureFixture[str]) ->
     assert "safe stop    sent drive, motors, pause_resume_stream, start" in out
 
 
+def test_the_summary_says_when_the_run_started_in_local_time(
+    mission: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A cron job's runs, appended to one log file every morning, each line in mission time,
+    could not be told apart: the summary says the start's date and time, local, ISO 8601
+    with its offset; ``--reproducible`` leaves it out, as its other wall-clock lines."""
+    assert main(["run", str(mission), "--fast", "--display", "none"]) == 0
+    [started] = [line for line in capsys.readouterr().out.splitlines() if "started" in line]
+    assert re.fullmatch(r"started      \d{4}-\d\d-\d\dT\d\d:\d\d:\d\d[+-]\d\d:\d\d", started)
+    assert main(["run", str(mission), "--fast", "--display", "none", "--reproducible"]) == 0
+    assert "started" not in capsys.readouterr().out
+
+
 def test_parameter_from_the_command_line(
     mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -399,10 +412,10 @@ def test_a_robot_whose_battery_went_flat_is_named_as_such(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """The simulated robot switches itself off at an empty battery; the run ends as a lost
-    connection (exit 3), and the cause it gives first is the battery the last frame read."""
+    connection (exit 8), and the cause it gives first is the battery the last frame read."""
     go = "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s}\n"
     options = ["--display", "none", "--battery", "0.0002", "--world", "corridor"]
-    assert _run_file(tmp_path, "go.yaml", go, *options) == 3
+    assert _run_file(tmp_path, "go.yaml", go, *options) == 8
     err = capsys.readouterr().err
     assert "most likely a flat battery (the last frame read 0.0 %: it switched itself off" in err
 

@@ -70,7 +70,7 @@ def test_without_keep_awake_it_sleeps_and_is_reported_asleep(tmp_path: Path) -> 
     assert "no valid sensor frame" not in summary.reason
     # the stop met the robot asleep, and says so (not "no valid frame for 0.5 s")
     assert "unconfirmed: the robot was asleep (300 s in Passive" in summary.safe_stop
-    assert summary.exit_code == 3
+    assert summary.exit_code == 8
 
 
 def test_the_command_line_is_told_its_own_words_for_a_sleeping_robot(tmp_path: Path) -> None:
@@ -205,7 +205,10 @@ def test_a_port_without_modem_lines_turns_keep_awake_off_once(
     # 40-column SSH screen), with what to do; the rest at -v (it named only the ioctl's error)
     [warned] = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
     assert "keep-awake (a BRC pulse a minute: Passive never sleeps) is off" in warned
-    assert f"a simulator never sleeps; {silenced}" in warned
+    assert f"no modem lines on this port; Passive sleeps after 5 min; {silenced}" in warned
+    # a pty's simulator sleeps after 5 minutes in Passive as a robot does, and a device path
+    # is no simulator: it said "a simulator never sleeps" of both, and the run then slept
+    assert "simulator" not in warned
     assert "Errno" not in warned  # the port's error at -v: it said nothing to a hobbyist
     assert len(warned) <= 175, warned
     [said] = [r.getMessage() for r in caplog.records if r.levelname == "DEBUG"]
@@ -219,6 +222,33 @@ class _Levels:
 
     def set_wake_line(self, low: bool) -> None:
         self.levels.append(low)
+
+
+class _NamedLevels(_Levels):
+    def __init__(self, name: str) -> None:
+        super().__init__()
+        self.name = name
+
+
+@pytest.mark.parametrize(
+    ("port", "said"),
+    [("/dev/ttyUSB0", True), ("rfc2217://pi.local:7000", True), ("sim://empty-room", False)],
+)
+def test_the_first_pulse_says_it_wakes_a_robot_that_slept(
+    caplog: pytest.LogCaptureFixture, port: str, said: bool
+) -> None:
+    """A robot asleep on its dock overnight was woken at a 9:00 run's start by BRC pulled
+    low, and the log said nothing of it (docs/robot.md said the start-up could not wake it).
+    Said once, at the first pulse; not of the simulator in this process, every run's."""
+    wake = KeepAwake(_NamedLevels(port), period=60.0, length=1.0)
+    with caplog.at_level("INFO", logger="roomba_bt"):
+        for now in (0.0, 1.0, 60.0, 61.0):
+            wake.tick(now)
+    woken = [r.getMessage() for r in caplog.records if "is woken by it" in r.getMessage()]
+    assert woken == (
+        [f"{port}: BRC pulled low (RTS and DTR: the port's open and keep-awake's first pulse): "
+         "a robot that slept (on its dock overnight) is woken by it"] if said else []
+    )  # fmt: skip
 
 
 def test_due_is_when_a_tick_next_has_something_to_do() -> None:

@@ -123,7 +123,7 @@ def test_ctrl_c_is_exit_130_after_the_safe_stop(
 def test_lost_stream_trips_the_watchdog_and_stops(run_mission: RunMission) -> None:
     run = run_mission(SPIN, stall_after=1.0, timeout=5.0)
     assert run.summary.outcome is Outcome.CONNECTION_LOST
-    assert run.summary.exit_code == 3
+    assert run.summary.exit_code == 8
     assert "the sensor stream stopped: nothing arrived for 2.0 s" in run.summary.reason
     assert "the watchdog sent drive 0 after 100 ms" in run.summary.reason
     # The watchdog's drive 0 first, then the whole safe stop.
@@ -132,10 +132,10 @@ def test_lost_stream_trips_the_watchdog_and_stops(run_mission: RunMission) -> No
     assert run.simulator.requested_left == 0 and run.simulator.requested_right == 0
 
 
-def test_unplugged_link_is_exit_3_and_says_the_stop_was_not_sent(run_mission: RunMission) -> None:
+def test_unplugged_link_is_exit_8_and_says_the_stop_was_not_sent(run_mission: RunMission) -> None:
     run = run_mission(SPIN, faults=Faults(disconnect_at=1.0))
     assert run.summary.outcome is Outcome.CONNECTION_LOST
-    assert run.summary.exit_code == 3
+    assert run.summary.exit_code == 8
     assert run.summary.safe_stop == (
         "NOT DELIVERED: last seen in Safe spinning left at 100 mm/s; "
         "the stop was not delivered: the port is gone: the robot may still be moving: pick it "

@@ -1,6 +1,6 @@
 """A bad patch of line is ridden through: the watchdog still stops the wheels 100 ms after the
 last valid frame, the run waits the grace for valid frames, then the tree goes on and the
-wheels get their command again; a loss longer than the grace ends as exit 3, its cause named
+wheels get their command again; a loss longer than the grace ends as exit 8, its cause named
 (a stopped stream, a garbled line, a reset)."""
 
 from __future__ import annotations
@@ -179,16 +179,16 @@ def test_a_line_logged_during_a_stall_is_stamped_with_the_time_it_was_written(
     assert stamp > tripped + 2.0
 
 
-def test_a_stream_stopped_past_the_grace_is_exit_3_named_stopped(tmp_path: Path) -> None:
+def test_a_stream_stopped_past_the_grace_is_exit_8_named_stopped(tmp_path: Path) -> None:
     summary, link = run(tmp_path, BadPatchLink, 1.0, 99.0, "silent", timeout=10.0)
-    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 8
     assert "the sensor stream stopped: nothing arrived for 2.0 s" in summary.reason
     assert "the watchdog sent drive 0 after 100 ms" in summary.reason
     assert [t for t, b in link.writes if b == HALT and 1.0 <= t <= 1.15]
     assert summary.stalls == 1 and summary.stalls_ridden == 0
 
 
-def test_a_garbled_line_past_the_grace_is_exit_3_named_garbled(tmp_path: Path) -> None:
+def test_a_garbled_line_past_the_grace_is_exit_8_named_garbled(tmp_path: Path) -> None:
     summary, _ = run(tmp_path, BadPatchLink, 1.0, 99.0, "garbled", timeout=10.0, grace=0.5)
     assert summary.outcome is Outcome.CONNECTION_LOST
     assert "the line is garbled: no valid sensor frame for 0.5 s while" in summary.reason

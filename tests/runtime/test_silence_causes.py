@@ -97,7 +97,7 @@ def test_a_robot_that_answers_after_a_pulse_too_soon_to_sleep_is_not_called_asle
     stopped and came back after a pulse), not "asleep" with advice to buy a BRC cable."""
     summary, simulator = run(tmp_path, WAIT_IN_PASSIVE, Faults(sleep_at=5.0))
     assert summary.outcome is Outcome.CONNECTION_LOST
-    assert summary.exit_code == 3
+    assert summary.exit_code == 8
     reason = summary.reason
     assert re.search(r"the stream stopped for \d\.\d s and came back \(a frozen adapter", reason)
     assert "it answered again after a BRC pulse (pulsed BRC low for 1 s" in reason, reason
@@ -315,7 +315,7 @@ def assert_followed_and_stopped(
 ) -> None:
     """The run named the change to 19200 and sent drive 0 again there; the stop reached the
     robot at its new rate (stopped, in Passive) within ``within`` s of the change."""
-    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 8
     assert "the robot now talks at another baud rate: 19200, not the 115200" in summary.reason
     assert "drive 0 sent again at 19200" in summary.reason
     assert summary.stop_delivered
@@ -519,7 +519,7 @@ def test_a_roomba500_read_by_the_default_profile_ends_the_run_at_the_watchdog_tr
     summary = stack.run()
     ended_at = link.now()  # the virtual clock: the run's own time, not the wall's
     stack.close()
-    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 8
     assert "then the run waited" not in summary.reason, summary.reason
     assert "use --profile roomba500" in summary.reason
     assert summary.stalls == 1 and summary.stalls_ridden == 0
@@ -558,4 +558,4 @@ def test_a_roomba500_read_by_the_default_profile_near_a_wall_is_not_called_noise
     # its stop was "unconfirmed: its frames fail the create2 profile's range": the robot went
     # quiet after Pause Stream and answered a Query List, which no profile's range refuses
     assert summary.safe_stop == "sent pause_resume_stream, start", summary.safe_stop
-    assert summary.stop_delivered and summary.exit_code == 3  # the lost stream's
+    assert summary.stop_delivered and summary.exit_code == 8  # the lost stream's

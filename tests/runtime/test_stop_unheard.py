@@ -68,7 +68,7 @@ def test_a_run_whose_stop_the_robot_never_heard_is_no_success(tmp_path: Path) ->
     assert (
         simulator.mode is OIMode.SAFE and simulator.requested_left < 0 < simulator.requested_right
     )
-    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 8
     assert summary.reason.startswith("the safe stop did not reach the robot")
     assert summary.reason.endswith("(the run had ended: success)")
     assert summary.safe_stop.startswith(  # "stopped": the tree's own drive 0, unheard too

@@ -76,6 +76,26 @@ def test_every_other_outcome_raises_with_its_reason_and_exit_code(outcome: Outco
     )
 
 
+#: each outcome's exit code, as scripts and systemd units read them: 3 was a run that never
+#: started and a link lost mid-run alike, and a service could not retry the one alone
+EXIT_CODES = {
+    Outcome.SUCCESS: 0,
+    Outcome.FAILURE: 1,
+    Outcome.TIMEOUT: 1,
+    Outcome.INPUT_ENDED: 1,
+    Outcome.NO_CONNECTION: 3,  # nothing of the mission sent: safe to retry
+    Outcome.ERROR: 4,
+    Outcome.HUNG: 4,
+    Outcome.CONNECTION_LOST: 8,  # the robot may have moved: a person looks first
+    Outcome.INTERRUPTED: 130,
+}
+
+
+@pytest.mark.parametrize("outcome", list(Outcome), ids=lambda outcome: outcome.name)
+def test_each_outcome_exits_with_its_documented_code(outcome: Outcome) -> None:
+    assert int(RunSummary("dock", outcome).exit_code) == EXIT_CODES[outcome]
+
+
 def test_a_run_that_fails_raises_after_the_robot_is_stopped() -> None:
     root = py_trees.composites.Sequence("s", memory=True, children=[
         Mode("safe", {"to": "safe"}), py_trees.behaviours.Failure("refuses"),

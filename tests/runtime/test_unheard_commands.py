@@ -56,11 +56,11 @@ tree:
 
 
 def _lost_and_stopped(run: Run, *said: str) -> None:
-    """The run ended as a lost connection (exit 3), its reason saying each of ``said``, and
+    """The run ended as a lost connection (exit 8), its reason saying each of ``said``, and
     the simulated robot was left stopped in Passive."""
     summary = run.summary
     assert summary.outcome is Outcome.CONNECTION_LOST
-    assert summary.exit_code == ExitCode.CONNECTION
+    assert summary.exit_code == ExitCode.LINK_LOST
     for words in said:
         assert words in summary.reason
     sim = run.simulator

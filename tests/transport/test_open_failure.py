@@ -91,7 +91,7 @@ def test_a_user_who_may_not_open_the_port_is_told_why(tmp_path: Path) -> None:
     [
         ("192.168.1.20:8888", "a network address needs its scheme: socket://HOST:PORT"),
         ("robot.local:23", "a network address needs its scheme: socket://HOST:PORT"),
-        ("{file}", "not a serial port but a file (--port takes a device such as /dev/ttyUSB0"),
+        ("{file}", "not a serial port but a file (--port takes a serial port's character device"),
         ("{folder}", "not a serial port but a folder"),
         ("/dev/null", "not a serial port: a device, but no terminal"),
         ("socket://127.0.0.1:{closed}", "nothing listens at 127.0.0.1:{closed}: is the bridge"),

@@ -486,6 +486,40 @@ def test_a_device_path_that_comes_back_is_reopened_and_carries_bytes(tmp_path: P
             os.close(fd)
 
 
+def test_a_link_left_to_a_pty_number_another_program_got_is_not_reopened(
+    tmp_path: Path,
+) -> None:
+    """A link to a simulator's pty, left as it was when the simulator died, while another
+    program's pty got the same number: the reopen took it for the port come back, and the
+    stop's bytes went into that program's line. The device is told apart (its pty made
+    anew): not opened, not a byte written, and said why."""
+    first = _pty()
+    link = tmp_path / "robot"
+    link.symlink_to(first[2])
+    transport = SerialTransport.open(str(link))
+    transport.close()
+    for fd in first[:2]:
+        os.close(fd)
+    time.sleep(0.05)  # a node made later than the first, on a coarse clock too
+    held = [_pty() for _ in range(20)]  # the lowest free number is handed out: the first's
+    try:
+        other = next((pty for pty in held if pty[2] == first[2]), None)
+        if other is None:
+            pytest.skip(f"another process took {first[2]} meanwhile")
+        assert transport.reopen(within=0.3) is None
+        assert transport.other_device == (
+            f"{first[2]} is another pseudo-terminal now: its number reused by another program"
+        )
+        os.set_blocking(other[0], False)
+        with pytest.raises(BlockingIOError):
+            os.read(other[0], 1)  # nothing reached the other program's line
+    finally:
+        transport.close()
+        for pty in held:
+            os.close(pty[0])
+            os.close(pty[1])
+
+
 def test_a_device_path_that_does_not_come_back_is_said_so(tmp_path: Path) -> None:
     master, slave, path = _pty()
     link = tmp_path / "robot"
