@@ -207,7 +207,11 @@ LINK_VERDICT_SLOTS = 200
 
 @dataclass
 class RunSummary:
-    """The end-of-run report; every field is measured, none is assumed."""
+    """The end-of-run report; every field is measured, none is assumed.
+
+    Long on purpose: two thirds of it are its fields, each with the comment a script's
+    author reads (``--json`` and the Python API give them by these names); the text of the
+    report is in the short methods below them."""
 
     mission: str
     outcome: Outcome = Outcome.ERROR
