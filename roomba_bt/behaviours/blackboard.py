@@ -3,7 +3,15 @@
 A mission's keys live on py_trees' blackboard under :data:`MISSION_NAMESPACE` (``leg`` is
 ``/mission/leg``), read and written straight through its store (:func:`read_key`,
 :func:`write_key`): no py_trees client per node, which registers every key it may touch and
-checks it on every access. A key the mission declares (``blackboard:``, :func:`declare_keys`)
+checks it on every access. py_trees' store is one for the process, so each run has a part
+of it of its own, a :class:`RunBoard` (:func:`claim_board`): the plain names
+(``/mission/leg``, ``/roomba/snapshot``) for the run that claims them while no other run
+is going, and under a prefix of its own (``/roomba-bt/run-2/mission/leg``) for a run that
+starts while another goes on in the process (``stack.ticks()`` loops stepped in turn,
+episodes in threads). The run's thread finds its board (:func:`run_board`), so
+:func:`read_key` and :func:`write_key` (a plugin's too) read and write its own keys; its
+keys are removed when the run is closed (:meth:`RunBoard.release`), so that the next run
+starts with none of them. A key the mission declares (``blackboard:``, :func:`declare_keys`)
 takes only values of its type (:class:`KeyType`), and is registered, once, with one py_trees
 client of the mission's (:data:`MISSION_CLIENT_NAME`, read and write): py_trees' own
 tools (``Blackboard.keys()``, ``py_trees.display.unicode_blackboard()``, its activity
@@ -18,13 +26,16 @@ parameter's range.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import logging
 import re
 import sys
+import threading
 import uuid
-from collections.abc import Iterable, Mapping
+import weakref
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import py_trees
 
@@ -44,6 +55,9 @@ SNAPSHOT_KEY = "/roomba/snapshot"
 KEY_TYPES_KEY = "/roomba/key_types"
 #: Mission blackboard keys live under this namespace: ``leg`` is ``/mission/leg``.
 MISSION_NAMESPACE = "/mission/"
+#: A run that starts while another goes on in the process keeps its keys under this
+#: namespace and a number of its own: ``/roomba-bt/run-2/mission/leg`` (:func:`claim_board`)
+RUNS_NAMESPACE = "/roomba-bt/run-"
 
 
 #: ``@key`` or ``@key.field``: a value read from the blackboard, in YAML and from Python
@@ -91,66 +105,147 @@ class KeyRange(ValueError, RoombaBtError):
         )
 
 
-def read_key(key: str) -> Any:
-    """A mission blackboard key's value (None if never written); ``key.field``, a record
-    key's field (None if the record was never written), as py_trees' own ``key.attribute``
-    reads one and ``@key.field`` does: ``check: {key: wp.distance}``."""
-    storage = py_trees.blackboard.Blackboard.storage
-    if "." not in key:
-        return storage.get(MISSION_NAMESPACE + key)
-    name, _, field = key.partition(".")
-    record = storage.get(MISSION_NAMESPACE + name)
-    return record.get(field) if isinstance(record, Mapping) else None
-
-
+#: the name write_key gives the mission's own writes in py_trees' activity stream
+_MISSION_WRITER_NAME = "roomba-bt mission"
+#: the py_trees client the declared keys are registered with (:func:`declare_keys`)
+MISSION_CLIENT_NAME = _MISSION_WRITER_NAME
 #: the id the mission's own writes (``set``, ``mark``, ``for_each``, initial values) carry in
 #: py_trees' activity stream while no mission client is registered (:func:`declare_keys`)
 _MISSION_WRITER = uuid.uuid4()
 
 
-#: the name write_key gives the mission's own writes in py_trees' activity stream
-_MISSION_WRITER_NAME = "roomba-bt mission"
-#: the py_trees client the declared keys are registered with (:func:`declare_keys`)
-MISSION_CLIENT_NAME = _MISSION_WRITER_NAME
+class RunBoard:
+    """One run's part of py_trees' blackboard: the names its keys have there (``prefix``
+    before each: ``""`` for the plain names, ``/roomba-bt/run-2`` for a run beside
+    another), the mission's py_trees client, and the undeclared keys it warned of.
 
+    py_trees keeps one store for the process (``Blackboard.storage``); two runs writing the
+    same names in it read each other's values (a 200 mm leg driven 900 mm, a coverage map
+    shared by two robots) and a run read the keys a run before it left (``UnwrittenKey``
+    never raised). A board is what keeps them apart: :func:`claim_board` gives each run one,
+    and the run's thread holds it while the run goes on (:func:`run_board`)."""
 
-class _MissionClient:
-    """The one py_trees client holding the mission's declared keys, replaced by each
-    :func:`declare_keys`. Registered at setup, never used to read or write: py_trees'
-    client checks every access (its permissions, the key's name parsed), which on the tick
-    path cost more than the write itself; the store is written directly and the
-    registration is what py_trees' display and ``Blackboard.keys()`` read."""
+    __slots__ = (
+        "__weakref__",
+        "client",
+        "mission",
+        "prefix",
+        "running",
+        "said",
+        "snapshot_key",
+        "types_key",
+        "writer",
+    )
 
-    client: py_trees.blackboard.Client | None = None
+    def __init__(self, prefix: str) -> None:
+        self._named(prefix)
+        #: the py_trees client holding the declared keys (:func:`declare_keys`), None: none
+        self.client: py_trees.blackboard.Client | None = None
+        #: the keys written this run that the mission does not declare, each warned of once,
+        #: with who wrote it first and where (``" by 'writer' at plugin.py:12"``)
+        self.said: dict[str, str] = {}
+        #: claimed and not yet ended (:meth:`ended`): its names are not another run's to take
+        self.running = False
+        #: the runtime's py_trees client, the snapshot's writer (for the activity stream)
+        self.writer: py_trees.blackboard.Client | None = None
 
-    @classmethod
-    def replace(cls, keys: Iterable[str]) -> None:
-        old, cls.client = cls.client, None
-        blackboard = py_trees.blackboard.Blackboard
-        if old is not None and old.unique_identifier in blackboard.clients:
-            # (else a Blackboard.clear() since forgot it and its keys.) Each key once, the
-            # values kept: py_trees' own unregister() unregisters a key registered both to
-            # read and to write twice, and the second raises KeyError (py_trees 2.6)
-            with contextlib.suppress(KeyError):
-                for key in {*old.read, *old.write}:
-                    old.unregister_key(key, clear=False, update_namespace_cache=False)
-            del blackboard.clients[old.unique_identifier]
+    def _named(self, prefix: str) -> None:
+        """Its names from ``prefix`` on; the prefix set last, the names it makes first (a
+        thread reading the board meanwhile finds one set or the other whole)."""
+        #: the mission's keys' names begin with this: ``/mission/``, ``/roomba-bt/run-2/mission/``
+        self.mission = prefix + MISSION_NAMESPACE
+        #: where the runtime writes each tick's snapshot (:data:`SNAPSHOT_KEY`)
+        self.snapshot_key = prefix + SNAPSHOT_KEY
+        #: where :func:`declare_keys` keeps the declared types (:data:`KEY_TYPES_KEY`)
+        self.types_key = prefix + KEY_TYPES_KEY
+        self.prefix = prefix
+
+    def __repr__(self) -> str:
+        return f"<RunBoard {self.prefix or '(plain names)'}>"
+
+    def name(self, key: str) -> str:
+        """The name ``key`` (a name as the process's only run has it: ``/roomba/cover/map``)
+        has in this run: ``/roomba-bt/run-2/roomba/cover/map`` for a run beside another."""
+        return self.prefix + key
+
+    def read(self, key: str) -> Any:
+        """:func:`read_key` on this run's keys (from another thread: a program's loop, an
+        evaluation reading an episode's keys at its end)."""
+        storage = py_trees.blackboard.Blackboard.storage
+        if "." not in key:
+            return storage.get(self.mission + key)
+        name, _, field = key.partition(".")
+        record = storage.get(self.mission + name)
+        return record.get(field) if isinstance(record, Mapping) else None
+
+    def names(self) -> list[str]:
+        """This run's names in py_trees' store: under its prefix; with the plain names,
+        those under ``/mission/`` and ``/roomba/`` (the keys of the runtime and its
+        behaviours), a program's own keys elsewhere being its own."""
+        storage = py_trees.blackboard.Blackboard.storage
+        if self.prefix:
+            start = self.prefix + "/"
+            return [name for name in list(storage) if name.startswith(start)]
+        return [name for name in list(storage) if name.startswith(("/mission/", "/roomba/"))]
+
+    def shown(self) -> dict[str, Any]:
+        """What the monitor shows of the blackboard: every key by the name a user knows
+        (``/mission/leg``, this run's prefix taken off), the snapshot and the declared types
+        (not keys) left out; with the plain names, a program's own keys too, but no key of
+        another run."""
+        storage = py_trees.blackboard.Blackboard.storage
+        if self.prefix:
+            start, cut = self.prefix + "/", len(self.prefix)
+            board = {name[cut:]: value for name, value in list(storage.items())
+                     if name.startswith(start)}  # fmt: skip
+        else:
+            board = storage.copy()  # two C calls: a third of a comprehension's time
+            if _Claims.beside:
+                for name in [name for name in board if name.startswith(RUNS_NAMESPACE)]:
+                    del board[name]
+        board.pop(SNAPSHOT_KEY, None)
+        board.pop(KEY_TYPES_KEY, None)
+        return board
+
+    def values(self) -> dict[str, Any]:
+        """The mission's keys and their values (``leg``, not ``/mission/leg``): those the
+        mission declares, each once written; a tree that declares none (built in Python):
+        every key under ``/mission/``."""
+        storage = py_trees.blackboard.Blackboard.storage
+        mission = self.mission
+        declared = storage.get(self.types_key)
+        if declared:
+            return {key: storage[mission + key] for key in declared if mission + key in storage}
+        cut = len(mission)
+        return {name[cut:]: value for name, value in list(storage.items())
+                if name.startswith(mission)}  # fmt: skip
+
+    def replace_client(self, keys: Iterable[str]) -> None:
+        """The mission's py_trees client, holding ``keys`` (read and write), in place of the
+        one before. Registered, never used to read or write: py_trees' client checks every
+        access (its permissions, the key's name parsed), which on the tick path cost more
+        than the write itself; the store is written directly and the registration is what
+        py_trees' display and ``Blackboard.keys()`` read."""
+        self._drop_client()
         keys = sorted(keys)
         if not keys:
             return
         client = py_trees.blackboard.Client(
-            name=MISSION_CLIENT_NAME, namespace=MISSION_NAMESPACE.rstrip("/")
+            name=MISSION_CLIENT_NAME, namespace=self.mission.rstrip("/")
         )
         for key in keys:
             client.register_key(key=key, access=py_trees.common.Access.WRITE)
             client.register_key(key=key, access=py_trees.common.Access.READ)
-        cls.client = client
+        self.client = client
 
-    @classmethod
-    def writer_id(cls) -> uuid.UUID:
+    def _drop_client(self) -> None:
+        old, self.client = self.client, None
+        _unregister(old)
+
+    def writer_id(self) -> uuid.UUID:
         """The id :func:`write_key` says a mission write came from: the client's while one
         is registered (py_trees' display of the stream names it), else the module's own."""
-        client = cls.client
+        client = self.client
         if client is None:
             return _MISSION_WRITER
         registered: uuid.UUID = client.unique_identifier  # py_trees' Client types it Any
@@ -158,21 +253,193 @@ class _MissionClient:
             registered if registered in py_trees.blackboard.Blackboard.clients else _MISSION_WRITER
         )
 
+    def ended(self) -> None:
+        """The run has ended: its keys stay for the program to read (:meth:`values`,
+        ``stack.blackboard``) until :meth:`release`, and its names may go to the next run."""
+        self.running = False
+
+    def release(self) -> None:
+        """The run is closed (``stack.close()``): its keys are removed from py_trees' store
+        and its client unregistered, so that no later run in the process reads them (a key
+        it does not write is then unwritten: ``UnwrittenKey``, as in a fresh process). Once
+        is enough: a second release finds nothing of its own."""
+        with _Claims.lock:
+            self.running = False
+            if self.prefix:
+                _Claims.beside.discard(self.prefix)
+            elif _Claims.plain is self:
+                _Claims.plain = None
+            else:
+                return
+            self._forget()
+
+    def _forget(self) -> None:
+        self._drop_client()
+        storage = py_trees.blackboard.Blackboard.storage
+        for name in self.names():
+            storage.pop(name, None)
+        self.said.clear()
+
+
+def _unregister(client: py_trees.blackboard.Client | None) -> None:
+    """``client``'s keys and itself taken off py_trees' registry, the values kept (a
+    client a ``Blackboard.clear()`` forgot already: nothing to do)."""
+    blackboard = py_trees.blackboard.Blackboard
+    if client is not None and client.unique_identifier in blackboard.clients:
+        # Each key once: py_trees' own unregister() unregisters a key registered both to
+        # read and to write twice, and the second raises KeyError (py_trees 2.6)
+        with contextlib.suppress(KeyError):
+            for key in {*client.read, *client.write}:
+                client.unregister_key(key, clear=False, update_namespace_cache=False)
+        del blackboard.clients[client.unique_identifier]
+
+
+class _Claims:
+    """Which run holds which names (:func:`claim_board`), changed under ``lock``."""
+
+    #: re-entrant: a board let go of inside :func:`claim_board` is forgotten at once, in it
+    lock = threading.RLock()
+    #: the board holding the plain names (None: none since the last one was released)
+    plain: RunBoard | None = None
+    #: the prefixes of the boards beside it, not yet released
+    beside: ClassVar[set[str]] = set()
+    numbers = itertools.count(2)
+
+
+def claim_board() -> RunBoard:
+    """A board for a run starting now: the plain names if no run that is still going holds
+    them, else a prefix of its own (``/roomba-bt/run-2``). So the process's only run has its
+    keys where py_trees programs and the docs look (``/mission/leg``, ``/roomba/snapshot``),
+    and runs side by side (``ticks()`` loops stepped in turn, episodes in threads) never
+    share one. A run that ended and is not closed yet gives the plain names up: its keys
+    move under a prefix of their own, its board with them, where its program still reads
+    them (an evaluation's keys at an episode's end, read while the next episode starts in
+    another thread) until it closes it; a board no longer held takes them with it."""
+    with _Claims.lock:
+        holder = _Claims.plain
+        if holder is None or not holder.running:
+            if holder is not None:
+                _moved_aside(holder)
+            board = _Claims.plain = RunBoard("")
+        else:
+            board = RunBoard(_new_prefix())
+        board.running = True
+        return board
+
+
+def _new_prefix() -> str:
+    prefix = f"{RUNS_NAMESPACE}{next(_Claims.numbers)}"
+    _Claims.beside.add(prefix)
+    return prefix
+
+
+def _moved_aside(board: RunBoard) -> None:
+    """``board``'s keys (a run that ended, not closed) moved from the plain names to a new
+    prefix, the board renamed to it: copied first, the board renamed, the plain names then
+    removed (its program, reading it in another thread, finds its keys at every moment).
+    Its py_trees client goes (the plain names are the next run's to register); its keys go
+    when it is released, or when nothing holds the board any longer."""
+    storage = py_trees.blackboard.Blackboard.storage
+    prefix = _new_prefix()
+    names = board.names()
+    for name in names:
+        storage[prefix + name] = storage[name]
+    board._drop_client()
+    board._named(prefix)
+    for name in names:
+        storage.pop(name, None)
+    weakref.finalize(board, _forgotten, prefix)
+
+
+def _forgotten(prefix: str) -> None:
+    """The keys under ``prefix`` of a board no longer held (its stack never closed)."""
+    with _Claims.lock:
+        _Claims.beside.discard(prefix)
+        storage = py_trees.blackboard.Blackboard.storage
+        for name in [name for name in list(storage) if name.startswith(prefix + "/")]:
+            storage.pop(name, None)
+
+
+class _Running(threading.local):
+    """The board of the run going on in this thread (:func:`run_board`)."""
+
+    #: outside a run: the plain names (a program's own ``write_key`` before a run, a
+    #: ``CompiledMission.setup`` called by hand)
+    board = RunBoard("")
+
+
+_RUNNING = _Running()
+
+
+def run_board() -> RunBoard:
+    """The board of the run going on in this thread (the plain names outside a run): what
+    :func:`read_key` and :func:`write_key` read and write."""
+    return _RUNNING.board
+
+
+@contextlib.contextmanager
+def running_on(board: RunBoard) -> Iterator[RunBoard]:
+    """``board`` this thread's run's board while the block runs (a run's set-up, ticks and
+    ending), the one before it afterwards."""
+    before = _RUNNING.board
+    _RUNNING.board = board
+    try:
+        yield board
+    finally:
+        _RUNNING.board = before
+
+
+class SharedBlackboard(RuntimeError, RoombaBtError):
+    """A run started beside another in the process (its keys under a prefix of their own,
+    :func:`claim_board`) whose tree has a node with keys of a py_trees client
+    (``attach_blackboard_client``, ``register_key``): such a key has the one name for the
+    process, so the two runs would read and write each other's value (a snapshot, a count)
+    with no word. Said before the tree's first tick rather than left to a wrong result."""
+
+
+def check_alone(board: RunBoard, root: py_trees.behaviour.Behaviour) -> None:
+    """Raise :class:`SharedBlackboard` if ``board`` is a run's beside another and a node of
+    ``root`` holds keys through a py_trees client of its own; with the plain names (the
+    process's only run) its keys are its own, as they always were."""
+    if not board.prefix:
+        return
+    for node in root.iterate():
+        for client in node.blackboards:
+            names = sorted({*client.read, *client.write, *client.exclusive})
+            if names:
+                raise SharedBlackboard(
+                    f"{node.name!r} ({type(node).__name__}) uses py_trees blackboard keys "
+                    f"{', '.join(names)} through a py_trees client, and another roomba-bt run "
+                    "is going on in this process: py_trees keeps one blackboard for the "
+                    "process, so the two runs would read each other's values. Run this tree "
+                    "when no other run is going (close the other first), or keep its keys "
+                    "with write_key and read_key, which are each run's own"
+                )
+
+
+def read_key(key: str) -> Any:
+    """A mission blackboard key's value (None if never written); ``key.field``, a record
+    key's field (None if the record was never written), as py_trees' own ``key.attribute``
+    reads one and ``@key.field`` does: ``check: {key: wp.distance}``. This thread's run's
+    key (:func:`run_board`)."""
+    return _RUNNING.board.read(key)
+
 
 def declare_keys(types: Mapping[str, ValueType]) -> None:
     """The mission's keys and their declared types (``blackboard:``), which
     :func:`write_key` holds every write to from now on; they replace those declared before
     (``declare_keys({})``: none; a write to a key not declared is then warned of, once a
     key, :func:`write_key`). ``CompiledMission.setup`` calls it before each run. Kept
-    on py_trees' blackboard (:data:`KEY_TYPES_KEY`), with the values: its ``clear()``, which
-    a test calls between missions, forgets them too. Each key is registered (read and
-    write) with the mission's py_trees client (:data:`MISSION_CLIENT_NAME`), so that py_trees'
-    display, ``Blackboard.keys()`` and its activity stream see them; the values stay after
-    the run, for a program to look at."""
-    storage = py_trees.blackboard.Blackboard.storage
-    storage[KEY_TYPES_KEY] = dict(types)  # {}: a mission that declares none, still said
-    _UNDECLARED_SAID.clear()
-    _MissionClient.replace(types)
+    on py_trees' blackboard (:data:`KEY_TYPES_KEY`, under this run's prefix), with the
+    values: its ``clear()``, which a test calls between missions, forgets them too. Each key
+    is registered (read and write) with the mission's py_trees client
+    (:data:`MISSION_CLIENT_NAME`), so that py_trees' display, ``Blackboard.keys()`` and its
+    activity stream see them; the values stay after the run, for a program to look at,
+    until the run is closed (:meth:`RunBoard.release`)."""
+    board = _RUNNING.board
+    py_trees.blackboard.Blackboard.storage[board.types_key] = dict(types)  # {}: still said
+    board.said.clear()
+    board.replace_client(types)
 
 
 class KeyType(TypeError, RoombaBtError):
@@ -198,20 +465,18 @@ def _write_problem(vtype: ValueType, value: Any) -> str | None:
     return f"expected an odometry mark (snapshot.odometry), got a {type(value).__name__}"
 
 
-#: the keys written this run that the mission does not declare, each warned of once, with
-#: who wrote it first and where (``" by 'writer' at plugin.py:12"``)
-_UNDECLARED_SAID: dict[str, str] = {}
+def undeclared_writes(board: RunBoard | None = None) -> tuple[tuple[str, str], ...]:
+    """Each key written this run (since the mission's :func:`declare_keys`; ``board``'s run,
+    else this thread's) that the mission does not declare, with who wrote it first and where
+    (``" by 'writer' at plugin.py:12"``), in the order written: what the warning said, for
+    an evaluation, whose episodes' log lines are silenced, to count the episodes it was said
+    in and say it once."""
+    return tuple((board or _RUNNING.board).said.items())
 
 
-def undeclared_writes() -> tuple[tuple[str, str], ...]:
-    """Each key written this run (since the mission's :func:`declare_keys`) that the mission
-    does not declare, with who wrote it first and where (``" by 'writer' at plugin.py:12"``),
-    in the order written: what the warning said, for an evaluation, whose episodes' log
-    lines are silenced, to count the episodes it was said in and say it once."""
-    return tuple(_UNDECLARED_SAID.items())
-
-
-def _said_undeclared(key: str, writer: str, declared: Mapping[str, ValueType]) -> None:
+def _said_undeclared(
+    board: RunBoard, key: str, writer: str, declared: Mapping[str, ValueType]
+) -> None:
     """A warning, once a key a run, that ``writer`` wrote ``key``, which the mission's
     ``blackboard:`` does not declare, and where (the line that called :func:`write_key`).
     Written all the same, as a tree built in Python writes any key: nothing drives on it,
@@ -222,7 +487,7 @@ def _said_undeclared(key: str, writer: str, declared: Mapping[str, ValueType]) -
     caller = sys._getframe(2)  # write_key's caller: the plugin's line
     where = f" at {caller.f_code.co_filename}:{caller.f_lineno}"
     by = "" if writer == _MISSION_WRITER_NAME else f" by {writer!r}"
-    _UNDECLARED_SAID[key] = by + where
+    board.said[key] = by + where
     keys = ", ".join(sorted(declared)) or "none"
     _log.warning(
         "write_key(%r)%s%s: blackboard key %r is not declared by the mission (it declares: "
@@ -234,34 +499,35 @@ def _said_undeclared(key: str, writer: str, declared: Mapping[str, ValueType]) -
 
 def unwrite_keys(keys: Iterable[str]) -> None:
     """Forget the values of ``keys``: a run's set-up does, for the keys its mission declares
-    without an ``initial:`` value, so that the run starts with them unwritten. The store is
-    py_trees' one for the process, and its values stay after a run: the next run in the
-    process (the next episode in an evaluation's worker, a monitor's reload) read the one
-    before's as its own (``check`` True on a key it never wrote; ``eval --key`` reporting
-    another episode's value)."""
+    without an ``initial:`` value, so that the run starts with them unwritten (a compiled
+    mission's ``setup`` called again by hand, outside a run, whose board is the plain
+    names')."""
+    board = _RUNNING.board
     storage = py_trees.blackboard.Blackboard.storage
     for key in keys:
-        storage.pop(MISSION_NAMESPACE + key, None)
+        storage.pop(board.mission + key, None)
 
 
 def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
-    """Write a mission key. Into the store directly (no py_trees client per node: a client
-    registers each key it may touch and checks it on every access), and, when py_trees'
-    activity stream is on (``Blackboard.enable_activity_stream()``), said there as a client's
-    write would be: a py_trees user's tools show ``/mission/leg`` changing. A key the
-    mission declared (:func:`declare_keys`) takes only a value of its type: else
-    :class:`KeyType`, and nothing is written. One it did not declare is written, with a
-    warning once a key (:func:`_said_undeclared`)."""
+    """Write a mission key, this thread's run's (:func:`run_board`). Into the store directly
+    (no py_trees client per node: a client registers each key it may touch and checks it
+    on every access), and, when py_trees' activity stream is on
+    (``Blackboard.enable_activity_stream()``), said there as a client's write would be: a
+    py_trees user's tools show ``/mission/leg`` changing. A key the mission declared
+    (:func:`declare_keys`) takes only a value of its type: else :class:`KeyType`, and
+    nothing is written. One it did not declare is written, with a warning once a key
+    (:func:`_said_undeclared`)."""
+    board = _RUNNING.board
     blackboard = py_trees.blackboard.Blackboard
-    types = blackboard.storage.get(KEY_TYPES_KEY)
+    types = blackboard.storage.get(board.types_key)
     vtype = types.get(key) if types is not None else None
     if vtype is not None:
         problem = _write_problem(vtype, value)
         if problem is not None:
             raise KeyType(key, vtype, value, problem, writer)
-    elif types is not None and key not in _UNDECLARED_SAID:
-        _said_undeclared(key, writer, types)
-    name = MISSION_NAMESPACE + key
+    elif types is not None and key not in board.said:
+        _said_undeclared(board, key, writer, types)
+    name = board.mission + key
     stream = blackboard.activity_stream
     if stream is not None:
         had = name in blackboard.storage
@@ -270,7 +536,7 @@ def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
             py_trees.blackboard.ActivityItem(
                 key=name,
                 client_name=writer,
-                client_id=_MissionClient.writer_id(),
+                client_id=board.writer_id(),
                 # its value, as py_trees' own clients push it (its display compares with it)
                 activity_type=(kind.WRITE if had else kind.INITIALISED).value,
                 previous_value=blackboard.storage.get(name) if had else None,

@@ -63,6 +63,7 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.blackboard import run_board
 from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.docking.common import DockWatch
 from roomba_bt.behaviours.driving import WHEEL
@@ -338,12 +339,12 @@ class Bearings:
     def of_run(odo: Odometry) -> tuple[Bearings, bool]:
         """The run's bearings kept under :data:`MAP_KEY`, resumed at ``odo`` (True), or new
         ones from ``odo``, kept there (False)."""
-        storage = py_trees.blackboard.Blackboard.storage
-        kept = storage.get(MAP_KEY)
+        storage, name = py_trees.blackboard.Blackboard.storage, run_board().name(MAP_KEY)
+        kept = storage.get(name)
         if isinstance(kept, Bearings):
             kept.resume(odo)
             return kept, True
-        bearings = storage[MAP_KEY] = Bearings(FloorMap(), odo)
+        bearings = storage[name] = Bearings(FloorMap(), odo)
         return bearings, False
 
     def resume(self, odo: Odometry) -> None:
@@ -484,7 +485,7 @@ class Cover(Action):
 
     def setup(self, **kwargs: Any) -> None:
         super().setup(**kwargs)  # a new run: its floor is not known yet
-        py_trees.blackboard.Blackboard.storage.pop(MAP_KEY, None)
+        py_trees.blackboard.Blackboard.storage.pop(run_board().name(MAP_KEY), None)
         self._interrupted = False
 
     def start(self) -> None:

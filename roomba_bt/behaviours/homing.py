@@ -50,6 +50,7 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.blackboard import run_board
 from roomba_bt.behaviours.coverage_map import (
     BLOCKED,
     MAP_KEY,
@@ -120,12 +121,12 @@ class HomeByMap(Action):
 
     def setup(self, **kwargs: Any) -> None:
         super().setup(**kwargs)  # a new run: an earlier run's map (the process's) is not its
-        py_trees.blackboard.Blackboard.storage.pop(MAP_KEY, None)
+        py_trees.blackboard.Blackboard.storage.pop(run_board().name(MAP_KEY), None)
         self._across = 0  # plans across blocked cells, this run (a retry goes on counting)
 
     def start(self) -> None:
         snap = self.snapshot
-        kept = py_trees.blackboard.Blackboard.storage.get(MAP_KEY)
+        kept = py_trees.blackboard.Blackboard.storage.get(run_board().name(MAP_KEY))
         self._bearings = kept if isinstance(kept, Bearings) else None
         if self._bearings is not None:
             self._bearings.resume(snap.odometry)

@@ -30,7 +30,7 @@ from types import FrameType
 from typing import Any
 
 from roomba_bt import yamlsource
-from roomba_bt.behaviours.blackboard import read_key, undeclared_writes
+from roomba_bt.behaviours.blackboard import RunBoard, read_key, undeclared_writes
 from roomba_bt.behaviours.reasons import GUARD_STOPPED
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
 from roomba_bt.mission import (
@@ -547,7 +547,10 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
     if summary.outcome is Outcome.INTERRUPTED:  # a stop asked of the run itself: the same
         raise KeyboardInterrupt(summary.reason)
     stage = failure_stage(summary.reason)
-    return _measured(spec, world, pose, simulator, summary, summary.outcome.value, stage)
+    board = stack.runner.blackboard
+    result = _measured(spec, world, pose, simulator, summary, summary.outcome.value, stage, board)
+    stack.close()  # its blackboard keys removed: the next episode in the process starts clean
+    return result
 
 
 def _not_compiled(spec: EpisodeSpec, exc: MissionError) -> MissionNotCompiled:
@@ -578,9 +581,11 @@ def _measured(
     summary: RunSummary,
     outcome: str,
     stage: str,
+    board: RunBoard | None,
 ) -> EpisodeResult:
     """The result of an episode that ran (to its end, or until its wall-clock limit): its
-    summary's words and counts, and what its simulator measured."""
+    summary's words and counts, what its simulator measured, and the keys asked for as
+    its run's blackboard (``board``) holds them."""
     trace = simulator.trace[:: max(1, spec.trace_every)]
     events = simulator.events
     return EpisodeResult(
@@ -618,19 +623,24 @@ def _measured(
         falls=falls_in_order(summary.falls),
         worker=f"{socket.gethostname()}:{os.getpid()}",
         coverage=_coverage(simulator, spec.start_area or ""),
-        keys=final_values(spec.keys),
-        undeclared=tuple((key, _named_as_given(spec, where)) for key, where in undeclared_writes()),
+        keys=final_values(spec.keys, board),
+        undeclared=tuple(
+            (key, _named_as_given(spec, where)) for key, where in undeclared_writes(board)
+        ),
     )
 
 
-def final_values(names: Sequence[str]) -> tuple[tuple[str, Any], ...]:
-    """Each of ``names`` with its value on the blackboard now, at the episode's end (None:
-    never written; a record's field read as ``check`` reads it). The declared types are
+def final_values(
+    names: Sequence[str], board: RunBoard | None = None
+) -> tuple[tuple[str, Any], ...]:
+    """Each of ``names`` with its value on ``board`` (the episode's run's blackboard; None:
+    this thread's run's) now, at the episode's end (None: never written; a record's field
+    read as ``check`` reads it). The declared types are
     numbers, bools and text; anything else a plugin wrote is kept as its text, so that a
     result stays plain data (pickled from a worker, written as JSON)."""
     values = []
     for name in names:
-        value = read_key(name)
+        value = board.read(name) if board is not None else read_key(name)
         if not (value is None or isinstance(value, bool | int | float | str)):
             value = str(value)
         values.append((name, value))
@@ -679,7 +689,9 @@ def hung_result(
     falls = stack.connection.falls
     summary = replace(runner.summary, reason=reason, wall_time_s=limit_s, falls=falls)
     summary.take_last(runner.snapshot if runner.has_snapshot else None)
-    measured = _measured(spec, run["world"], run["pose"], run["simulator"], summary, HUNG, stage)
+    measured = _measured(
+        spec, run["world"], run["pose"], run["simulator"], summary, HUNG, stage, runner.blackboard
+    )
     return tidied(measured)
 
 

@@ -43,7 +43,7 @@ import py_trees
 from py_trees.common import Status
 
 from roomba_bt.behaviours.base import Condition
-from roomba_bt.behaviours.blackboard import KEY_TYPES_KEY, SNAPSHOT_KEY
+from roomba_bt.behaviours.blackboard import RunBoard, run_board
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.monitor.board_text import board_text
@@ -418,7 +418,7 @@ class RunFeed:
             self._refused(runner, snapshot)
         if summary.tick_halts != self._tick_halts_seen:
             self._tick_halted(summary, snapshot)
-        self._watch_board()
+        self._watch_board(runner.blackboard or run_board())
         if not ticked and self.thin_pauses and snapshot is not None:
             if self._thins(snapshot.tick, changed or mode_changed):
                 return changed
@@ -480,9 +480,10 @@ class RunFeed:
         self._paused_kept = tick
         return False
 
-    def _watch_board(self) -> None:
+    def _watch_board(self, run: RunBoard) -> None:
         """A new version of the blackboard when a key changed (the snapshot's mirror and the
-        keys' declared types are not keys).
+        keys' declared types are not keys): ``run``'s keys, by the names a user knows
+        (:meth:`RunBoard.shown <roomba_bt.behaviours.blackboard.RunBoard.shown>`).
 
         A value that may change in place (the cover's map: one object, changed every tick)
         is kept as its text at this tick (its key listed under :data:`TEXT_KEYS`): kept as
@@ -490,10 +491,8 @@ class RunFeed:
         run's map at tick 100), and no new version was made when it changed. Numbers,
         strings, enums and tuples of them are kept as they are (they cannot change)."""
         storage = py_trees.blackboard.Blackboard.storage
-        if len(storage) > 1 or SNAPSHOT_KEY not in storage:
-            board = storage.copy()  # two C calls: a third of a comprehension's time
-            board.pop(SNAPSHOT_KEY, None)
-            board.pop(KEY_TYPES_KEY, None)
+        if len(storage) > 1 or run.snapshot_key not in storage:
+            board = run.shown()
             texts: tuple[str, ...] = ()
             for key, value in board.items():
                 if type(value) not in _PLAIN and not _fixed(value):

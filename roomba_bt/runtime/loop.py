@@ -37,7 +37,7 @@ from typing import Any, NoReturn, Protocol, cast
 
 import py_trees
 
-from roomba_bt.behaviours import SNAPSHOT_KEY
+from roomba_bt.behaviours.blackboard import RunBoard, check_alone, claim_board, running_on
 from roomba_bt.behaviours.lean import Direct
 from roomba_bt.behaviours.reasons import failure_reason, running_in
 from roomba_bt.mission import RUNTIME_PACKETS
@@ -335,7 +335,8 @@ class MissionRunner(BaseHandle):
         #: (the page shows the robot) and the tick index (the stream's) goes on, but mission
         #: time stands still: a wait, a time limit or the run's timeout does not count the pause
         self.clock_held = False
-        self._blackboard: py_trees.blackboard.Client | None = None
+        #: this run's part of py_trees' blackboard (claimed when it starts: :attr:`blackboard`)
+        self._board: RunBoard | None = None
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
         self._fallback_seen: object = None
@@ -386,6 +387,12 @@ class MissionRunner(BaseHandle):
         return self._outbox.standing
 
     @property
+    def blackboard(self) -> RunBoard | None:
+        """This run's part of py_trees' blackboard, from its start (None before):
+        ``runner.blackboard.values()``, its mission's keys; ``read("leg")``, one of them."""
+        return self._board
+
+    @property
     def ride(self) -> StallRide:
         """The run's ride through a watchdog trip or a tick guard's halt."""
         return self._ride
@@ -420,16 +427,20 @@ class MissionRunner(BaseHandle):
         interrupt: KeyboardInterrupt | None = None
         raised_in: py_trees.behaviour.Behaviour | None = None  # its terminate raised: said
         limit = WallLimit(self.wall_limit_s)
-        with guard:
+        # this run's part of py_trees' blackboard, this thread's while it runs: its keys are
+        # no other run's in the process (blackboard.claim_board)
+        board = self._board = claim_board()
+        with guard, running_on(board):
             try:
                 with limit:
                     self.connection.start(OIMode.PASSIVE, self.packets)
                     self._sent_at_start = self.connection.writer.sent
-                    self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
-                    self._blackboard.register_key(
-                        key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE
+                    board.writer = py_trees.blackboard.Client(name="roomba-bt runtime")
+                    board.writer.register_key(
+                        key=board.snapshot_key, access=py_trees.common.Access.WRITE
                     )
                     setup_tree(self.mission.root, lambda: self.mission.setup(self))
+                    check_alone(board, root)  # a py_trees client's keys: the process's
                     virtual = not getattr(self.connection.transport, "wall_clock", True)
                     if virtual or not self.on_wall_clock:  # py_trees' Timeout would never fire
                         warn_of_wall_clock_timeouts(root)
@@ -448,6 +459,7 @@ class MissionRunner(BaseHandle):
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
                 self._finish(summary, wall_start, raised_in)
+        board.ended()  # its keys stay for the program to read until the stack's close()
         late = guard.late_interrupt()  # a signal during the stop and shutdown: not lost
         if interrupt is None and late is not None:
             interrupt = late
@@ -484,9 +496,11 @@ class MissionRunner(BaseHandle):
         set_up = self._sent_at_start is not None  # what its setup() opened, closed
         last = self.snapshot if self.has_snapshot else None
         ending.safe_stop(guard, first, self.mission.root if set_up else None, last)
-        if self._blackboard is not None:
-            with contextlib.suppress(Exception):
-                self._blackboard.unregister(clear=True)
+        board = self._board
+        if board is not None and board.writer is not None:
+            writer, board.writer = board.writer, None
+            with contextlib.suppress(Exception):  # the snapshot's key with it: the run is over
+                writer.unregister(clear=True)
         ending.sum_up(time.perf_counter() - wall_start, last, self._hazards.unconfirmed)
 
     # Long on purpose: every frame's path, written out in one loop (a call less a frame),
@@ -620,13 +634,16 @@ class MissionRunner(BaseHandle):
             tick - slots if untick is None else untick,
         ))  # fmt: skip
         self.snapshot = snapshot
-        if self._blackboard is not None:
+        board = self._board
+        if board is not None:
             if _Blackboard.activity_stream is None:
                 # the client's own key, registered for writing: its permission checks and
                 # name parsing cost more than the rest of this method
-                _STORAGE[SNAPSHOT_KEY] = snapshot
+                _STORAGE[board.snapshot_key] = snapshot
             else:  # someone is watching the blackboard's activity: tell it
-                self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
+                cast(py_trees.blackboard.Client, board.writer).set(
+                    board.snapshot_key, snapshot, overwrite=True
+                )
         return mission_time
 
     def _fallback_changed(

@@ -439,6 +439,9 @@ class RunStack:
         elif isinstance(self.transport, RecordingTransport):
             self.connection.transport = self.link  # the program's link, without the tap
             self.transport.end_record()
+        board = self.runner.blackboard
+        if board is not None:  # its keys: no later run in the process reads them
+            board.release()
 
 
 def _given(

@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING, Any
 
 import py_trees
 
-from roomba_bt.behaviours.blackboard import KEY_TYPES_KEY, MISSION_NAMESPACE
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.robot.safety import Terminated, signal_reason, sigterm_raises
 from roomba_bt.runtime.loop import (
@@ -77,24 +76,11 @@ class Tick:
     @property
     def blackboard(self) -> Mapping[str, Any]:
         """The mission's blackboard keys and their values now (``leg``, not
-        ``/mission/leg``), read from py_trees' blackboard: a copy, for this tick. The keys
-        the mission declares (``blackboard:``), each once written; a tree that declares
-        none (built in Python): every key under ``/mission/``, which py_trees' blackboard
-        keeps across runs in one process."""
-        storage = py_trees.blackboard.Blackboard.storage
-        declared = storage.get(KEY_TYPES_KEY)
-        if declared:
-            return {
-                key: storage[MISSION_NAMESPACE + key]
-                for key in declared
-                if MISSION_NAMESPACE + key in storage
-            }
-        cut = len(MISSION_NAMESPACE)
-        return {
-            name[cut:]: value
-            for name, value in list(storage.items())
-            if name.startswith(MISSION_NAMESPACE)
-        }
+        ``/mission/leg``), this run's (another run's in the process are its own): a copy,
+        for this tick. The keys the mission declares (``blackboard:``), each once written; a
+        tree that declares none (built in Python): every key it wrote under ``/mission/``."""
+        board = self.runner.blackboard
+        return board.values() if board is not None else {}
 
 
 class _Ended:

@@ -21,6 +21,7 @@ from collections.abc import Callable
 import py_trees
 from py_trees.common import Status
 
+from roomba_bt.behaviours.blackboard import run_board
 from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
     HAZARD_IN_PACKETS,
@@ -209,7 +210,7 @@ class DockApproach(DockingAction):
         self._guesses = 0
         self._crossings = 0
         self._centred = False
-        run = py_trees.blackboard.Blackboard.storage.get(RUN_KEY)
+        run = py_trees.blackboard.Blackboard.storage.get(run_board().name(RUN_KEY))
         if run != self._run:
             self._run, self._starts = run, 0
         self._starts += 1

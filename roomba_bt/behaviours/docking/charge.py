@@ -7,6 +7,7 @@ import py_trees
 from py_trees.common import Status
 
 from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.blackboard import run_board
 from roomba_bt.behaviours.declare import Param, declare
 from roomba_bt.behaviours.docking.common import (
     FAILED,
@@ -84,9 +85,9 @@ class DockTimeLimit(Action):
 
     def start(self) -> None:
         self._t0 = self.snapshot.time
-        storage = py_trees.blackboard.Blackboard.storage
-        storage.pop(STAGE_KEY, None)  # a new docking run
-        storage[RUN_KEY] = DockingRun(id(self), self._t0, self.name)
+        storage, board = py_trees.blackboard.Blackboard.storage, run_board()
+        storage.pop(board.name(STAGE_KEY), None)  # a new docking run
+        storage[board.name(RUN_KEY)] = DockingRun(id(self), self._t0, self.name)
         self._limit = self.number("limit") - 1e-9  # read once a start
 
     def tick_direct(self, started: bool = False) -> None:

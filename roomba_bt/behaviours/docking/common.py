@@ -13,6 +13,7 @@ import py_trees
 from py_trees.common import Status
 
 from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.blackboard import run_board
 from roomba_bt.behaviours.declare import Declaration, Param, declare
 from roomba_bt.behaviours.driving import left_driving_message, wheel_speeds
 from roomba_bt.behaviours.units import DURATION
@@ -65,12 +66,14 @@ class DockingRun(NamedTuple):
 
 
 def note_stage(stage: str) -> None:
-    py_trees.blackboard.Blackboard.storage[STAGE_KEY] = stage
+    """Keep ``stage`` as this run's docking stage (the run's own name for
+    :data:`STAGE_KEY`: :func:`~roomba_bt.behaviours.blackboard.run_board`)."""
+    py_trees.blackboard.Blackboard.storage[run_board().name(STAGE_KEY)] = stage
 
 
 def current_stage() -> str | None:
-    """The docking stage that ran last (None before any)."""
-    stage = py_trees.blackboard.Blackboard.storage.get(STAGE_KEY)
+    """The docking stage that ran last in this run (None before any)."""
+    stage = py_trees.blackboard.Blackboard.storage.get(run_board().name(STAGE_KEY))
     return stage if isinstance(stage, str) else None
 
 
