@@ -380,13 +380,15 @@ def run_board() -> RunBoard:
 @contextlib.contextmanager
 def running_on(board: RunBoard) -> Iterator[RunBoard]:
     """``board`` this thread's run's board while the block runs (a run's set-up, ticks and
-    ending), the one before it afterwards."""
+    ending), the one before it afterwards; the block's end, however it ends, is the run's
+    (:meth:`RunBoard.ended`)."""
     before = _RUNNING.board
     _RUNNING.board = board
     try:
         yield board
     finally:
         _RUNNING.board = before
+        board.ended()
 
 
 class SharedBlackboard(RuntimeError, RoombaBtError):
@@ -412,8 +414,8 @@ def check_alone(board: RunBoard, root: py_trees.behaviour.Behaviour) -> None:
                     f"{', '.join(names)} through a py_trees client, and another roomba-bt run "
                     "is going on in this process: py_trees keeps one blackboard for the "
                     "process, so the two runs would read each other's values. Run this tree "
-                    "when no other run is going (close the other first), or keep its keys "
-                    "with write_key and read_key, which are each run's own"
+                    "when no other run is going, or keep its keys with write_key and "
+                    "read_key, which are each run's own"
                 )
 
 

@@ -459,7 +459,6 @@ class MissionRunner(BaseHandle):
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
                 self._finish(summary, wall_start, raised_in)
-        board.ended()  # its keys stay for the program to read until the stack's close()
         late = guard.late_interrupt()  # a signal during the stop and shutdown: not lost
         if interrupt is None and late is not None:
             interrupt = late

@@ -142,34 +142,23 @@ def in_two_threads(specs: list[EpisodeSpec]) -> list[EpisodeResult]:
 
 
 def reader() -> TreeMission:
-    """A tree built in Python that reads ``@leg`` and never writes it."""
+    """A tree built in Python that reads ``@d`` (:func:`leg`'s key) and never writes it."""
     root = py_trees.composites.Sequence(
         "s",
         memory=True,
         children=[
             Mode("safe", {"to": "safe"}),
-            Drive("d", {"velocity": "200 mm/s", "distance": "@leg"}),
+            Drive("drive", {"velocity": "200 mm/s", "distance": "@d"}),
         ],
     )
     return TreeMission(root, name="reader")
 
 
-WRITER = """
-mission: writer
-blackboard:
-  leg: {type: distance, initial: 800 mm}
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: 200 mm/s, distance: "@leg"}
-"""
-
-
 def test_a_key_a_closed_run_wrote_is_unwritten_for_the_next() -> None:
-    with stack_for(load_mission_text(WRITER, name="writer.yaml")) as stack:
+    with stack_for(load_mission_text(leg(800), name="leg800.yaml")) as stack:
         assert stack.run().outcome is Outcome.SUCCESS
-        assert read_key("leg") == 800.0  # read back until the stack is closed
-    assert read_key("leg") is None
+        assert read_key("d") == 800.0  # read back until the stack is closed
+    assert read_key("d") is None
     with stack_for(reader()) as stack:
         summary = stack.run()
     assert summary.outcome is Outcome.ERROR
@@ -179,15 +168,17 @@ def test_a_key_a_closed_run_wrote_is_unwritten_for_the_next() -> None:
 def test_a_run_not_closed_leaves_nothing_to_the_next() -> None:
     """A run that ended and is not closed gives the plain names to the next run: its keys
     move aside, where its board still reads them, and the next run reads none of them."""
-    writer = stack_for(load_mission_text(WRITER, name="writer.yaml"))
+    writer = stack_for(load_mission_text(leg(800), name="leg800.yaml"))
     writer.run()
     summary = stack_for(reader()).run()
     assert isinstance(summary.exception, UnwrittenKey)
     board = writer.runner.blackboard
     assert board is not None and board.prefix.startswith(RUNS_NAMESPACE)
-    assert board.read("leg") == 800.0
+    assert board.read("d") == 800.0
     writer.close()
-    assert not [name for name in py_trees.blackboard.Blackboard.storage if "leg" in name]
+    assert not [
+        name for name in py_trees.blackboard.Blackboard.storage if name.endswith("/mission/d")
+    ]
 
 
 class Counts(py_trees.behaviour.Behaviour):
