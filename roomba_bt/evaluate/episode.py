@@ -16,14 +16,16 @@ the world's loop (for patrols). Episodes are plain data (picklable) so that
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import logging
 import math
 import os
 import re
 import socket
+import threading
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import FrameType
@@ -431,15 +433,40 @@ def run_episode(
     and a thousand episodes' lines would scroll over the progress bar. ``simulator``: a
     subclass that measures more (:mod:`roomba_bt.evaluate.wheels`), for a caller that keeps
     its instance; the episode is the same."""
-    logger = logging.getLogger("roomba_bt")
-    level = logger.level
-    logger.setLevel(logging.CRITICAL)
     started = _cpu_clock()
-    try:
+    with _robot_log_silenced():
         result = _run_episode(spec, simulator or _MeasuredSimulator)
-    finally:
-        logger.setLevel(level)
     return tidied(replace(result, cpu_s=_cpu_clock() - started))
+
+
+class _Silenced:
+    """How many episodes of the process are running (:func:`_robot_log_silenced`), and the
+    ``roomba_bt`` logger's level before the first of them."""
+
+    lock = threading.Lock()
+    running = 0
+    level = logging.NOTSET
+
+
+@contextlib.contextmanager
+def _robot_log_silenced() -> Iterator[None]:
+    """The ``roomba_bt`` logger at CRITICAL while any episode of the process runs, its level
+    before the first put back after the last. Each episode saving and restoring it alone,
+    two in threads left it CRITICAL for the rest of the process (the second saved the first's
+    CRITICAL, and put it back last)."""
+    logger = logging.getLogger("roomba_bt")
+    with _Silenced.lock:
+        if _Silenced.running == 0:
+            _Silenced.level = logger.level
+            logger.setLevel(logging.CRITICAL)
+        _Silenced.running += 1
+    try:
+        yield
+    finally:
+        with _Silenced.lock:
+            _Silenced.running -= 1
+            if _Silenced.running == 0:
+                logger.setLevel(_Silenced.level)
 
 
 #: Significant digits kept of an episode's measured numbers (``stats.tidy``'s, for ``--json``):

@@ -6,6 +6,7 @@ its own (``roomba_bt.behaviours.blackboard.claim_board``), removed when it is cl
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Iterator
 from dataclasses import replace
@@ -112,7 +113,9 @@ tree:
 def test_episodes_in_two_threads_are_the_episodes_alone(tmp_path: Path) -> None:
     """``run_episode`` is "same spec, same result" in a thread beside another too (a Dask
     worker with more than one thread): its key ``d`` at the end (``eval --key``) was the
-    other thread's about four times in five."""
+    other thread's about four times in five. And the log is as it was after them (each
+    episode silences the robot layer's lines: the two left it silenced for good)."""
+    level = logging.getLogger("roomba_bt").level
     mission = str(write_mission(tmp_path, LEG_PARAMETER))
     specs = [
         EpisodeSpec(mission=mission, seed=1, timeout_s=20, trace_every=0,
@@ -124,6 +127,7 @@ def test_episodes_in_two_threads_are_the_episodes_alone(tmp_path: Path) -> None:
     for _ in range(3):
         for beside, result in zip(in_two_threads(specs), alone, strict=True):
             assert replace(beside, wall_s=result.wall_s, cpu_s=result.cpu_s) == result
+    assert logging.getLogger("roomba_bt").level == level
 
 
 def in_two_threads(specs: list[EpisodeSpec]) -> list[EpisodeResult]:
