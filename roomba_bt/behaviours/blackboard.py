@@ -146,7 +146,8 @@ class RunBoard:
         self.said: dict[str, str] = {}
         #: claimed and not yet ended (:meth:`ended`): its names are not another run's to take
         self.running = False
-        #: the runtime's py_trees client, the snapshot's writer (for the activity stream)
+        #: the runtime's py_trees client, the snapshot's writer (:meth:`write_snapshot`),
+        #: from the run's claim (:meth:`started`) to its end
         self.writer: py_trees.blackboard.Client | None = None
 
     def _named(self, prefix: str) -> None:
@@ -253,10 +254,31 @@ class RunBoard:
             registered if registered in py_trees.blackboard.Blackboard.clients else _MISSION_WRITER
         )
 
+    def started(self) -> None:
+        """The run has claimed it: the runtime's client registers the snapshot's key,
+        which py_trees' display then shows, as a plain behaviour's client reads it."""
+        self.running = True
+        self.writer = py_trees.blackboard.Client(name="roomba-bt runtime")
+        self.writer.register_key(key=self.snapshot_key, access=py_trees.common.Access.WRITE)
+
+    def write_snapshot(self, snapshot: object) -> None:
+        """The tick's snapshot written through the runtime's client, while py_trees'
+        activity stream is on (``Blackboard.enable_activity_stream()``), which then shows
+        it; else the runtime writes the store directly (the client's checks cost more than
+        the rest of the tick's snapshot)."""
+        if self.writer is not None:
+            self.writer.set(self.snapshot_key, snapshot, overwrite=True)
+
     def ended(self) -> None:
-        """The run has ended: its keys stay for the program to read (:meth:`values`,
-        ``stack.blackboard``) until :meth:`release`, and its names may go to the next run."""
+        """The run has ended: its snapshot's key goes with the runtime's client (no frame
+        comes after the end); its keys stay for the program to read (:meth:`values`,
+        ``stack.runner.blackboard``) until :meth:`release`, and its names may go to the
+        next run."""
         self.running = False
+        writer, self.writer = self.writer, None
+        if writer is not None:
+            with contextlib.suppress(Exception):  # a Blackboard.clear() forgot it already
+                writer.unregister(clear=True)
 
     def release(self) -> None:
         """The run is closed (``stack.close()``): its keys are removed from py_trees' store
@@ -323,7 +345,7 @@ def claim_board() -> RunBoard:
             board = _Claims.plain = RunBoard("")
         else:
             board = RunBoard(_new_prefix())
-        board.running = True
+        board.started()
         return board
 
 

@@ -26,7 +26,6 @@ tree or the status log); py_trees visitors, when a run is given some, are run on
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import time
 import traceback
@@ -335,8 +334,9 @@ class MissionRunner(BaseHandle):
         #: (the page shows the robot) and the tick index (the stream's) goes on, but mission
         #: time stands still: a wait, a time limit or the run's timeout does not count the pause
         self.clock_held = False
-        #: this run's part of py_trees' blackboard (claimed when it starts: :attr:`blackboard`)
-        self._board: RunBoard | None = None
+        #: this run's part of py_trees' blackboard, claimed when it starts (None before):
+        #: ``runner.blackboard.values()``, its mission's keys; ``.read("leg")``, one of them
+        self.blackboard: RunBoard | None = None
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
         self._fallback_seen: object = None
@@ -387,12 +387,6 @@ class MissionRunner(BaseHandle):
         return self._outbox.standing
 
     @property
-    def blackboard(self) -> RunBoard | None:
-        """This run's part of py_trees' blackboard, from its start (None before):
-        ``runner.blackboard.values()``, its mission's keys; ``read("leg")``, one of them."""
-        return self._board
-
-    @property
     def ride(self) -> StallRide:
         """The run's ride through a watchdog trip or a tick guard's halt."""
         return self._ride
@@ -427,18 +421,13 @@ class MissionRunner(BaseHandle):
         interrupt: KeyboardInterrupt | None = None
         raised_in: py_trees.behaviour.Behaviour | None = None  # its terminate raised: said
         limit = WallLimit(self.wall_limit_s)
-        # this run's part of py_trees' blackboard, this thread's while it runs: its keys are
-        # no other run's in the process (blackboard.claim_board)
-        board = self._board = claim_board()
+        # this thread's while it runs: its keys are no other run's in the process
+        board = self.blackboard = claim_board()
         with guard, running_on(board):
             try:
                 with limit:
                     self.connection.start(OIMode.PASSIVE, self.packets)
                     self._sent_at_start = self.connection.writer.sent
-                    board.writer = py_trees.blackboard.Client(name="roomba-bt runtime")
-                    board.writer.register_key(
-                        key=board.snapshot_key, access=py_trees.common.Access.WRITE
-                    )
                     setup_tree(self.mission.root, lambda: self.mission.setup(self))
                     check_alone(board, root)  # a py_trees client's keys: the process's
                     virtual = not getattr(self.connection.transport, "wall_clock", True)
@@ -495,11 +484,6 @@ class MissionRunner(BaseHandle):
         set_up = self._sent_at_start is not None  # what its setup() opened, closed
         last = self.snapshot if self.has_snapshot else None
         ending.safe_stop(guard, first, self.mission.root if set_up else None, last)
-        board = self._board
-        if board is not None and board.writer is not None:
-            writer, board.writer = board.writer, None
-            with contextlib.suppress(Exception):  # the snapshot's key with it: the run is over
-                writer.unregister(clear=True)
         ending.sum_up(time.perf_counter() - wall_start, last, self._hazards.unconfirmed)
 
     # Long on purpose: every frame's path, written out in one loop (a call less a frame),
@@ -633,16 +617,13 @@ class MissionRunner(BaseHandle):
             tick - slots if untick is None else untick,
         ))  # fmt: skip
         self.snapshot = snapshot
-        board = self._board
-        if board is not None:
+        if (board := self.blackboard) is not None:
             if _Blackboard.activity_stream is None:
                 # the client's own key, registered for writing: its permission checks and
                 # name parsing cost more than the rest of this method
                 _STORAGE[board.snapshot_key] = snapshot
             else:  # someone is watching the blackboard's activity: tell it
-                cast(py_trees.blackboard.Client, board.writer).set(
-                    board.snapshot_key, snapshot, overwrite=True
-                )
+                board.write_snapshot(snapshot)
         return mission_time
 
     def _fallback_changed(
