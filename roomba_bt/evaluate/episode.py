@@ -576,7 +576,8 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
     stage = failure_stage(summary.reason)
     board = stack.runner.blackboard
     result = _measured(spec, world, pose, simulator, summary, summary.outcome.value, stage, board)
-    stack.close()  # its blackboard keys removed: the next episode in the process starts clean
+    if board is not None:  # its keys removed: the next episode in the process starts clean
+        board.release()
     return result
 
 
