@@ -177,10 +177,10 @@ def put_back(link: StreamLink, found: int, run_rate: int) -> bool:
 def asks_after(link: StreamLink) -> bool:
     """Whether a stop not confirmed is asked after on this link: on the wall clock, and on
     the simulator's virtual one where its line loses bytes to the robot (as
-    ``ending.listened_after``, whether or not a stream ran); never in a replay, which writes
-    only what the recorded run wrote."""
+    ``ending.listened_after``, whether or not a stream ran); in a replay where the recorded
+    run's stop was (``ReplayTransport.loses_bytes``), on the recorded bytes."""
     transport = link.transport
-    if getattr(transport, "recorded_reads", None) is not None or not transport.is_open:
+    if not transport.is_open:
         return False
     return bool(getattr(transport, "wall_clock", True) or getattr(transport, "loses_bytes", False))
 

@@ -421,11 +421,10 @@ def listened_after(link: StreamLink) -> bool:
     the simulator's virtual one where its line loses bytes on the way to the robot
     (``loses_bytes``: a lost byte can make a long command that takes the stop as its data,
     as on a cable; the run's end waits the listen's frames). A perfect simulated line cannot
-    swallow the stop: its runs end where they did (the golden recordings). Not in a replay
-    (``recorded_reads``), which writes what the recorded run wrote."""
+    swallow the stop: its runs end where they did (the golden recordings). A replay
+    listens where its record says the recorded run did (``ReplayTransport.loses_bytes``),
+    and decides on the recorded bytes as that run did."""
     transport = link.transport
-    if getattr(transport, "recorded_reads", None) is not None:
-        return False
     on_a_line = getattr(transport, "wall_clock", True) or getattr(transport, "loses_bytes", False)
     return bool(on_a_line) and link.streaming and link.status is LinkStatus.STREAMING
 

@@ -47,6 +47,11 @@ simulator's options (``simulator``) and the run's (``options``) say how to make 
 ``run --reproducible`` leaves out ``started`` (unless ``SOURCE_DATE_EPOCH`` gives it) and
 ``mission_path``, which change on every run with nothing changed.
 
+``"stop_listened": true`` in the header (:data:`STOP_LISTENED`, since session 33) says the
+run's safe stop was listened and asked after (the wall clock; the simulator's line losing
+bytes): its replay does the same on the recorded bytes (docs/runtime.md, Replaying a stop that
+needed more than one try). A record without it is replayed without listening, as before.
+
 The header also holds the run's ``watchdog`` and ``grace`` (seconds), and each watchdog trip
 is a note (``{"watchdog": 0.101, "limit": 0.1}``, at the link time it tripped): a replay's
 link trips where the record's did, and nowhere else (``StreamLink.replayed_trips``), so a
@@ -156,6 +161,13 @@ SIMULATOR = "simulator"
 #: the header field holding the run's options that decide its bytes besides the mission and
 #: the simulator, as given (``timeout``, ``include_dirs``, ``allow_plugin_files``, ``end_in``)
 RUN_OPTIONS = "options"
+
+#: header key, true where the recorded run's stop was listened after and asked after (the
+#: wall clock, a real line; the simulator's line losing bytes to the robot:
+#: ``ending.listened_after``): its replay takes the same decisions from the recorded bytes,
+#: and writes the zeros, the stop again, the Query List and the other rates' stops the
+#: recorded run wrote. A record made before has none: replayed as then, never listened after.
+STOP_LISTENED = "stop_listened"
 
 #: Seconds of the link's clock between two flushes of the record to the operating system: a
 #: run killed outright (``kill -9``, the OOM killer) loses at most this much of its record.
@@ -311,6 +323,8 @@ class RecordingTransport:
         #: stopped: the run's stack gives its runner's; by itself, the record's own clock
         self.mission_time: Callable[[], float | None] = _no_mission_time
         head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, MADE_BY: __version__, **header}
+        if self.wall_clock or self.loses_bytes:
+            head[STOP_LISTENED] = True
         self._flushed_at = -math.inf  # the header goes out at once, and the first chunk
         self._put(json.dumps(head) + "\n", 0.0)
 
@@ -1135,6 +1149,9 @@ class ReplayTransport:
 
     #: the recorded clock, as fast as the replay reads it
     wall_clock = False
+    #: whether the recorded run's stop was listened after (:data:`STOP_LISTENED`): then the
+    #: replay's is too, on the recorded bytes, as a line that loses bytes to the robot's is
+    loses_bytes = False
 
     def __init__(
         self,
@@ -1151,6 +1168,7 @@ class ReplayTransport:
         #: its end, its time), for :meth:`write`'s clock
         self._out_times: deque[tuple[int, float]] = deque()
         self._recorded = record.out_bytes
+        self.loses_bytes = bool(record.header.get(STOP_LISTENED, False))
         self._ended = record.ended
         self._progress = progress
         self._last_t = record.last_chunk_t  # a replay's last read or write is its 100 %

@@ -8,11 +8,13 @@ bytes and takes the tree's ``mode: passive`` and the whole safe stop as notes, s
 
 from __future__ import annotations
 
+import json
 import logging
 from pathlib import Path
 
 import pytest
 
+from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
@@ -20,11 +22,12 @@ from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, longest_data_bytes
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import STOP_RESYNC_ZEROS
+from roomba_bt.runtime.recording import STOP_LISTENED, load_record
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import SimLink, Simulator, load_world
 
-from .simrun import LosesTheOpcodeOf, spins_then_passive
+from .simrun import LosesTheOpcodeOf, record_run, spins_then_passive
 
 #: the drive whose opcode the line loses: its data bytes then read as a 255-note Song
 SONG_MAKER = oi.drive(140, -1).data
@@ -107,3 +110,45 @@ def test_a_stream_on_in_passive_with_the_wheels_still_confirms_the_stop() -> Non
     assert link.writes[-1] == stop and link.writes.count(stop) == 1  # written once
     assert simulator.mode is OIMode.PASSIVE and simulator.streaming
     connection.close()
+
+
+def test_the_record_of_a_stop_written_again_replays_byte_for_byte(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The record says its run's stop was listened after (``stop_listened``), and its replay
+    listens on the recorded frames: it writes the zeros and the stop again where the recorded
+    run did. Before, a replay never listened: ``first difference ... expected bytes 00 00 00
+    00 00 00 00 00, sent nothing``, exit 1, for a run that had ended well."""
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    record = record_run(tmp_path, LosesTheOpcodeOf(simulator, SONG_MAKER), SPIN_THEN_SPIN_BACK)
+    assert load_record(record).header[STOP_LISTENED] is True
+    capsys.readouterr()
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    assert "sent 512 zeros and the stop again, heard at write 2" in out, out
+    assert "replay: the tree wrote the same 564 bytes as the recorded run" in out, out
+
+
+def test_a_record_without_stop_listened_is_replayed_without_listening(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A record made before ``stop_listened`` was written (its header without it) replays as
+    it did then: the stop written once, no zeros; its difference at the end is said."""
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    record = record_run(tmp_path, LosesTheOpcodeOf(simulator, SONG_MAKER), SPIN_THEN_SPIN_BACK)
+    lines = record.read_text().splitlines(keepends=True)
+    header = json.loads(lines[0])
+    del header[STOP_LISTENED]
+    record.write_text(json.dumps(header) + "\n" + "".join(lines[1:]))
+    capsys.readouterr()
+    assert main(["replay", str(record)]) == 1
+    out = capsys.readouterr().out
+    assert "expected bytes 00 00 00 00 00 00 00 00, sent nothing" in out, out
+
+
+def test_a_perfect_simulated_line_s_record_is_not_listened_after(tmp_path: Path) -> None:
+    """The golden recordings' line (``SimLink`` on the virtual clock, losing nothing): its
+    records say nothing of listening, and their replays end as they did."""
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    record = record_run(tmp_path, SimLink(simulator), SPIN_THEN_SPIN_BACK)
+    assert STOP_LISTENED not in load_record(record).header
