@@ -623,6 +623,26 @@ ENDED = "ended"
 #: the outcomes that come from outside the tree (an operator, a signal, the run's time limit),
 #: which a replay, whose tree would go on, brings about where the end note says
 ENDED_FROM_OUTSIDE = ("interrupted", "timeout")
+#: how an end note's reason starts where the run's tree had ended well and its safe stop did
+#: not reach the robot (``teardown.note_undelivered_stop``): the note says ``connection
+#: lost``, its link had not failed before the stop
+UNDELIVERED_STOP = "the safe stop did not reach the robot (the run had ended: "
+
+
+def tree_ended(note: Mapping[str, Any]) -> str:
+    """How the recorded run's tree ended: the end note's outcome, or, where a stop that did
+    not reach the robot made a run that had ended well a lost connection, the ending it had
+    (``timeout``, ``success``). A replay ends such a run where its tree ended, as it would
+    have (a timeout at its tick), and compares its stop, not a link's failure: before, a
+    timed-out run's stop unconfirmed was replayed as a link lost, the replay's tree went on
+    past the time limit, starved, and its own stop was not compared."""
+    outcome, reason = str(note.get(ENDED)), str(note.get("reason") or "")
+    if not reason.startswith(UNDELIVERED_STOP):
+        return outcome
+    had = reason[len(UNDELIVERED_STOP) :]
+    return had.split(":", 1)[0].split(")", 1)[0]
+
+
 #: the end note's key, for a Ctrl-C or SIGTERM that came before its tick was written whole:
 #: how many bytes of the record's "out" side were written when it came. More than were
 #: written before that tick: it came between two of the tick's writes (its flush), and the
@@ -1119,6 +1139,13 @@ def _bytes_at(stream: bytes | bytearray, offset: int) -> str:
 #: the bytes the tree wrote before them (:meth:`ReplayTransport.starved`).
 STARVED_AFTER_S = 1.0
 
+#: A chunk's time stamp is rounded to the microsecond (``"t": 3.240000``): one the recorded
+#: run read at the very end of a wait (the safe stop's listening, whose end its clock's float
+#: sums reach at 3.2399999999) may be stamped just past it, and a replay, whose clock adds
+#: the same waits, left it for the next read: its stop again came a chunk early, a
+#: difference. Half the rounding's step of slack gives it where it was read.
+STAMP_SLACK = 0.5e-6
+
 #: Bytes a replay keeps past the first difference, of the recorded bytes and of the tree's,
 #: to name the commands there: the longest OI command (a Script, 152) is 102 bytes.
 DIFFERENCE_CONTEXT = 256
@@ -1350,7 +1377,10 @@ class ReplayTransport:
         if self.difference is not None or self.exhausted:  # a difference ends the replay
             return self._nothing_for(timeout)
         t, data, written_before = self._inbound[0]
-        if (t > self._now + timeout and not self._as_recorded) or self.written < written_before:
+        late = (
+            t - STAMP_SLACK > self._now + timeout
+        )  # past the wait, by more than its stamp's rounding
+        if (late and not self._as_recorded) or self.written < written_before:
             return self._nothing_for(timeout)
         self._inbound.popleft()
         self._now = max(self._now, t)

@@ -50,7 +50,6 @@ from roomba_bt.runtime.loop import (
     stream_request,
 )
 from roomba_bt.runtime.recording import (
-    ENDED,
     ENDED_FROM_OUTSIDE,
     MISSION_AT,
     PLUGINS,
@@ -65,6 +64,7 @@ from roomba_bt.runtime.recording import (
     ReplayTransport,
     end_note,
     ending_text,
+    tree_ended,
 )
 from roomba_bt.runtime.stepping import Tick, TickStepper, ticks
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, Outcome, RunSummary
@@ -621,7 +621,7 @@ def link_lost_after(
     has none: the wrong profile, no answer) marks the transport from its start, as its tree
     wrote nothing to compare. ``gate`` itself for any other ending."""
     note = record.ending
-    if note is None or note[ENDED] not in LINK_FAILED:
+    if note is None or tree_ended(note) not in LINK_FAILED:
         return gate
     tick = note.get("tick")
     if not isinstance(tick, int):
@@ -638,7 +638,7 @@ def recorded_end(
     ended by its tree or its link: the replay ends there by itself). ``transport``: the
     replay's, which ends a tick the recorded run's interrupt cut short where it did."""
     note = record.ending
-    if note is None or note[ENDED] not in ENDED_FROM_OUTSIDE:
+    if note is None or tree_ended(note) not in ENDED_FROM_OUTSIDE:
         return None
     if not isinstance(note.get("tick"), int) or note.get("at") not in ("before", "after"):
         return None
@@ -707,7 +707,12 @@ def replay_record(
     end = recorded_end(record, gate, transport)
     stack.runner.gate = end or gate  # the monitor's replay of the operator's acts inside
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
-    summary = stack.run(raise_interrupts=raise_interrupts)
+    try:
+        summary = stack.run(raise_interrupts=raise_interrupts)
+    finally:
+        # as the recorded run's (``run``): a stop not delivered is tried once more there, and
+        # its bytes are in the record; before, the replay's was left to the program's exit
+        stack.close()
     if end is not None and end.ended and summary.outcome is Outcome.INTERRUPTED:
         summary.outcome, summary.reason = Outcome.INPUT_ENDED, f"end of the record: {end.reason}"
     return summary, transport

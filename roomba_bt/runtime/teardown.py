@@ -42,6 +42,7 @@ from roomba_bt.robot.safety import (
     signal_delivered,
     signal_reason,
 )
+from roomba_bt.runtime.recording import UNDELIVERED_STOP
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
 log = logging.getLogger(__name__)
@@ -351,7 +352,7 @@ def note_undelivered_stop(summary: RunSummary) -> None:
         return
     was = summary.outcome.value + (f": {summary.reason}" if summary.reason else "")
     summary.outcome = Outcome.CONNECTION_LOST
-    summary.reason = f"the safe stop did not reach the robot (the run had ended: {was})"
+    summary.reason = f"{UNDELIVERED_STOP}{was})"
 
 
 def note_late_interrupt(

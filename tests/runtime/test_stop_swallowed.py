@@ -27,7 +27,7 @@ from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import SimLink, Simulator, load_world
 
-from .simrun import LosesTheOpcodeOf, record_run, spins_then_passive
+from .simrun import SPIN, LosesTheOpcodeOf, record_run, spins_then_passive
 
 #: the drive whose opcode the line loses: its data bytes then read as a 255-note Song
 SONG_MAKER = oi.drive(140, -1).data
@@ -152,3 +152,40 @@ def test_a_perfect_simulated_line_s_record_is_not_listened_after(tmp_path: Path)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
     record = record_run(tmp_path, SimLink(simulator), SPIN_THEN_SPIN_BACK)
     assert STOP_LISTENED not in load_record(record).header
+
+
+class DeafFromTheStop(SimLink):
+    """The simulator's link on a line that loses bytes, losing every byte from the safe
+    stop's first Pause Stream on (a wire to the robot that dies at the run's end): the robot
+    streams on, in Safe, spinning."""
+
+    loses_bytes = True
+
+    def __init__(self, simulator: Simulator) -> None:
+        super().__init__(simulator)
+        self.drove = self.deaf = False
+
+    def write(self, data: bytes) -> None:
+        self.drove = self.drove or bytes(data).startswith(oi.halt().data[:1])
+        self.deaf = self.deaf or (self.drove and oi.pause_stream().data in bytes(data))
+        if not self.deaf:
+            super().write(data)
+
+
+def test_the_record_of_a_timed_out_run_whose_stop_was_not_received_replays_byte_for_byte(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Its end note says ``connection lost`` (the stop not received after the time limit):
+    the replay ends the tree at the recorded run's last tick, as the time limit did, and
+    its stop, written three times and tried once more by ``close()``, is compared. Before,
+    it was replayed as a link lost: its tree went on past the limit and starved, and "the
+    replay does not fail as its link did (... the replay's own ending sent nothing)"."""
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    record = record_run(tmp_path, DeafFromTheStop(simulator), SPIN)
+    assert simulator.mode is OIMode.SAFE  # the stop never reached it
+    capsys.readouterr()
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    assert "the stop was written 3 times but not received" in out, out
+    assert "replay: the tree wrote the same 2136 bytes as the recorded run" in out, out
+    assert "does not fail as its link did" not in out
