@@ -651,6 +651,19 @@ def _window_end(until: float | None) -> str:
     return f"the end of the window, mission time {until:g} s ({wording.current.replay_until})"
 
 
+def follow_the_recorded_link(stack: RunStack, record: Record) -> None:
+    """A replay's link trips its watchdog where the record's did (on the record's silence
+    where the record notes no trips: made before they were noted), and asks for a silent
+    stream again where the record's did, nowhere else (robot/stall_asks.py): its run's bytes
+    come from those acts, which a replayed line cannot bring about by itself."""
+    trips = record.watchdog_trips
+    if trips is not None:
+        stack.connection.link.replayed_trips = deque(trips)
+    stack.connection.stall_asks.replayed = deque(
+        t for t, note in record.notes if STREAM_AGAIN_NOTE in note
+    )
+
+
 def replay_record(
     record: Record,
     mission: MissionLike,
@@ -673,7 +686,7 @@ def replay_record(
     mission time the replay ends at, as if the record ended there (``--to``; its
     transport's ``ended_early``)."""
     transport = ReplayTransport(record, name=f"replay:{name}", progress=progress)
-    header, trips = record.header, record.watchdog_trips
+    header = record.header
 
     def input_ended() -> str | None:
         if transport.difference is not None or transport.starved():
@@ -695,12 +708,7 @@ def replay_record(
         input_ended=input_ended,
         replayed_notes=[note for _, note in record.notes],  # the tick guard's acts
     )
-    if trips is not None:  # it trips where the record's did (None: on the record's silence)
-        stack.connection.link.replayed_trips = deque(trips)
-    # and asks for a silent stream again where the record's did, nowhere else (robot/stall_asks.py)
-    stack.connection.stall_asks.replayed = deque(
-        t for t, note in record.notes if STREAM_AGAIN_NOTE in note
-    )
+    follow_the_recorded_link(stack, record)
     if until is not None:
         gate = WindowEnd(until, gate, transport)
     gate = link_lost_after(record, gate, transport)
