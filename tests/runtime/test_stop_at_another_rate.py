@@ -22,7 +22,7 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.baud_hunt import hunt_rates, hunt_seconds
 from roomba_bt.robot.ending import STOP_RESYNC_ZEROS
-from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.stack import Recording, RunStack
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.sim import Simulator, load_world
 from roomba_bt.sim.faults import Faults
@@ -194,4 +194,48 @@ def test_the_record_of_a_stop_started_again_after_a_reset_replays_byte_for_byte(
     assert main(["replay", str(record)]) == 0
     out = capsys.readouterr().out
     assert "replay: the tree wrote the same 355 bytes as the recorded run" in out, out
+    assert "does not fail as its link did" not in out
+
+
+class _RecordedEpisodeStack(RunStack):
+    """An evaluation episode's stack that records its run to :attr:`record` (as ``run
+    --record``) and closes as ``run`` does, its record's end line written."""
+
+    record = Path("run.jsonl")
+
+    def __init__(self, *args: Any, **options: Any) -> None:
+        super().__init__(*args, record=Recording(self.record, DOCK), **options)
+
+    def run(self, **options: Any) -> RunSummary:
+        summary = super().run(**options)
+        self.close()
+        return summary
+
+
+DOCK = str(Path(__file__).parents[2] / "roomba_bt" / "missions" / "dock.yaml")
+
+
+@pytest.mark.parametrize(
+    ("seed", "written"),
+    [(4, 1099), (51, 731), (67, 6508)],
+    ids=["query after a stopped stream", "start again after a reset", "stop written again"],
+)
+def test_the_record_of_a_stop_asked_after_replays_byte_for_byte(
+    seed: int, written: int, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    """The dock's 1 % sweep's seeds above, recorded: each run's link failed (a Power, a Reset
+    made of lost bytes), and its stop was asked after by a Query List (seed 67's written
+    again after zeros first, seed 51's Start sent again after the banner). The replay asks
+    where the recorded run did, on the recorded bytes. Before, each was compared up to the
+    link's failure only: "the record holds bytes 95 03 23 15 22, the replay's own ending
+    sent bytes ", the ending unchecked."""
+    record = tmp_path / "run.jsonl"
+    monkeypatch.setattr(_RecordedEpisodeStack, "record", record)
+    monkeypatch.setattr(episode, "RunStack", _RecordedEpisodeStack)
+    run_episode(EpisodeSpec(DOCK, seed=seed, faults=Faults(host_drop_rate=0.01), trace_every=0))
+    capsys.readouterr()
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    assert f"replay: the tree wrote the same {written} bytes as the recorded run" in out, out
     assert "does not fail as its link did" not in out
