@@ -239,6 +239,18 @@ class RunBoard:
             client.register_key(key=key, access=py_trees.common.Access.READ)
         self.client = client
 
+    def move_to(self, prefix: str) -> None:
+        """The keys copied under ``prefix``, the board renamed to it, the old names removed,
+        in that order (:func:`_moved_aside`); the py_trees client dropped."""
+        storage = py_trees.blackboard.Blackboard.storage
+        names = self.names()
+        for name in names:
+            storage[prefix + name] = storage[name]
+        self._drop_client()
+        self._named(prefix)
+        for name in names:
+            storage.pop(name, None)
+
     def _drop_client(self) -> None:
         old, self.client = self.client, None
         _unregister(old)
@@ -361,15 +373,8 @@ def _moved_aside(board: RunBoard) -> None:
     removed (its program, reading it in another thread, finds its keys at every moment).
     Its py_trees client goes (the plain names are the next run's to register); its keys go
     when it is released, or when nothing holds the board any longer."""
-    storage = py_trees.blackboard.Blackboard.storage
     prefix = _new_prefix()
-    names = board.names()
-    for name in names:
-        storage[prefix + name] = storage[name]
-    board._drop_client()
-    board._named(prefix)
-    for name in names:
-        storage.pop(name, None)
+    board.move_to(prefix)
     weakref.finalize(board, _forgotten, prefix)
 
 
