@@ -23,7 +23,7 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.baud_hunt import hunt_rates, hunt_seconds
 from roomba_bt.robot.ending import STOP_RESYNC_ZEROS
 from roomba_bt.runtime.stack import Recording, RunStack
-from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.runtime.summary import ExitCode, RunSummary
 from roomba_bt.sim import Simulator, load_world
 from roomba_bt.sim.faults import Faults
 
@@ -188,7 +188,7 @@ def test_the_record_of_a_stop_started_again_after_a_reset_replays_byte_for_byte(
     15 22, the replay's own ending sent bytes" (exit 0, the ending unchecked)."""
     record = tmp_path / "r.jsonl"
     faults = ["--fast", "--host-drop-rate", "0.01", "--seed", "29"]
-    assert main(["run", "dock", *faults, "--record", str(record)]) == 3
+    assert main(["run", "dock", *faults, "--record", str(record)]) == ExitCode.LINK_LOST
     run = capsys.readouterr().out
     assert "sent Start again after its banner, it answered in Passive" in run, run
     assert main(["replay", str(record)]) == 0
