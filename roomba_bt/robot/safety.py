@@ -23,7 +23,7 @@ import signal
 import threading
 from collections.abc import Callable, Iterator
 from types import FrameType
-from typing import TypeVar
+from typing import Any, ClassVar, TypeVar
 
 log = logging.getLogger(__name__)
 
@@ -251,16 +251,29 @@ def sigterm_raises() -> Iterator[None]:
         log.debug("sigterm_raises() outside the main thread: SIGTERM left as it is")
         yield
         return
-    previous = {
-        signum: signal.signal(signum, raise_terminated)
-        for signum in _taken(ENDING_SIGNALS)
-        if signum != signal.SIGINT
-    }
+    if _TermHandlers.depth == 0:
+        _TermHandlers.previous = {
+            signum: signal.signal(signum, raise_terminated)
+            for signum in _taken(ENDING_SIGNALS)
+            if signum != signal.SIGINT
+        }
+    _TermHandlers.depth += 1
     try:
         yield
     finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+        _TermHandlers.depth -= 1
+        if _TermHandlers.depth == 0:
+            for signum, handler in _TermHandlers.previous.items():
+                signal.signal(signum, handler)
+
+
+class _TermHandlers:
+    """The handlers :func:`sigterm_raises` found, given back when its last block ends: two
+    runs' blocks stepped in turn (two ``RunStack.ticks()``) end in the order they began, and
+    each giving back what it found left the process with ours after both."""
+
+    depth: ClassVar[int] = 0
+    previous: ClassVar[dict[int, Any]] = {}
 
 
 #: What the run is doing while it stops, as a Ctrl-C or SIGTERM meanwhile says it

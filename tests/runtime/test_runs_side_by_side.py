@@ -224,3 +224,19 @@ def test_a_runner_has_no_board_before_its_run() -> None:
     runner: MissionRunner = stack.runner
     assert runner.blackboard is None
     stack.close()
+
+
+def test_two_stacks_stepped_in_turn_give_back_the_signal_handlers_they_found() -> None:
+    """Each ``ticks()`` makes SIGTERM raise ``Terminated`` while it runs; stepped in turn,
+    the first ended first and the second gave back the first's handler: the process kept
+    ours after both (a later plain ``raise Terminated`` was taken for a signal's)."""
+    import signal
+
+    found = signal.getsignal(signal.SIGTERM)
+    stacks = [stack_for(load_mission_text(leg(mm), name=f"leg{mm}.yaml")) for mm in (200, 900)]
+    try:
+        stepped_in_turn(stacks)
+    finally:
+        for stack in stacks:
+            stack.close()
+    assert signal.getsignal(signal.SIGTERM) is found
