@@ -53,19 +53,28 @@ def test_the_hunt_tries_every_rate_of_the_baud_table_but_the_runs() -> None:
     assert 13.5 < hunt_seconds(115200, bytes(11), STOP_RESYNC_ZEROS) < 14.0
 
 
+def _spun_on(
+    tmp_path: Path, lossy: type[LosesTheOpcodeOf]
+) -> tuple[RunSummary, Simulator, LosesTheOpcodeOf]:
+    """The spinning mission run to its end and closed on ``lossy``'s line, whose lost opcode
+    makes a Baud to 300 (:data:`BAUD_MAKER`): its summary, the robot, the line."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPINS)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    link = lossy(simulator, BAUD_MAKER)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
+    summary = stack.run()
+    stack.close()
+    return summary, simulator, link
+
+
 def test_a_robot_a_lost_byte_put_on_300_baud_is_stopped_there_and_put_back(
     tmp_path: Path,
 ) -> None:
     """Before, the run said ``NOT DELIVERED: ... the line is garbled`` and the simulated robot
     spun on at 300 baud; then it was stopped there and left at 300, where the next run at
     115200 could not reach it. Now it is sent Baud back to the run's rate and asked there."""
-    path = tmp_path / "m.yaml"
-    path.write_text(SPINS)
-    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
-    link = LosesTheOpcodeOf(simulator, BAUD_MAKER)
-    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
-    summary = stack.run()
-    stack.close()
+    summary, simulator, link = _spun_on(tmp_path, LosesTheOpcodeOf)
     assert link.lost and simulator.baud == 115200 == link.baud
     assert simulator.mode is OIMode.PASSIVE
     assert simulator.requested_left == simulator.requested_right == 0
@@ -88,13 +97,7 @@ def test_a_robot_that_does_not_come_back_to_the_runs_rate_is_left_where_it_answe
 ) -> None:
     """The Baud back lost: the robot still talks at 300, and the port is left there, the
     summary saying so and how to find it."""
-    path = tmp_path / "m.yaml"
-    path.write_text(SPINS)
-    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
-    link = LosesTheBaudBackToo(simulator, BAUD_MAKER)
-    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
-    summary = stack.run()
-    stack.close()
+    summary, simulator, link = _spun_on(tmp_path, LosesTheBaudBackToo)
     assert simulator.baud == 300 == link.baud and simulator.mode is OIMode.PASSIVE
     assert summary.stop_delivered, summary.safe_stop
     assert (
