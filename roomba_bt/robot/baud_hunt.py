@@ -143,7 +143,8 @@ def hunt(
         if not found:
             with contextlib.suppress(*LINK_ERRORS):
                 link.switch_rate(run_rate)
-    link.port_rate = probes[-1].baud
+    if found:  # else switch_rate set it (the run's rate), or left it unknown on a failure
+        link.port_rate = probes[-1].baud
     return Hunt(tuple(probes))
 
 
