@@ -13,7 +13,7 @@ from __future__ import annotations
 import logging
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any
 
@@ -532,6 +532,7 @@ class Turn(Drive):
     params=(Param("motors", BOOL, default=False, doc="also switch the brushes and vacuum off"),),
     sends=opcodes("drive", "motors"),
     halts_only=True,  # Drive 0
+    stops_only=lambda params: True,  # Drive 0, and Motors 0 if asked
 )
 class Stop(Action):
     """Stop the wheels (Drive 0: ``[137][0][0][0][0]``), and the motors if asked.
@@ -624,6 +625,14 @@ class SeekDock(Action):
 
 #: ``motors``' switches: :func:`~roomba_bt.oi.bits.motor_bits`' keywords, brushes first
 _MOTORS = ("main_brush", "side_brush", "vacuum", "side_brush_clockwise", "main_brush_outward")
+#: the switches that run a motor (the others only say its direction)
+_RUNNING = _MOTORS[:3]
+
+
+def _switched_off(names: tuple[str, ...]) -> Callable[[Mapping[str, Any]], bool]:
+    """A ``stops_only`` (validate's, for Passive): each of ``names`` is given false or left
+    out (false by default): the Motors sent runs nothing. A ``@key`` may be true at run time."""
+    return lambda params: all(params.get(name, False) is False for name in names)
 
 
 @declare(
@@ -632,6 +641,7 @@ _MOTORS = ("main_brush", "side_brush", "vacuum", "side_brush_clockwise", "main_b
     at_once=True,
     params=tuple(Param(name, BOOL, default=False) for name in _MOTORS),
     sends=opcodes("motors"),
+    stops_only=_switched_off(_RUNNING),
 )
 class Motors(Action):
     """Switch the cleaning motors (Motors 138 ``[138][bits]``); unnamed ones go off."""
@@ -648,6 +658,7 @@ class Motors(Action):
     params=(Param("on", BOOL, required=True, doc="vacuum on or off (other motors go off)"),),
     sends=opcodes("motors"),
     primary="on",
+    stops_only=_switched_off(("on",)),
 )
 class Vacuum(Action):
     """Vacuum alone on or off (Motors 138, bit 1)."""
