@@ -72,6 +72,8 @@ from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
     from collections.abc import Sequence
 
+    from roomba_bt.cli.validate_report import Checked
+    from roomba_bt.evaluate import EvaluationError
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, MissionNotCompiled
     from roomba_bt.evaluate.parallel import Engine, Evaluation, Interruption, Progress
     from roomba_bt.evaluate.records import PartialResults
@@ -226,12 +228,15 @@ def near_dock_distance(text: str) -> float:
     return metres(text, *NEAR_DOCK_RANGE_M)
 
 
-def _error(message: str, args: argparse.Namespace | None = None) -> int:
+def _error(
+    message: str, args: argparse.Namespace | None = None, errors: Sequence[dict[str, Any]] = ()
+) -> int:
     """``message`` on stderr, exit 2; under ``--json`` (``args`` given) also on stdout as
-    :func:`_refusal_as_json` writes it, so a script's ``json.load`` reads why nothing ran."""
+    :func:`_refusal_as_json` writes it, so a script's ``json.load`` reads why nothing ran;
+    ``errors``: its places in a file (a world's problems), each as a diagnostic."""
     if args is not None and getattr(args, "json", False):
         said_alone = message.replace(" (said above)", "")  # stdout holds the errors too
-        _refusal_as_json(said_alone, [], getattr(args, "not_found", []))
+        _refusal_as_json(said_alone, [], getattr(args, "not_found", []), errors)
     print(f"roomba-bt eval: {message}", file=sys.stderr)
     return ExitCode.INVALID
 
@@ -561,13 +566,18 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     do not compile, :func:`_compiled`) and every number in its range; the first problem's
     message."""
     args.key = list(dict.fromkeys(args.key))  # a key named twice is reported once
+    from roomba_bt.cli.validate_report import Checked
+
     found = [(mission, mission_file(mission)) for mission in args.missions]
-    not_found: list[str] = list(dict.fromkeys(f[0] for _, f in found if isinstance(f, tuple)))
+    # each as validate has it: --json names the file asked for, as validate --format json
+    not_found = list(
+        {m: Checked(m, problem=f[0]) for m, f in found if isinstance(f, tuple)}.values()
+    )
     args.not_found = not_found
     named = [(mission, f) for mission, f in found if not isinstance(f, tuple)]
     if not named:  # each on its line, as validate says them: they were joined with "; "
         if len(not_found) == 1:
-            return not_found[0]
+            return str(not_found[0].problem)
         _say_not_found(not_found)
         return _cannot_be_evaluated(len(not_found), len(not_found))
     args.mission_paths = dict(given_once("eval", named, "evaluated"))
@@ -599,10 +609,10 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     return None
 
 
-def _say_not_found(problems: list[str]) -> None:
+def _say_not_found(not_found: list[Checked]) -> None:
     """Each mission not found on its own line, as ``validate`` says each."""
-    for problem in problems:
-        print(f"roomba-bt eval: {problem}", file=sys.stderr)
+    for one in not_found:
+        print(f"roomba-bt eval: {one.problem}", file=sys.stderr)
 
 
 def _cannot_be_evaluated(count: int, given: int) -> str:
@@ -699,7 +709,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         start_pose(world, batches[0][0])
         batches = _reading_keys(args, chosen, missions, batches)
     except EvaluationError as exc:
-        return _error(str(exc), args)
+        return _error(str(exc), args, _world_errors(exc))
     args.made_by = made_by(args, chosen, missions, world)
     _warn_if_one_start(args, world)
     return chosen, batches, world
@@ -751,21 +761,39 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
 
 
 def _refusal_as_json(
-    said: str, diagnostics: list[Diagnostic], problems: Sequence[str] = ()
+    said: str,
+    diagnostics: list[Diagnostic],
+    not_found: Sequence[Checked] = (),
+    errors: Sequence[dict[str, Any]] = (),
 ) -> None:
     """``eval --json`` refusing to start, on stdout as data a script reads (its ``json.load``
     of an empty stdout raised): ``{"error": what stops it, "errors": [...]}``, each error as
     ``validate --format json`` gives a diagnostic (``file``, ``line``, ``column``,
-    ``message``, ...), a mission not found at no line or column. stderr says the same as
-    without ``--json``; the exit code is the same."""
+    ``message``, ...), a mission not found in the file asked for at no line or column (its
+    ``file`` was null: a script could not tell which of several it was), then ``errors``
+    as they are. stderr says the same as without ``--json``; the exit code is the same."""
     import json
 
-    from roomba_bt.cli.validate_report import diagnostic_as_json
+    from roomba_bt.cli.validate_report import diagnostic_as_json, problem_as_json
 
-    errors = [diagnostic_as_json(d) for d in diagnostics]
-    errors += [{"file": None, "line": None, "column": None, "severity": "error",
-                "message": problem} for problem in problems]  # fmt: skip
-    print(json.dumps({"error": said, "errors": errors}, indent=2))
+    listed = [diagnostic_as_json(d) for d in diagnostics]
+    listed += [problem_as_json(one) for one in not_found]
+    print(json.dumps({"error": said, "errors": [*listed, *errors]}, indent=2))
+
+
+def _world_errors(exc: EvaluationError) -> list[dict[str, Any]]:
+    """The world's problems behind ``exc`` (:func:`~roomba_bt.evaluate.episode.build_world`
+    raises it from the :class:`~roomba_bt.sim.world.WorldError`), each at its file, line
+    and column as ``--json`` lists a mission's errors (a world not found: the name or path
+    asked for, at no line); none for a problem that is no world's."""
+    from roomba_bt.cli.validate_report import error_as_json
+    from roomba_bt.sim.world import WorldError
+
+    cause = exc.__cause__
+    if not isinstance(cause, WorldError):
+        return []
+    return [error_as_json(p.source, p.message, p.line or None, p.column or None)
+            for p in cause.problems]  # fmt: skip
 
 
 def _reading_keys(

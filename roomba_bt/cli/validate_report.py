@@ -197,7 +197,7 @@ def print_json(checked: list[Checked], *, strict: bool) -> None:
         }
         if one.problem is not None:  # a diagnostic too: a program reads the reason there
             entry["problem"] = one.problem
-            diagnostics.append({**_problem_as_json(one), "checked_file": one.file})
+            diagnostics.append({**problem_as_json(one), "checked_file": one.file})
         files.append(entry)
         diagnostics += [
             {**diagnostic_as_json(d), "checked_file": one.file}
@@ -214,15 +214,24 @@ def print_json(checked: list[Checked], *, strict: bool) -> None:
     print(json.dumps(document, indent=2))
 
 
-def _problem_as_json(one: Checked) -> dict[str, Any]:
+def problem_as_json(one: Checked) -> dict[str, Any]:
     """A file argument that is no file to read (missing, a folder with no mission, a FIFO)
     as a diagnostic: at no line or column (null), the reason its message."""
+    return error_as_json(one.file, one.problem_said)
+
+
+def error_as_json(
+    file: str, message: str, line: int | None = None, column: int | None = None
+) -> dict[str, Any]:
+    """An error the mission compiler did not find (a file not found, a world file's
+    problem) with a diagnostic's fields (:func:`diagnostic_as_json`), so that a program
+    reads every error of a report alike; no line or column: null."""
     return {
-        "file": one.file,
-        "line": None,
-        "column": None,
+        "file": file,
+        "line": line,
+        "column": column,
         "severity": "error",
-        "message": one.problem_said,
+        "message": message,
         "yaml_path": "",
         "included_from": [],
         "began_at": None,

@@ -361,7 +361,8 @@ def build_world(spec: EpisodeSpec) -> World:
             text, source = world_text(spec.world)
         world = _parsed_world(text, source)
     except Exception as exc:  # WorldError: every problem, already worded for the user
-        raise EvaluationError(str(exc)) from None
+        # its cause kept: eval --json lists each problem at its file, line and column
+        raise EvaluationError(str(exc)) from exc
     if spec.dock:
         if world.dock is None:
             raise EvaluationError(f"--dock: world {world.name!r} has no dock")

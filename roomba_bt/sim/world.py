@@ -363,10 +363,16 @@ class WorldProblem:
 
     def __str__(self) -> str:
         where = f"{self.source}:{self.line}:{self.column}" if self.line else self.source
+        return f"{where}: {self.message}"
+
+    @property
+    def message(self) -> str:
+        """The problem without its place: what ``eval --json`` lists beside the file, line
+        and column, as a mission's diagnostic has them."""
         if not self.allowed:  # a sentence of its own: YAML's syntax error, a refused tag
             field = f"{self.field}: " if self.field else ""
-            return f"{where}: {field}{self.found}"
-        return f"{where}: {self.field}: found {self.found}; allowed: {self.allowed}"
+            return f"{field}{self.found}"
+        return f"{self.field}: found {self.found}; allowed: {self.allowed}"
 
 
 class WorldError(ValueError, RoombaBtError):

@@ -656,7 +656,8 @@ def test_json_says_why_no_episode_runs_as_json(
     said = json.loads(capsys.readouterr().out)
     assert said["error"] == "1 of 2 missions cannot be evaluated; no episode runs"
     [error] = said["errors"]
-    assert error["file"] is None and error["message"].startswith(f"{missing}: no such mission")
+    assert (error["file"], error["line"], error["column"]) == (missing, None, None)
+    assert error["message"].startswith("no such mission file")
     warned = tmp_path / "w1.yaml"
     warned.write_text("tree:\n  sequence:\n    - mode: full\n"
                       "    - drive: {velocity: 100 mm/s, duration: 1s}\n")  # fmt: skip
@@ -665,6 +666,27 @@ def test_json_says_why_no_episode_runs_as_json(
     assert said["error"] == f"{warned}: failed --strict (1 warning); no episode runs"
     [warning] = said["errors"]
     assert (warning["line"], warning["column"], warning["severity"]) == (4, 7, "warning")
+
+
+def test_json_names_the_world_file_asked_for_and_each_of_its_problems_places(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--json``'s refusal for a world not found listed no error at all, and a mission not
+    found had ``"file": null``: a script could not tell which file to fix. Each error names
+    the file asked for now, as ``validate --format json`` does, and a world's problems come
+    each at its line and column."""
+    missing = str(tmp_path / "nowhere.yaml")
+    options = ["--runs", "1", "--no-progress", "--json"]
+    assert main(["eval", BUMP, "--world", missing, *options]) == 2
+    [error] = json.loads(capsys.readouterr().out)["errors"]
+    assert (error["file"], error["line"], error["column"]) == (missing, None, None)
+    assert error["message"].startswith("world: found no such file or shipped world")
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("name: broken\nrooms: 3\n")
+    assert main(["eval", BUMP, "--world", str(broken), *options]) == 2
+    [error] = json.loads(capsys.readouterr().out)["errors"]
+    assert (error["file"], error["line"], error["column"]) == (str(broken), 2, 8)
+    assert error["message"] == "rooms: found 3; allowed: a list"
 
 
 def test_json_says_why_when_no_mission_is_found_or_an_option_is_wrong(
@@ -676,7 +698,8 @@ def test_json_says_why_when_no_mission_is_found_or_an_option_is_wrong(
     assert main(["eval", *missing, "--runs", "1", "--no-progress", "--json"]) == 2
     said = json.loads(capsys.readouterr().out)
     assert said["error"] == "2 of 2 missions cannot be evaluated; no episode runs"
-    assert [e["message"].split(": no such")[0] for e in said["errors"]] == missing
+    assert [e["file"] for e in said["errors"]] == missing
+    assert all(e["message"].startswith("no such mission file") for e in said["errors"])
     assert main(["eval", BUMP, "--runs", "0", "--no-progress", "--json"]) == 2
     said = json.loads(capsys.readouterr().out)
     assert said == {"error": "--runs 0: expected 1..1,000,000 (more: several evaluations)",
