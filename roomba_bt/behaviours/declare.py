@@ -236,7 +236,7 @@ class Param:
                 why = self.minimum_why
                 if not why and self.type is SPEED and lo == SLOWEST_MOVING_SPEED_MM_S:
                     why = STANDS_STILL
-            allowed = f"allowed {_bound(lo)}..{_bound(hi)}{unit}"
+            allowed = f"allowed {range_said(lo, hi, unit)}"
             return f"{self.name} {shown} is out of range: {allowed}{why}"
         return None
 
@@ -302,6 +302,19 @@ def from_python(param: Param, value: Any) -> Any:
 
 def _bound(value: float | None) -> str:
     return "" if value is None else f"{value:g}"
+
+
+def range_said(lo: float | None, hi: float | None, unit: str = "") -> str:
+    """A range as a message says it: ``0..2 mm``; open at one end, ``0 s or more`` or ``5 m
+    or less`` (``allowed 0.. s`` left the reader to guess what the missing end meant).
+    ``unit`` with its leading space, or ""."""
+    if lo is None and hi is None:
+        return f"any number{unit}"
+    if hi is None:
+        return f"{lo:g}{unit} or more"
+    if lo is None:
+        return f"{hi:g}{unit} or less"
+    return f"{lo:g}..{hi:g}{unit}"
 
 
 PacketsOf = Callable[[Mapping[str, Any]], tuple[int, ...]]

@@ -244,6 +244,50 @@ def _compound_hint(dimension: str, value: str) -> str:
     )
 
 
+#: what a value is often written with that is no part of it: a list's comma after a block
+#: mapping's value (``angle: 90 deg,``), a sentence's semicolon or full stop
+_STRAY_PUNCTUATION = ",;."
+
+
+def _stray_punctuation_hint(dimension: str, value: str) -> str:
+    """For a quantity with a comma, semicolon or full stop after it (``90 deg,``): the
+    punctuation named and the value without it; "" when the value without it does not read
+    either (then the punctuation is not what is wrong)."""
+    written = value.strip()
+    meant = written.rstrip(_STRAY_PUNCTUATION + " \t")
+    if not meant or meant == written:
+        return ""
+    try:
+        parse_quantity(dimension, meant)
+    except UnitError:
+        return ""
+    stray = written[len(meant) :].strip()
+    return f": a stray {stray!r} after the value: write {meant}"
+
+
+#: a fraction and a unit (``1/4 turn``, ``1/2m``): a mission writes a decimal number
+_FRACTION = re.compile(r"^\s*([0-9]+)\s*/\s*([0-9]+)(\s*)([A-Za-z°%/]+)\s*$", re.ASCII)
+
+
+def _fraction_hint(dimension: str, value: str) -> str:
+    """For a fraction with a unit of ``dimension`` (``1/4 turn``): its decimal in that unit,
+    and in the canonical unit when that is another (``write 0.25 turn or 90 deg``), spaced
+    as the value was; "" for any other value."""
+    match = _FRACTION.match(value)
+    if match is None:
+        return ""
+    numerator, denominator, space, unit = match.groups()
+    units = UNITS[dimension]
+    if int(denominator) == 0 or unit not in units:
+        return ""
+    number = int(numerator) / int(denominator)
+    said = f"{number:g}{space}{unit}"
+    canonical = CANONICAL[dimension]
+    if units[unit] != units[canonical]:
+        said += f" or {number * units[unit]:g}{space}{canonical}"
+    return f": a fraction does not read as a number: write {said}"
+
+
 def parse_quantity(dimension: str, value: object) -> float:
     """``parse_quantity("speed", "0.2 m/s") == 200.0``; raises :class:`UnitError`."""
     units = UNITS[dimension]
@@ -258,12 +302,20 @@ def parse_quantity(dimension: str, value: object) -> float:
     if match is None:
         if dimension == "duration" and (compound := compound_duration(value)) is not None:
             return compound
+        # a value that reads without the punctuation after it (``90 deg,``, ``1h30min,``)
+        # is said so before the unit it seems to have (``mm/s;``) or several parts
+        stray = _stray_punctuation_hint(dimension, value)
         spelled = _ANY_UNIT.match(value)  # 100µs, 90º: a number and a unit not in ASCII
-        if spelled is not None and math.isfinite(float(spelled.group(1))):
+        if not stray and spelled is not None and math.isfinite(float(spelled.group(1))):
             raise UnitError(_unknown_unit(dimension, value, *spelled.groups()) + miswritten(value))
         raise UnitError(
             f"expected {what} such as {EXAMPLES[dimension]}, got {quoted(value)}"
-            + (miswritten(value) or _compound_hint(dimension, value))
+            + (
+                miswritten(value)
+                or stray
+                or _compound_hint(dimension, value)
+                or _fraction_hint(dimension, value)
+            )
         )
     number, unit = float(match.group(1)), match.group(2)
     if not math.isfinite(number):  # 1e400 overflows to inf

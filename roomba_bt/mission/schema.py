@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from roomba_bt.behaviours.declare import Declaration, Param
+from roomba_bt.behaviours.declare import Declaration, Param, range_said
 from roomba_bt.behaviours.language import MODIFIERS, STRUCTURAL, WORDS, NodeKind, Shape
 from roomba_bt.behaviours.registry import Registry, default_registry
 from roomba_bt.behaviours.units import UNITS, VALUE_TYPES, boolean_schema, quantity_schema
@@ -107,9 +107,8 @@ def _value_schema(param: Param) -> tuple[dict[str, Any], str]:
     if param.type.name in UNITS and (lo is not None or hi is not None):
         schema = {**quantity_schema(param.type.name, signed=lo is None or lo < 0),
                   "description": schema.get("description", "")}  # fmt: skip
-        low = "" if lo is None else f"{lo:g}"
-        high = "" if hi is None else f"{hi:g}"
-        return schema, f"range {low}..{high} {param.type.unit}, {RANGE_NOT_IN_SCHEMA}"
+        said = range_said(lo, hi, f" {param.type.unit}")
+        return schema, f"range {said}, {RANGE_NOT_IN_SCHEMA}"
     return schema, ""
 
 

@@ -10,7 +10,8 @@ import pytest
 
 from roomba_bt.behaviours import BlackboardRef, ParamError
 from roomba_bt.behaviours.actions import Drive, Mode, Turn
-from roomba_bt.behaviours.declare import Declaration
+from roomba_bt.behaviours.declare import Declaration, Param
+from roomba_bt.behaviours.units import DURATION
 from roomba_bt.mission import load_mission
 
 MISSIONS = Path(__file__).resolve().parents[2] / "roomba_bt" / "missions"
@@ -29,6 +30,22 @@ def test_a_misspelt_parameter_is_refused_with_a_did_you_mean() -> None:
 def test_a_value_out_of_range_is_refused_when_built() -> None:
     with pytest.raises(ValueError, match=r"drive 'fast': velocity 900 mm/s is out of range"):
         Drive("fast", {"velocity": 900.0})
+
+
+@pytest.mark.parametrize(
+    ("minimum", "maximum", "said"),
+    [(0.0, None, "pause -1 s is out of range: allowed 0 s or more"),
+     (None, 5.0, "pause 9 s is out of range: allowed 5 s or less"),
+     (0.5, 5.0, "pause -1 s is out of range: allowed 0.5..5 s")],
+    ids=["no maximum", "no minimum", "closed"],
+)  # fmt: skip
+def test_a_range_open_at_one_end_is_said_in_words(
+    minimum: float | None, maximum: float | None, said: str
+) -> None:
+    """``allowed 0.. s`` left the reader to guess what the missing end meant."""
+    param = Param("pause", DURATION, minimum=minimum, maximum=maximum)
+    value = -1.0 if minimum is not None else 9.0
+    assert param.check_range(value) == said
 
 
 def test_a_text_is_read_through_the_parameter_s_type_as_in_yaml() -> None:

@@ -80,10 +80,13 @@ def test_a_duration_in_several_units_written_wrong_says_how(text: str, message: 
 
 def test_a_full_stop_after_the_unit_is_not_said_to_be_a_second_part() -> None:
     """``2 min.`` (a sentence's full stop) was told "in several units, each part has its own
-    unit": no second part was written."""
+    unit": no second part was written. The full stop is named, with the value to write."""
     with pytest.raises(UnitError) as refused:
         DURATION.parse("2 min.")
-    assert str(refused.value) == "expected a duration such as 500ms, 30s or 2min, got '2 min.'"
+    assert str(refused.value) == (
+        "expected a duration such as 500ms, 30s or 2min, got '2 min.': a stray '.' after the "
+        "value: write 2 min"
+    )
 
 
 def test_several_units_are_a_duration_s_only() -> None:

@@ -38,7 +38,7 @@ def test_initial_and_set_values_are_checked_against_their_readers(errors_of: Err
         "2:29: initial value of blackboard key 'v': drive's velocity reads it as @v (at 10:25): "
         "velocity 900 mm/s is out of range: allowed -500..500 mm/s",
         "3:32: initial value of blackboard key 'd': drive's duration reads it as @d (at 11:41): "
-        "duration -5 s is out of range: allowed 0.. s",
+        "duration -5 s is out of range: allowed 0 s or more",
         "5:60: initial value of blackboard key 'wp': turn's angle reads it as @wp.turn (at 12:21): "
         "angle 4000 deg is out of range: allowed -3600..3600 deg",
         "9:28: set value of blackboard key 'w': drive's velocity reads it as @w (at 11:25): "
@@ -85,7 +85,7 @@ def test_a_plugin_s_range_is_checked_too(
     out = capsys.readouterr().out
     assert (
         "m.yaml:3:32: initial value of blackboard key 'd': pause's duration reads it as @d "
-        "(at 5:47): duration -5 s is out of range: allowed 0.1.. s" in out
+        "(at 5:47): duration -5 s is out of range: allowed 0.1 s or more" in out
     ), out
 
 

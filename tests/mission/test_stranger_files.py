@@ -467,12 +467,46 @@ def test_a_unit_written_as_a_word_or_a_plural_is_given_the_one_to_write(
 
 @pytest.mark.parametrize(
     ("step", "said"),
+    [("turn: 90 deg,",
+      "5:13: turn.angle: expected an angle such as 90deg or 1.57rad, got '90 deg,': a stray "
+      "',' after the value: write 90 deg"),
+     ("wait: 2 min.",
+      "5:13: wait.duration: expected a duration such as 500ms, 30s or 2min, got '2 min.': a "
+      "stray '.' after the value: write 2 min"),
+     ("drive: {velocity: 200 mm/s;, distance: 1 m}",
+      "5:25: drive.velocity: expected a speed such as 200 mm/s or 0.2 m/s, got '200 mm/s;': a "
+      "stray ';' after the value: write 200 mm/s"),
+     ("wait: 1h30min,",
+      "5:13: wait.duration: expected a duration such as 500ms, 30s or 2min, got '1h30min,': a "
+      "stray ',' after the value: write 1h30min"),
+     ("turn: 1/4 turn",
+      "5:13: turn.angle: expected an angle such as 90deg or 1.57rad, got '1/4 turn': a "
+      "fraction does not read as a number: write 0.25 turn or 90 deg"),
+     ("turn: 1/2turns",
+      "5:13: turn.angle: expected an angle such as 90deg or 1.57rad, got '1/2turns': a "
+      "fraction does not read as a number: write 0.5turns or 180deg"),
+     ("drive: {velocity: 200 mm/s, distance: 1/2 m}",
+      "5:45: drive.distance: expected a distance such as 300 mm, 30cm or 1.5 m, got '1/2 m': "
+      "a fraction does not read as a number: write 0.5 m or 500 mm")],
+    ids=["comma", "full stop", "semicolon", "compound", "quarter turn", "half turns", "metre"],
+)  # fmt: skip
+def test_a_value_with_punctuation_after_it_or_a_fraction_is_given_the_one_to_write(
+    tmp_path: Path, step: str, said: str
+) -> None:
+    """``angle: 90 deg,`` (a list's comma) and ``1/4 turn`` got the generic "expected an
+    angle such as 90deg", where a unit's word or plural got the value to write: now so do
+    they (a fraction as its decimal, and in the canonical unit)."""
+    assert _problems(_one_step(tmp_path, step)) == [said]
+
+
+@pytest.mark.parametrize(
+    ("step", "said"),
     [("drive: {velocity: 1.5 m/s, distance: 1 m}",
       "5:25: drive: velocity 1.5 m/s (1500 mm/s) is out of range: allowed -500..500 mm/s"),
      ("drive: {velocity: 600 mm/s, distance: 1 m}",
       "5:25: drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s"),
      ("wait: {duration: -2 min}",
-      "5:24: wait: duration -2 min (-120 s) is out of range: allowed 0.. s")],
+      "5:24: wait: duration -2 min (-120 s) is out of range: allowed 0 s or more")],
     ids=["m/s", "canonical already", "min"],
 )  # fmt: skip
 def test_a_value_out_of_range_is_said_as_written_with_the_unit_of_its_range(
