@@ -94,6 +94,7 @@ from roomba_bt.mission.values import (
     Bound,
     Context,
     SubtreeDef,
+    check_literal_names,
     parameters_used,
     parse_type_name,
     read_literal,
@@ -244,6 +245,8 @@ class Loader:
         self.parameters = tuple(params)
         self.nodes.global_env = params
         self._file_sections(path, sections)
+        if "tree" in sections:  # a library alone: its names may be an including mission's
+            check_literal_names(self.ctx, params)
         name, description = self._names(path, sections)
         if "description" in sections and "$" in description:
             node, _, vloc = sections["description"]

@@ -110,7 +110,7 @@ def read_literal(ctx: Context, node: yaml.Node, loc: Loc) -> None:
     write a literal ``${``, so without this a mission that means the text warned on every
     run and could never pass ``--strict``. By name, not for the whole file: another
     ``$${name}`` there, written for 0.1.0, is still said."""
-    names: set[str] = set()
+    names: dict[str, Loc] = {}
     try:
         entries = sequence(node, loc, "literal")
     except Bad as bad:
@@ -130,8 +130,39 @@ def read_literal(ctx: Context, node: yaml.Node, loc: Loc) -> None:
                 )
             )
             continue
-        names.add(name)
-    ctx.literal[loc.file] = frozenset(names)
+        names.setdefault(name, iloc)
+    ctx.literal[loc.file] = names
+
+
+def check_literal_names(ctx: Context, mission_parameters: Collection[str]) -> None:
+    """Each file's ``literal:`` names against the parameters its texts can name: the
+    mission's and those of the subtrees the file defines. Any other name was taken without
+    a word, and a misspelt ``literal: [lpas]`` left ``$${laps}`` warned of with no hint
+    why. Not for a file with a subtree refused as written: its parameters are unknown."""
+    defined_in: dict[str, set[str]] = {}
+    unknown_in: set[str] = set()
+    for sub in ctx.subtrees.values():
+        defined_in.setdefault(sub.loc.file, set()).update(sub.params, sub.broken)
+        if sub.written_wrongly:
+            unknown_in.add(sub.loc.file)
+    for file, names in ctx.literal.items():
+        if file in unknown_in:
+            continue
+        allowed = sorted({*mission_parameters, *defined_in.get(file, ())})
+        said = (
+            f"{', '.join(allowed)} (the mission's parameters and those of the subtrees this "
+            "file defines)"
+            if allowed
+            else "none: neither the mission nor a subtree this file defines has a parameter"
+        )
+        for name, at in names.items():
+            if name not in allowed:
+                ctx.error(
+                    at.at(
+                        f"literal: found {name!r}, no parameter in scope in this file"
+                        f"{closest(name, allowed)}; allowed: {said}"
+                    )
+                )
 
 
 #: Two dollars alone (no ``$`` before or after them) and before anything but a ``{``: one
@@ -182,7 +213,7 @@ def warn_escaped(
         (offset, doubled_warning(at(offset), what, text, offset))
         for offset in doubled_dollars(text)
     ]
-    meant = ctx.literal.get(loc.file, frozenset())
+    meant = ctx.literal.get(loc.file, {})
     said += [
         (offset, escape_warning(at(offset), what, name))
         for offset, name in escaped_parameters(text, names or ())
@@ -306,7 +337,8 @@ class Context:
     warnings: list[Diagnostic] = field(default_factory=list)
     #: each file's ``literal:`` names, by the file as its places name it: the ``$${name}``
     #: written there that mean the text ``${name}``, not warned of (:func:`read_literal`)
-    literal: dict[str, frozenset[str]] = field(default_factory=dict)
+    #: each name with where it is written, for :func:`check_literal_names`
+    literal: dict[str, dict[str, Loc]] = field(default_factory=dict)
     #: ``diagnostics`` as a set: an error is reported once, and looking it up in the list
     #: made N errors cost N**2/2 comparisons (20,000 aliases took 40 s to validate)
     _reported: set[Diagnostic] = field(default_factory=set, init=False, repr=False)

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from runtime.simrun import SHORT_DRIVE  # tests/runtime: the short drive
 
-from roomba_bt.mission import CompiledMission, load_mission
+from roomba_bt.mission import CompiledMission, compile_mission, load_mission
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
 
@@ -247,6 +247,46 @@ def test_literal_says_the_text_is_meant_and_a_right_mission_passes_strict(
     assert error.startswith("1:18: literal: '2x' is no parameter name"), error
     (error,) = errors_of("literal: price" + BUDGET)
     assert error.startswith("1:10: literal must be a list"), error
+
+
+def test_literal_refuses_a_name_no_text_of_the_file_can_mean(errors_of: Errors) -> None:
+    """``literal: [lpas]`` was taken without a word, and the ``$${laps}`` it was written for
+    still warned with no hint why: a name that is no parameter in scope in the file (the
+    mission's, or one of a subtree it defines) is refused at its place, with the names
+    allowed and the closest of them."""
+    mission = (
+        "literal: [lpas, say_n]\nparameters:\n  laps: {type: int, default: 2}\n"
+        "subtrees:\n  say:\n    parameters: {say_n: {type: int, default: 1}}\n"
+        '    tree: {log: "n is $${say_n}"}\ntree: {log: "$${laps}"}\n'
+    )
+    assert errors_of(mission) == [
+        "1:11: literal: found 'lpas', no parameter in scope in this file (did you mean "
+        "'laps'?); allowed: laps, say_n (the mission's parameters and those of the subtrees "
+        "this file defines)"
+    ]
+    assert errors_of('literal: [price]\ntree: {log: "$${price}"}\n') == [
+        "1:11: literal: found 'price', no parameter in scope in this file; allowed: none: "
+        "neither the mission nor a subtree this file defines has a parameter"
+    ]
+
+
+def test_a_library_s_literal_may_name_the_mission_s_parameters(tmp_path: Path) -> None:
+    """A library's subtrees see the including mission's parameters too, so its ``literal:``
+    may name them; a name that is neither is refused at the library's line, and a library
+    validated alone (no mission: no parameters known) is not refused for one."""
+    library = tmp_path / "lib.yaml"
+    library.write_text('literal: [n, spede]\nsubtrees:\n  say:\n    tree: {log: "$${n}"}\n')
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "include: [lib.yaml]\nparameters:\n  n: {type: int, default: 2}\n"
+        "tree: {subtree: {id: say}}\n"
+    )
+    _, problems = compile_mission(mission)
+    assert [(Path(p.file).name, p.line, p.column, p.message[:30]) for p in problems] == [
+        ("lib.yaml", 1, 14, "literal: found 'spede', no par")
+    ]
+    _, alone = compile_mission(library, require_tree=False)
+    assert alone == []
 
 
 def test_literal_is_the_file_s_own(tmp_path: Path) -> None:
