@@ -910,6 +910,10 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     if not args.mission:
         mission_path = _from_the_record(args.record, header)
     found = _recorded_mission(args.record, mission_path, given=bool(args.mission))
+    if isinstance(found, str) and not args.mission:
+        which = _shipped_file_replayed(args.record, header, mission_path, found)
+        if which is not None:
+            print(which, file=sys.stderr)
     if isinstance(found, int):
         return found
     params = {name: str(value) for name, value in (header.get("parameters") or {}).items()}
@@ -973,7 +977,7 @@ def _recorded_mission(record_path: str, mission_path: object, *, given: bool) ->
         print(
             f"{record_path}: mission {mission_path!r} is not here (the installation that made "
             f"the record had it); replaying the shipped mission {shipped!r} of roomba-bt "
-            f"{__version__}",
+            f"{__version__}; --mission FILE replays another",
             file=sys.stderr,
         )
         return str(mission_file(shipped))
@@ -981,6 +985,47 @@ def _recorded_mission(record_path: str, mission_path: object, *, given: bool) ->
     if isinstance(mission_path, str) and mission_path.startswith(SHIPPED_PREFIX) and not given:
         gone = f" (shipped with the roomba-bt that made the record, not with {__version__})"
     return _error(f"{record_path}: mission {mission_path!r} not found{gone}; pass --mission FILE")
+
+
+def _shipped_file_replayed(
+    record_path: str, header: dict[str, Any], named: object, found: str
+) -> str | None:
+    """Which file a replay of a shipped mission's record reads, when it may not be the one
+    the run read: another installation's shipped file, still on this machine (a 0.1.0 record
+    names the path in the venv that made it), or this installation's, when another release
+    made the record (its mission may have changed since). Either was replayed without a word,
+    and a difference read as the mission's. None when the record names no shipped mission,
+    or this release's shipped file and this release made the record, or when
+    :func:`_recorded_mission` said already that it replays this installation's."""
+    from roomba_bt import __version__
+    from roomba_bt.mission.shipped import SHIPPED_PREFIX
+    from roomba_bt.runtime.provenance import made_by_said
+    from roomba_bt.runtime.recording import MADE_BY
+
+    if not isinstance(named, str):
+        return None
+    name = shipped_mission_at(named)
+    if name is not None and not Path(named).is_file():
+        return None  # gone: _recorded_mission said it replays this installation's
+    if name is None and named.startswith(SHIPPED_PREFIX):
+        name = named.removeprefix(SHIPPED_PREFIX).removesuffix(".yaml")
+    ours = mission_file(name) if name is not None else None
+    if name is None or not isinstance(ours, str):
+        return None
+    made_by = made_by_said(header)
+    if Path(found).resolve() != Path(ours).resolve():
+        return (
+            f"{record_path}: replaying {found}, the shipped mission {name!r} of the "
+            f"installation that made the record ({made_by}), not this installation's "
+            f"({ours}, roomba-bt {__version__}): --mission {name} replays this one's"
+        )
+    if header.get(MADE_BY) == __version__:
+        return None
+    return (
+        f"{record_path}: replaying the shipped mission {name!r} of roomba-bt {__version__} "
+        f"({ours}); the record was made by {made_by}, whose {name!r} may differ: --mission "
+        "FILE replays another"
+    )
 
 
 def _from_the_record(record_path: str, header: dict[str, Any]) -> object:

@@ -808,6 +808,51 @@ def test_a_record_of_a_shipped_mission_made_before_replays_it_where_its_path_is_
     )
 
 
+def test_a_replay_says_which_shipped_file_it_reads_when_another_may_have_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 0.1.0 record of ``run dock`` names the shipped file in the venv that made it; where
+    that venv is still on the machine, the replay read the old release's file without a
+    word, and one made by another release replayed this release's shipped mission alike.
+    Each says now which file it reads, and how to choose another (``--mission``)."""
+    from roomba_bt import __version__
+    from roomba_bt.mission.shipped import SHIPPED_DIR
+
+    lines = _recorded_run(tmp_path, capsys)
+    header = {k: v for k, v in json.loads(lines[0]).items() if k != "roomba_bt_version"}
+    old = tmp_path / "old-venv/lib/python3.11/site-packages/roomba_bt/missions"
+    old.mkdir(parents=True)
+    old_file = old / "bump-and-turn.yaml"
+    old_file.write_bytes((SHIPPED_DIR / "bump-and-turn.yaml").read_bytes())
+    ours = SHIPPED_DIR / "bump-and-turn.yaml"
+    record = tmp_path / "old.jsonl"
+    record.write_text("".join([json.dumps({**header, "mission": str(old_file)}) + "\n",
+                               *lines[1:]]))  # fmt: skip
+    assert main(["replay", str(record)]) == 0
+    err = capsys.readouterr().err
+    assert (
+        f"{record}: replaying {old_file}, the shipped mission 'bump-and-turn' of the "
+        "installation that made the record (roomba-bt 0.1.0 or earlier, as the record names "
+        f"no release), not this installation's ({ours}, roomba-bt {__version__}): --mission "
+        "bump-and-turn replays this one's" in err
+    )
+    assert main(["replay", str(record), "--mission", "bump-and-turn"]) == 0
+    assert "replaying" not in capsys.readouterr().err
+    by_name = {**header, "mission": "roomba-bt:bump-and-turn.yaml"}
+    record.write_text("".join([json.dumps({**by_name, "roomba_bt_version": "0.1.9"}) + "\n",
+                               *lines[1:]]))  # fmt: skip
+    assert main(["replay", str(record)]) == 0
+    assert (
+        f"{record}: replaying the shipped mission 'bump-and-turn' of roomba-bt {__version__} "
+        f"({ours}); the record was made by roomba-bt 0.1.9, whose 'bump-and-turn' may differ: "
+        "--mission FILE replays another" in capsys.readouterr().err
+    )
+    record.write_text("".join([json.dumps({**by_name, "roomba_bt_version": __version__})
+                               + "\n", *lines[1:]]))  # fmt: skip
+    assert main(["replay", str(record)]) == 0
+    assert "replaying" not in capsys.readouterr().err
+
+
 def test_a_record_of_a_shipped_mission_run_by_name_replays_in_another_installation(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
