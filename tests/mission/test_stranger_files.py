@@ -454,20 +454,8 @@ DURATION_UNITS = "use one of: ms, s, sec, min, h, d"
       "cm/s, m/s (write 200 mm/s)"),
      ("drive: {velocity: 200 mm/s, distance: 2 meters}",
       "5:45: drive.distance: unknown distance unit 'meters' in '2 meters'; use one of: mm, cm, "
-      "m (write 2 m)")],
-    ids=["2m", "mins", "hours", "capital S", "degrees", "mm/sec", "meters"],
-)  # fmt: skip
-def test_a_unit_written_as_a_word_or_a_plural_is_given_the_one_to_write(
-    tmp_path: Path, step: str, said: str
-) -> None:
-    """``2 mins``, ``3 hours``, ``90 degrees`` said only the units there are, and a reader
-    had to guess which was meant; ``2m`` for two minutes reads as metres to roomba-bt."""
-    assert _problems(_one_step(tmp_path, step)) == [said]
-
-
-@pytest.mark.parametrize(
-    ("step", "said"),
-    [("turn: 90 deg,",
+      "m (write 2 m)"),
+     ("turn: 90 deg,",
       "5:13: turn.angle: expected an angle such as 90deg or 1.57rad, got '90 deg,': a stray "
       "',' after the value: write 90 deg"),
      ("wait: 2 min.",
@@ -488,14 +476,17 @@ def test_a_unit_written_as_a_word_or_a_plural_is_given_the_one_to_write(
      ("drive: {velocity: 200 mm/s, distance: 1/2 m}",
       "5:45: drive.distance: expected a distance such as 300 mm, 30cm or 1.5 m, got '1/2 m': "
       "a fraction does not read as a number: write 0.5 m or 500 mm")],
-    ids=["comma", "full stop", "semicolon", "compound", "quarter turn", "half turns", "metre"],
+    ids=["2m", "mins", "hours", "capital S", "degrees", "mm/sec", "meters", "comma",
+         "full stop", "semicolon", "compound", "quarter turn", "half turns", "metre"],
 )  # fmt: skip
-def test_a_value_with_punctuation_after_it_or_a_fraction_is_given_the_one_to_write(
+def test_a_value_written_otherwise_is_given_the_one_to_write(
     tmp_path: Path, step: str, said: str
 ) -> None:
-    """``angle: 90 deg,`` (a list's comma) and ``1/4 turn`` got the generic "expected an
-    angle such as 90deg", where a unit's word or plural got the value to write: now so do
-    they (a fraction as its decimal, and in the canonical unit)."""
+    """``2 mins``, ``3 hours``, ``90 degrees`` said only the units there are, and a reader
+    had to guess which was meant; ``2m`` for two minutes reads as metres to roomba-bt.
+    ``angle: 90 deg,`` (a list's comma) and ``1/4 turn`` got the generic "expected an angle
+    such as 90deg": now they get the value to write too (a fraction as its decimal, and in
+    the canonical unit)."""
     assert _problems(_one_step(tmp_path, step)) == [said]
 
 
