@@ -15,8 +15,8 @@ import pytest
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from roomba_bt.behaviours.decorators import _MissionClock
 from roomba_bt.behaviours.declare import Param
+from roomba_bt.behaviours.decorators import _MissionClock
 from roomba_bt.behaviours.language import (
     FAILS,
     SUCCEEDS,
