@@ -134,7 +134,6 @@ COOLDOWN = NodeKind(
 
 #: the contributor's case: a cooldown of a condition ends on every tick, as held needs
 HELD_COOLDOWN = """\
-mission: cooling
 tree:
   sequence:
     - mode: safe
