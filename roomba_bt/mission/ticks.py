@@ -117,7 +117,8 @@ def never_succeeds(node: Node) -> bool:
     own = decorator.on_success | decorator.on_failure | decorator.while_running | decorator.alone
     if SUCCESS not in own:
         return True  # force_failure
-    # one that ends as its child does, on the tick it does (timeout)
+    # one that ends as its child does, on the tick it does (timeout); conservative, as the
+    # module is: a delay, retry, held or oneshot of such a child is not said to never succeed
     mirrors = (decorator.on_success, decorator.on_failure) == (SUCCEEDS, FAILS)
     return (
         mirrors
