@@ -13,7 +13,7 @@ from __future__ import annotations
 import logging
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any
 
@@ -532,46 +532,26 @@ class Turn(Drive):
     params=(Param("motors", BOOL, default=False, doc="also switch the brushes and vacuum off"),),
     sends=opcodes("drive", "motors"),
     halts_only=True,  # Drive 0
+    stops_only=lambda params: True,  # Drive 0, and Motors 0 if asked
 )
 class Stop(Action):
     """Stop the wheels (Drive 0: ``[137][0][0][0][0]``), and the motors if asked.
 
     Out of Safe and Full (the robot fell to Passive by itself: a cliff, a wheel drop, the
-    charger), where the mode guard refuses Drive and Motors, it sends nothing. It succeeds
-    there, said, when no built-in cycle may be driving: both specs say the robot "stops all
-    motors and reverts to the Passive mode" on such a fall, and ``mode: passive`` switches
-    the wheels and motors off before its Start, so what ``stop`` asks for holds already (its
-    SUCCESS is the truth, and the refused bytes counted as a refusal, failing ``--strict``,
-    said nothing more). It fails, said, while a cycle (Clean, Spot, Max, Seek Dock) may be
-    driving: Drive 0 cannot stop that in Passive; ``mode: safe`` does. ``validate`` still
-    refuses a ``stop`` the tree itself can reach in Passive (after ``clean``, say), as it
-    cannot know that no cycle runs there; decided in session 33 (docs/protocol.md)."""
+    charger; or ``mode: passive``), where the mode guard refuses Drive and Motors, it sends
+    nothing: SUCCESS, said, when no built-in cycle may be driving (the OI stopped the wheels
+    and motors already), FAILURE, said, while one may (:meth:`~.base.Action.stopped_already`,
+    as ``motors`` off). ``validate`` accepts it where the tree can reach Passive with no
+    cycle it started (Clean, Spot, Max, Seek Dock) still driving, and refuses it where one
+    may: decided in sessions 33 and 34 (docs/protocol.md, "Actuators in Passive")."""
 
     def update(self) -> Status:
         halt = oi.halt()
         if self.will_be_refused(halt):
-            return self._out_of_safe(halt)
+            return self.stopped_already(halt)
         self.send(halt)
         if self.value("motors"):
             self.send(oi.motors_off())
-        return _OK
-
-    def _out_of_safe(self, halt: oi.Command) -> Status:
-        """The tick out of Safe and Full (the class's docstring says why)."""
-        robot = self.robot
-        mode = self.snapshot.mode.label
-        if robot is not None and cycle_may_run(robot):
-            self.feedback_message = (
-                f"the robot is in {mode} and its own cycle may be driving it: Drive 0 is "
-                "refused there and cannot stop it; put `mode: safe` before stop (Safe ends "
-                "the cycle)"
-            )
-            return _FAIL
-        self.feedback_message = (
-            f"the robot is in {mode}: its wheels and motors are stopped already (the OI "
-            f"stops them when it leaves Safe/Full), so stop sent nothing ({halt.spec.title} "
-            f"{halt.spec.opcode} is refused there)"
-        )
         return _OK
 
 
@@ -645,6 +625,14 @@ class SeekDock(Action):
 
 #: ``motors``' switches: :func:`~roomba_bt.oi.bits.motor_bits`' keywords, brushes first
 _MOTORS = ("main_brush", "side_brush", "vacuum", "side_brush_clockwise", "main_brush_outward")
+#: the switches that run a motor (the others only say its direction)
+_RUNNING = _MOTORS[:3]
+
+
+def _switched_off(names: tuple[str, ...]) -> Callable[[Mapping[str, Any]], bool]:
+    """A ``stops_only`` (validate's, for Passive): each of ``names`` is given false or left
+    out (false by default): the Motors sent runs nothing. A ``@key`` may be true at run time."""
+    return lambda params: all(params.get(name, False) is False for name in names)
 
 
 @declare(
@@ -653,6 +641,7 @@ _MOTORS = ("main_brush", "side_brush", "vacuum", "side_brush_clockwise", "main_b
     at_once=True,
     params=tuple(Param(name, BOOL, default=False) for name in _MOTORS),
     sends=opcodes("motors"),
+    stops_only=_switched_off(_RUNNING),
 )
 class Motors(Action):
     """Switch the cleaning motors (Motors 138 ``[138][bits]``); unnamed ones go off."""
@@ -669,6 +658,7 @@ class Motors(Action):
     params=(Param("on", BOOL, required=True, doc="vacuum on or off (other motors go off)"),),
     sends=opcodes("motors"),
     primary="on",
+    stops_only=_switched_off(("on",)),
 )
 class Vacuum(Action):
     """Vacuum alone on or off (Motors 138, bit 1)."""

@@ -299,11 +299,38 @@ class Action(RobotBehaviour):
         it in this tick (a ``parallel``'s ``mode: safe`` beside it). Its message says the
         mode, the fall and the fix (:meth:`refused_motion`). The guard refused it after the
         tick, and the leaf had said SUCCESS for a vacuum that never ran. A halt or motors
-        off is queued as before: out of Safe/Full nothing of them runs."""
-        if sets_going(command) and self.will_be_refused(command):
-            self.feedback_message = self.refused_motion(command)
-            return _FAILURE
+        off the guard will refuse is :meth:`stopped_already`'s, as ``stop``'s is."""
+        if self.will_be_refused(command):
+            if sets_going(command):
+                self.feedback_message = self.refused_motion(command)
+                return _FAILURE
+            return self.stopped_already(command)
         self.send(command)
+        return _SUCCESS
+
+    def stopped_already(self, command: Command) -> py_trees.common.Status:
+        """The tick of a halt or motors off (``command``) the guard will refuse, out of Safe
+        and Full: nothing queued. SUCCESS, said, when no built-in cycle may be driving: both
+        specs say the robot "stops all motors and reverts to the Passive mode" when it
+        falls, and ``mode: passive`` switches the wheels and motors off before its Start, so
+        what the leaf asks for holds already (the refused bytes, counted as a refusal that
+        fails ``--strict``, said nothing more; ``motors`` off was one until session 34 while
+        ``stop`` was not). FAILURE, said, while a cycle (Clean, Spot, Max, Seek Dock) may be
+        driving: in Passive nothing the host sends stops its wheels, brushes or vacuum;
+        ``mode: safe`` does (docs/protocol.md, "Actuators in Passive")."""
+        robot = self.robot
+        name, mode = self.declaration.name, self.snapshot.mode.label
+        refused = f"{command.spec.title} {command.spec.opcode} is refused there"
+        if robot is not None and cycle_may_run(robot):
+            self.feedback_message = (
+                f"the robot is in {mode} and its own cycle may be driving it: {refused} and "
+                f"cannot stop it; put `mode: safe` before {name} (Safe ends the cycle)"
+            )
+            return _FAILURE
+        self.feedback_message = (
+            f"the robot is in {mode}: its wheels and motors are stopped already (the OI "
+            f"stops them when it leaves Safe/Full), so {name} sent nothing ({refused})"
+        )
         return _SUCCESS
 
     def send_accepted(self, command: Command) -> py_trees.common.Status:

@@ -367,6 +367,11 @@ class Declaration:
     #: clean`` starts the robot's own cleaning cycle, as a finger would), said with the fix;
     #: None: nothing. Validate warns where the leaf may be reached in Passive
     in_passive: Callable[[Mapping[str, Any]], str | None] | None = None
+    #: whether, with given parameters, all it asks for is what the OI stopped already in
+    #: Passive (``stop``; ``motors`` and ``vacuum`` off): the leaf sends nothing there and
+    #: succeeds (``Action.stopped_already``), so validate accepts it in Passive, unless a
+    #: built-in cycle the tree started may still drive (then it fails). None: never
+    stops_only: Callable[[Mapping[str, Any]], bool] | None = None
 
     @property
     def defaults(self) -> dict[str, Any]:
@@ -704,6 +709,7 @@ def declare(
     needs: Callable[[Mapping[str, Any], RobotProfile], str | None] | None = None,
     needs_only_warns: bool = False,
     in_passive: Callable[[Mapping[str, Any]], str | None] | None = None,
+    stops_only: Callable[[Mapping[str, Any]], bool] | None = None,
 ) -> Callable[[B], B]:
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
     the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
@@ -721,7 +727,10 @@ def declare(
     of the parameters and the chosen robot profile, why that robot cannot do it, or None
     (a warning, not an error, with ``needs_only_warns=True``). ``in_passive`` says, of the
     parameters, what the leaf does in Passive that the mission may not mean, or None:
-    validate warns where it may be reached in Passive."""
+    validate warns where it may be reached in Passive. ``stops_only`` says, of the
+    parameters, whether it only stops what Passive has stopped already (the wheels, the
+    motors), sending nothing there (``Action.stopped_already``): validate accepts it in
+    Passive where no built-in cycle the tree started may drive."""
     after = mode_after_sending(sends) if leads_to is None else leads_to
     writes, written_types = key_roles(writes_keys)
     reads_named, read_types = key_roles(reads_keys)
@@ -734,6 +743,7 @@ def declare(
             key_types=(*written_types, *read_types), halts_only=halts_only,
             compares=compares, sends_by=sends_by, at_once=at_once, may_succeed=may_succeed,
             needs=needs, needs_only_warns=needs_only_warns, in_passive=in_passive,
+            stops_only=stops_only,
         )  # fmt: skip
         return cls
 

@@ -7,7 +7,11 @@
   have *failed* in; a parallel branch also sees the modes its sibling branches may set; loops
   (retry, repeat, for_each, reactive composites) iterate to a fixed point; a preempting
   decorator (timeout, while/until) may end its child anywhere. An actuator reached with any
-  mode outside its allowed set is an error: some path lacks the mode change.
+  mode outside its allowed set is an error: some path lacks the mode change. A leaf that
+  only stops what Passive has stopped (``stop``, ``motors`` off: the declaration's
+  ``stops_only``) is allowed in Passive too, where it sends nothing, but not in the Passive
+  of a built-in cycle the tree started (Clean, Spot, Max, Seek Dock: :class:`Cycle`), which
+  its refused Drive 0 cannot stop.
   (At run time the mode model guards every command again: a cliff in Safe drops the robot
   to Passive whatever this proof said.)
 * **Blackboard.** Every key read (``@key`` values, ``check``, ``odometry.since``) must be
@@ -56,6 +60,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from enum import Enum
 from typing import Any
 
 from roomba_bt.behaviours.blackboard import BlackboardRef
@@ -102,8 +107,27 @@ RUNTIME_PACKETS: tuple[int, ...] = (
 )
 assert RUNTIME_PACKETS == (7, 9, 10, 11, 12, 34, 35, 43, 44)
 
-Modes = frozenset[OIMode]
+
+class Cycle(Enum):
+    """The mode pass's one state beside the four OI modes: Passive while a built-in cycle
+    the tree started (Clean, Spot, Max, Seek Dock) may still drive the robot. A leaf that
+    is taken in Passive is taken there too; ``stop`` (and ``motors`` off) is taken in
+    Passive without it, where the OI stopped the wheels and motors already and it sends
+    nothing, but not with it: Drive 0 is refused in Passive and cannot stop the cycle
+    (``Action.stopped_already``). A mode command ends the cycle: ``mode: safe`` (Safe),
+    ``mode: passive`` (its leaf ends a cycle it finds), as does the failure of the leaf
+    that started it."""
+
+    DRIVING = "Passive, a built-in cycle driving"
+
+
+#: a mode the robot may be in, as the mode pass carries it
+Mode = OIMode | Cycle
+Modes = frozenset[Mode]
 _EMPTY: Modes = frozenset()
+_CYCLE_DRIVING: Modes = frozenset({Cycle.DRIVING})
+#: where a leaf taken in Passive is taken: the Passive of a cycle is Passive too
+_PASSIVE_STATES: Modes = frozenset({OIMode.PASSIVE, Cycle.DRIVING})
 
 
 def _label(modes: frozenset[OIMode]) -> str:
@@ -134,6 +158,8 @@ class ModeCheck:
         self._reported: set[int] = set()
         #: the leaves that send Reset (7) or Stop (173), in the order reached
         self.silencers: list[Node] = []
+        #: the leaves that start a built-in cycle (Clean, Spot, Max, Seek Dock), in that order
+        self.cycle_starters: list[Node] = []
         #: each leaf reached, and every mode it may be entered in
         self.entered: dict[int, tuple[Node, Modes]] = {}
 
@@ -159,9 +185,11 @@ class ModeCheck:
             # it is entered in Off, and told so (_entered)
             self.silencers.append(node)
             return frozenset({OIMode.OFF}), entry
+        if decl.starts_cycle:  # its cycle drives on after its SUCCESS; its failure ends it
+            self.cycle_starters.append(node)
+            return _CYCLE_DRIVING, entry | {OIMode.PASSIVE}
         after = decl.mode_after(node.params)
-        success = frozenset({after}) if after is not None else entry
-        return success, (entry | success if decl.starts_cycle else entry)
+        return (frozenset({after}) if after is not None else entry), entry
 
     def _unbuilt(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         """A node that could not be built: a behaviour whose parameters were wrong is judged
@@ -175,6 +203,8 @@ class ModeCheck:
         if callable(decl.leads_to):
             return _EMPTY, _EMPTY
         self._entered(node, decl, entry)
+        if decl.starts_cycle:
+            return _CYCLE_DRIVING, entry | {OIMode.PASSIVE}
         after = decl.leads_to
         return (frozenset({after}) if after is not None else entry), entry
 
@@ -188,20 +218,52 @@ class ModeCheck:
                 self._reported.add(id(node))
                 self.errors.append(node.loc.at(self._after_the_end(decl)))
             return
-        allowed = decl.modes_for(node.params)
+        allowed = self._taken_in(node, decl)
         bad = entry - allowed
         if bad and id(node) not in self._reported:
             self._reported.add(id(node))
+            if bad == _CYCLE_DRIVING and OIMode.PASSIVE in allowed:  # a stop, a cycle on
+                self.errors.append(node.loc.at(self._in_a_cycle(decl)))
+                return
+            # the Passive of a cycle refuses it as plain Passive does: said as Passive
+            said = frozenset(m if isinstance(m, OIMode) else OIMode.PASSIVE for m in bad)
             sent = decl.sent(node.params)
-            refused = [COMMANDS[op] for op in sent if bad - COMMANDS[op].modes]
+            refused = [COMMANDS[op] for op in sent if said - COMMANDS[op].modes]
             sends = ", ".join(f"{c.title} ({c.opcode})" for c in refused)
+            taken = decl.modes_for(node.params)
             self.errors.append(
                 node.loc.at(
-                    f"{decl.name} sends {sends}, accepted only in {_label(allowed)} mode, "
-                    f"but it can be reached in {_label(bad)} mode: put a mode change (mode: "
+                    f"{decl.name} sends {sends}, accepted only in {_label(taken)} mode, "
+                    f"but it can be reached in {_label(said)} mode: put a mode change (mode: "
                     "safe or mode: full) before it on every path"
                 )
             )
+
+    @staticmethod
+    def _taken_in(node: Node, decl: Declaration) -> Modes:
+        """The modes ``node`` may be entered in: those that take every command it sends
+        with its parameters, the Passive of a cycle with Passive, and plain Passive too for
+        a leaf that only stops what Passive has stopped (``stop``: its ``stops_only``); not
+        one whose parameters did not parse (``node.decl`` None): what it asks is not known."""
+        allowed: Modes = decl.modes_for(node.params)
+        if OIMode.PASSIVE in allowed:
+            return allowed | _CYCLE_DRIVING
+        if node.decl is not None and decl.stops_only is not None and decl.stops_only(node.params):
+            return allowed | {OIMode.PASSIVE}
+        return allowed
+
+    def _in_a_cycle(self, decl: Declaration) -> str:
+        """The error of a ``stop`` (a ``stops_only`` leaf) the tree may reach in Passive
+        while a cycle it started may drive, naming the leaves that start one."""
+        starters = ", ".join(
+            dict.fromkeys(f"{s.name} (line {s.loc.line})" for s in self.cycle_starters)
+        )
+        return (
+            f"{decl.name} can be reached in Passive while a built-in cycle started by "
+            f"{starters or 'a leaf'} may still drive the robot: it sends nothing there, and "
+            "the cycle drives on (Drive and Motors are refused in Passive); put mode: safe "
+            "before it (Safe ends the cycle), or mode: passive (it ends the cycle too)"
+        )
 
     def _after_the_end(self, decl: Declaration) -> str:
         """The error of a leaf the tree may run after a leaf that sends Reset or Stop,
@@ -783,7 +845,7 @@ def in_passive(root: Node, modes: ModeCheck) -> list[Diagnostic]:
     warnings: list[Diagnostic] = []
     for node, entry in modes.entered.values():
         decl = node.decl
-        if decl is None or decl.in_passive is None or OIMode.PASSIVE not in entry:
+        if decl is None or decl.in_passive is None or entry.isdisjoint(_PASSIVE_STATES):
             continue
         said = decl.in_passive(node.params)
         if said is not None:

@@ -16,7 +16,7 @@ import pytest
 from py_trees.common import Status
 
 from roomba_bt.behaviours import builtin_registry
-from roomba_bt.behaviours.actions import Stop, Vacuum
+from roomba_bt.behaviours.actions import Motors, Stop, Vacuum
 from roomba_bt.behaviours.declare import Declaration, RobotBehaviour
 from roomba_bt.behaviours.driving import needs_mode_message
 from roomba_bt.oi import commands as oi
@@ -134,15 +134,6 @@ def test_a_mover_in_safe_does_not_fail_on_its_first_tick(make: Make, name: str) 
     assert tick(behaviour) is not Status.FAILURE, behaviour.feedback_message
 
 
-def test_motors_off_in_passive_is_queued_as_before(make: Make) -> None:
-    """Switching the motors off sets nothing going: out of Safe/Full nothing of them runs,
-    and the leaf succeeds (its command is the guard's to refuse, as before)."""
-    robot = StubRobot(mode=OIMode.PASSIVE)
-    robot.set_frame({35: OIMode.PASSIVE})
-    assert tick(make(Vacuum, robot=robot, on=False)) is Status.SUCCESS
-    assert [list(c.data) for c in robot.flush()] == [[138, 0]]
-
-
 def _fell(cause: str, *, seen_at: float | None, entered: float | None = None) -> ModeChange:
     return ModeChange(
         OIMode.SAFE, OIMode.PASSIVE, 10, 12.0, cause, entered=entered, mission_time=seen_at
@@ -231,34 +222,52 @@ def test_a_show_after_a_safe_queued_in_its_tick_is_sent(make: Make, name: str) -
     assert [c.opcode for c in robot.flush()] == [131, *declaration.sends]
 
 
-@pytest.mark.parametrize("motors", [False, True])
-def test_stop_out_of_safe_succeeds_sending_nothing_the_robot_being_stopped(
-    make: Make, motors: bool
+#: the leaves whose tick out of Safe and Full asks only for what the OI stopped already when
+#: it left them (the wheels, the brushes, the vacuum), with the parameters that make it so
+_STOPPERS = [
+    pytest.param(Stop, {"motors": False}, id="stop"),
+    pytest.param(Stop, {"motors": True}, id="stop-motors"),
+    pytest.param(Motors, {}, id="motors-off"),
+    pytest.param(Vacuum, {"on": False}, id="vacuum-off"),
+]
+
+
+@pytest.mark.parametrize(("leaf", "params"), _STOPPERS)
+def test_a_stop_out_of_safe_succeeds_sending_nothing_the_robot_being_stopped(
+    make: Make, leaf: type[RobotBehaviour], params: dict[str, Any]
 ) -> None:
     """Decided (session 33, docs/protocol.md): both specs say the robot "stops all motors
     and reverts to the Passive mode" when it falls, so what ``stop`` asks for holds; the
-    Drive 0 the guard would refuse is not queued (it was, and counted as a refusal)."""
+    Drive 0 the guard would refuse is not queued (it was, and counted as a refusal). The
+    motors switched off likewise since session 34: their Motors 0 was queued, refused and
+    counted (failing ``--strict``) while ``stop: {motors: true}`` said SUCCESS."""
     robot = StubRobot(mode=OIMode.PASSIVE)
     robot.set_frame({35: OIMode.PASSIVE})
-    stop = make(Stop, robot=robot, motors=motors)
-    assert tick(stop) is Status.SUCCESS
+    behaviour = make(leaf, robot=robot, **params)
+    assert tick(behaviour) is Status.SUCCESS
     assert robot.flush() == []
-    assert stop.feedback_message.startswith(
+    assert behaviour.feedback_message.startswith(
         "the robot is in Passive: its wheels and motors are stopped already"
     )
+    assert f"so {behaviour.declaration.name} sent nothing" in behaviour.feedback_message
 
 
-def test_stop_out_of_safe_fails_while_a_cycle_may_drive(make: Make) -> None:
-    """Drive 0 cannot stop a Clean in Passive: FAILURE, with the way that does (Safe)."""
+@pytest.mark.parametrize(("leaf", "params"), _STOPPERS)
+def test_a_stop_out_of_safe_fails_while_a_cycle_may_drive(
+    make: Make, leaf: type[RobotBehaviour], params: dict[str, Any]
+) -> None:
+    """Drive 0 cannot stop a Clean in Passive, nor Motors 0 its brushes: FAILURE, with the
+    way that does (Safe)."""
     robot = StubRobot(mode=OIMode.PASSIVE)
     robot.outbox.send(oi.clean())
     robot.flush()
     robot.set_frame({35: OIMode.PASSIVE})
-    stop = make(Stop, robot=robot)
-    assert tick(stop) is Status.FAILURE
+    behaviour = make(leaf, robot=robot, **params)
+    assert tick(behaviour) is Status.FAILURE
     assert robot.flush() == []
-    assert "its own cycle may be driving it" in stop.feedback_message
-    assert "put `mode: safe` before stop" in stop.feedback_message
+    message = behaviour.feedback_message
+    assert "its own cycle may be driving it" in message
+    assert f"put `mode: safe` before {behaviour.declaration.name}" in message
 
 
 def test_stop_in_safe_sends_drive_0(make: Make) -> None:

@@ -34,23 +34,82 @@ def test_actuators_after_a_mode_change_on_every_path(errors_of: Errors, tree: st
     "tree",
     [
         # the alternative taken when 'mode: safe' is never reached
-        "{sequence: [{fallback: [wall, {mode: safe}]}, {stop: {}}]}",
+        "{sequence: [{fallback: [wall, {mode: safe}]}, {vacuum: on}]}",
         # a repeat loops back to its start after seek_dock left the robot in Passive
         "{sequence: [{mode: safe},"
-        " {repeat: {times: 2, do: {sequence: [{stop: {}}, {seek_dock: {wait: false}}]}}}]}",
+        " {repeat: {times: 2, do: {sequence: [{vacuum: on}, {seek_dock: {wait: false}}]}}}]}",
         # a parallel branch may change the mode under its sibling
         "{sequence: [{mode: safe}, {parallel: [{clean: {}}, {drive: {duration: 1s}}]}]}",
         # seek_dock fails by its own timeout after it sent Seek Dock: its end leaves Passive
         "{sequence: [{mode: safe},"
         " {fallback: [{seek_dock: {timeout: 2s}}, {drive: {duration: 1s}}]}]}",
         # a timeout may cut a sequence after clean and before safe
-        "{sequence: [{mode: safe},"
-        " {force_success: {timeout: {after: 1s, do: {sequence: [clean, {mode: safe}]}}}}, stop]}",
+        "{sequence: [{mode: safe}, {force_success: {timeout: {after: 1s,"
+        " do: {sequence: [clean, {mode: safe}]}}}}, {leds: {dock: true}}]}",
+        # all Passive refuses of a leaf that stops, it refuses: the vacuum switched on
+        "{sequence: [{mode: safe}, {mode: passive}, {motors: {vacuum: true, main_brush: false}}]}",
     ],
 )
 def test_paths_without_the_mode_change_are_found(errors_of: Errors, tree: str) -> None:
     [error] = errors_of(f"tree: {tree}")
     assert "accepted only in Safe or Full mode, but it can be reached in Passive mode" in error
+
+
+def test_a_switch_read_from_the_blackboard_is_not_taken_for_off_in_passive(
+    errors_of: Errors,
+) -> None:
+    """``vacuum: '@suck'`` may switch the vacuum on when it runs: not a stop, whatever the
+    key's initial value."""
+    text = "blackboard: {suck: {type: bool, initial: false}}\ntree: {vacuum: '@suck'}"
+    [error] = errors_of(text)
+    assert "accepted only in Safe or Full mode, but it can be reached in Passive mode" in error
+
+
+@pytest.mark.parametrize(
+    "tree",
+    [
+        "{sequence: [{mode: safe}, {drive: {duration: 1s}}, {mode: passive}, stop]}",
+        "{sequence: [{mode: safe}, {vacuum: on}, {mode: passive}, {stop: {motors: true}}]}",
+        "{sequence: [{mode: passive}, {motors: {}}, {vacuum: off}]}",
+        "{sequence: [stop, {motors: {main_brush: false, side_brush_clockwise: true}}]}",
+        # mode: passive ends a cycle it finds (Safe, drive 0, motors off, Start), as Safe does
+        "{sequence: [{mode: safe}, clean, {mode: passive}, stop]}",
+        "{sequence: [spot, {mode: safe}, {mode: passive}, stop]}",
+        # the cycle's leaf failed: its end (Safe, drive 0, motors off, Start) ended the cycle
+        "{sequence: [{mode: safe}, {inverter: {seek_dock: {timeout: 5s}}}, stop]}",
+    ],
+)
+def test_a_stop_in_passive_with_no_cycle_is_accepted(errors_of: Errors, tree: str) -> None:
+    """Decided in session 34 (docs/protocol.md, "Actuators in Passive"): Passive has
+    stopped the wheels and motors, so ``stop`` there sends nothing and succeeds at run
+    time (``Action.stopped_already``); ``motors`` and ``vacuum`` off too. ``validate``
+    refused it wherever the tree could reach Passive, ``mode: passive`` included."""
+    assert errors_of(f"tree: {tree}") == []
+
+
+@pytest.mark.parametrize(
+    ("tree", "started_by"),
+    [
+        ("{sequence: [{mode: safe}, clean, stop]}", "clean (line 1)"),
+        ("{sequence: [{mode: safe}, max, {motors: {}}]}", "max (line 1)"),
+        # a repeat loops back to its start after seek_dock left its cycle driving
+        ("{sequence: [{mode: safe},"
+         " {repeat: {times: 2, do: {sequence: [{stop: {}}, {seek_dock: {wait: false}}]}}}]}",
+         "seek_dock(wait=false) (line 1)"),
+        # a timeout may cut a sequence after clean and before safe
+        ("{sequence: [{mode: safe},"
+         " {force_success: {timeout: {after: 1s, do: {sequence: [clean, {mode: safe}]}}}}, stop]}",
+         "clean (line 1)"),
+    ],
+)  # fmt: skip
+def test_a_stop_where_a_cycle_the_tree_started_may_drive_is_refused(
+    errors_of: Errors, tree: str, started_by: str
+) -> None:
+    """Drive 0 and Motors 0 are refused in Passive and cannot stop a Clean: the leaf fails
+    there at run time, and validate names the leaf that started the cycle and the fix."""
+    [error] = errors_of(f"tree: {tree}")
+    assert f"can be reached in Passive while a built-in cycle started by {started_by}" in error
+    assert "put mode: safe before it" in error
 
 
 @pytest.mark.parametrize(

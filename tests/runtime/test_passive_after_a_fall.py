@@ -143,13 +143,41 @@ def test_leds_and_play_after_a_wheel_drop_fail_at_once_sending_nothing(
     assert summary.refused_commands == 0
 
 
-def test_stop_after_a_wheel_drop_succeeds_sending_nothing(
-    run_mission: RunMission, tmp_path: Path
+@pytest.mark.parametrize("leaf", ["stop: {motors: true}", "motors: {}", "vacuum: off"])
+def test_a_stop_after_a_wheel_drop_succeeds_sending_nothing(
+    run_mission: RunMission, tmp_path: Path, leaf: str
 ) -> None:
     """The robot stopped its wheels and motors when it fell: ``stop``'s ask holds, and its
     Drive 0 is not written for the guard to refuse (docs/protocol.md, "Actuators in
-    Passive")."""
+    Passive"). The motors switched off likewise (their Motors 0 was written, refused and
+    counted until session 34, failing ``--strict``)."""
     (tmp_path / "lifted.yaml").write_text(LIFTED)
-    run = run_mission(_lift_then("stop: {motors: true}"), world=str(tmp_path / "lifted.yaml"))
+    run = run_mission(_lift_then(leaf), world=str(tmp_path / "lifted.yaml"))
     assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
     assert run.summary.refused_commands == 0
+
+
+def test_a_stop_after_mode_passive_validates_and_succeeds_sending_nothing(
+    run_mission: RunMission,
+) -> None:
+    """What ``validate`` accepts since session 34 (a stop in Passive with no cycle the tree
+    started) the run does: SUCCESS, and no Drive or Motors after the Start for the guard
+    to refuse. ``mode: passive`` switched the vacuum off before its Start."""
+    mission = """\
+mission: a stop after passive
+tree:
+  sequence:
+    - mode: safe
+    - vacuum: on
+    - drive: {velocity: 100 mm/s, distance: 5 cm}
+    - mode: passive
+    - stop: {motors: true}
+    - motors: {}
+"""
+    run = run_mission(mission)
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    assert run.summary.refused_commands == 0
+    written = run.link.written
+    after_start = written[written.index(oi.motors_off().data + oi.start().data) :]
+    assert oi.halt().data not in after_start[2:]
+    assert oi.motors_off().data not in after_start[2:]

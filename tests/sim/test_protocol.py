@@ -165,6 +165,32 @@ def test_song_and_play_show_in_packets_36_and_37_for_the_songs_length() -> None:
     assert frames[60][37] == 1 and frames[-1][37] == 0
 
 
+@pytest.mark.parametrize(
+    "durations",
+    [(1,), (2, 2), (32,), (64, 64), (16,) * 16],
+    ids=["1/64 s", "4/64 s", "0.5 s", "2 s", "16 notes, 4 s"],
+)
+def test_packet_37_shows_a_song_for_the_sum_of_its_notes_then_clears(
+    durations: tuple[int, ...],
+) -> None:
+    """Packet 37 ("1 = OI song currently playing", both specs) is 1 on every frame sampled
+    before the song's length, the sum of its notes' durations in 1/64 s (Song 140), and 0
+    from then on; packet 36 ("the currently selected OI song") keeps the slot played. A
+    maker read the simulator as showing every song for 16 ms: a one-note 1/64 s song shows
+    on one frame, and each longer one for its length. (A real robot updates these values
+    every 15 ms out of step with the stream and may never show a song of a frame or two:
+    ``play`` allows for it, docs/protocol.md "A song too short for packet 37".)"""
+    host = make()
+    host.stream([36, 37])
+    notes = [Note(60 + i, d) for i, d in enumerate(durations)]
+    host.send(C.song(3, notes), C.play(3))
+    length = sum(durations) / 64
+    frames = host.frames(length + 0.1)  # frame k is sampled at 15 ms * k after the Play
+    shown = sum(1 for k in range(1, len(frames) + 1) if 0.015 * k < length)
+    assert [f[37] for f in frames] == [1] * shown + [0] * (len(frames) - shown)
+    assert all(f[36] == 3 for f in frames)
+
+
 def test_play_while_a_song_plays_is_ignored_and_said() -> None:
     """Decided in session 32 (docs/protocol.md, "Play while a song plays"): the original
     Create OI spec says Play "does not work if a song is already playing"; the 600 and 500
