@@ -11,6 +11,7 @@ in turn", no word of Passive, and no ``retry`` or fallback of the tree could tak
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import pytest
 from py_trees.common import Status
