@@ -12,7 +12,12 @@ reserved words and the documentation test. ``mode``, ``set`` and ``mark`` are be
 Adding a decorator is one :class:`NodeKind` in :data:`WORDS` and one class::
 
     NodeKind("delay", Shape.DO, lambda name, kids, o: Delay(name, kids[0], o["for"]),
-             (Param("for", DURATION, required=True),), doc="RUNNING for a while, then ...")
+             (Param("for", DURATION, required=True),), doc="RUNNING for a while, then ...",
+             answers=Answers(SUCCEEDS, FAILS, alone=RUNS))
+
+A decorator must say how its answer follows its child's (:class:`Answers`): the static
+checks (:mod:`roomba_bt.mission.ticks`, :mod:`roomba_bt.mission.checks`) reason from it
+alone, and a decorator word without it is refused when this module is imported.
 
 It lives in the behaviours layer because the registry (which may not import the mission
 layer) must know the reserved words, and because it names the node classes.
@@ -78,6 +83,56 @@ STRUCTURAL = (TEXT, CHILD_NAMES, KEY_ITEMS)
 
 Build = Callable[[str, Sequence[Behaviour], Mapping[str, Any]], Behaviour]
 
+SUCCESS, FAILURE, RUNNING = "success", "failure", "running"
+#: some of a node's answers (SUCCESS, FAILURE, RUNNING)
+Outcomes = frozenset[str]
+SUCCEEDS: Outcomes = frozenset({SUCCESS})
+FAILS: Outcomes = frozenset({FAILURE})
+RUNS: Outcomes = frozenset({RUNNING})
+
+
+@dataclass(frozen=True, slots=True)
+class Answers:
+    """How a decorator's answer follows its child's, on the tick the child gives it: the
+    facts the static checks read (which nodes end on the tick they start, which modes and
+    blackboard keys hold after them, which cliff reads end them), so that a new decorator
+    is judged by what it declares, never by a default for a word they do not know.
+
+    RUNNING in the answer to a child that ended means the decorator starts it again
+    (``repeat`` after a success, ``retry`` after a failure)."""
+
+    #: what it answers on a tick its child succeeds
+    on_success: Outcomes
+    #: what it answers on a tick its child fails
+    on_failure: Outcomes
+    #: what it answers on a tick its child is RUNNING: RUNNING, FAILURE too when its own
+    #: clock can end the child (``timeout``), or FAILURE alone (``held`` is never RUNNING)
+    while_running: Outcomes = RUNS
+    #: what it may answer on a tick it does not tick its child: RUNNING while a ``delay``
+    #: waits, SUCCESS for a ``for_each`` of no items
+    alone: Outcomes = frozenset()
+    #: once ended, it gives that answer again without ticking its child (``oneshot``)
+    replays: bool = False
+    #: its own clock or count can end it in FAILURE, and starts afresh when the node is
+    #: started again (``timeout``, ``retry``)
+    limit: bool = False
+    #: options without any of which it starts its child again after every success, for
+    #: ever: it can only fail (``repeat``'s ``times`` and ``for``)
+    forever_without: tuple[str, ...] = ()
+
+    @property
+    def restarts_on(self) -> Outcomes:
+        """The child's endings after which it ticks the child again."""
+        return frozenset(
+            ending
+            for ending, answer in ((SUCCESS, self.on_success), (FAILURE, self.on_failure))
+            if RUNNING in answer
+        )
+
+    def answer(self, ending: str) -> Outcomes:
+        """What it answers on a tick its child ended in ``ending`` (SUCCESS or FAILURE)."""
+        return self.on_success if ending == SUCCESS else self.on_failure
+
 
 @dataclass(frozen=True, slots=True)
 class NodeKind:
@@ -106,6 +161,23 @@ class NodeKind:
     #: (``held``): the compiler refuses an action under it, or a node that may be RUNNING
     #: (the word would halt it and start it again on every tick)
     condition_child: bool = False
+    #: a decorator's answers by its child's (:class:`Answers`): required of every decorator
+    answers: Answers | None = None
+
+    def __post_init__(self) -> None:
+        """A decorator without :class:`Answers` would be judged by no check (or wrongly by
+        a default): refused here, when the table is built, not found in a wrong ``validate``."""
+        decorates = self.shape in (Shape.DO, Shape.CHILD_OR_DO)
+        if decorates and self.answers is None:
+            raise TypeError(
+                f"NodeKind {self.word!r} is a decorator ({self.shape.value}) and needs "
+                "answers=Answers(...): how its answer follows its child's (see Answers)"
+            )
+        if not decorates and self.answers is not None:
+            raise TypeError(
+                f"NodeKind {self.word!r} takes no answers=: only a decorator (one child "
+                "under do:) has them"
+            )
 
     def option(self, name: str) -> Param | None:
         for p in self.options:
@@ -210,14 +282,15 @@ _KINDS: tuple[NodeKind, ...] = (
                "py_trees Selector without memory (same as reactive_fallback)"),
     _PARALLEL,
     NodeKind("inverter", Shape.CHILD_OR_DO, lambda n, k, o: lean.Inverter(n, k[0]),
-             doc="SUCCESS <-> FAILURE"),
+             doc="SUCCESS <-> FAILURE", answers=Answers(FAILS, SUCCEEDS)),
     NodeKind("force_success", Shape.CHILD_OR_DO, lambda n, k, o: lean.FailureIsSuccess(n, k[0]),
-             doc="FAILURE becomes SUCCESS"),
+             doc="FAILURE becomes SUCCESS", answers=Answers(SUCCEEDS, SUCCEEDS)),
     NodeKind("force_failure", Shape.CHILD_OR_DO, lambda n, k, o: lean.SuccessIsFailure(n, k[0]),
-             doc="SUCCESS becomes FAILURE"),
+             doc="SUCCESS becomes FAILURE", answers=Answers(FAILS, FAILS)),
     NodeKind("retry", Shape.DO, lambda n, k, o: lean.Retry(n, k[0], int(o["times"])),
              (Param("times", INT, required=True, minimum=1, doc="attempts in all"),),
-             doc="re-run the child after a failure"),
+             doc="re-run the child after a failure",
+             answers=Answers(SUCCEEDS, RUNS | FAILS, limit=True)),
     # A negative time is refused everywhere. repeat.for and timeout.after are at least one
     # tick of the mission clock: less repeats nothing (the child runs once) or fails any
     # child still running after its first tick. delay.for may be 0 (no delay, as wait: 0s:
@@ -227,14 +300,17 @@ _KINDS: tuple[NodeKind, ...] = (
              (Param("times", INT, minimum=1, doc="successes in all"),
               Param("for", DURATION, minimum=SLOT_SECONDS, doc="mission time to repeat for")),
              doc="re-run the child after each success (forever without times or for)",
-             exclusive=("times", "for")),
+             exclusive=("times", "for"),
+             answers=Answers(RUNS | SUCCEEDS, FAILS, forever_without=("times", "for"))),
     NodeKind("timeout", Shape.DO, lambda n, k, o: ours.Timeout(n, k[0], float(o["after"])),
              (Param("after", DURATION, required=True, minimum=SLOT_SECONDS,
                     doc="mission time"),),
-             doc="FAILURE, and the child stopped, if it still runs after a while"),
+             doc="FAILURE, and the child stopped, if it still runs after a while",
+             answers=Answers(SUCCEEDS, FAILS, while_running=RUNS | FAILS, limit=True)),
     NodeKind("delay", Shape.DO, lambda n, k, o: ours.Delay(n, k[0], float(o["for"])),
              (Param("for", DURATION, required=True, minimum=0, doc="mission time"),),
-             doc="RUNNING for a while, then ticks the child"),
+             doc="RUNNING for a while, then ticks the child",
+             answers=Answers(SUCCEEDS, FAILS, alone=RUNS)),
     # held.for is at least one tick, as repeat.for: a hold of less is no debounce (the child
     # holding on one tick would do).
     NodeKind("held", Shape.DO, lambda n, k, o: ours.Held(n, k[0], float(o["for"])),
@@ -242,16 +318,19 @@ _KINDS: tuple[NodeKind, ...] = (
                     doc="mission time the child must hold"),),
              doc="SUCCESS once the child has succeeded on every tick for a while, else "
                  "FAILURE (never RUNNING: a debounced condition)",
-             condition_child=True),
+             condition_child=True,
+             answers=Answers(SUCCEEDS | FAILS, FAILS, while_running=FAILS)),
     NodeKind("oneshot", Shape.CHILD_OR_DO, _oneshot,
              (Param("policy", enum_type("on_success", "on_completion"),
                     doc="on_success (the default) or on_completion"),),
-             doc="runs the child until it succeeds (or completes), then returns that result"),
+             doc="runs the child until it succeeds (or completes), then returns that result",
+             answers=Answers(SUCCEEDS, FAILS, replays=True)),
     NodeKind("for_each", Shape.DO,
              lambda n, k, o: ours.ForEach(n, k[0], str(o["key"]), o.get("items", ())),
              (Param("key", STR, required=True, doc="a declared blackboard key"),
               Param("in", KEY_ITEMS, required=True, doc="values of the key's type")),
-             doc="for each item: write it to the key and run the child", writes_key="key"),
+             doc="for each item: write it to the key and run the child", writes_key="key",
+             answers=Answers(RUNS | SUCCEEDS, FAILS, alone=SUCCEEDS)),
     NodeKind("subtree", Shape.SUBTREE, None,
              (Param("id", TEXT, required=True, doc="the subtree's name"),),
              doc="use a subtree by name"),

@@ -66,12 +66,14 @@ from typing import Any
 from roomba_bt.behaviours.blackboard import BlackboardRef
 from roomba_bt.behaviours.conditions import comparison_problem
 from roomba_bt.behaviours.declare import Declaration, Param
+from roomba_bt.behaviours.language import FAILURE, SUCCESS, WORDS, Outcomes
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.ticks import (
     SELECTORS,
     SEQUENCES,
+    answers,
     at_once,
     never_succeeds,
     packet_tests,
@@ -309,43 +311,46 @@ class ModeCheck:
             failure |= ko
         return success | failure, failure | success
 
-    def _loop(self, node: Node, entry: Modes, on: str) -> tuple[Modes, Modes]:
+    def _loop(self, node: Node, entry: Modes, again_on: Outcomes) -> tuple[Modes, Modes]:
+        """A decorator that starts its child again after the endings ``again_on``: the
+        child starts in the modes it ended in that way too, until they settle."""
         child = node.children[0]
         current = entry
         for _ in range(4):
             ok, ko = self.visit(child, current)
-            again = entry | (ok if on == "success" else ko)
+            again = entry | (ok if SUCCESS in again_on else _EMPTY)
+            again |= ko if FAILURE in again_on else _EMPTY
             if again == current:
                 break
             current = again
         return ok, ko
 
     def _decorator(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
-        kind = node.kind
-        if kind == "guard":
+        """A guard, or a decorator judged by its declared answers: each answer holds the
+        modes of the child's endings it answers; a limit's failure can come anywhere in its
+        child; an answer given without ticking the child, in the modes it was entered in."""
+        if node.kind == "guard":
             self.visit(node.children[0], entry)
             ok, ko = self.visit(node.children[1], entry)
             anywhere = entry | ok | ko | _leads_to_within(node.children[1])
             return (ok | anywhere, ko) if node.options["until"] else (ok, ko | anywhere)
-        if kind in ("repeat", "for_each"):
-            ok, ko = self._loop(node, entry, "success")
-            return (ok | entry if kind == "for_each" else ok), ko
-        if kind == "retry":
-            return self._loop(node, entry, "failure")
-        ok, ko = self.visit(node.children[0], entry)
-        if kind == "inverter":
-            return ko, ok
-        if kind == "force_success":
-            return ok | ko, _EMPTY
-        if kind == "force_failure":
-            return _EMPTY, ok | ko
-        if kind == "timeout":
-            return ok, ko | ok | entry | _leads_to_within(node.children[0])
-        if kind == "oneshot":
-            return ok | entry, ko | entry
-        if kind == "held":  # fails on a tick its child succeeded on, until the hold is long
-            return ok, ko | ok
-        return ok, ko  # delay
+        decorator = answers(node)
+        assert decorator is not None, f"{node.kind} is neither a decorator nor handled"
+        again_on = decorator.restarts_on
+        if again_on:
+            ok, ko = self._loop(node, entry, again_on)
+        else:
+            ok, ko = self.visit(node.children[0], entry)
+        ended = {SUCCESS: ok, FAILURE: ko}
+        success = _EMPTY.union(*(m for e, m in ended.items() if SUCCESS in decorator.answer(e)))
+        failure = _EMPTY.union(*(m for e, m in ended.items() if FAILURE in decorator.answer(e)))
+        if decorator.limit and FAILURE in decorator.while_running:  # timeout: the child halted
+            failure |= ok | ko | entry | _leads_to_within(node.children[0])
+        if decorator.replays or SUCCESS in decorator.alone:
+            success |= entry
+        if decorator.replays or FAILURE in decorator.alone:
+            failure |= entry
+        return success, failure
 
 
 #: The mode pass's handler of each node kind; every other kind is a decorator. A table, not
@@ -407,12 +412,12 @@ class KeyCheck:
                         )
                     )
             return written | frozenset(node.keys_written())
-        if kind in ("sequence", "reactive_sequence"):
+        if kind in SEQUENCES:
             current = written
             for child in node.children:
                 current = self.visit(child, current)
             return current
-        if kind in ("fallback", "selector", "reactive_fallback", "reactive_selector"):
+        if kind in SELECTORS:
             outs = [self.visit(child, written) for child in node.children]
             return frozenset.intersection(*outs) if outs else written
         if kind == "parallel":
@@ -423,17 +428,24 @@ class KeyCheck:
             if node.options.get("policy") == "all":
                 return frozenset().union(*outs)
             return frozenset.intersection(*outs) if outs else written
-        if kind == "for_each":
-            self.visit(node.children[0], written | {node.options["key"]})
-            return written | ({node.options["key"]} if node.options.get("items") else set())
         if kind == "guard":
             self.visit(node.children[0], written)
             inner = self.visit(node.children[1], written)
             return written if node.options["until"] else inner
+        word = WORDS[kind]
+        if word.writes_key is not None:  # for_each: written for its child, and after it
+            key = node.options[word.writes_key]
+            self.visit(node.children[0], written | {key})
+            return written | ({key} if node.options.get("items") else set())
         inner = self.visit(node.children[0], written)
-        if kind in ("inverter", "force_success", "force_failure", "oneshot"):
-            return written
-        return inner
+        decorator = word.answers
+        assert decorator is not None, f"{kind} is neither a decorator nor handled"
+        # what the child wrote holds when the decorator succeeds only on its child's success
+        # (not an inverter's, force_success's, or a oneshot's answer given again)
+        only_after = decorator.on_failure | decorator.while_running | decorator.alone
+        if SUCCESS in decorator.on_success and SUCCESS not in only_after and not decorator.replays:
+            return inner
+        return written
 
 
 def _may_write(node: Node) -> bool:
@@ -520,7 +532,7 @@ def _limits(node: Node) -> list[Node]:
     return [
         n
         for n in node.walk()
-        if n.kind in ("timeout", "retry")
+        if ((decorator := answers(n)) is not None and decorator.limit)
         or (n.declared is not None and n.declared.name in TIME_LIMIT_LEAVES)
     ]
 
@@ -701,7 +713,8 @@ def _ends_again_at_once(node: Node) -> bool:
     """Whether ``node``, ticked again after it succeeded, ends on that tick: what ends at
     once, a ``oneshot`` (it answers as the first time), a :data:`SETTLED_LEAVES` leaf."""
     settled = node.decl is not None and node.decl.name in SETTLED_LEAVES
-    return at_once(node) or node.kind == "oneshot" or settled
+    decorator = answers(node)
+    return at_once(node) or (decorator is not None and decorator.replays) or settled
 
 
 def parallel_wheels(root: Node) -> list[Diagnostic]:

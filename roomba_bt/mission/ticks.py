@@ -18,24 +18,42 @@ counted). The facts it rests on:
 * A guard (``while:``/``until:``) ticks its condition before its child on every tick.
 * ``held`` ticks its child on every tick and never returns RUNNING: it fails on the tick its
   child fails, and succeeds only once the child has succeeded for a while.
+
+A decorator is judged by the :class:`~roomba_bt.behaviours.language.Answers` its word
+declares (how its answer follows its child's), never by its name: a new decorator word
+gets the answers its declaration implies, not a default.
 """
 
 from __future__ import annotations
 
 from roomba_bt.behaviours.conditions import COMPARISON, OPERATORS
 from roomba_bt.behaviours.declare import Comparison, Declaration
+from roomba_bt.behaviours.language import (
+    FAILS,
+    FAILURE,
+    RUNNING,
+    SUCCEEDS,
+    SUCCESS,
+    WORDS,
+    Answers,
+    Outcomes,
+)
 from roomba_bt.mission.plan import Node
 from roomba_bt.oi.frames import CLIFF_PACKETS
 
-SUCCESS, FAILURE = "success", "failure"
-#: the results a node may be made to give
-Outcomes = frozenset[str]
 _NONE: Outcomes = frozenset()
 _BOTH: Outcomes = frozenset({SUCCESS, FAILURE})
 
 SEQUENCES = frozenset({"sequence", "reactive_sequence"})
 SELECTORS = frozenset({"fallback", "selector", "reactive_fallback", "reactive_selector"})
 CLIFFS = frozenset(CLIFF_PACKETS)
+
+
+def answers(node: Node) -> Answers | None:
+    """The answers ``node``'s word declares if it is a decorator; None for a leaf, a
+    composite, a guard (``while:``/``until:``) or a node that could not be built."""
+    kind = WORDS.get(node.kind)
+    return None if kind is None else kind.answers
 
 
 def at_once(node: Node) -> bool:
@@ -45,13 +63,13 @@ def at_once(node: Node) -> bool:
     if kind == "leaf":
         decl = node.decl
         return decl is not None and (decl.kind == "condition" or decl.at_once)
-    if kind == "held":  # never RUNNING, whatever its child
-        return True
-    if kind in SEQUENCES or kind in SELECTORS or kind == "parallel" or kind == "guard":
-        return all(at_once(child) for child in node.children)
-    if kind in ("inverter", "force_success", "force_failure", "timeout", "oneshot"):
-        return at_once(node.children[0])
-    return False  # retry, repeat, for_each and delay run on; an unbuilt node is not known
+    decorator = answers(node)
+    if decorator is None:  # a composite or guard; an unbuilt node (no children) is not known
+        return kind != "unbuilt" and all(at_once(child) for child in node.children)
+    if RUNNING in decorator.on_success | decorator.on_failure | decorator.alone:
+        return False  # it runs on (retry, repeat, for_each, delay)
+    # never RUNNING itself (held), or RUNNING only while its child is
+    return RUNNING not in decorator.while_running or at_once(node.children[0])
 
 
 def succeeds_at_once(node: Node) -> bool:
@@ -63,11 +81,14 @@ def succeeds_at_once(node: Node) -> bool:
         return node.decl is not None and node.decl.at_once
     if kind in SEQUENCES or kind == "parallel":
         return all(succeeds_at_once(child) for child in node.children)
-    if kind in SELECTORS or kind in ("timeout", "oneshot"):
+    if kind in SELECTORS:
         return succeeds_at_once(node.children[0])
-    if kind == "force_success":
+    decorator = answers(node)
+    if decorator is None or decorator.alone or decorator.restarts_on:
+        return False  # a guard, an unbuilt node; one that may answer before its child
+    if decorator.on_success | decorator.on_failure == SUCCEEDS:  # force_success
         return at_once(node.children[0])
-    return False
+    return decorator.on_success == SUCCEEDS and succeeds_at_once(node.children[0])
 
 
 def never_succeeds(node: Node) -> bool:
@@ -81,19 +102,30 @@ def never_succeeds(node: Node) -> bool:
         return (
             decl is not None and decl.may_succeed is not None and not decl.may_succeed(node.params)
         )
-    if kind == "repeat":
-        return node.options.get("times") is None and node.options.get("for") is None
-    if kind == "force_failure":
-        return True
     if kind in SEQUENCES:
         return any(never_succeeds(child) for child in node.children)
     if kind in SELECTORS:
         return all(never_succeeds(child) for child in node.children)
     if kind == "guard":
         return not node.options["until"] and never_succeeds(node.children[1])
-    if kind == "timeout":
-        return never_succeeds(node.children[0])
-    return False
+    decorator = answers(node)
+    if decorator is None:
+        return False  # a composite that may succeed; an unbuilt node
+    given = (node.options.get(option) is not None for option in decorator.forever_without)
+    if decorator.forever_without and not any(given):
+        return True  # repeat without times or for
+    own = decorator.on_success | decorator.on_failure | decorator.while_running | decorator.alone
+    if SUCCESS not in own:
+        return True  # force_failure
+    # one that ends as its child does, on the tick it does (timeout); conservative, as the
+    # module is: a delay, retry, held or oneshot of such a child is not said to never succeed
+    mirrors = (decorator.on_success, decorator.on_failure) == (SUCCEEDS, FAILS)
+    return (
+        mirrors
+        and not decorator.alone
+        and not decorator.replays
+        and never_succeeds(node.children[0])
+    )
 
 
 def runs_again(node: Node) -> bool:
@@ -104,7 +136,8 @@ def runs_again(node: Node) -> bool:
     its child) nor what only reads (conditions, and composites and ``held`` of them); not
     a node that could not be built (its own errors are said)."""
     kind = node.kind
-    if kind == "oneshot" or kind == "unbuilt":
+    decorator = answers(node)
+    if kind == "unbuilt" or (decorator is not None and decorator.replays):
         return False
     if kind == "leaf":
         return node.decl is not None and node.decl.kind == "action"
@@ -165,17 +198,6 @@ def cliff_ends(node: Node) -> Outcomes:
     kind = node.kind
     if kind == "leaf":
         return _leaf_cliff_ends(node)
-    if kind == "inverter":
-        inner = cliff_ends(node.children[0])
-        return frozenset({SUCCESS: FAILURE, FAILURE: SUCCESS}[r] for r in inner)
-    if kind == "timeout":
-        return cliff_ends(node.children[0])
-    if kind == "repeat":  # a success starts the child again
-        return cliff_ends(node.children[0]) & {FAILURE}
-    if kind == "retry":  # a failure starts the child again
-        return cliff_ends(node.children[0]) & {SUCCESS}
-    if kind == "held":  # the child's failure fails it at once; its success only in time
-        return cliff_ends(node.children[0]) & {FAILURE}
     if kind == "guard":
         ends = SUCCESS if node.options["until"] else FAILURE
         by_condition = {ends} if ends in cliff_ends(node.children[0]) else set()
@@ -186,7 +208,25 @@ def cliff_ends(node: Node) -> Outcomes:
         return _chain_ends(node, SUCCESS)
     if kind == "parallel":
         return frozenset().union(*(branch_ends(node, child) for child in node.children))
-    return _NONE  # oneshot, force_*, delay, for_each, unbuilt
+    decorator = answers(node)
+    if decorator is None or decorator.alone or decorator.replays:
+        return _NONE  # unbuilt; a decorator that may answer without its child's cliff read
+    return _passed_on(decorator, cliff_ends(node.children[0]))
+
+
+def _passed_on(decorator: Answers, child_ends: Outcomes) -> Outcomes:
+    """What a decorator answers to the cliff results ``child_ends`` of its child: each that
+    it answers one way (not a ``repeat``'s success, which may start the child again, nor a
+    ``held`` one, which succeeds only in time), and whose other result it may answer
+    otherwise (``force_success`` answers SUCCESS whatever its child said: nothing passes
+    on)."""
+    out: set[str] = set()
+    for ending in child_ends:
+        answer = decorator.answer(ending)
+        other = decorator.answer(FAILURE if ending == SUCCESS else SUCCESS)
+        if len(answer) == 1 and RUNNING not in answer and other != answer:
+            out |= answer
+    return frozenset(out)
 
 
 def _chain_ends(node: Node, stops: str) -> Outcomes:

@@ -38,6 +38,8 @@ from roomba_bt.oi.opcodes import (
 from roomba_bt.robot.interface import SLOT_SECONDS, Odometry
 from roomba_bt.robot.testing import StubRobot
 
+from .example_params import EXAMPLE_PARAMS
+
 
 def tick(behaviour: Behaviour) -> Status:
     behaviour.tick_once()
@@ -640,18 +642,6 @@ def test_a_wheel_command_that_moves_nothing_leaves_nothing_to_halt() -> None:
     assert turns_wheels(drive(-1, 1)) and turns_wheels(drive_direct(0, 5))
 
 
-#: the parameters a built-in needs to be ticked at all (its required ones)
-_REQUIRED: dict[str, dict[str, Any]] = {
-    "vacuum": {"on": True},
-    "song": {"number": 1, "notes": ((60, 16),)},
-    "log": {"message": "hello"},
-    "set": {"key": "k", "value": 1},
-    "mark": {"key": "here"},
-    "display": {"text": "hi!"},
-    "press": {"buttons": ("clean",)},
-}
-
-
 def test_what_declares_it_succeeds_at_once_succeeds_on_its_first_tick(make: Make) -> None:
     """``at_once``: the static checks take what such a leaf does as done within the tick it
     starts (a limit under a reactive fallback, a parallel's writes), so it must be true."""
@@ -668,7 +658,7 @@ def test_what_declares_it_succeeds_at_once_succeeds_on_its_first_tick(make: Make
         "schedule_leds",
     }
     for declaration in declared:
-        behaviour = make(declaration.cls, **_REQUIRED.get(declaration.name, {}))
+        behaviour = make(declaration.cls, **EXAMPLE_PARAMS.get(declaration.name, {}))
         assert tick(behaviour) is Status.SUCCESS, declaration.name
     assert not a.Wait.declaration.at_once and not a.Drive.declaration.at_once
 

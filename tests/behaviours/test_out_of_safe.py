@@ -26,15 +26,10 @@ from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.testing import StubRobot
 
+from .example_params import EXAMPLE_PARAMS
+
 Make = Callable[..., RobotBehaviour]
 
-#: what each needs to set something going (``motors`` with none given switches all off)
-_PARAMS: dict[str, dict[str, Any]] = {
-    "turn": {"angle": 90.0},
-    "vacuum": {"on": True},
-    "motors": {"main_brush": True},
-    "drive": {"velocity": 100.0},
-}
 #: ``home_by_map`` succeeds at once with no ``cover`` map to go by, sending nothing
 _NOT_STARTED_ALONE = {"home_by_map"}
 
@@ -70,7 +65,10 @@ def test_the_movers_are_the_wheel_and_motor_leaves() -> None:
 
 def _frame_of(declaration: Declaration, mode: OIMode) -> dict[int, int]:
     """A frame with every packet the leaf reads, zero, and packet 35 saying ``mode``."""
-    return {**dict.fromkeys(declaration.packets(_PARAMS.get(declaration.name, {})), 0), 35: mode}
+    return {
+        **dict.fromkeys(declaration.packets(EXAMPLE_PARAMS.get(declaration.name, {})), 0),
+        35: mode,
+    }
 
 
 @pytest.mark.parametrize("name", MOVERS)
@@ -82,7 +80,7 @@ def test_a_mover_started_in_passive_fails_within_a_tick_sending_nothing(
     declaration = builtin_registry().get(name)
     assert declaration is not None
     robot = StubRobot(mode=OIMode.PASSIVE)
-    behaviour = make(declaration.cls, robot=robot, **_PARAMS.get(name, {}))
+    behaviour = make(declaration.cls, robot=robot, **EXAMPLE_PARAMS.get(name, {}))
     for _ in range(2):
         robot.set_frame(_frame_of(declaration, OIMode.PASSIVE))
         behaviour.tick_once()
@@ -107,7 +105,7 @@ def test_a_mode_command_queued_beside_a_mover_in_its_first_tick_lets_it_drive(
     declaration = builtin_registry().get(name)
     assert declaration is not None
     robot = StubRobot(mode=OIMode.PASSIVE)
-    behaviour = make(declaration.cls, robot=robot, **_PARAMS.get(name, {}))
+    behaviour = make(declaration.cls, robot=robot, **EXAMPLE_PARAMS.get(name, {}))
     robot.set_frame(_frame_of(declaration, OIMode.PASSIVE))
     assert tick(behaviour) is Status.RUNNING
     robot.outbox.send(oi.safe())
@@ -133,7 +131,7 @@ def test_a_mover_in_safe_does_not_fail_on_its_first_tick(make: Make, name: str) 
     assert declaration is not None
     robot = StubRobot(mode=OIMode.SAFE)
     robot.set_frame(_frame_of(declaration, OIMode.SAFE))
-    behaviour = make(declaration.cls, robot=robot, **_PARAMS.get(name, {}))
+    behaviour = make(declaration.cls, robot=robot, **EXAMPLE_PARAMS.get(name, {}))
     assert tick(behaviour) is not Status.FAILURE, behaviour.feedback_message
 
 
@@ -185,8 +183,6 @@ def _shows_in_safe_only(declaration: Declaration) -> bool:
 
 
 SHOWS = sorted(d.name for d in builtin_registry() if _shows_in_safe_only(d))
-#: what each needs to be built (``schedule_leds`` and ``leds`` with none given still send)
-_SHOW_PARAMS: dict[str, dict[str, Any]] = {"display": {"text": "hi"}, "play": {"number": 1}}
 
 
 def test_the_shows_are_the_led_display_and_song_leaves() -> None:
@@ -204,7 +200,7 @@ def test_a_show_in_passive_fails_at_once_naming_its_command_sending_nothing(
     assert declaration is not None
     robot = StubRobot(mode=OIMode.PASSIVE)
     robot.set_frame({35: OIMode.PASSIVE})
-    behaviour = make(declaration.cls, robot=robot, **_SHOW_PARAMS.get(name, {}))
+    behaviour = make(declaration.cls, robot=robot, **EXAMPLE_PARAMS.get(name, {}))
     assert tick(behaviour) is Status.FAILURE
     assert robot.flush() == []
     (spec,) = (COMMANDS[opcode] for opcode in declaration.sends)
@@ -222,7 +218,7 @@ def test_a_show_after_a_safe_queued_in_its_tick_is_sent(make: Make, name: str) -
     robot = StubRobot(mode=OIMode.PASSIVE)
     robot.set_frame({35: OIMode.PASSIVE})
     robot.outbox.send(oi.safe())
-    behaviour = make(declaration.cls, robot=robot, **_SHOW_PARAMS.get(name, {}))
+    behaviour = make(declaration.cls, robot=robot, **EXAMPLE_PARAMS.get(name, {}))
     assert tick(behaviour) is not Status.FAILURE, behaviour.feedback_message
     assert [c.opcode for c in robot.flush()] == [131, *declaration.sends]
 

@@ -2,17 +2,22 @@
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 from importlib.metadata import EntryPoint
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import pytest
 from py_trees.common import Status
 
+import roomba_bt.behaviours
 from roomba_bt.behaviours import (
     INT,
     SPEED,
     Condition,
+    Declaration,
     DeclarationError,
     Param,
     Registry,
@@ -46,6 +51,37 @@ def test_every_builtin_is_registered_with_a_valid_declaration() -> None:
         decl.validate()
         assert decl.doc, f"{decl.name} has no docstring"
         assert decl.origin == "builtin"
+
+
+def _declared_in(package: ModuleType) -> list[type]:
+    """Every class a module of ``package`` (and its subpackages) declares with ``@declare``."""
+    found = []
+    for info in pkgutil.walk_packages(package.__path__, f"{package.__name__}."):
+        module = importlib.import_module(info.name)
+        for value in vars(module).values():
+            declared = isinstance(value, type) and value.__module__ == module.__name__
+            decl = vars(value).get("declaration") if declared else None
+            if isinstance(decl, Declaration) and decl.cls is value:
+                found.append(value)
+    return found
+
+
+def test_every_declared_builtin_behaviour_is_in_the_builtin_registry() -> None:
+    """``@declare`` alone registers nothing: a built-in joins through its module's tuple
+    (``ACTIONS``, ``CONDITIONS``, ...) read by ``builtin_registry``. Found by walking the
+    modules, not from those tuples, so a class left out of them fails here."""
+    registry = builtin_registry()
+    declared = _declared_in(roomba_bt.behaviours)
+    assert len(declared) > 40  # the walk found the modules
+    missing = [
+        f"{cls.__module__}.{cls.__qualname__}"
+        for cls in declared
+        if (entry := registry.get(cls.declaration.name)) is None or entry.cls is not cls
+    ]
+    assert not missing, (
+        f"declared but not registered: {missing}; add each to its module's tuple (ACTIONS, "
+        "CONDITIONS, ...) that behaviours.registry.builtin_registry reads"
+    )
 
 
 def test_default_registry_holds_builtins_and_the_installed_example_plugin() -> None:
