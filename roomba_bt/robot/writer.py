@@ -83,6 +83,10 @@ class CommandWriter:
         self.refused = 0
         #: the last wheel command written (Drive, Drive Direct, PWM, a cleaning cycle)
         self.last_wheels: Command | None = None
+        #: how many wheel commands were written: the motion watch's way to tell a command
+        #: that stood from one written again, or Drive 0 -> 200 -> 0 between two of its
+        #: looks (equal bytes, wheels that rightly turned: runtime/motion_watch.py)
+        self.wheel_writes = 0
         #: why :attr:`last_wheels` is None after wheels were commanded: the cause of the
         #: robot's own fall to Passive that stopped them (``charger``; :meth:`robot_stopped`),
         #: "" while none has. Not cleared by a wheel command after it: ``last_wheels`` says
@@ -207,6 +211,7 @@ class CommandWriter:
         channel = spec.channel
         if channel == "wheels":
             self.last_wheels = command
+            self.wheel_writes += 1
         elif channel == "motors":
             self.last_motors = command
         self.sent += 1

@@ -13,7 +13,11 @@ The robot's encoders (packets 43, 44: every run streams them) say what its wheel
 Once a second of mission time (:class:`~roomba_bt.runtime.long_run.MissionTimeChecks`, which
 calls :meth:`MotionWatch.look`; nothing more on the tick path, and nothing written on a line
 that loses nothing), the watch compares them with the wheel command last written
-(``CommandWriter.last_wheels``), when the same command stood over the whole second:
+(``CommandWriter.last_wheels``), when the same command stood over the whole second: written
+once, before the last look, and not again since (``CommandWriter.wheel_writes``; equal bytes
+are not enough: Drive 0, Drive 200, Drive 0 within the second is a stop whose wheels rightly
+turned, and a look that took it for one stop that stood ended valid stop-and-go missions as a
+lost link):
 
 * it turns a wheel at a full speed step (28.5 mm/s) or more, and neither encoder moved; or
 * it turns no wheel, and a wheel turned :data:`RUNAWAY_MM` or more (a robot slowing down
@@ -91,9 +95,9 @@ class MotionWatch:
         self.connection = connection
         self.summary = summary
         self._writer = connection.writer
-        #: what the last look saw: the wheel command standing (None: none judged), whether
-        #: it turns a wheel, and the encoder counts
-        self._command: Command | None = None
+        #: what the last look saw: the writer's count of wheel commands written then (-1:
+        #: none judged), whether the command standing turns a wheel, and the encoder counts
+        self._written = -1
         self._turning = False
         self._counts: tuple[int, int] | None = None
         #: the command put right at the last finding, until the look after it judges it
@@ -113,31 +117,36 @@ class MotionWatch:
         (``python -m bench.icount --against``: within 0.1 % of the tick before it)."""
         frame = snapshot.frame
         slots = frame.layout.encoder_slots
-        command = self._writer.last_wheels
+        writer = self._writer
+        command = writer.last_wheels
         if slots is None or command is None:
-            self._command = self._counts = self._resent = None
+            self._counts = self._resent = None
+            self._written = -1
             return True
         values = frame.values
         counts = (values[slots[0]], values[slots[1]])
         before, self._counts = self._counts, counts
+        written = writer.wheel_writes
         if (
-            command is self._command
+            written == self._written
             and self._resent is None
             and (counts != before) is self._turning
         ):
             return True
-        return self._judge(snapshot, command, before, counts)
+        return self._judge(snapshot, command, written, before, counts)
 
     def _judge(
         self,
         snapshot: Snapshot,
         command: Command,
+        written: int,
         before: tuple[int, int] | None,
         counts: tuple[int, int],
     ) -> bool:
-        """A look that is not the common one: a new command (judged from the next look),
-        the look after a finding, or wheels that may not have obeyed (the excuses weighed,
-        then a finding put right)."""
+        """A look that is not the common one: a wheel command written since the last look
+        (``written``: the writer's count; judged from the next look), the look after a
+        finding, or wheels that may not have obeyed (the excuses weighed, then a finding put
+        right)."""
         writer = self._writer
         judged = (
             snapshot.mode in DRIVING_MODES
@@ -156,8 +165,8 @@ class MotionWatch:
             and not self._after_resend(resent, moved, snapshot.time)
         ):
             return False
-        if not judged or command != self._command or moved is None:
-            self._command, self._given_up_on = (command if judged else None), None
+        if not judged or written != self._written or moved is None:
+            self._written, self._given_up_on = (written if judged else -1), None
             self._turning = turns_wheels(command)
             return True
         if resent is None and command != self._given_up_on and self._disobeyed(command, moved):
@@ -196,6 +205,8 @@ class MotionWatch:
         )  # fmt: skip
         writer.send_many(again, prefix=RESYNC_ZEROS)
         self._resent = command
+        # its own write again is no new command of the tree's: the next look judges this one
+        self._written = writer.wheel_writes
 
     def _after_resend(self, command: Command, moved: int, mission_time: float) -> bool:
         """The look after a finding: the wheels obey now (the bytes were lost: counted, and
