@@ -365,15 +365,24 @@ class OIModeIs(Condition):
     kind="condition",
     params=(
         Param("since", STR, from_blackboard=False, doc="a mark key; default: the start"),
-        Param("distance", DISTANCE, minimum=0, doc="at least this path length"),
-        Param("angle", ANGLE, minimum=0, doc="at least this heading change"),
+        Param("distance", DISTANCE, minimum=0,
+              doc="at least this path length: every mm the centre moved, forward or back"),
+        Param("angle", ANGLE, minimum=0,
+              doc="at least this net heading change: a turn back undoes a turn, either way"),
     ),
     reads=ENCODER_PACKETS,
     reads_keys={"since": MARK},
     constraints=_exactly_one("distance", "angle"),
 )  # fmt: skip
 class OdometrySince(Condition):
-    """The robot has travelled a distance, or turned an angle, since a mark (or the start)."""
+    """The robot has travelled a distance, or turned an angle, since a mark (or the start).
+
+    ``distance`` is the path (``Odometry.path_mm``, the summary's ``distance``): 10 cm forward
+    then 10 cm back is 20 cm travelled. It was the net signed distance, which a back-off
+    cancelled: a "travelled too far" limit around manoeuvres that back up never tripped.
+    ``angle`` stays the net heading change (how far the robot now faces from where it faced,
+    not wrapped: two whole turns one way are 720deg): what a lap counted by heading
+    (``patrol``) needs, where the wiggles of a wall follow must not add up."""
 
     def held_means(self) -> str:
         """What its holding means, for a ``while`` guard's reason: the one of distance or
@@ -398,7 +407,7 @@ class OdometrySince(Condition):
         now = snapshot.odometry
         distance = self.value("distance")
         if distance is not None:
-            return abs(now.distance_mm - base.distance_mm) >= float(distance)
+            return now.path_mm - base.path_mm >= float(distance)
         return abs(math.degrees(now.angle_rad - base.angle_rad)) >= self.number("angle")
 
 

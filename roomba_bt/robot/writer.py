@@ -83,9 +83,8 @@ class CommandWriter:
         self.refused = 0
         #: the last wheel command written (Drive, Drive Direct, PWM, a cleaning cycle)
         self.last_wheels: Command | None = None
-        #: how many wheel commands were written: the motion watch's way to tell a command
-        #: that stood from one written again, or Drive 0 -> 200 -> 0 between two of its
-        #: looks (equal bytes, wheels that rightly turned: runtime/motion_watch.py)
+        #: wheel commands written: what tells runtime/motion_watch.py a command that stood
+        #: from equal bytes written again (Drive 0, 200, 0 between two of its looks)
         self.wheel_writes = 0
         #: why :attr:`last_wheels` is None after wheels were commanded: the cause of the
         #: robot's own fall to Passive that stopped them (``charger``; :meth:`robot_stopped`),

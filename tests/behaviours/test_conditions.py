@@ -166,6 +166,25 @@ def test_odometry_since_a_mark(robot: StubRobot, make: Make) -> None:
     assert holds(make(c.OdometrySince, distance=240.0))  # since the start
 
 
+def test_odometry_distance_is_the_path_a_back_off_adds_to(robot: StubRobot, make: Make) -> None:
+    """10 cm forward, then 10 cm back: 20 cm travelled, though the robot is where it began
+    (the net signed distance, 0, said a "travelled too far" limit never tripped)."""
+    forward = round(mm_to_counts(100))
+    for counts in (0, forward, 0):
+        robot.set_frame({43: counts, 44: counts})
+    assert holds(make(c.OdometrySince, distance=150.0))
+    assert not holds(make(c.OdometrySince, distance=210.0))
+
+
+def test_odometry_angle_is_the_net_heading_change(robot: StubRobot, make: Make) -> None:
+    """90 degrees left, then 90 back: the robot faces where it faced, a heading change of 0."""
+    quarter = round(mm_to_counts(math.radians(90) * 235.0 / 2))
+    for left, right in ((0, 0), (-quarter, quarter), (0, 0)):
+        robot.set_frame({43: left, 44: right})
+    assert not holds(make(c.OdometrySince, angle=45.0))
+    assert holds(make(c.OdometrySince, angle=0.0))
+
+
 def test_odometry_angle(robot: StubRobot, make: Make) -> None:
     write_key("start", Odometry())
     arc = math.radians(30) * 235.0 / 2

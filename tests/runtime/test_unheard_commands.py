@@ -120,11 +120,68 @@ def test_a_line_that_keeps_losing_commands_ends_the_run_stopped(run_mission: Run
     assert run.summary.distance_mm < 3 * 600 + 400  # the third drive ended part of the way
 
 
-def test_a_clean_line_writes_nothing_more(run_mission: RunMission) -> None:
-    run = run_mission(DRIVE_60_CM + "    - wait: {duration: 3 s}\n", timeout=15.0)
+def stop_and_go(name: str, times: int, *steps: str) -> str:
+    """A mission that goes to Safe and repeats ``steps`` (each a step of a sequence, in flow
+    style) ``times`` times: a patrol's stop and go."""
+    body = "".join(f"              - {step}\n" for step in steps)
+    return (
+        f"mission: {name}\ntree:\n  sequence:\n    - mode: safe\n    - repeat:\n"
+        f"        times: {times}\n        do:\n          sequence:\n{body}"
+    )
+
+
+#: Missions on a line that loses nothing. The stop-and-go ones write Drive 0, a drive, and
+#: Drive 0 again between two of the watch's looks: the same bytes at both looks, and wheels
+#: that rightly turned between. The watch compared the bytes, took them for one stop that
+#: stood while the wheels turned, and ended these runs CONNECTION LOST, exit 8, naming the
+#: cable (session 34's py_trees review: unheard3.yaml and inch.yaml).
+CLEAN_RUNS = [
+    pytest.param(DRIVE_60_CM + "    - wait: {duration: 3 s}\n", "empty-room", id="drive-wait"),
+    *(
+        pytest.param(
+            stop_and_go("unheard3", 4, "drive: {velocity: 200 mm/s, duration: 1s}",
+                        "wait: 1s", "drive: {velocity: -200 mm/s, duration: 500ms}",
+                        "wait: 1500ms"),
+            world, id=f"stop-and-go-{world}",
+        )
+        for world in ("empty-room", "apartment")
+    ),
+    pytest.param(
+        stop_and_go("inch", 10, "drive: {velocity: 200 mm/s, distance: 6cm}", "wait: 700ms"),
+        "apartment", id="inch-forward",
+    ),
+    pytest.param(
+        stop_and_go("smallest", 1, "drive: {velocity: 200 mm/s, duration: 1s}", "wait: 1s",
+                    "drive: {velocity: 200 mm/s, duration: 500ms}", "wait: 2s"),
+        "empty-room", id="go-stop-go-stop",
+    ),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("mission", "world"), CLEAN_RUNS)
+def test_a_clean_line_writes_nothing_more(
+    run_mission: RunMission, mission: str, world: str
+) -> None:
+    run = run_mission(mission, world=world, timeout=60.0)
+    assert run.summary.outcome is Outcome.SUCCESS
     assert run.summary.unheard == 0
     assert not any(b"\x00" * 8 in data for _, data in run.link.writes)
     assert not any(line.startswith("unheard") for line in run.summary.lines())
+
+
+def test_a_stop_and_go_whose_stop_was_lost_is_still_put_right(run_mission: RunMission) -> None:
+    """Stop and go, its first stop's byte lost: the robot drives on through the pause. A
+    stop written once and standing since the last look is judged as before the watch went
+    by writes: the second look finds it, and the robot stops."""
+    mission = stop_and_go("pauses", 2, "drive: {velocity: 200 mm/s, duration: 1s}", "wait: 3s")
+    run = run_mission(mission, world="corridor", host_line=LosesByte(STOP, 3), timeout=20.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.SUCCESS
+    assert (summary.unheard, summary.unheard_obeyed) == (1, 1)
+    assert "the wheels turned for a second under Drive (137) velocity 0" in summary.unheard_first
+    assert any(data == RESYNC_ZEROS + STOP for _, data in run.link.writes)
+    # two drives of 20 cm, and at most 2 s more at 200 mm/s before the stop was heard
+    assert summary.distance_mm < 2 * 200 + 450
 
 
 def test_a_robot_wedged_with_no_bump_gets_one_resend_and_no_blame_on_the_cable(
