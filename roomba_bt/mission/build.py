@@ -207,6 +207,12 @@ def _differs(initial: Mapping[str, Any], other: Mapping[str, Any], key: str) -> 
 
 def _as_reviewed(node: Node) -> Node:
     """``node`` and its children, each renamed by ``name:`` named by what it is first."""
-    name = f"{node.label} named {node.name!r}" if node.label else node.name
+    what = node.label or node.name
+    if node.options_written:  # a composite or decorator: its options, as a leaf's
+        what = f"{node.kind}({node.options_written})"
+        renamed = node.name != node.kind  # by name:, or as a subtree's body
+        name = f"{what} named {node.name!r}" if renamed else what
+    else:
+        name = f"{what} named {node.name!r}" if node.label else node.name
     name = escaped(name, ANY_CONTROL)  # one line of show's tree: a -p text may hold "\n"
     return replace(node, name=name, children=[_as_reviewed(child) for child in node.children])

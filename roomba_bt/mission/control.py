@@ -15,6 +15,7 @@ import yaml
 
 from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.language import CHILD_NAMES, KEY_ITEMS, TEXT, WORDS, NodeKind, Shape
+from roomba_bt.mission.leaves import written_text
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text, sequence
 from roomba_bt.mission.ticks import at_once
@@ -115,9 +116,9 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
     options: dict[str, Any] = kind.defaults
     children_node: yaml.Node | None = value
     children_loc = loc
+    fields: Fields = {}
     if isinstance(value, yaml.MappingNode):
         allowed = ["children", *(p.name for p in kind.options)]
-        fields = {}
         items = mapping(value, loc, word)
         _children_as_keys(parser, word, [(k, kl) for k, _, kl, _ in items if k not in allowed])
         for k, v, kl, vl in items:
@@ -148,7 +149,8 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         children.append(child if child is not None else Node("unbuilt", child_loc, "unbuilt"))
     name, parameter_in_name = options.pop("name", word), options.pop(_PARAMETER_IN_NAME, None)
     result = Node(word, key_loc, name, children, options=options,
-                  parameter_in_name=parameter_in_name)  # fmt: skip
+                  parameter_in_name=parameter_in_name,
+                  options_written=_options_written(fields, env))  # fmt: skip
     for param in kind.options:
         if param.type is CHILD_NAMES and param.name in options:
             _chosen(ctx, f"{word}.{param.name}", options, children, [e[1] for e in entries])
@@ -300,7 +302,20 @@ def parse_decorator(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         return None
     if kind.condition_child:
         _condition_child(parser.ctx, word, child)
-    return Node(word, key_loc, word, [child], options=options)
+    return Node(word, key_loc, word, [child], options=options,
+                options_written=_options_written(fields, env))  # fmt: skip
+
+
+def _options_written(fields: Fields, env: Mapping[str, Bound]) -> str:
+    """``policy=one, synchronise=false``: the options the file writes for a composite or
+    decorator, in its order, as it writes them (what ``show`` says the node is, as a leaf's
+    parameters; options left at their default are not written, so not said). Neither its
+    children nor its ``name:``, which ``show`` says apart."""
+    return ", ".join(
+        f"{option}={written_text(node, env, lists=True)}"
+        for option, (node, _) in fields.items()
+        if option not in ("children", "name")
+    )
 
 
 def _condition_child(ctx: Context, word: str, child: Node) -> None:

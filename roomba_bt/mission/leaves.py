@@ -246,14 +246,27 @@ def leaf_name(
     ``${parameters}`` shown as their values."""
     if not given:
         return behaviour
+    parts = []
+    for pname, node, key_loc, value_loc in given:
+        text = written_text(node, env)
+        parts.append(text if key_loc is value_loc else f"{pname}={text}")
+    return f"{behaviour}({', '.join(parts)})"
+
+
+def written_text(node: yaml.Node, env: Mapping[str, Bound], *, lists: bool = False) -> str:
+    """A value as the file writes it, each ``${parameter}`` as its value's own text: what
+    ``show`` prints for a leaf's parameter and a decorator's option. A list of scalars
+    (``for_each.in``) is written out when ``lists``; anything else longer is ``...``."""
 
     def value_of(name: str) -> str | None:
         bound = env.get(name)
         return bound.text if bound is not None and bound.value is not UNKNOWN else None
 
-    parts = []
-    for pname, node, key_loc, value_loc in given:
-        text = str(node.value) if isinstance(node, yaml.ScalarNode) else "..."
-        text = substituted(text, value_of)
-        parts.append(text if key_loc is value_loc else f"{pname}={text}")
-    return f"{behaviour}({', '.join(parts)})"
+    if isinstance(node, yaml.ScalarNode):
+        return substituted(str(node.value), value_of)
+    scalars = isinstance(node, yaml.SequenceNode) and all(
+        isinstance(item, yaml.ScalarNode) for item in node.value
+    )
+    if lists and scalars:
+        return f"[{', '.join(written_text(item, env) for item in node.value)}]"
+    return "..."

@@ -42,6 +42,9 @@ class Node:
     #: what the node is, as its name says it without ``name:`` (``drive(velocity=500 mm/s,
     #: duration=10s)``), when ``name:`` replaced that; "" otherwise
     label: str = ""
+    #: a composite's or decorator's options as the file writes them (``after=10min``),
+    #: for ``show`` to say what the node does whatever its name; "" when none is written
+    options_written: str = ""
     #: where the ``${parameter}`` is written that the name was made with (``name: "turn
     #: ${side}"``, a leaf's ``bump(${side})``, a guard's condition's): the name changes with
     #: the value, so ``selected:`` cannot pick the node by it; None: the name is fixed

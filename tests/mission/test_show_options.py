@@ -1,0 +1,77 @@
+"""``show`` says what a composite or decorator does, its options as written, as it does a
+leaf's parameters: a ``name:`` cannot pass a ten-minute ``timeout`` off as a 5 s safety
+limit, and ``repeat: {times: 2}`` is told from ``repeat: {for: 1s}``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.mission import load_mission
+
+
+def _reviewed_root(tmp_path: Path, tree: str) -> str:
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "parameters:\n  limit: {type: duration, default: 10min}\n"
+        "blackboard:\n  leg: {type: distance, initial: 0cm}\n"
+        f"tree:\n{tree}"
+    )
+    return load_mission(path).reviewed().name
+
+
+@pytest.mark.parametrize(
+    ("tree", "shown"),
+    [
+        (
+            "  timeout: {after: 10min, do: {wait: 1s}}\n  name: 5 s safety limit\n",
+            "timeout(after=10min) named '5 s safety limit'",
+        ),
+        ("  timeout: {after: '${limit}', do: {wait: 1s}}\n", "timeout(after=10min)"),
+        ("  retry: {times: 1000, do: {wait: 1s}}\n", "retry(times=1000)"),
+        ("  repeat: {for: 1s, do: {wait: 1s}}\n", "repeat(for=1s)"),
+        ("  delay: {for: 200ms, do: {wait: 1s}}\n", "delay(for=200ms)"),
+        ("  held: {for: 45ms, do: {bump: any}}\n", "held(for=45ms)"),
+        (
+            "  for_each: {key: leg, in: [10cm, 20cm], do: {wait: 1s}}\n",
+            "for_each(key=leg, in=[10cm, 20cm])",
+        ),
+        (
+            "  parallel: {policy: one, synchronise: false, children: [{wait: 1s}, {wait: 2s}]}\n",
+            "parallel(policy=one, synchronise=false)",
+        ),
+        (
+            "  parallel: {policy: one, name: both, children: [{wait: 1s}, {wait: 2s}]}\n",
+            "parallel(policy=one) named 'both'",
+        ),
+    ],
+)
+def test_show_says_a_composite_or_decorators_options_as_written(
+    tmp_path: Path, tree: str, shown: str
+) -> None:
+    assert _reviewed_root(tmp_path, tree) == shown
+
+
+@pytest.mark.parametrize(
+    ("tree", "shown"),
+    [
+        ("  inverter: {bump: any}\n", "inverter"),
+        ("  sequence: [{wait: 1s}]\n", "sequence"),
+        (
+            "  timeout: {after: 1s, do: {wait: 1s}}\n  name: limit\n",
+            "timeout(after=1s) named 'limit'",
+        ),
+    ],
+)
+def test_options_left_at_their_default_are_not_said(tmp_path: Path, tree: str, shown: str) -> None:
+    """As for a leaf: what the file writes is said, nothing more."""
+    assert _reviewed_root(tmp_path, tree) == shown
+
+
+def test_the_run_tree_keeps_the_name_alone(tmp_path: Path) -> None:
+    """The live tree, the log and the outcome say the node by its name (as a named leaf's);
+    only ``show``, the review, says what it is."""
+    path = tmp_path / "m.yaml"
+    path.write_text("tree:\n  timeout: {after: 1s, do: {wait: 1s}}\n  name: limit\n")
+    assert load_mission(path).root.name == "limit"
