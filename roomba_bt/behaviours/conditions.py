@@ -698,21 +698,26 @@ def _comparable(params: Mapping[str, Any]) -> list[str]:
 class CheckKey(Condition):
     """Compare a blackboard key with a value. A key not written yet makes the check False; a
     value that cannot be compared with the key's (a plugin wrote another type) ends the run
-    as an error: a bug, not a False."""
+    as an error: a bug, not a False. A False says the value found, as py_trees'
+    CheckBlackboardVariableValue does (``n is 2, not == 1``): the outcome quoted only the
+    node's name, which says what was wanted, never what was there."""
 
     def check(self, snapshot: Snapshot) -> bool:
         key = str(self.value("key"))
         current = read_key(key)
         op, value = self.value("op"), self.value("value")
         try:
-            return bool(OPERATORS[op](current, value))
+            holds = bool(OPERATORS[op](current, value))
         except TypeError:
             if current is None:  # not written yet
+                self.feedback_message = f"{key} is not written yet"
                 return False
             raise TypeError(
                 f"check: key {key!r} holds {current!r} ({type(current).__name__}), which "
                 f"cannot be compared with {value!r} ({type(value).__name__}) by {op}"
             ) from None
+        self.feedback_message = "" if holds else f"{key} is {current!r}, not {op} {value!r}"
+        return holds
 
 
 CONDITIONS: tuple[type[Condition], ...] = (

@@ -249,8 +249,15 @@ def leaf_name(
     parts = []
     for pname, node, key_loc, value_loc in given:
         text = written_text(node, env)
-        parts.append(text if key_loc is value_loc else f"{pname}={text}")
+        if key_loc is value_loc:
+            parts.append(text)
+        else:  # check's op, "==", was op===: a text holding = or , is quoted
+            parts.append(f"{pname}={_quoted(text) if any(c in text for c in '=,') else text}")
     return f"{behaviour}({', '.join(parts)})"
+
+
+def _quoted(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
 def written_text(node: yaml.Node, env: Mapping[str, Bound], *, lists: bool = False) -> str:

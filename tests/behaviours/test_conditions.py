@@ -276,6 +276,24 @@ def test_check_blackboard_key(robot: StubRobot, make: Make) -> None:
         holds(make(c.CheckKey, key="count", op="<", value=3))
 
 
+def test_a_failed_check_says_the_value_it_found(robot: StubRobot, make: Make) -> None:
+    """As py_trees' CheckBlackboardVariableValue: the outcome quoted the node's name only,
+    which says what was wanted, not what the key held. Cleared once it holds again."""
+    write_key("count", 2)
+    check = make(c.CheckKey, key="count", op="==", value=1)
+    assert not holds(check)
+    assert check.feedback_message == "count is 2, not == 1"
+    write_key("count", 1)
+    assert holds(check)
+    assert check.feedback_message == ""
+
+
+def test_a_check_of_a_key_not_written_says_so(robot: StubRobot, make: Make) -> None:
+    check = make(c.CheckKey, key="never_written", op="<", value=3)
+    assert not holds(check)
+    assert check.feedback_message == "never_written is not written yet"
+
+
 def test_a_condition_with_a_lifecycle_of_its_own_gets_every_call_of_the_leaf_tick(
     robot: StubRobot, monkeypatch: pytest.MonkeyPatch
 ) -> None:

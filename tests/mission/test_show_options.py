@@ -75,3 +75,13 @@ def test_the_run_tree_keeps_the_name_alone(tmp_path: Path) -> None:
     path = tmp_path / "m.yaml"
     path.write_text("tree:\n  timeout: {after: 1s, do: {wait: 1s}}\n  name: limit\n")
     assert load_mission(path).root.name == "limit"
+
+
+def test_a_checks_operator_is_quoted_in_its_name(tmp_path: Path) -> None:
+    """``check(key=n, op===, value=1)``: an ``=`` (or ``,``) in a value written as
+    ``name=value`` ran into the ``=`` before it; such a value is quoted."""
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "blackboard:\n  n: {type: int, initial: 1}\ntree:\n  check: {key: n, op: '==', value: 1}\n"
+    )
+    assert load_mission(path).root.name == 'check(key=n, op="==", value=1)'
