@@ -412,6 +412,7 @@ def write_graph(root: Any, target: Path, fmt: str) -> str | None:
     import py_trees
 
     graph = py_trees.display.dot_tree(root)
+    _labelled_by_name(graph, root)
     try:
         if fmt == "dot":
             target.write_text(graph.to_string(), encoding="utf-8")
@@ -424,6 +425,33 @@ def write_graph(root: Any, target: Path, fmt: str) -> str | None:
         return f"cannot render {fmt}: {exc}"
     print(f"wrote {target}", file=sys.stderr)
     return None
+
+
+def _labelled_by_name(graph: Any, root: Any) -> None:
+    """Each graph node labelled with its node's name. py_trees keeps the graph's node ids
+    unique by adding ``*`` to a name already used, and labels the node with that id: the
+    second ``bump(any)`` of a tree read ``bump(any)*``, a mark that is in no mission. The
+    ids are worked out as py_trees makes them (depth first, from the root) and stay; only
+    the labels say the name again. An id made otherwise by a later py_trees is left as it
+    labelled it."""
+    used = {root.name}
+    renamed: dict[str, str] = {}
+
+    def renaming(node: Any) -> None:
+        for child in node.children:
+            node_id = child.name
+            while node_id in used:
+                node_id += "*"
+            used.add(node_id)
+            if node_id != child.name:
+                renamed[node_id] = child.name
+            renaming(child)
+
+    renaming(root)
+    for dot_node in graph.get_nodes():
+        name = renamed.get(dot_node.get_name())
+        if name is not None:
+            dot_node.set_label(str(dot_node.get_label()).replace(dot_node.get_name(), name, 1))
 
 
 def describe_behaviours(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -88,6 +89,24 @@ def test_show_writes_dot(capsys: Capsys, tmp_path: Path) -> None:
     target = tmp_path / "tree.dot"
     assert main(["show", str(EXAMPLES / "dock.yaml"), "--dot", str(target)]) == 0
     assert target.read_text().startswith("digraph")
+
+
+def test_show_dot_labels_each_node_by_its_name_not_its_unique_id(
+    mission_file: Callable[..., Path], tmp_path: Path
+) -> None:
+    """py_trees makes a second ``bump(any)`` the graph node ``bump(any)*``, and labelled it
+    so: the label is the node's text; the ids stay unique (three nodes, three ids)."""
+    path = mission_file(
+        "tree:\n  sequence:\n    - bump: any\n    - inverter: {bump: any}\n"
+        "    - inverter: {bump: any}\n"
+    )
+    target = tmp_path / "tree.dot"
+    assert main(["show", str(path), "--dot", str(target)]) == 0
+    dot = target.read_text()
+    assert "*" not in "".join(re.findall(r'label="?([^",]*)', dot)), dot
+    assert dot.count('label="bump(any)"') == 3, dot
+    assert dot.count("label=inverter") == 2, dot
+    assert '"bump(any)**"' in dot  # ids are still unique
 
 
 SPOOF = """\
