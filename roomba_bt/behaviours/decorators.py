@@ -295,6 +295,16 @@ class Guard(SaysWhy, Stepped, py_trees.composites.Composite):
         #: the condition's status after its last tick, and the inputs' values it had then
         self._seen: tuple[Status, object] | None = None
 
+    @property
+    def drawn_as(self) -> str:
+        """The py_trees composite it ticks as, by its symbol's key in
+        ``py_trees.display.unicode_symbols``: a ``while`` guard is a sequence without memory
+        of [condition, node] (``[-]``: FAILURE and the node halted when the condition fails),
+        an ``until`` guard a selector without memory (``[o]``: SUCCESS and the node halted
+        when it holds). py_trees' displays draw every composite they do not know as a leaf
+        (``-->``), which a node with children is not."""
+        return "selector_without_memory" if self.until else "sequence_without_memory"
+
     def initialise(self) -> None:
         """No message from a run before (:class:`SaysWhy`: one only when the condition
         ended this run)."""

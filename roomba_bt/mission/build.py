@@ -215,4 +215,8 @@ def _as_reviewed(node: Node) -> Node:
     else:
         name = f"{what} named {node.name!r}" if node.label else node.name
     name = escaped(name, ANY_CONTROL)  # one line of show's tree: a -p text may hold "\n"
-    return replace(node, name=name, children=[_as_reviewed(child) for child in node.children])
+    children = [_as_reviewed(child) for child in node.children]
+    if node.kind == GUARD.word:  # drawn as the composite it ticks as (Guard.drawn_as)
+        word = "reactive_fallback" if node.options["until"] else "reactive_sequence"
+        return replace(node, kind=word, name=name, children=children, options={"memory": False})
+    return replace(node, name=name, children=children)

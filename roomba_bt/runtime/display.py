@@ -23,6 +23,7 @@ from uuid import UUID
 
 import py_trees
 
+from roomba_bt.behaviours.decorators import Guard
 from roomba_bt.oi.frames import (
     BATTERY_PACKETS,
     BUMPS_PACKETS,
@@ -166,6 +167,8 @@ def node_kind(node: py_trees.behaviour.Behaviour) -> str:
         return "sequence_with_memory" if node.memory else "sequence_without_memory"
     if isinstance(node, py_trees.composites.Selector):
         return "selector_with_memory" if node.memory else "selector_without_memory"
+    if isinstance(node, Guard):  # a composite py_trees does not know: not a leaf
+        return node.drawn_as
     return "behaviour"
 
 

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import py_trees
 import pytest
 
 from roomba_bt.mission import load_mission
+from roomba_bt.runtime.display import node_kind
 
 
 def _reviewed_root(tmp_path: Path, tree: str) -> str:
@@ -85,3 +87,37 @@ def test_a_checks_operator_is_quoted_in_its_name(tmp_path: Path) -> None:
         "blackboard:\n  n: {type: int, initial: 1}\ntree:\n  check: {key: n, op: '==', value: 1}\n"
     )
     assert load_mission(path).root.name == 'check(key=n, op="==", value=1)'
+
+
+GUARDED = """\
+tree:
+  sequence:
+    - wait: 1s
+      until: {bump: any}
+    - wait: 1s
+      while: {inverter: {bump: any}}
+"""
+
+
+def test_show_draws_a_guard_as_the_composite_it_ticks_as(tmp_path: Path) -> None:
+    """A guard has two children and was drawn with the leaf marker ``-->``: py_trees draws
+    every composite it does not know so. ``until`` ticks as a selector without memory of
+    [condition, node], ``while`` as a sequence without memory, and are drawn so."""
+    path = tmp_path / "m.yaml"
+    path.write_text(GUARDED)
+    lines = py_trees.display.ascii_tree(load_mission(path).reviewed()).splitlines()
+    assert lines[1:3] == ["    [o] until bump(any)", "        --> bump(any)"], lines
+    assert lines[4] == "    [-] while inverter", lines
+
+
+def test_the_run_display_draws_a_guard_as_a_composite(tmp_path: Path) -> None:
+    """The live tree, the end-of-run tree and the monitor name each node's marker by
+    :func:`node_kind`: a guard's is no leaf's."""
+    path = tmp_path / "m.yaml"
+    path.write_text(GUARDED)
+    root = load_mission(path).root
+    until, while_ = root.children
+    assert (node_kind(until), node_kind(while_)) == (
+        "selector_without_memory",
+        "sequence_without_memory",
+    )
