@@ -465,6 +465,10 @@ class SafeStop:
         self._heard_at: float | None = None
         #: why the quiet after a stop shows nothing (:meth:`_quiet_unproven`), or None
         self._unproven: str | None = None
+        #: bytes read after the stop's last valid frame (or the stop) that make no frame:
+        #: a quiet with these is no quiet (a robot a Baud (129) moved streams on at its
+        #: new rate, garbage at the run's; :meth:`_contradicted`)
+        self._garbage_after = 0
         #: the link's count of valid frames when a stop was last said not delivered
         self._unseen_from = -1
         #: whether the last stop's sequence was written whole (:attr:`safe_stopped` says
@@ -663,9 +667,12 @@ class SafeStop:
         (the port's backlog after a tick that blocked, read at once; those on their way over
         a link with latency): they show the robot as it was before the stop, and are neither
         counted nor read for its mode. A quiet of :data:`STOP_LISTEN` s after the last frame
-        shows the stop heard; frames still coming :data:`STOP_LISTEN` s past the frames in
-        flight, more than :data:`PAUSE_SLACK`, show it unheard (the host-to-robot wire dead,
-        the robot still in Safe and driving): what they showed, or None (heard)."""
+        shows the stop heard, unless bytes that make no frame came in it (kept for
+        :meth:`_quiet_unproven`: a lost byte that made a Baud (129) of the last command's
+        data moved the robot to 300 baud, where it streamed on, garbage at the run's rate,
+        and the stop was said sent); frames still coming :data:`STOP_LISTEN` s past the
+        frames in flight, more than :data:`PAUSE_SLACK`, show it unheard (the host-to-robot
+        wire dead, the robot still in Safe and driving): what they showed, or None."""
         link = self.writer.link
         parser = StreamParser(link.stream_ids, link.profile, mode_plus_one=link.mode_plus_one)
         clock = link.transport.now
@@ -674,6 +681,7 @@ class SafeStop:
         deadline = stale_until + STOP_LISTEN
         last = written_at  # when the last frame came (the write, before any)
         late: list[SensorFrame] = []  # the frames sent after the robot should have heard it
+        unframed = self._garbage_after = 0  # bytes read since the last valid frame (or the write)
         try:
             while (now := clock()) < deadline and now - last < STOP_LISTEN:
                 wait = min(deadline, last + STOP_LISTEN) - now
@@ -681,12 +689,14 @@ class SafeStop:
                     break  # read (a virtual one) may not move at all, and looped for ever
                 data = link.read(wait)
                 new = parser.feed(data, clock()) if data else []
+                unframed = 0 if new else unframed + len(data)
                 if new:
                     last = self._heard_at = clock()
                     if last > stale_until:
                         late += new
         except (PortLost, WaitCutShort):  # the stop was written; the quiet it cut short
             return None  # shows nothing (:meth:`_quiet_unproven`, :meth:`stop` say so)
+        self._garbage_after = max(0, unframed - parser.pending)
         if clock() - last >= STOP_LISTEN - CLOCK_ROUNDING or len(late) <= PAUSE_SLACK:
             return None  # the stream stopped: it heard Pause Stream
         if self.end_in == "passive" and stopped_in_passive(late, self.writer.modes.detector):
@@ -710,12 +720,20 @@ class SafeStop:
 
     def _quiet_unproven(self, written_at: float) -> str | None:
         """Why the quiet after a stop written at ``written_at`` does not show it heard: the
-        port failed while it was listened after, or no valid frame came after it and none
-        for over :data:`QUIET_BEFORE_PERIODS` stream periods before it (the robot fell
-        silent first); None if the robot was heard after it, or up to it."""
+        port failed while it was listened after, bytes came after it that make no frame
+        (garbage: the robot may talk at another rate, asked after and hunted for by
+        :func:`asked_after`), or no valid frame came after it and none for over
+        :data:`QUIET_BEFORE_PERIODS` stream periods before it (the robot fell silent first);
+        None if the robot was heard after it, or up to it."""
         link = self.writer.link
         if link.status is LinkStatus.LOST:
             return "the port failed while the robot was listened to after it"
+        if self._garbage_after:  # not a quiet: the robot may talk at another rate
+            return (
+                f"no valid frame came after it, but {self._garbage_after} bytes that make none "
+                "(the robot talking at another rate: a Baud (129) made of lost bytes, most "
+                "likely)"
+            )
         if self._heard_at is None:  # no frame of this stream yet: no silence to measure
             return None
         silent = written_at - self._heard_at

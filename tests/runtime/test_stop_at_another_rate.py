@@ -21,6 +21,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.baud_hunt import hunt_rates, hunt_seconds
+from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import STOP_RESYNC_ZEROS
 from roomba_bt.runtime.stack import Recording, RunStack
 from roomba_bt.runtime.summary import ExitCode, RunSummary
@@ -105,6 +106,27 @@ def test_a_robot_that_does_not_come_back_to_the_runs_rate_is_left_where_it_answe
         in summary.safe_stop
     ), summary.safe_stop
     assert "`--baud auto` or roomba-bt doctor finds it" in summary.safe_stop
+
+
+def test_a_baud_made_of_the_last_command_before_the_stop_is_no_quiet_and_is_hunted() -> None:
+    """The opcode lost of the drive written just before the stop: the robot moved to 300
+    baud as the stop went out at 115200 and streamed on there, garbage at the run's rate,
+    no valid frame. That was taken for the quiet of a stop heard: ``sent``, the simulated
+    robot left spinning in Safe at 300 baud. Bytes that make no frame after the stop are no
+    quiet: the stop is asked after, found at 300 and the robot put back."""
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    link = LosesTheOpcodeOf(simulator, BAUD_MAKER)
+    connection = Connection(link, CREATE2)
+    connection.start("safe", (7, 35, 43, 44))
+    while connection.counters.frames < 10:
+        connection.poll(0.05)
+    connection.send(oi.drive(129, 1))
+    assert link.lost and simulator.baud == 300 and simulator.mode is OIMode.SAFE
+    assert connection.safe_stop() is True, connection.stop_report
+    assert "the robot had moved to 300 baud" in connection.ending.found_at
+    assert simulator.baud == 115200 and simulator.mode is OIMode.PASSIVE
+    assert simulator.requested_left == simulator.requested_right == 0
+    connection.close()
 
 
 def dock_at_one_percent_lost(seed: int, monkeypatch: pytest.MonkeyPatch) -> tuple[Any, RunSummary]:
