@@ -59,7 +59,7 @@ from roomba_bt.installation import optional_import_failure
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, duration_said, encodes, escaped
-from roomba_bt.robot.errors import DEFAULT_WATCHDOG
+from roomba_bt.robot.errors import DEFAULT_WATCHDOG, TurnedAway
 from roomba_bt.robot.safety import signals_end_the_process
 from roomba_bt.runtime.summary import (
     DEFAULT_GRACE,
@@ -810,7 +810,8 @@ def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSum
     if summary.outcome is Outcome.TIMEOUT and _fast_limit(args):
         print("roomba-bt: no --timeout was given; give one to change the limit (--timeout 10h "
               "for a longer run)", file=sys.stderr)  # fmt: skip
-    if summary.outcome is Outcome.NO_CONNECTION and args.port:
+    turned_away = isinstance(summary.link_error, TurnedAway)  # doctor would be turned away too
+    if summary.outcome is Outcome.NO_CONNECTION and args.port and not turned_away:
         # doctor tries what start-up does not: each rate, a BRC pulse or a hang-up to wake it
         print(f"roomba-bt: `roomba-bt doctor --port {args.port}` finds the robot's rate, wakes "
               "it if it sleeps and says what else is wrong", file=sys.stderr)  # fmt: skip

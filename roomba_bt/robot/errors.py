@@ -152,6 +152,13 @@ class PortLost(LinkDown):
     """Reading or writing the port raised (cable unplugged, bridge closed, robot reset)."""
 
 
+class TurnedAway(PortLost):
+    """The far end of a network link (``socket://``, ``rfc2217://``) closed the connection
+    before it sent a byte: another client holds the bridge, and nothing of this run reached
+    a robot. A run it ends before any robot answered was never started (exit 3, safe to
+    retry: ``runtime/loop.ended_by``), not a link lost under a moving robot (exit 8)."""
+
+
 class ConnectionSilent(PortLost):
     """A network link (``socket://``, ``rfc2217://``) that carried not a byte for the grace
     while a stream ran, and did not close: taken for dead (the safe stop closes it and tries

@@ -42,7 +42,7 @@ from roomba_bt.oi.identify import (
 )
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, shows_reset_banner
-from roomba_bt.robot.errors import PortLost, StreamStalled
+from roomba_bt.robot.errors import PortLost, StreamStalled, TurnedAway
 from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.listen import listen_at
 from roomba_bt.robot.wall_bound import WallBound
@@ -248,7 +248,7 @@ class StreamLink:
         cause = exc.cause if isinstance(exc, TransportError) else exc
         if cause == CLOSED_AT_ONCE:  # turned away, not gone: the robot may be fine
             self.turned_away = True
-            return PortLost(self.name, f"{cause}; nothing reached a robot")
+            return TurnedAway(self.name, f"{cause}; nothing reached a robot")
         return PortLost(
             self.name,
             f"the port is gone ({link_of(self.name).gone}): it failed on {action} ({cause}); the "

@@ -47,7 +47,13 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
+from roomba_bt.robot.errors import (
+    ConnectionFailed,
+    LinkDown,
+    ModeError,
+    StreamStalled,
+    TurnedAway,
+)
 from roomba_bt.robot.hazards import HazardConfirmation
 from roomba_bt.robot.interface import (
     BaseHandle,
@@ -783,7 +789,8 @@ def run_ended_by(
 def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None:
     """The outcome and reason of a run that ``exc`` ended (Ctrl-C aside): the operator's
     stop, the link (its own errors, :class:`LinkDown` and :class:`ConnectionFailed`;
-    ``answered``: the robot had streamed, so it was not merely never there), or an
+    ``answered``: the robot had streamed, so it was not merely never there; a bridge that
+    closed before a byte, :class:`TurnedAway`, with none answered: not started), or an
     exception in a behaviour, an ``OSError`` too, or its ``sys.exit()``, a
     ``KeyboardInterrupt`` it raised itself (no signal came), a ``BaseException`` of its own
     (its path, method and file:line, the traceback: not ours to exit, as at a plugin's
@@ -791,7 +798,8 @@ def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None
     after the safe stop."""
     if isinstance(exc, StopRequested):
         summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
-    elif isinstance(exc, ConnectionFailed):
+    elif isinstance(exc, ConnectionFailed) or (isinstance(exc, TurnedAway) and not answered):
+        # a bridge that turned the run away before any robot answered: never started
         summary.outcome = Outcome.CONNECTION_LOST if answered else Outcome.NO_CONNECTION
         summary.reason, summary.link_error = str(exc), exc
     elif isinstance(exc, LinkDown):
