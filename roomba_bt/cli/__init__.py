@@ -22,7 +22,7 @@ from typing import NoReturn
 from roomba_bt import __version__
 from roomba_bt.cli.streams import guard_std_streams, stdout_problem
 from roomba_bt.installation import IncompleteInstallation, missing_from_installation
-from roomba_bt.robot.wording import COMMAND_LINE, spoken
+from roomba_bt.robot.wording import COMMAND_LINE, UNATTENDED, ConnectionWording, spoken
 
 # Nothing heavier at the top: the process's signal handlers (:func:`_as_the_process`) are set
 # once this module has loaded, and each module imported here delays them. The exit codes'
@@ -128,6 +128,17 @@ def _cannot_run(exc: ImportError, verbose: int) -> int:
     return ExitCode.INVALID
 
 
+def _command_line_wording() -> ConnectionWording:
+    """The command line's words for the connections' messages: a terminal's, or, where stdin
+    is no TTY (a systemd service, cron, a timer: nobody to press Clean), the unattended
+    robot's owner's (:data:`~roomba_bt.robot.wording.UNATTENDED`)."""
+    try:
+        attended = sys.stdin is not None and sys.stdin.isatty()
+    except (OSError, ValueError):  # stdin closed
+        attended = False
+    return COMMAND_LINE if attended else UNATTENDED
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """The command: ``argv`` None is the process itself (``roomba-bt``), whose streams and
     signals are its own to set (:func:`_as_the_process`); a list is a program's call."""
@@ -135,7 +146,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if process:
         _as_the_process()
     try:
-        with spoken(COMMAND_LINE):  # the connections' messages name the flags, not arguments
+        with spoken(_command_line_wording()):  # the connections' messages name the flags
             return _command(argv)
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP before a run took them
         if process:

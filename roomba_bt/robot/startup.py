@@ -32,6 +32,7 @@ from typing import Literal
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.robot import wording
 from roomba_bt.robot.errors import ConnectionFailed, NoAnswer
 from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.transport.base import TransportError
@@ -46,14 +47,23 @@ WRONG_RATE = (
     "wrong baud rate (115200 by default; 19200 after Clean held at power-on on a Roomba 500, "
     "at power-off on a 600 or Create 2, or three BRC pulses after power-on)"
 )
-NOT_AWAKE = "no power or the robot asleep (press Clean or the power button)"
+#: why a robot may not answer, its power or sleep, as a Python caller is told it (the
+#: command line's words: :func:`not_awake`)
+NOT_AWAKE = f"no power or the robot asleep ({wording.PYTHON.wake_asleep})"
+
+
+def not_awake() -> str:
+    """Why a robot may not answer, its power or sleep, and what its owner can do, in the
+    words of the caller (:data:`~roomba_bt.robot.wording.current`): a button at the robot,
+    or for a service, which nobody watches, BRC and the power."""
+    return f"no power or the robot asleep ({wording.current.wake_asleep})"
 
 
 def no_answer_causes(port: str) -> tuple[str, str, str]:
     """Why the robot on ``port`` may not answer: the rate, its power or sleep, and the
     link's wiring, a cable's or a bridge's serial side (a bridge's user was told to check
     a cable there is none of)."""
-    return (WRONG_RATE, NOT_AWAKE, link_of(port).wiring)
+    return (WRONG_RATE, not_awake(), link_of(port).wiring)
 
 
 #: 0.1.0's name (in ``robot.connection.__all__``): the causes said for a device path, a

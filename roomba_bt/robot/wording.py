@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
-__all__ = ["COMMAND_LINE", "PYTHON", "ConnectionWording", "current", "spoken"]
+__all__ = ["COMMAND_LINE", "PYTHON", "UNATTENDED", "ConnectionWording", "current", "spoken"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -36,6 +36,10 @@ class ConnectionWording:
     record_max: str
     #: what the caller set to end a replay before its record does
     replay_until: str
+    #: what the robot's owner can do about a robot that answers nothing at start-up, asleep
+    #: or without power: at the robot, a button; with nobody there (a service, a timer), the
+    #: BRC line that wakes it and keeps it awake, and its power
+    wake_asleep: str = "press Clean or the power button"
 
 
 #: A Python program's words: ``Connection``'s, ``Connection.open``'s and ``RunStack``'s
@@ -60,6 +64,19 @@ COMMAND_LINE = ConnectionWording(
     firmware_read="roomba-bt doctor --allow-reset reads the version",
     record_max="--record-max",
     replay_until="--to",
+)
+
+#: The ``roomba-bt`` command's words where nobody is at a terminal (stdin no TTY: a systemd
+#: service, a cron job or timer): "press Clean" asked a person who is not there; what the
+#: robot's owner sets up instead is BRC on the port's modem lines and the dock's power
+#: (docs/unattended.md, "BRC: keeping the robot awake, and waking it at 9:00")
+UNATTENDED = replace(
+    COMMAND_LINE,
+    wake_asleep=(
+        "unattended, a BRC pulse wakes it: BRC wired to the port's RTS or DTR, as iRobot's "
+        "cable does, and keep-awake left on; else check the dock's power and the battery: "
+        "docs/unattended.md, BRC"
+    ),
 )
 
 #: the words this process's connection messages use now
