@@ -234,11 +234,21 @@ def _asked_again(
     mode = connection.mode.label  # last seen in, before the robot's reply
     reply = _reply(connection)
     if reply is None:
+        asked_twice = f"it answered no query, asked twice {ASK_AGAIN_AFTER_S:g} s apart"
+        lost_before = bytes_lost_said(connection)
+        if lost_before:  # the reason says the OI went Off mid-run: Off answers no query, and
+            # "in Safe, which never sleeps" read as if the robot were still there in Safe
+            probed = (
+                f"{asked_twice}, as an OI gone Off does (last seen in {mode}; else "
+                f"{_silent_causes(connection)})"
+            )
+        else:
+            probed = f"{asked_twice}, and it was in {mode}, which never sleeps: " + (
+                _silent_causes(connection)
+            )
         return StreamLost(
             connection.name, silent_for, grace, 0, watchdog=connection.watchdog, halted=halted,
-            probed=f"it answered no query, asked twice {ASK_AGAIN_AFTER_S:g} s apart, and it "
-            f"was in {mode}, which never sleeps: {_silent_causes(connection)}",
-            lost_before=bytes_lost_said(connection),
+            probed=probed, lost_before=lost_before,
         )  # fmt: skip
     connection.unheard = None
     # the mode the robot answered with, not the model's: it may have fallen to Passive

@@ -200,6 +200,12 @@ def test_seed_67_a_power_made_of_lost_bytes_is_named_and_its_stop_confirmed(
         "Power (133) made of lost bytes on this line: bytes from the computer to the robot "
         "were lost in this run (a wheel command 2 times, put right); nothing arrived for 2.0 s"
     ), summary.reason
+    # an OI gone Off answers no query: not "in Safe, which never sleeps" (its old ending)
+    assert (
+        "it answered no query, asked twice 1 s apart, as an OI gone Off does (last seen in "
+        "Safe; else switched off, a flat battery, or " in summary.reason
+    ), summary.reason
+    assert "never sleeps" not in summary.reason
     assert summary.stop_delivered and summary.safe_stop.startswith("sent "), summary.safe_stop
 
 
