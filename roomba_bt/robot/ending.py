@@ -115,6 +115,12 @@ RESET_RESTARTED = (
     "the robot reset (its start-up banner was read; a Reset (7) made of lost bytes, most "
     "likely): sent Start again after its banner, it answered in Passive"
 )
+#: Why a quiet after a stop with bytes in it that make no frame (how many) does not show it
+#: heard: a robot a Baud (129) made of lost bytes moved to another rate streams on there
+GARBAGE_AFTER = (
+    "no valid frame came after it, but %d bytes that make none (the robot talking at another "
+    "rate: a Baud (129) made of lost bytes, most likely)"
+)
 #: Reads at most of what waits unread in the port before a stop (each read takes all there
 #: is: one is the rule; the bound is for a line that never runs dry)
 BACKLOG_READS = 16
@@ -216,6 +222,23 @@ def stopped_in_passive(frames: list[SensorFrame], detector: OffsetDetector) -> b
     if _LEFT_VELOCITY in last and _RIGHT_VELOCITY in last:
         return last[_LEFT_VELOCITY] == last[_RIGHT_VELOCITY] == 0
     return wheels_seen(frames) == WHEELS_STILL
+
+
+def streamed_on(
+    late: list[SensorFrame], in_flight: float, detector: OffsetDetector
+) -> tuple[str, OIMode | None]:
+    """What the frames that came after a stop the robot did not hear showed: how many, its
+    mode (packet 35, read by ``detector``; also returned, for the stop written again, or
+    None) and its wheels."""
+    said = (
+        f"{len(late)} sensor frames came in the {STOP_LISTEN:.2f} s after Pause Stream "
+        f"(past the {in_flight:.2f} s the frames already on their way may take)"
+    )
+    last = late[-1]
+    mode = detector.interpret(last[OI_MODE_PACKET]) if OI_MODE_PACKET in last else None
+    if mode is not None:
+        said += f", packet 35 still reading {mode.label}"
+    return said + wheels_seen(late), mode
 
 
 def wheels_seen(frames: list[SensorFrame]) -> str:
@@ -465,9 +488,7 @@ class SafeStop:
         self._heard_at: float | None = None
         #: why the quiet after a stop shows nothing (:meth:`_quiet_unproven`), or None
         self._unproven: str | None = None
-        #: bytes read after the stop's last valid frame (or the stop) that make no frame:
-        #: a quiet with these is no quiet (a robot a Baud (129) moved streams on at its
-        #: new rate, garbage at the run's; :meth:`_contradicted`)
+        #: bytes after the stop's last valid frame (or the stop) that make none: no quiet
         self._garbage_after = 0
         #: the link's count of valid frames when a stop was last said not delivered
         self._unseen_from = -1
@@ -668,9 +689,8 @@ class SafeStop:
         a link with latency): they show the robot as it was before the stop, and are neither
         counted nor read for its mode. A quiet of :data:`STOP_LISTEN` s after the last frame
         shows the stop heard, unless bytes that make no frame came in it (kept for
-        :meth:`_quiet_unproven`: a lost byte that made a Baud (129) of the last command's
-        data moved the robot to 300 baud, where it streamed on, garbage at the run's rate,
-        and the stop was said sent); frames still coming :data:`STOP_LISTEN` s past the
+        :meth:`_quiet_unproven`: :data:`GARBAGE_AFTER`; the robot a Baud made of lost bytes
+        put on 300 baud was said stopped); frames still coming :data:`STOP_LISTEN` s past the
         frames in flight, more than :data:`PAUSE_SLACK`, show it unheard (the host-to-robot
         wire dead, the robot still in Safe and driving): what they showed, or None."""
         link = self.writer.link
@@ -699,24 +719,12 @@ class SafeStop:
         self._garbage_after = max(0, unframed - parser.pending)
         if clock() - last >= STOP_LISTEN - CLOCK_ROUNDING or len(late) <= PAUSE_SLACK:
             return None  # the stream stopped: it heard Pause Stream
-        if self.end_in == "passive" and stopped_in_passive(late, self.writer.modes.detector):
+        detector = self.writer.modes.detector
+        if self.end_in == "passive" and stopped_in_passive(late, detector):
             return None  # Pause Stream lost (a command's data a lost byte left short), Start not
-        return self._streamed_on(late, in_flight)
-
-    def _streamed_on(self, late: list[SensorFrame], in_flight: float) -> str:
-        """What the frames that came after a stop the robot did not hear showed: how many,
-        its mode (packet 35, kept for the stop written again) and its wheels."""
-        said = (
-            f"{len(late)} sensor frames came in the {STOP_LISTEN:.2f} s after Pause Stream "
-            f"(past the {in_flight:.2f} s the frames already on their way may take)"
-        )
-        last = late[-1]
-        if OI_MODE_PACKET in last:
-            mode = self.writer.modes.detector.interpret(last[OI_MODE_PACKET])
-            if mode is not None:
-                said += f", packet 35 still reading {mode.label}"
-                self._seen = mode
-        return said + wheels_seen(late)
+        said, seen = streamed_on(late, in_flight, detector)
+        self._seen = seen or self._seen  # the mode the stop written again is sent from
+        return said
 
     def _quiet_unproven(self, written_at: float) -> str | None:
         """Why the quiet after a stop written at ``written_at`` does not show it heard: the
@@ -729,11 +737,7 @@ class SafeStop:
         if link.status is LinkStatus.LOST:
             return "the port failed while the robot was listened to after it"
         if self._garbage_after:  # not a quiet: the robot may talk at another rate
-            return (
-                f"no valid frame came after it, but {self._garbage_after} bytes that make none "
-                "(the robot talking at another rate: a Baud (129) made of lost bytes, most "
-                "likely)"
-            )
+            return GARBAGE_AFTER % self._garbage_after
         if self._heard_at is None:  # no frame of this stream yet: no silence to measure
             return None
         silent = written_at - self._heard_at
