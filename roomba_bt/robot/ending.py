@@ -723,7 +723,8 @@ class SafeStop:
         if self.end_in == "passive" and stopped_in_passive(late, detector):
             return None  # Pause Stream lost (a command's data a lost byte left short), Start not
         said, seen = streamed_on(late, in_flight, detector)
-        self._seen = seen or self._seen  # the mode the stop written again is sent from
+        if seen is not None:  # the mode the stop written again is sent from
+            self._seen = seen
         return said
 
     def _quiet_unproven(self, written_at: float) -> str | None:
