@@ -1,11 +1,20 @@
 """The slowest tick's behaviour, named in the summary (runtime/tick_watch.py): a plugin's
 ``update()`` that blocks (``time.sleep``) showed under ``run --fast`` only as ``slowest 503.89
-ms``, and the plugin's author, who tests there, could not tell which leaf it was. The blocking
-here is half a second, twenty looks of the watch: whether it is named does not depend on the
-machine's speed."""
+ms``, and the plugin's author, who tests there, could not tell which leaf it was.
+
+End to end the plugin blocks on a pipe until the watch has seen it blocked for half a second
+(twenty looks), and is let go right after that look: the tick ends a wake-up after the
+watch's last look inside it, and began at most a look before the first, well within the
+watch's three looks of slack on a loaded machine too. A fixed ``time.sleep(0.5)`` flaked
+under load: its tick began before the watch thread's first look, and the run ended two ticks
+after it, before another look, so each end was a look short, and a late look on top of that
+went past the slack ("slowest 5xx ms", no behaviour named)."""
 
 from __future__ import annotations
 
+import os
+import threading
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -17,7 +26,9 @@ from roomba_bt.runtime.tick_watch import SlowTickWatch
 
 from .simrun import RunMission, write_mission
 
+#: the plugin, its first tick blocked by ``{blocks}``
 PLUGIN = '''
+import os
 import time
 
 from py_trees.common import Status
@@ -27,7 +38,8 @@ from roomba_bt.behaviours import Action, declare
 
 @declare("sleepy", kind="action")
 class Sleepy(Action):
-    """Blocks its first tick for half a second, then runs two ticks more."""
+    """Blocks its first tick (half a second, or until the test lets it go), then runs two
+    ticks more."""
 
     def initialise(self):
         self.ticks = 0
@@ -35,7 +47,7 @@ class Sleepy(Action):
     def update(self):
         self.ticks += 1
         if self.ticks == 1:
-            time.sleep(0.5)
+            {blocks}
         return Status.SUCCESS if self.ticks >= 3 else Status.RUNNING
 '''
 
@@ -44,21 +56,55 @@ MISSION = "plugins: [./sleepy.py]\ntree:\n  sequence: [{mode: safe}, {wait: 100m
 
 @pytest.fixture
 def mission(tmp_path: Path) -> Path:
-    return write_mission(tmp_path, MISSION, "m.yaml", {"sleepy.py": PLUGIN})
+    """The mission whose plugin sleeps half a second."""
+    return write_mission(
+        tmp_path, MISSION, "m.yaml", {"sleepy.py": PLUGIN.format(blocks="time.sleep(0.5)")}
+    )
+
+
+@pytest.fixture
+def watched_mission(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
+    """The mission whose plugin blocks reading a pipe; the pipe's other end is closed (the
+    read returns) right after the look at which the watch has seen it inside for 0.5 s, or
+    after a minute if no look ever does (the test fails, it does not hang)."""
+    read_end, write_end = os.pipe()
+    still_open = [write_end]
+    lock = threading.Lock()
+
+    def release() -> None:
+        with lock:
+            if still_open:
+                os.close(still_open.pop())
+
+    look = SlowTickWatch.look
+
+    def look_then_release(watch: SlowTickWatch, ticks: int, where_now: Callable[[], str]) -> None:
+        look(watch, ticks, where_now)
+        if watch.longest_s >= 0.5:
+            release()
+
+    monkeypatch.setattr(SlowTickWatch, "look", look_then_release)
+    last_resort = threading.Timer(60.0, release)
+    last_resort.start()
+    plugin = PLUGIN.format(blocks=f"os.read({read_end}, 1)")
+    yield write_mission(tmp_path, MISSION, "m.yaml", {"sleepy.py": plugin})
+    last_resort.cancel()
+    release()
+    os.close(read_end)
 
 
 def test_run_fast_names_the_behaviour_of_its_slowest_tick(
-    mission: Path, capsys: pytest.CaptureFixture[str]
+    watched_mission: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """On the virtual clock there is no tick guard; the ticks line names the leaf all the
     same, as the guard would: the behaviour, its method and the line it was blocked at."""
-    argv = ["run", str(mission), "--fast", "--display", "none", "--allow-plugin-files"]
+    argv = ["run", str(watched_mission), "--fast", "--display", "none", "--allow-plugin-files"]
     assert main(argv) == ExitCode.OK
     out = capsys.readouterr().out
     ticks = next(line for line in out.splitlines() if line.startswith("ticks "))
-    plugin = mission.parent / "sleepy.py"
+    plugin = watched_mission.parent / "sleepy.py"
     assert " ms in sleepy (Sleepy.update at " in ticks, ticks
-    assert f"{plugin}:19)" in ticks, ticks  # the time.sleep line
+    assert f"{plugin}:21)" in ticks, ticks  # the line it blocked at
 
 
 def test_a_program_s_run_starts_no_watch_unless_asked(
@@ -185,8 +231,6 @@ def test_without_the_thread_s_times_every_slow_tick_is_named_as_before() -> None
 
 def test_the_thread_s_times_are_read_from_the_kernel_where_it_keeps_them() -> None:
     """Linux's schedstat of the calling thread: its time on a CPU grows as it computes."""
-    import threading
-
     from roomba_bt.runtime.tick_watch import SchedStat
 
     stats = SchedStat(threading.get_native_id())
