@@ -30,6 +30,20 @@ def test_the_names_a_program_needs_are_there() -> None:
         assert name in roomba_bt.__all__ and name in dir(roomba_bt), name
 
 
+def test_the_blackboard_s_names_a_program_meets_are_there() -> None:
+    """A tree with py_trees client keys run beside another run ends with
+    ``SharedBlackboard`` (its message says why and what to use instead), which a program
+    catches; ``stack.runner.blackboard`` is a ``RunBoard``. Both from the package, as the
+    other errors are, and from ``roomba_bt.behaviours``, where ``read_key`` is."""
+    from roomba_bt.behaviours import blackboard
+
+    for name in ("SharedBlackboard", "RunBoard"):
+        assert name in roomba_bt.__all__ and name in roomba_bt.behaviours.__all__, name
+        assert getattr(roomba_bt, name) is getattr(roomba_bt.behaviours, name)
+        assert getattr(roomba_bt, name) is getattr(blackboard, name)
+    assert issubclass(roomba_bt.SharedBlackboard, roomba_bt.RoombaBtError)
+
+
 @pytest.mark.parametrize("name", EXPORTS)
 def test_every_name_is_kept_once_asked_for(name: str) -> None:
     value = getattr(roomba_bt, name)
