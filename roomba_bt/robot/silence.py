@@ -36,6 +36,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.stream import stream_period
+from roomba_bt.robot import wording
 from roomba_bt.robot.discovery import OI_RATES, search, wake_pulse
 from roomba_bt.robot.ending import signals_deferred
 from roomba_bt.robot.errors import (
@@ -430,10 +431,11 @@ def another_model(connection: Connection, mismatch: ProfileMismatch) -> None:
     mismatch and its fix. It was said unconfirmed because "the robot had sent no valid
     frame for 0.11 s before it", a silence that was only the profile's."""
     likely = mismatch.likely[0]
+    fix = wording.current.profile_named.format(name=likely.name)  # a program has no --profile
     _confirmed_by_quiet(
         connection,
-        f"its frames fail {mismatch.fails} (most likely a {likely.title}: --profile "
-        f"{likely.name}), and it neither went quiet after Pause Stream nor answered a query",
+        f"its frames fail {mismatch.fails} (most likely a {likely.title}: {fix}), and it "
+        "neither went quiet after Pause Stream nor answered a query",
     )
 
 

@@ -36,6 +36,12 @@ class ConnectionWording:
     record_max: str
     #: what the caller set to end a replay before its record does
     replay_until: str
+    #: how the caller reads a robot with the profile ``{name}`` (a stop unconfirmed on
+    #: another model's frames says it: robot/silence.py)
+    profile_named: str
+    #: what the caller set to limit a run's wall-clock time, ``{limit}`` long, as "... of
+    #: wall-clock time ran out" says it (runtime/wall_limit.py)
+    wall_limit: str
     #: what the robot's owner can do about a robot that answers nothing at start-up, asleep
     #: or without power: at the robot, a button; with nobody there (a service, a timer), the
     #: BRC line that wakes it and keeps it awake, and its power
@@ -54,6 +60,8 @@ PYTHON = ConnectionWording(
     ),
     record_max="Recording's max_bytes",
     replay_until="replay_record's until",
+    profile_named="Connection.open(port, profile='{name}')",
+    wall_limit="stack.runner.wall_limit_s ({limit})",
 )
 
 #: The ``roomba-bt`` command's words: its flags
@@ -64,6 +72,8 @@ COMMAND_LINE = ConnectionWording(
     firmware_read="roomba-bt doctor --allow-reset reads the version",
     record_max="--record-max",
     replay_until="--to",
+    profile_named="--profile {name}",
+    wall_limit="--wall-limit {limit}",
 )
 
 #: The ``roomba-bt`` command's words where nobody is at a terminal (stdin no TTY: a systemd

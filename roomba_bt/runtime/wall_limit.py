@@ -21,6 +21,7 @@ from types import FrameType, TracebackType
 import py_trees
 
 from roomba_bt.printable import duration_said
+from roomba_bt.robot import wording
 from roomba_bt.robot.safety import RunAborted
 from roomba_bt.runtime.teardown import stuck_in
 
@@ -70,8 +71,11 @@ class WallLimit:
 
     def said(self, exc: BaseException) -> str:
         """Where the limit found the thread, from the stack ``exc`` (its
-        :class:`WallLimitReached`) unwound: :func:`ran_out`'s words."""
-        return ran_out(self.limit_s or 0.0, list(traceback.walk_tb(exc.__traceback__)))[1]
+        :class:`WallLimitReached`) unwound: :func:`ran_out`'s words, the limit named as the
+        run's caller set it (``--wall-limit``, or a program's ``stack.runner.wall_limit_s``,
+        which has no such option)."""
+        frames = list(traceback.walk_tb(exc.__traceback__))
+        return ran_out(self.limit_s or 0.0, frames, wording.current.wall_limit)[1]
 
     def _expire(self) -> None:
         with self._lock:
@@ -89,12 +93,18 @@ def _set_async_exc(thread: int, kind: type[BaseException] | None) -> None:
 
 
 def ran_out(
-    limit_s: float, frames: list[tuple[FrameType, int]] | None
+    limit_s: float,
+    frames: list[tuple[FrameType, int]] | None,
+    limit_named: str = wording.COMMAND_LINE.wall_limit,
 ) -> tuple[py_trees.behaviour.Behaviour | None, str]:
     """What a run or episode stopped at its wall-clock limit says, and the behaviour it was
     stuck in (None: outside every behaviour, or no stack): ``--wall-limit 3 s of wall-clock
     time ran out in behaviour sequence / hang (at bad.py:30)``, where :func:`stuck_in` finds
-    it on ``frames`` (outermost first; None: no Python frame answered, a loop in C code)."""
+    it on ``frames`` (outermost first; None: no Python frame answered, a loop in C code).
+    ``limit_named``: the limit as its caller set it (:class:`ConnectionWording.wall_limit
+    <roomba_bt.robot.wording.ConnectionWording>`); an evaluation's episode keeps ``eval
+    --wall-limit``'s, being judged on a worker process that does not know its caller's."""
     behaviour, where = stuck_in(frames) if frames else (None, "")
     said = f" {where}" if where else ": no Python frame answered (a loop in C code?)"
-    return behaviour, f"--wall-limit {duration_said(limit_s)} of wall-clock time ran out{said}"
+    named = limit_named.format(limit=duration_said(limit_s))
+    return behaviour, f"{named} of wall-clock time ran out{said}"

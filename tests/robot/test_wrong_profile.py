@@ -8,6 +8,7 @@ from __future__ import annotations
 import pytest
 
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600, RobotProfile
+from roomba_bt.robot import wording
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import StreamStalled
 from roomba_bt.sim import SimLink, Simulator, load_world
@@ -145,28 +146,36 @@ def test_a_roomba500_summing_the_header_beside_a_wall_is_named_by_its_range(
 
 @pytest.mark.parametrize("sums_header", [True, False], ids=["range", "checksum"])
 @pytest.mark.parametrize("hears", [True, False], ids=["heard", "deaf"])
+@pytest.mark.parametrize(
+    ("caller", "fix"),
+    [(wording.PYTHON, "Connection.open(port, profile='roomba500')"),
+     (wording.COMMAND_LINE, "--profile roomba500")],
+    ids=["a program", "the command line"],
+)  # fmt: skip
 def test_the_stop_after_another_model_s_stall_says_what_is_known(
-    sums_header: bool, hears: bool
+    sums_header: bool, hears: bool, caller: wording.ConnectionWording, fix: str
 ) -> None:
     """After a stall on a Roomba 500's frames read with create2 (its frames fail the range,
     or the checksum, of the profile), the stop was "unconfirmed: the robot had sent no valid
     frame for 0.11 s before it": a silence that was only the profile's, the robot streaming
     all along. Its Pause Stream heard (the line quiet) and a Query List answered confirm it;
-    a robot that hears nothing leaves it unconfirmed, with the mismatch and its fix."""
+    a robot that hears nothing leaves it unconfirmed, with the mismatch and its fix, in the
+    caller's words (a program was told ``--profile roomba500``, an option it has not got)."""
     from dataclasses import replace
 
     summing = replace(ROOMBA500, checksum_includes_header=sums_header)
-    stalled, connection = _stalled_beside_a_wall(summing, CREATE2)
-    assert stalled.mismatch is not None
-    simulator = connection.transport.simulator  # type: ignore[attr-defined]
-    simulator.deaf = not hears
-    assert connection.close() is hears
+    with wording.spoken(caller):
+        stalled, connection = _stalled_beside_a_wall(summing, CREATE2)
+        assert stalled.mismatch is not None
+        simulator = connection.transport.simulator  # type: ignore[attr-defined]
+        simulator.deaf = not hears
+        assert connection.close() is hears
     if hears:
         assert connection.stop_report is None
     else:
         report = connection.stop_report or ""
         assert "unconfirmed: its frames fail the create2 profile's" in report, report
-        assert "--profile roomba500" in report
+        assert f"(most likely a Roomba 500 series: {fix})" in report, report
         assert "no valid frame" not in report
 
 

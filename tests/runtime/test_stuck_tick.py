@@ -16,6 +16,7 @@ from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot import wording
 from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.runtime.wall_limit import WallLimit, WallLimitReached
@@ -117,15 +118,24 @@ def test_an_ordinary_tick_s_interrupt_says_only_the_signal() -> None:
     assert (summary.outcome, summary.reason) == (Outcome.INTERRUPTED, "Ctrl-C")
 
 
-def test_the_wall_limit_ends_a_stuck_run_naming_the_leaf_after_the_safe_stop() -> None:
+@pytest.mark.parametrize(
+    ("caller", "limit"),
+    [(wording.PYTHON, "stack.runner.wall_limit_s (0.5 s)"),
+     (wording.COMMAND_LINE, "--wall-limit 0.5 s")],
+    ids=["a program", "the command line"],
+)  # fmt: skip
+def test_the_wall_limit_ends_a_stuck_run_naming_the_leaf_after_the_safe_stop(
+    caller: wording.ConnectionWording, limit: str
+) -> None:
+    """The limit is named as the caller set it: a program has no ``--wall-limit``."""
     stack, stuck = _stack()
     stack.runner.wall_limit_s = 0.5
-    with stack:
+    with stack, wording.spoken(caller):
         summary = stack.run()
     assert stuck.spinning.is_set()
     # HUNG, eval's word for a stuck episode: not ERROR, no exception was raised in the tree
     assert summary.outcome is Outcome.HUNG and summary.exit_code == 4
-    said = "--wall-limit 0.5 s of wall-clock time ran out in behaviour root / stuck"
+    said = f"{limit} of wall-clock time ran out in behaviour root / stuck"
     assert summary.reason.startswith(said), summary.reason
     assert stuck.named(summary.reason, said), summary.reason
     _stopped(stack, summary)
