@@ -243,17 +243,24 @@ def test_a_run_whose_watchdog_stopped_the_wheels_over_the_pty_replays_byte_for_b
 
     The gap comes 1.5 s after the run started the stream (``--faults-from-stream``): at 1.5 s
     of the simulator's own clock it had passed before a run slow to start (its imports on a
-    loaded machine) opened the port, and no stall happened."""
+    loaded machine) opened the port, and no stall happened.
+
+    On a loaded machine the simulator's process may itself be kept from running past the
+    watchdog (100 ms): a stall more, which the run rides through and the replay does again
+    as well; so the gap's stall is one of one or more, each ridden through. The waits are
+    :data:`RUN_WAIT_S` (a run's start took over 10 s under load; 30 s bounded it and the
+    replay before)."""
     sim = served_sim(
         "--pty", "--stream-gap-at", "1.5", "--stream-gap-s", "0.5", "--faults-from-stream"
     )
     record = tmp_path / "run.jsonl"
     proc = _start_run(sim.address, write_mission(tmp_path, SPIN), record, "--timeout", "3s")
-    out, err = proc.communicate(timeout=30)
+    out, err = proc.communicate(timeout=RUN_WAIT_S)
     assert proc.returncode == 1, err  # its timeout
-    assert "stalls       1 (watchdog drive 0), 1 ridden through" in out
+    stalls = re.search(r"stalls +(\d+) \(watchdog drive 0\), (\d+) ridden through", out)
+    assert stalls is not None and int(stalls[1]) >= 1 and stalls[1] == stalls[2], out
     replay = subprocess.run(
-        [*CLI, "replay", str(record)], capture_output=True, text=True, timeout=30
+        [*CLI, "replay", str(record)], capture_output=True, text=True, timeout=RUN_WAIT_S
     )
     assert replay.returncode == 0, replay.stdout + replay.stderr
     assert "the tree wrote the same" in replay.stdout
