@@ -56,21 +56,31 @@ COMMAND_WAIT_S = 60.0
 CREATE2_OR_500 = "iRobot Create 2 (or a Roomba 500 series, by its label)"
 
 
-def _cli(*args: str) -> subprocess.CompletedProcess[str]:
-    """``roomba-bt ARGS`` run to its end (:data:`COMMAND_WAIT_S` at most: then SIGTERM,
-    which lets it close its port, and the test fails)."""
-    with subprocess.Popen(
+def _started(*args: str) -> subprocess.Popen[str]:
+    """``roomba-bt ARGS`` started, its output read through text pipes."""
+    return subprocess.Popen(
         [sys.executable, "-m", "roomba_bt.cli", *args],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-    ) as proc:
-        try:
-            out, err = proc.communicate(timeout=COMMAND_WAIT_S)
-        except subprocess.TimeoutExpired:
-            proc.terminate()
-            proc.communicate(timeout=COMMAND_WAIT_S)
-            raise
+    )
+
+
+def _ended(proc: subprocess.Popen[str]) -> tuple[str, str]:
+    """What ``proc`` wrote on stdout and stderr once it ended (:data:`COMMAND_WAIT_S` at
+    most: then SIGTERM, which lets it close its port, and the test fails)."""
+    try:
+        return proc.communicate(timeout=COMMAND_WAIT_S)
+    except subprocess.TimeoutExpired:
+        proc.terminate()
+        proc.communicate(timeout=COMMAND_WAIT_S)
+        raise
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess[str]:
+    """``roomba-bt ARGS`` run to its end."""
+    with _started(*args) as proc:
+        out, err = _ended(proc)
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
@@ -84,23 +94,13 @@ def _doctor_timed(port: str) -> tuple[subprocess.CompletedProcess[str], float]:
     """:func:`_doctor`, and the seconds from its first line (printed once its imports are
     done) to its end: doctor's own time, which the interpreter's start-up does not count
     in."""
-    with subprocess.Popen(
-        [sys.executable, "-m", "roomba_bt.cli", "doctor", "--port", port],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    ) as proc:
+    with _started("doctor", "--port", port) as proc:
         assert proc.stdout is not None
         ready, _, _ = select.select([proc.stdout], [], [], COMMAND_WAIT_S)
         assert ready, "doctor printed nothing"
         first = proc.stdout.readline()
         began = time.monotonic()
-        try:
-            out, err = proc.communicate(timeout=COMMAND_WAIT_S)
-        except subprocess.TimeoutExpired:
-            proc.terminate()
-            proc.communicate(timeout=COMMAND_WAIT_S)
-            raise
+        out, err = _ended(proc)
         took = time.monotonic() - began
     assert "Traceback" not in err + out
     return subprocess.CompletedProcess(proc.args, proc.returncode, first + out, err), took
