@@ -327,10 +327,17 @@ class Registry:
                 self._errors.append(PluginError(said, clash, names=names, loses_behaviours=False))
             except _LanguageWord as exc:  # the word is the language's; the class may be reached
                 spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
-                reach = f"a mission reaches it as {spelled!r}" if spelled else "it is not used"
+                reach = (
+                    f"this behaviour is reached only as {spelled!r}"
+                    if spelled
+                    else "this behaviour cannot be used"
+                )
+                # what was found, why it is refused, what to do (it read "the word is the
+                # language's, and it is not used (or rename it)")
                 word = (
-                    f"{_where(cls)} declares {exc.name!r}, a word of the mission language: the "
-                    f"word is the language's, and {reach} (or rename it)"
+                    f"{_where(cls)} declares the name {exc.name!r}, which is a word of the "
+                    f"mission language: {exc.name!r} in a mission always means the "
+                    f"language's own, so {reach}; rename it in its @declare"
                 )
                 self._errors.append(PluginError(said, word, names=names, loses_behaviours=False))
             except _NotABehaviour as exc:

@@ -28,6 +28,7 @@ from roomba_bt.cli.arguments import (
     parse_params,
     permissions,
 )
+from roomba_bt.cli.language_words import EVERY_WORD, every_word, language_word
 from roomba_bt.cli.profile_choice import (
     BadSetting,
     chosen_profile,
@@ -121,12 +122,25 @@ def register(sub: Any) -> None:
         """list every behaviour with its parameters
 
         List the built-in and plugin behaviours: parameters (type, unit, range, default), sensor
-        packets read, OI modes needed. Exit 2 if an installed plugin did not load (it is
-        named, with its error), unless --skip-broken-plugins.
+        packets read, OI modes needed. A word of the mission language (retry, timeout, until)
+        is no behaviour: asked for, its meaning and options are printed (--words lists them
+        all). Exit 2 if an installed plugin did not load (it is named, with its error),
+        unless --skip-broken-plugins.
         """,
     )
     behaviours.add_argument("names", nargs="*", help="only these behaviours")
-    behaviours.add_argument("--json", action="store_true", help="machine-readable output")
+    output = behaviours.add_mutually_exclusive_group()
+    output.add_argument("--json", action="store_true", help="machine-readable output")
+    output.add_argument(
+        "--markdown",
+        action="store_true",
+        help="each as its entry in docs/missions.md's reference (its text and parameter table)",
+    )
+    output.add_argument(
+        "--words",
+        action="store_true",
+        help="list the mission language's own words (composites, decorators, modifiers)",
+    )
     _add_plugin_file_option(behaviours, "also list")
     _add_skip_broken_option(behaviours, "list the behaviours that loaded and exit 0")
 
@@ -505,46 +519,6 @@ def describe_behaviours(
     return out
 
 
-#: what each shape of the language's words is called (docs/missions.md, "Nodes")
-_WORD_KINDS = {
-    "children": "a composite",
-    "do": "a decorator",
-    "child or do": "a decorator",
-    "subtree": "a word (the node that uses a subtree)",
-}
-
-
-#: Where the mission language is described: a page the wheel does not ship, so named as
-#: the project's.
-MISSIONS_DOC = "roomba-bt's repository: docs/missions.md"
-
-
-def language_word(name: str) -> str | None:
-    """What ``behaviours NAME`` says of a word of the mission language (a composite, a
-    decorator, ``subtree``, a modifier, a file section), which is no behaviour: what it is,
-    its options, and where the language is described; None for any other name. ``behaviours
-    retry`` said ``unknown behaviour 'retry' (did you mean 'odometry'?)``."""
-    from roomba_bt.behaviours.language import MODIFIERS, RESERVED, WORDS
-
-    kind = WORDS.get(name)
-    if kind is not None:
-        what = _WORD_KINDS[kind.shape.value]
-        options = "; ".join(f"{p.name}: {p.describe()}" for p in kind.options)
-        takes = f" (options: {options})" if options else ""
-        return (
-            f"{name!r} is {what} of the mission language, not a behaviour: {kind.doc}{takes}; "
-            f'the language\'s words are in {MISSIONS_DOC}, "Nodes"'
-        )
-    if name in MODIFIERS:
-        return (
-            f"{name!r} is a modifier of the mission language, written beside any node's word, "
-            f'not a behaviour: {MODIFIERS[name]} ({MISSIONS_DOC}, "Modifiers")'
-        )
-    if name in RESERVED:
-        return f"{name!r} is a section of a mission file, not a behaviour ({MISSIONS_DOC})"
-    return None
-
-
 def _key_roles(decl: Declaration, names: tuple[str, ...]) -> list[dict[str, str | None]]:
     """Each parameter of ``names`` (its ``writes_keys`` or ``reads_keys``) with the type of
     its key's value, as ``behaviours --json`` lists them."""
@@ -580,15 +554,20 @@ def behaviours_command(args: argparse.Namespace) -> int:
 def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -> int:
     """The behaviours ``args`` asks for, listed from ``registry``, and the exit code they
     call for; the ``installed`` plugins that did not load said after them."""
-    unknown = [n for n in args.names if n not in registry]
+    if args.words:
+        print("\n".join(every_word()))
+        return ExitCode.OK
+    # a word of the language asked about is answered (its meaning and options), not an error
+    words = [word for word in map(language_word, args.names) if word is not None]
+    # beside --json or --markdown output the answer goes to stderr: stdout stays the format's
+    said_to = sys.stderr if args.json or args.markdown else sys.stdout
+    for word in words:
+        print(f"{word}\n    ({EVERY_WORD})", file=said_to)
+    unknown = [n for n in args.names if n not in registry and language_word(n) is None]
     if unknown:
         from roomba_bt.behaviours.units import closest
 
         for name in unknown:
-            word = language_word(name)
-            if word is not None:
-                print(f"roomba-bt behaviours: {word}", file=sys.stderr)
-                continue
             hint = closest(name, registry.names())
             print(
                 f"roomba-bt behaviours: unknown behaviour {name!r}{hint}; a plugin file's "
@@ -597,6 +576,8 @@ def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -
             )
         _plugin_warnings(installed)  # it may be one of a plugin that did not load
         return ExitCode.INVALID
+    if words and len(words) == len(args.names):
+        return ExitCode.OK  # only words asked for: listing every behaviour would bury them
     data = describe_behaviours(args.names, registry)
     # a name two plugins declare is no behaviour a mission can use (it is refused, exit 2):
     # asked for by name, the answer is that error, not one of the two as if it were in use
@@ -604,6 +585,11 @@ def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -
     said = ExitCode.INVALID if args.names and contested else ExitCode.OK
     if args.json:
         print(json.dumps(data, indent=2, default=str))
+    elif args.markdown:
+        from roomba_bt.behaviours.reference import markdown_entry
+
+        chosen = [registry.get(entry["name"]) for entry in data]
+        print("\n".join(markdown_entry(decl) for decl in chosen if decl is not None))
     else:
         for entry in data:
             if entry in contested:

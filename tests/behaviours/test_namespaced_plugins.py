@@ -113,6 +113,13 @@ def test_what_each_plugin_is_told_names_the_other_and_the_spellings(registry: Re
     [retry] = [e for e in errors if "'retry'" in e]
     assert "a word of the mission language" in retry and "'bt-ns-beta:retry'" in retry
     assert "wrongly" not in retry
+    # what was found, why it is refused, what to do (it read "the word is the language's,
+    # and a mission reaches it as ... (or rename it)")
+    assert retry.endswith(
+        "declares the name 'retry', which is a word of the mission language: 'retry' in a "
+        "mission always means the language's own, so this behaviour is reached only as "
+        "'bt-ns-beta:retry'; rename it in its @declare"
+    )
 
 
 @pytest.mark.parametrize(

@@ -394,11 +394,62 @@ def test_a_plugin_that_did_not_load_is_said_by_behaviours_name_and_by_schema(
 def test_behaviours_of_a_word_of_the_language_says_what_it_is(
     capsys: Capsys, name: str, said: str
 ) -> None:
-    """``behaviours retry`` said ``unknown behaviour 'retry' (did you mean 'odometry'?)``."""
-    assert main(["behaviours", name]) == 2
-    err = capsys.readouterr().err
-    assert f"roomba-bt behaviours: {said}" in err
-    assert "did you mean" not in err and "unknown behaviour" not in err
+    """``behaviours retry`` said ``unknown behaviour 'retry' (did you mean 'odometry'?)``;
+    then it said what the word is, but exited 2 (asking is no error) and pointed a pip user
+    to docs/missions.md, a page the wheel has not got."""
+    assert main(["behaviours", name]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith(said) and not err
+    assert "(every word of the language: roomba-bt behaviours --words)" in out
+    assert "docs/missions.md" not in out
+
+
+def test_behaviours_of_a_word_and_a_behaviour_lists_both(capsys: Capsys) -> None:
+    """A word beside a behaviour: the word's answer, then the behaviour as ever; beside
+    --json the answer goes to stderr, so stdout stays JSON."""
+    assert main(["behaviours", "timeout", "wait"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("'timeout' is a decorator of the mission language")
+    assert "options: after: duration (s), 0.015.., required" in out
+    assert "\nwait  (action" in out
+    assert main(["behaviours", "--json", "timeout", "wait"]) == 0
+    out, err = capsys.readouterr()
+    assert [entry["name"] for entry in json.loads(out)] == ["wait"]
+    assert err.startswith("'timeout' is a decorator")
+    assert main(["behaviours", "timeout", "no_such_thing"]) == 2
+    assert "unknown behaviour 'no_such_thing'" in capsys.readouterr().err
+
+
+def test_behaviours_words_lists_every_word_of_the_language(capsys: Capsys) -> None:
+    """No command listed the language's own words: ``--words`` does, one line each."""
+    from roomba_bt.behaviours.language import MODIFIERS, RESERVED, WORDS
+
+    assert main(["behaviours", "--words"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == len(RESERVED)
+    assert [line.split("'")[1] for line in lines[: len(WORDS)]] == list(WORDS)
+    for word in (*MODIFIERS, "include", "tree"):
+        assert any(line.startswith(f"{word!r} is a ") for line in lines), word
+
+
+def test_behaviours_markdown_prints_the_entry_docs_missions_md_holds(capsys: Capsys) -> None:
+    """docs/missions.md said its reference "comes from the declarations", and a contributor
+    typed each entry by hand to match the test: ``--markdown`` prints what the page holds."""
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "missions.md").read_text()
+    assert main(["behaviours", "--markdown", "bump", "turn"]) == 0
+    out = capsys.readouterr().out
+    bump, turn = out.split("\n\n**`")
+    assert bump.startswith(
+        "**`bump`**: A bumper is pressed (packet 7: bit 0 right, bit 1 left).  \n"
+    )
+    assert turn.startswith("turn`**: ")
+    for row in (line for line in out.splitlines() if line.startswith("| ")):
+        assert row in doc, row
+    assert "| `side` | one of left, right, any |  | `any` |  |" in out
+    with pytest.raises(SystemExit) as refused:  # one format at a time: argparse's usage error
+        main(["behaviours", "--markdown", "--json"])
+    assert refused.value.code == 2
+    assert "not allowed with argument" in capsys.readouterr().err
 
 
 def test_show_prints_what_a_mission_wrote_each_on_its_line(capsys: Capsys, tmp_path: Path) -> None:

@@ -14,6 +14,7 @@ from roomba_bt.behaviours.coverage_map import COVERAGE
 from roomba_bt.behaviours.homing import HOMING
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
 from roomba_bt.behaviours.panel import PANEL
+from roomba_bt.behaviours.reference import entry_text, param_row
 from roomba_bt.behaviours.wall import WALL_FOLLOWING
 from roomba_bt.mission.loader import TOP_LEVEL
 
@@ -33,12 +34,15 @@ def test_every_builtin_behaviour_and_parameter_is_documented() -> None:
             assert f"| `{param.name}` |" in DOC, f"{decl.name}.{param.name}"
 
 
-def _param_rows(name: str) -> dict[str, tuple[str, str]]:
-    """The range and default columns of behaviour ``name``'s parameter table in the docs."""
+def _param_rows(name: str) -> dict[str, tuple[str, str, str]]:
+    """The type, range and default columns of behaviour ``name``'s parameter table in the
+    docs."""
     found = re.search(rf"^\*\*`{name}`\*\*.*?(?=^\*\*`|^#)", DOC, re.S | re.M)
     assert found is not None, f"docs/missions.md has no section for {name}"
-    rows = re.findall(r"^\| `(\w+)` \| [^|]*\| ([^|]*)\| ([^|]*)\|", found.group(0), re.M)
-    return {param: (span.strip(), default.strip()) for param, span, default in rows}
+    rows = re.findall(r"^\| `(\w+)` \| ([^|]*)\| ([^|]*)\| ([^|]*)\|", found.group(0), re.M)
+    return {
+        param: (kind.strip(), span.strip(), default.strip()) for param, kind, span, default in rows
+    }
 
 
 @pytest.mark.parametrize(
@@ -46,19 +50,16 @@ def _param_rows(name: str) -> dict[str, tuple[str, str]]:
     [*ACTIONS, *PANEL, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING],
     ids=lambda cls: cls.declaration.name,
 )
-def test_every_parameters_range_and_default_in_the_docs_is_the_declarations(cls: type) -> None:
-    """The docs say these tables are generated from the declarations: a default changed in
-    the code and not in the docs (cover's turn_speed read 200 mm/s, declared 300) fails."""
+def test_every_parameters_type_range_and_default_in_the_docs_is_the_declarations(
+    cls: type,
+) -> None:
+    """The tables are checked against the declarations, by the function ``roomba-bt
+    behaviours --markdown`` prints them with: a default changed in the code and not in the
+    docs (cover's turn_speed read 200 mm/s, declared 300) fails."""
     rows = _param_rows(cls.declaration.name)
     for param in cls.declaration.params:
-        low = "" if param.minimum is None else f"{param.minimum:g}"
-        high = "" if param.maximum is None else f"{param.maximum:g}"
-        span = f"{low}..{high}" if param.minimum is not None or param.maximum is not None else ""
-        if param.required:
-            default = "**required**"
-        else:
-            default = "" if param.default is None else f"`{param.default}`"
-        assert rows[param.name] == (span, default), f"{cls.declaration.name}.{param.name}"
+        _, kind, span, default, _ = param_row(param)
+        assert rows[param.name] == (kind, span, default), f"{cls.declaration.name}.{param.name}"
 
 
 def test_every_option_of_every_word_is_documented_in_its_row() -> None:
@@ -134,12 +135,10 @@ def _entry(name: str) -> str:
     ids=lambda cls: cls.declaration.name,
 )
 def test_every_behaviours_text_in_the_docs_starts_with_its_declaration(cls: type) -> None:
-    """The docs say the lists are generated from the declarations (``roomba-bt behaviours``
-    prints the same): each entry starts with the declaration's text, word for word (the
-    docs may say more after it). ``cover``, ``home_by_map`` and ``spiral`` read differently in
-    the two; only the parameter tables were compared."""
-    declared = " ".join(cls.declaration.doc.replace("``", "`").split())
-    assert _entry(cls.declaration.name).replace("``", "`").startswith(declared)
+    """Each entry starts with the declaration's text, word for word, as ``roomba-bt behaviours
+    --markdown`` prints it (the docs may say more after it). ``cover``, ``home_by_map`` and
+    ``spiral`` read differently in the two; only the parameter tables were compared."""
+    assert _entry(cls.declaration.name).replace("``", "`").startswith(entry_text(cls.declaration))
 
 
 @pytest.mark.parametrize(
@@ -153,4 +152,5 @@ def test_every_parameters_text_in_the_docs_is_its_declarations(cls: type) -> Non
     rows = dict(re.findall(r"^\| `(\w+)` \| [^|]*\|[^|]*\|[^|]*\| (.*) \|$", found.group(0), re.M))
     for param in cls.declaration.params:
         said = rows.get(param.name, "").strip().replace("`", "")
-        assert said == param.doc.replace("`", ""), f"{cls.declaration.name}.{param.name}"
+        meaning = param_row(param)[-1]
+        assert said == meaning.replace("`", ""), f"{cls.declaration.name}.{param.name}"

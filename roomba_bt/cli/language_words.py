@@ -1,0 +1,59 @@
+"""What ``roomba-bt behaviours`` says of the mission language's own words (``retry``,
+``timeout``, ``until``, ``include``): they are no behaviours, but a user asking about one
+is asking a fair question, so the answer is the word's meaning and options from the
+language table, exit 0, and ``behaviours --words`` lists them all. The description is the
+language table's (:mod:`roomba_bt.behaviours.language`), not a page: docs/missions.md is in
+the project's repository, not in the wheel a pip user has.
+"""
+
+from __future__ import annotations
+
+#: what each shape of the language's words is called (docs/missions.md, "Nodes")
+_WORD_KINDS = {
+    "children": "a composite",
+    "do": "a decorator",
+    "child or do": "a decorator",
+    "subtree": "a word (the node that uses a subtree)",
+}
+
+#: the file sections a node could be mistaken for (the rest of RESERVED are words and
+#: modifiers), each with what it holds
+_SECTIONS = {
+    "include": "other files whose subtrees (and blackboard, plugins) this one uses",
+    "tree": "the mission's root node",
+}
+
+#: said after a word's description: where every word is listed, for a pip user too
+EVERY_WORD = "every word of the language: roomba-bt behaviours --words"
+
+
+def language_word(name: str) -> str | None:
+    """What ``behaviours NAME`` says of a word of the mission language (a composite, a
+    decorator, ``subtree``, a modifier, a file section), which is no behaviour: what it is
+    and its options; None for any other name. ``behaviours retry`` said ``unknown behaviour
+    'retry' (did you mean 'odometry'?)``."""
+    from roomba_bt.behaviours.language import MODIFIERS, WORDS
+
+    kind = WORDS.get(name)
+    if kind is not None:
+        what = _WORD_KINDS[kind.shape.value]
+        options = "; ".join(f"{p.name}: {p.describe()}" for p in kind.options)
+        takes = f" (options: {options})" if options else ""
+        return f"{name!r} is {what} of the mission language, not a behaviour: {kind.doc}{takes}"
+    if name in MODIFIERS:
+        return (
+            f"{name!r} is a modifier of the mission language, written beside any node's word, "
+            f"not a behaviour: {MODIFIERS[name]}"
+        )
+    if name in _SECTIONS:
+        return f"{name!r} is a section of a mission file, not a behaviour: {_SECTIONS[name]}"
+    return None
+
+
+def every_word() -> list[str]:
+    """``behaviours --words``: each word of the language, modifier and section a node could
+    be mistaken for, one line each, in the language table's order."""
+    from roomba_bt.behaviours.language import MODIFIERS, WORDS
+
+    names = [*WORDS, *MODIFIERS, *_SECTIONS]
+    return [said for said in map(language_word, names) if said is not None]
