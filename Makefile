@@ -1,12 +1,16 @@
 # Two commands on a fresh machine: `make run` and `make test`. Both create .venv first.
 # `make run` installs the package alone (what running needs); `make test` adds the test,
-# plot and benchmark extras and the example plugins under plugins/.
+# plot and benchmark extras and the example plugins under plugins/. `make lint` needs only
+# ruff and `make typecheck` only the dev extra (CONTRIBUTING.md), not playwright or the
+# benchmark's peers.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 PIP := $(BIN)/python -m pip --quiet --disable-pip-version-check
 RUN_STAMP := $(VENV)/.installed-run
 STAMP := $(VENV)/.installed
+LINT_STAMP := $(VENV)/.installed-lint
+DEV_STAMP := $(VENV)/.installed-dev
 EXTRAS ?= test,plot,bench,cluster,monitor,browser-test
 
 .PHONY: run test wheel-check sdist-check lint typecheck bench icount routines coverage golden venv clean monitor-screenshots reliability
@@ -23,6 +27,16 @@ $(STAMP): pyproject.toml $(RUN_STAMP)
 	@for p in plugins/*/; do [ -f "$$p/pyproject.toml" ] && $(PIP) install -e "$$p" || true; done
 	touch $(STAMP)
 
+# ruff (the lint extra) beside the package's own few dependencies: no extra of a user's
+$(LINT_STAMP): pyproject.toml | $(BIN)/python
+	$(PIP) install -e ".[lint]"
+	touch $(LINT_STAMP)
+
+# what mypy's strict check imports: the dev extra (test, plot, monitor, cluster)
+$(DEV_STAMP): pyproject.toml $(RUN_STAMP)
+	$(PIP) install -e ".[dev]"
+	touch $(DEV_STAMP)
+
 venv: $(STAMP)
 
 # The shipped dock mission, by name, on the built-in simulator, on the virtual clock
@@ -31,11 +45,11 @@ RUN_ARGS ?= --fast
 run: $(RUN_STAMP)
 	$(BIN)/roomba-bt run dock $(RUN_ARGS)
 
-lint: $(STAMP)
+lint: $(LINT_STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check roomba_bt tests bench plugins
 
-typecheck: $(STAMP)
+typecheck: $(DEV_STAMP)
 	$(BIN)/mypy
 
 # pytest names its 15 slowest tests at the end (--durations=15): the suite's budget is 10 min
