@@ -106,6 +106,22 @@ class _LanguageWord(DeclarationError):
         self.name = name
 
 
+def _language_word_refused(cls: type, name: str, spelled: str | None) -> str:
+    """Why a plugin's class that declares a word of the language is not used under it: what
+    was found, why it is refused, what to do (it read "the word is the language's, and it is
+    not used (or rename it)"). ``spelled``: its package's spelling, if it has one."""
+    reach = (
+        f"this behaviour is reached only as {spelled!r}"
+        if spelled
+        else "this behaviour cannot be used"
+    )
+    return (
+        f"{_where(cls)} declares the name {name!r}, which is a word of the mission language: "
+        f"{name!r} in a mission always means the language's own, so {reach}; rename it in its "
+        "@declare"
+    )
+
+
 @dataclass(frozen=True, slots=True)
 class PluginError:
     """A plugin that could not be loaded: which one, and why. ``imported`` is False when its
@@ -327,18 +343,7 @@ class Registry:
                 self._errors.append(PluginError(said, clash, names=names, loses_behaviours=False))
             except _LanguageWord as exc:  # the word is the language's; the class may be reached
                 spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
-                reach = (
-                    f"this behaviour is reached only as {spelled!r}"
-                    if spelled
-                    else "this behaviour cannot be used"
-                )
-                # what was found, why it is refused, what to do (it read "the word is the
-                # language's, and it is not used (or rename it)")
-                word = (
-                    f"{_where(cls)} declares the name {exc.name!r}, which is a word of the "
-                    f"mission language: {exc.name!r} in a mission always means the "
-                    f"language's own, so {reach}; rename it in its @declare"
-                )
+                word = _language_word_refused(cls, exc.name, spelled)
                 self._errors.append(PluginError(said, word, names=names, loses_behaviours=False))
             except _NotABehaviour as exc:
                 refused = names[0] if isinstance(declared, Declaration) else ""

@@ -514,3 +514,24 @@ def test_behaviours_of_a_name_two_plugins_declare_is_the_clash_and_exit_2(
     [entry] = json.loads(capsys.readouterr().out)
     assert entry["clash"]["severity"] == "error"
     assert main(["behaviours", "wait"]) == 0  # a name no one contests
+
+
+def test_a_plugin_file_declaring_a_word_of_the_language_is_told_to_rename_it(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """A file's class named ``retry`` has no package spelling to be reached by: the refusal
+    says what was found, why, and what to do (it read "the word is the language's, and it is
+    not used (or rename it)")."""
+    plugin = tmp_path / "worded.py"
+    plugin.write_text(
+        "from roomba_bt.behaviours import Condition, declare\n\n\n"
+        '@declare("retry", kind="condition")\nclass Again(Condition):\n'
+        '    """Takes a word."""\n\n    def check(self, snapshot):\n        return True\n'
+    )
+    assert main(["behaviours", "wait", "--plugin-file", str(plugin)]) == 2
+    err = capsys.readouterr().err
+    assert (
+        "declares the name 'retry', which is a word of the mission language: 'retry' in a "
+        "mission always means the language's own, so this behaviour cannot be used; rename it "
+        "in its @declare"
+    ) in err
