@@ -891,6 +891,7 @@ class Play(Action):
 @declare(
     "wait",
     kind="action",
+    never_fails=True,
     params=(Param("duration", DURATION, required=True, minimum=0),),
     primary="duration",
 )
@@ -911,6 +912,7 @@ class Wait(Action):
     "log",
     kind="action",
     at_once=True,
+    never_fails=True,
     params=(
         Param("message", STR, required=True),
         Param("level", enum("debug", "info", "warning", "error"), default="info"),

@@ -369,6 +369,10 @@ class Declaration:
     #: it; ``dock_time_limit`` only fails): the static checks read a branch that never
     #: succeeds as one a parallel ticks on every tick. None: it can
     may_succeed: Callable[[Mapping[str, Any]], bool] | None = None
+    #: it never ends in FAILURE (``wait``, ``log``): validate says a ``retry`` around it
+    #: never retries, and an alternative after it in a fallback can never run
+    #: (:mod:`roomba_bt.mission.deadends`). False: it may fail, as any action may
+    never_fails: bool = False
     #: what the robot must have for it with given parameters, where not every model has it
     #: (``display`` the digit display, ``press: minute`` a clock panel's button): why the
     #: chosen profile lacks it, or None. Validate says it at the leaf as an error
@@ -702,6 +706,8 @@ def _accepted_in(opcodes: tuple[int, ...]) -> frozenset[OIMode]:
     return modes
 
 
+# Long on purpose: one keyword per field of Declaration, each said in the docstring; split,
+# a plugin author would read two places to learn one decorator.
 def declare(
     name: str,
     *,
@@ -719,6 +725,7 @@ def declare(
     sends_by: Callable[[Mapping[str, Any]], tuple[int, ...]] | None = None,
     at_once: bool = False,
     may_succeed: Callable[[Mapping[str, Any]], bool] | None = None,
+    never_fails: bool = False,
     needs: Callable[[Mapping[str, Any], RobotProfile], str | None] | None = None,
     needs_only_warns: bool = False,
     in_passive: Callable[[Mapping[str, Any]], str | None] | None = None,
@@ -733,7 +740,8 @@ def declare(
     are taken in (the static checks rely on it: a test ticks every built-in that says so;
     the robot's own fall to Passive is beyond them, and ``motors`` there fails at once:
     ``Action.send_going``). ``may_succeed`` says, of the
-    parameters, whether it can succeed by itself at all (a ``drive`` with no end cannot).
+    parameters, whether it can succeed by itself at all (a ``drive`` with no end cannot);
+    ``never_fails=True`` that it never ends in FAILURE (``wait``, ``log``).
     ``writes_keys`` / ``reads_keys`` name the ``STR`` parameters that name blackboard keys
     it writes / reads, alone or with the type of the value (``writes_keys={"key": INT}``):
     validate holds a typed one to the key's declaration in the mission. ``needs`` says,
@@ -755,7 +763,7 @@ def declare(
             constraints=constraints, writes_keys=writes, reads_keys=reads_named,
             key_types=(*written_types, *read_types), halts_only=halts_only,
             compares=compares, sends_by=sends_by, at_once=at_once, may_succeed=may_succeed,
-            needs=needs, needs_only_warns=needs_only_warns, in_passive=in_passive,
+            never_fails=never_fails, needs=needs, needs_only_warns=needs_only_warns, in_passive=in_passive,
             stops_only=stops_only,
         )  # fmt: skip
         return cls

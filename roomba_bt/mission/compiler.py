@@ -41,6 +41,7 @@ from roomba_bt.mission.checks import (
     sensor_ranges,
     undefined_songs,
 )
+from roomba_bt.mission.deadends import dead_ends
 from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError
 from roomba_bt.mission.loader import NO_PERMISSIONS, Loader, Permissions
 from roomba_bt.mission.plan import Node
@@ -187,6 +188,9 @@ def _checked(
     unavailable, ignored = profile_commands(tree, profile, ctx.wording)
     diagnostics = ctx.diagnostics + modes.errors + keys.errors + key_ranges(tree, ctx.keys)
     diagnostics += restarted_limits(tree) + restarted_branches(tree) + unavailable
+    # judged once the rest is right: a held whose child is refused is said once, there
+    dead_errors, dead_warnings = dead_ends(tree) if not diagnostics else ([], [])
+    diagnostics += dead_errors
     problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud, profile)
     if problem is not None:
         assert parsed.tree_loc is not None
@@ -212,7 +216,11 @@ def _checked(
         blackboard_keys={k: d.type for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
-        warnings=(*ctx.warnings, *_tree_warnings(tree, modes, profile, ignored)),
+        warnings=(
+            *ctx.warnings,
+            *_tree_warnings(tree, modes, profile, ignored),
+            *dead_warnings,
+        ),
     )
     return mission, []
 

@@ -1,0 +1,266 @@
+"""Structural dead ends: what a behaviour-tree reviewer checks first, from the results
+each node can give (:func:`outcomes`), on the checked tree
+(:class:`~roomba_bt.mission.plan.Node`).
+
+A node that can never succeed blocks the sequence it is a step of: the steps after it can
+never run (``log`` after a ``drive`` with no end, after a ``repeat`` for ever, after a
+``force_failure``). One that can never fail does the same to the alternatives after it in
+a fallback. A guard whose condition answers the same on its first tick either never runs
+its node or always fails; a ``retry`` around a child that never fails never retries; a
+``parallel`` (policy ``all``) of a condition and its inverter never succeeds. These are
+warnings (errors under ``--strict``): the mission runs, and does not do what it says.
+
+One is an error: ``held`` as a step of a sequence, with nothing above it that ticks it
+again (a loop, a reactive composite, a guard). ``held`` is FAILURE on the tick it starts
+(its hold has lasted 0 s), and such a step is ticked once: it fails the sequence on every
+run, which is never meant.
+
+Each answer is conservative where it is not sure (an action may fail, a plugin may do
+anything): it gives more results, so fewer findings, never a false one. What can end a
+node from outside (a ``timeout``, a ``while:``/``until:`` guard, a reactive parent's
+earlier child) is counted where it acts: a ``timeout`` may fail, an ``until:`` may
+succeed, a reactive fallback succeeds when its earlier child does. An endless node at the
+end of a tree (a patrol's ``repeat``) blocks nothing, and is not said.
+"""
+
+from __future__ import annotations
+
+from roomba_bt.mission.diagnostics import Diagnostic
+from roomba_bt.mission.plan import Node
+from roomba_bt.mission.ticks import FAILURE, SELECTORS, SEQUENCES, SUCCESS, Outcomes, at_once
+
+_NONE: Outcomes = frozenset()
+_BOTH: Outcomes = frozenset({SUCCESS, FAILURE})
+_SWAPPED = {SUCCESS: FAILURE, FAILURE: SUCCESS}
+#: decorators that give their child's results unchanged (a ``timeout`` adds FAILURE)
+_PASSING = frozenset({"oneshot", "delay", "retry", "for_each"})
+#: nodes that tick a child again after it ended, so a ``held`` under them may count a hold
+_TICK_AGAIN = frozenset(
+    {"repeat", "retry", "for_each", "guard", "reactive_sequence", "reactive_fallback",
+     "reactive_selector"}
+)  # fmt: skip
+
+
+def outcomes(node: Node, first_tick: bool = False) -> Outcomes:
+    """The results ``node`` can end in by itself (empty: it never ends). ``first_tick``:
+    on the tick it starts, where ``held`` is always FAILURE (what a guard's condition
+    answers before its node starts)."""
+    kind = node.kind
+    if kind == "leaf":
+        return _leaf_outcomes(node)
+    children = node.children
+    if kind in SEQUENCES or kind in SELECTORS:
+        return _chain_outcomes(node, first_tick)
+    if kind == "parallel":
+        return _parallel_outcomes(node)
+    if kind == "guard":
+        return _guard_outcomes(node, first_tick)
+    if kind == "held":
+        if first_tick:
+            return frozenset({FAILURE})
+        return frozenset({FAILURE}) | (outcomes(children[0]) & {SUCCESS})
+    inner = outcomes(children[0], first_tick) if children else _BOTH
+    if kind == "inverter":
+        return frozenset(_SWAPPED[result] for result in inner)
+    if kind in ("force_success", "force_failure"):
+        return frozenset({SUCCESS if kind == "force_success" else FAILURE}) if inner else _NONE
+    if kind == "timeout":
+        return inner | {FAILURE}
+    if kind == "repeat":
+        counted = node.options.get("times") is not None or node.options.get("for") is not None
+        return (inner if counted else _NONE) | (inner & {FAILURE})
+    if kind in _PASSING:
+        return inner
+    return _BOTH  # unbuilt, or a kind this module does not know: anything
+
+
+def _leaf_outcomes(node: Node) -> Outcomes:
+    """A leaf: SUCCESS unless its declaration says it cannot with these parameters
+    (``may_succeed``), FAILURE unless it says it never fails (``never_fails``)."""
+    decl = node.decl
+    if decl is None:
+        return _BOTH
+    succeeds = decl.may_succeed is None or decl.may_succeed(node.params)
+    return frozenset(
+        ({SUCCESS} if succeeds else set()) | (set() if decl.never_fails else {FAILURE})
+    )
+
+
+def _chain_outcomes(node: Node, first_tick: bool) -> Outcomes:
+    """A sequence goes on after a success, a fallback after a failure: it ends the other
+    way at the first child that can, and its own way if every child can go on."""
+    go_on = SUCCESS if node.kind in SEQUENCES else FAILURE
+    out: set[str] = set()
+    for child in node.children:
+        results = outcomes(child, first_tick)
+        out |= results - {go_on}
+        if go_on not in results:
+            return frozenset(out)
+    return frozenset(out | {go_on})
+
+
+def _parallel_outcomes(node: Node) -> Outcomes:
+    """A failed branch fails the parallel; it succeeds when one branch (``one``), the
+    ``selected`` ones or all of them can."""
+    results = [outcomes(child) for child in node.children]
+    if _contradicts(node.children):
+        return frozenset({FAILURE})
+    failure = {FAILURE} if any(FAILURE in r for r in results) else set()
+    policy = node.options.get("policy")
+    if policy == "one":
+        succeeds = any(SUCCESS in r for r in results)
+    else:
+        chosen = node.options.get("selected_at") if policy == "selected" else None
+        needed = results if chosen is None else [results[i] for i in chosen]
+        succeeds = all(SUCCESS in r for r in needed)
+    success = {SUCCESS} if succeeds else set()
+    return frozenset(failure | success)
+
+
+def _contradicts(branches: list[Node]) -> bool:
+    """Whether the branches all end on the tick they start and one is the ``inverter`` of
+    another (``[bump: any, inverter: {bump: any}]``): on that tick one of them fails."""
+    if not all(at_once(branch) for branch in branches):
+        return False
+    said = {(branch.kind, branch.name) for branch in branches}
+    return any(
+        branch.kind == "inverter" and (branch.children[0].kind, branch.children[0].name) in said
+        for branch in branches
+    )
+
+
+def _guard_outcomes(node: Node, first_tick: bool) -> Outcomes:
+    """``while:`` fails when its condition does, ``until:`` succeeds when its condition
+    does; a condition that stops it on its first tick leaves its node never started."""
+    condition, guarded = node.children
+    stop = SUCCESS if node.options["until"] else FAILURE
+    if outcomes(condition, first_tick=True) == {stop} and at_once(condition):
+        return frozenset({stop})
+    stops = {stop} if stop in outcomes(condition) else set()
+    return outcomes(guarded, first_tick) | stops
+
+
+def _why(results: Outcomes) -> str:
+    """How a node that blocks what follows it ends, if it does."""
+    if not results:
+        return (
+            "never ends (nothing ends it: no distance, duration or count, no until:, no "
+            "timeout, no reactive parent whose earlier child ends it)"
+        )
+    return "never succeeds (it can only fail)" if results == {FAILURE} else "never fails"
+
+
+def _line(node: Node) -> str:
+    return f"line {node.loc.line}"
+
+
+def dead_ends(root: Node) -> tuple[list[Diagnostic], list[Diagnostic]]:
+    """Errors and warnings (see the module docstring), each said once for a subtree used
+    twice."""
+    errors: list[Diagnostic] = []
+    warnings: list[Diagnostic] = []
+    pending: list[tuple[Node, bool]] = [(root, False)]
+    while pending:
+        node, ticked_again = pending.pop()
+        errors += _held_steps(node, ticked_again)
+        warnings += _blocked_children(node) + _guard_answers(node) + _futile_retry(node)
+        warnings += _parallel_never_succeeds(node)
+        again = ticked_again or node.kind in _TICK_AGAIN
+        pending.extend((child, again) for child in reversed(node.children))
+    return list(dict.fromkeys(errors)), list(dict.fromkeys(warnings))
+
+
+def _held_steps(node: Node, ticked_again: bool) -> list[Diagnostic]:
+    """A ``held`` step of a sequence with memory that nothing above ticks again."""
+    if ticked_again or node.kind != "sequence":
+        return []
+    return [
+        child.loc.at(
+            "held is FAILURE on the tick it starts (its hold has lasted 0 s), and as a step "
+            f"of this sequence ({node.loc.line}:{node.loc.column}) it is ticked once: the sequence fails here on every run; "
+            "use it where it is ticked on every tick: until: {held: ...} around a node, or "
+            "the first child of a reactive_fallback"
+        )
+        for child in node.children
+        if child.kind == "held"
+    ]
+
+
+def _blocked_children(node: Node) -> list[Diagnostic]:
+    """The first child of a sequence after a step that never succeeds, of a fallback after
+    an alternative that never fails: it can never run."""
+    if node.kind not in SEQUENCES and node.kind not in SELECTORS:
+        return []
+    go_on = SUCCESS if node.kind in SEQUENCES else FAILURE
+    for child, after in zip(node.children, node.children[1:], strict=False):
+        if child.kind == "held":
+            continue  # said by _held_steps, or ticked again by a loop above
+        results = outcomes(child)
+        if go_on in results:
+            continue
+        if go_on == SUCCESS:
+            what, needs = "step", "succeeds"
+            fix = "give it an end that succeeds (a distance or duration, until:)"
+        else:
+            what, needs = "alternative", "fails"
+            fix = "let it fail (no force_success around it)"
+        return [
+            after.loc.at(
+                f"{after.name} can never run: the {what} before it, {child.name} "
+                f"({_line(child)}), {_why(results)}, and the {node.kind} goes on only "
+                f"when it {needs}; {fix}, or remove what follows it"
+            ).as_warning()
+        ]
+    return []
+
+
+def _guard_answers(node: Node) -> list[Diagnostic]:
+    """A ``while:``/``until:`` whose condition ends the guard on its first tick, every
+    time: its node never starts."""
+    if node.kind != "guard":
+        return []
+    condition, guarded = node.children
+    until = node.options["until"]
+    stop = SUCCESS if until else FAILURE
+    if not at_once(condition) or outcomes(condition, first_tick=True) != {stop}:
+        return []
+    word, answer, result = ("until", "true", "SUCCESS") if until else ("while", "false", "FAILURE")
+    return [
+        guarded.loc.at(
+            f"{guarded.name} never runs: its {word}: condition {condition.name} is always "
+            f"{answer} on its first tick, so the guard ends in {result} before it starts; "
+            "guard it with a condition that can change (a sensor, bump, odometry)"
+        ).as_warning()
+    ]
+
+
+def _futile_retry(node: Node) -> list[Diagnostic]:
+    """A ``retry`` around a child that never fails: it never retries."""
+    if node.kind != "retry" or FAILURE in outcomes(node.children[0]):
+        return []
+    child = node.children[0]
+    return [
+        node.loc.at(
+            f"retry never retries: {child.name} ({_line(child)}) never fails, and retry "
+            "starts it again only after a failure; remove the retry, or retry what can fail"
+        ).as_warning()
+    ]
+
+
+def _parallel_never_succeeds(node: Node) -> list[Diagnostic]:
+    """A ``parallel`` waiting for every branch (policy ``all``) whose branches contradict
+    each other (:func:`_contradicts`). Not one with a branch that only fails (``[drive,
+    inverter: {cliff: any}]`` drives until the cliff is seen, and fails then, as meant):
+    a step after it is said by :func:`_blocked_children`."""
+    if node.kind != "parallel" or node.options.get("policy", "all") != "all":
+        return []
+    if not _contradicts(node.children):
+        return []
+    return [
+        node.loc.at(
+            "the parallel can never succeed: it waits for every branch (policy: all), its "
+            "branches are all read on the tick it starts, and one is the inverter of another, "
+            "so one of them fails on that tick; use a fallback to take either answer, or "
+            "remove one of them"
+        ).as_warning()
+    ]
