@@ -763,8 +763,8 @@ def declare(
             constraints=constraints, writes_keys=writes, reads_keys=reads_named,
             key_types=(*written_types, *read_types), halts_only=halts_only,
             compares=compares, sends_by=sends_by, at_once=at_once, may_succeed=may_succeed,
-            never_fails=never_fails, needs=needs, needs_only_warns=needs_only_warns, in_passive=in_passive,
-            stops_only=stops_only,
+            never_fails=never_fails, needs=needs, needs_only_warns=needs_only_warns,
+            in_passive=in_passive, stops_only=stops_only,
         )  # fmt: skip
         return cls
 

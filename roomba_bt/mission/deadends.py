@@ -177,7 +177,8 @@ def _held_steps(node: Node, ticked_again: bool) -> list[Diagnostic]:
     return [
         child.loc.at(
             "held is FAILURE on the tick it starts (its hold has lasted 0 s), and as a step "
-            f"of this sequence ({node.loc.line}:{node.loc.column}) it is ticked once: the sequence fails here on every run; "
+            f"of this sequence ({node.loc.line}:{node.loc.column}) it is ticked once: the "
+            "sequence fails here on every run; "
             "use it where it is ticked on every tick: until: {held: ...} around a node, or "
             "the first child of a reactive_fallback"
         )

@@ -387,9 +387,7 @@ def test_the_full_mode_warning_asks_whether_a_cliff_is_read_while_the_wheels_tur
     body = "\n".join("    " + line for line in tree.splitlines())
     mission = compile_text(f"tree:\n  sequence:\n    - mode: full\n{body}\n")
     full = [w for w in mission.warnings if "in Full mode" in w.message]  # not a dead end's
-    assert [w.message.split(" ", 1)[0] for w in full] == (
-        ["drive"] if warned else []
-    ), tree
+    assert [w.message.split(" ", 1)[0] for w in full] == (["drive"] if warned else []), tree
 
 
 def test_a_subtree_used_twice_is_warned_at_its_place_once(
