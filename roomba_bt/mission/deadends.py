@@ -25,20 +25,23 @@ end of a tree (a patrol's ``repeat``) blocks nothing, and is not said.
 
 from __future__ import annotations
 
+from roomba_bt.behaviours.language import (
+    FAILS,
+    FAILURE,
+    RUNNING,
+    SUCCEEDS,
+    SUCCESS,
+    Answers,
+    Outcomes,
+)
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.plan import Node
-from roomba_bt.mission.ticks import FAILURE, SELECTORS, SEQUENCES, SUCCESS, Outcomes, at_once
+from roomba_bt.mission.ticks import SELECTORS, SEQUENCES, answers, at_once
 
-_NONE: Outcomes = frozenset()
 _BOTH: Outcomes = frozenset({SUCCESS, FAILURE})
-_SWAPPED = {SUCCESS: FAILURE, FAILURE: SUCCESS}
-#: decorators that give their child's results unchanged (a ``timeout`` adds FAILURE)
-_PASSING = frozenset({"oneshot", "delay", "retry", "for_each"})
-#: nodes that tick a child again after it ended, so a ``held`` under them may count a hold
-_TICK_AGAIN = frozenset(
-    {"repeat", "retry", "for_each", "guard", "reactive_sequence", "reactive_fallback",
-     "reactive_selector"}
-)  # fmt: skip
+#: the word whose answer on the tick it starts is FAILURE whatever its child says: its
+#: hold has lasted 0 s (its Answers say what it answers later, once the hold has lasted)
+HELD = "held"
 
 
 def outcomes(node: Node, first_tick: bool = False) -> Outcomes:
@@ -55,23 +58,29 @@ def outcomes(node: Node, first_tick: bool = False) -> Outcomes:
         return _parallel_outcomes(node)
     if kind == "guard":
         return _guard_outcomes(node, first_tick)
-    if kind == "held":
-        if first_tick:
-            return frozenset({FAILURE})
-        return frozenset({FAILURE}) | (outcomes(children[0]) & {SUCCESS})
-    inner = outcomes(children[0], first_tick) if children else _BOTH
-    if kind == "inverter":
-        return frozenset(_SWAPPED[result] for result in inner)
-    if kind in ("force_success", "force_failure"):
-        return frozenset({SUCCESS if kind == "force_success" else FAILURE}) if inner else _NONE
-    if kind == "timeout":
-        return inner | {FAILURE}
-    if kind == "repeat":
-        counted = node.options.get("times") is not None or node.options.get("for") is not None
-        return (inner if counted else _NONE) | (inner & {FAILURE})
-    if kind in _PASSING:
-        return inner
-    return _BOTH  # unbuilt, or a kind this module does not know: anything
+    decorator = answers(node)
+    if decorator is None or not children:
+        return _BOTH  # unbuilt: anything
+    if kind == HELD and first_tick:
+        return FAILS  # its hold has lasted 0 s
+    return _decorated(node, decorator, outcomes(children[0], first_tick))
+
+
+def _decorated(node: Node, decorator: Answers, child: Outcomes) -> Outcomes:
+    """A decorator's results, by what its word declares (:class:`Answers`) of its answer
+    to each of its child's: ``repeat`` without ``times`` or ``for`` never takes a success
+    for its own; an answer while the child runs (``timeout``'s FAILURE) counts when the
+    child may run; RUNNING (the child started again) is no result."""
+    out = set(decorator.alone)
+    endless = decorator.forever_without and all(
+        node.options.get(option) is None for option in decorator.forever_without
+    )
+    for ending in child:
+        answer = decorator.answer(ending)
+        out |= answer - SUCCEEDS if endless and ending == SUCCESS else answer
+    if not at_once(node.children[0]):
+        out |= decorator.while_running
+    return frozenset(out - {RUNNING})
 
 
 def _leaf_outcomes(node: Node) -> Outcomes:
@@ -165,9 +174,20 @@ def dead_ends(root: Node) -> tuple[list[Diagnostic], list[Diagnostic]]:
         errors += _held_steps(node, ticked_again)
         warnings += _blocked_children(node) + _guard_answers(node) + _futile_retry(node)
         warnings += _parallel_never_succeeds(node)
-        again = ticked_again or node.kind in _TICK_AGAIN
+        again = ticked_again or _ticks_again(node)
         pending.extend((child, again) for child in reversed(node.children))
     return list(dict.fromkeys(errors)), list(dict.fromkeys(warnings))
+
+
+def _ticks_again(node: Node) -> bool:
+    """Whether ``node`` ticks a child again after it ended, so that a ``held`` under it
+    may count a hold: a decorator that starts its child again (its :class:`Answers`:
+    ``repeat``, ``retry``, ``for_each``), a guard (both children every tick), a reactive
+    composite (its earlier children every tick)."""
+    decorator = answers(node)
+    if decorator is not None:
+        return bool(decorator.restarts_on)
+    return node.kind == "guard" or node.options.get("memory", True) is False
 
 
 def _held_steps(node: Node, ticked_again: bool) -> list[Diagnostic]:
@@ -183,7 +203,7 @@ def _held_steps(node: Node, ticked_again: bool) -> list[Diagnostic]:
             "the first child of a reactive_fallback"
         )
         for child in node.children
-        if child.kind == "held"
+        if child.kind == HELD
     ]
 
 
@@ -194,7 +214,7 @@ def _blocked_children(node: Node) -> list[Diagnostic]:
         return []
     go_on = SUCCESS if node.kind in SEQUENCES else FAILURE
     for child, after in zip(node.children, node.children[1:], strict=False):
-        if child.kind == "held":
+        if child.kind == HELD:
             continue  # said by _held_steps, or ticked again by a loop above
         results = outcomes(child)
         if go_on in results:
