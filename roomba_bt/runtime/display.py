@@ -23,7 +23,6 @@ from uuid import UUID
 
 import py_trees
 
-from roomba_bt.behaviours.decorators import Guard
 from roomba_bt.oi.frames import (
     BATTERY_PACKETS,
     BUMPS_PACKETS,
@@ -167,8 +166,12 @@ def node_kind(node: py_trees.behaviour.Behaviour) -> str:
         return "sequence_with_memory" if node.memory else "sequence_without_memory"
     if isinstance(node, py_trees.composites.Selector):
         return "selector_with_memory" if node.memory else "selector_without_memory"
-    if isinstance(node, Guard):  # a composite py_trees does not know: not a leaf
-        return node.drawn_as
+    # a composite py_trees does not know (a guard, behaviours.decorators.Guard) says how it is
+    # drawn; read by name so that this module, which the CLI's logging set-up imports before
+    # any command, does not import the behaviours (and their py_trees version check) with it
+    drawn_as = getattr(node, "drawn_as", None)
+    if isinstance(drawn_as, str):
+        return drawn_as
     return "behaviour"
 
 
