@@ -142,7 +142,7 @@ def replayed_include_dirs(record: str, header: dict[str, Any], mission: str) -> 
     the recording machine's absolute ones). What it does not grant is a warning, said once:
     the include it was meant for is refused at its own line, with ``--include-dir``."""
     from roomba_bt.cli.arguments import warn_once
-    from roomba_bt.runtime.recording import recorded_path
+    from roomba_bt.runtime.recording import held_to_record, recorded_path
 
     options = header.get("options")
     names = options.get("include_dirs") if isinstance(options, dict) else None
@@ -156,13 +156,12 @@ def replayed_include_dirs(record: str, header: dict[str, Any], mission: str) -> 
         if folder is None or not folder.is_dir():
             warn_once(f"{record}: include folder {name!r} of the recorded run is not here")
             continue
-        folder = folder.resolve()
-        if common == Path(common.anchor) or not folder.is_relative_to(common):
+        if not held_to_record(folder, common):
             warn_once(
                 f"{record}: include folder {name!r} of the recorded run is outside the folder "
                 f"that holds the record and its mission ({common}): a record grants only "
                 f"folders there; give it with --include-dir or ROOMBA_BT_INCLUDE_PATH; not granted"
             )
             continue
-        granted.append(folder)
+        granted.append(folder.resolve())
     return tuple(granted)

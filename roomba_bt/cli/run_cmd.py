@@ -931,7 +931,10 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     mission = load(found, params, profile, baud, granted, absent_plugins(header))
     if isinstance(mission, int):
         if not args.mission:  # the errors above say what to write; this, where it goes
-            print(_refused_recorded_mission(header, found), file=sys.stderr)
+            print(
+                _refused_recorded_mission(header, found, bool(args.allow_plugin_files)),
+                file=sys.stderr,
+            )
         return mission
     packets = _recorded_packets(args.record, header, mission, found)
     if isinstance(packets, str):
@@ -939,20 +942,34 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     return Recorded(record, mission, profile, baud, packets)
 
 
-def _refused_recorded_mission(header: dict[str, Any], found: str) -> str:
+def _refused_recorded_mission(header: dict[str, Any], found: str, plugins_allowed: bool) -> str:
     """What ``replay`` adds when the record's own mission no longer compiles (a 0.1.0
     mission that this release refuses): that the record is not at fault, and how to replay it
     after fixing the file. The validation errors alone left the upgrader to find
-    ``--mission``, with which such a record replays byte for byte."""
+    ``--mission``, with which such a record replays byte for byte. A run that was allowed
+    its plugin files (the header's ``options.allow_plugin_files``, never honoured: a record
+    may come from someone else) is replayed with them only by ``--allow-plugin-files``
+    (``plugins_allowed``): that is the fix then, where "fix a copy" sent the user to edit a
+    mission that was whole."""
     from roomba_bt import __version__
     from roomba_bt.runtime.provenance import UPGRADING, made_by_said
-    from roomba_bt.runtime.recording import MADE_BY
+    from roomba_bt.runtime.recording import MADE_BY, header_text
+
+    options = header.get("options")
+    allowed_then = isinstance(options, dict) and options.get("allow_plugin_files") is True
+    if allowed_then and not plugins_allowed:
+        return (
+            f"replay: the record's run was allowed the plugin files of its mission "
+            f"{header_text(found)} (--allow-plugin-files); a replay imports them only when "
+            "told: pass --allow-plugin-files if you trust them (they run as Python code)"
+        )
 
     # the upgrade notes only where another release made the record (a file edited since is
     # refused by the release that made it too)
     notes = "" if header.get(MADE_BY) == __version__ else f' (the CHANGELOG\'s "{UPGRADING}")'
     return (
-        f"replay: the record's mission {found} is refused by roomba-bt {__version__}; the "
+        f"replay: the record's mission {header_text(found)} is refused by roomba-bt "
+        f"{__version__}; the "
         f"record was made by {made_by_said(header)}: fix a copy as said above{notes} and "
         "pass --mission FILE with the fixed file to replay this record"
     )
@@ -1036,7 +1053,7 @@ def _from_the_record(record_path: str, header: dict[str, Any]) -> object:
     said on stderr; else as the header says it (a shipped name, a path of a record made
     before). Relative paths were absolute ones, and a record committed beside its missions
     was "not found" in every other checkout."""
-    from roomba_bt.runtime.recording import MISSION_AT, recorded_path
+    from roomba_bt.runtime.recording import MISSION_AT, header_text, recorded_path
 
     named = header.get("mission")
     if not isinstance(named, str) or Path(named).is_absolute():
@@ -1049,8 +1066,8 @@ def _from_the_record(record_path: str, header: dict[str, Any]) -> object:
     there = header.get(MISSION_AT)
     if isinstance(there, str) and Path(there).is_file():
         print(
-            f"{record_path}: mission {named!r} is not beside the record ({here}); replaying "
-            f"{there}, where it was recorded",
+            f"{record_path}: mission {named!r} is not beside the record "
+            f"({header_text(str(here))}); replaying {header_text(there)}, where it was recorded",
             file=sys.stderr,
         )
         return there

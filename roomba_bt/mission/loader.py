@@ -106,7 +106,12 @@ from roomba_bt.mission.values import (
 )
 from roomba_bt.mission.wording import COMMAND_LINE, PYTHON, Wording
 from roomba_bt.printable import path_written
-from roomba_bt.yamlsource import too_many_digits, yaml11_number_problem
+from roomba_bt.yamlsource import (
+    holds_some_of,
+    not_a_file_of,
+    too_many_digits,
+    yaml11_number_problem,
+)
 
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
              "subtrees", "tree", "literal")  # fmt: skip
@@ -310,7 +315,7 @@ class Loader:
             root,
             root_loc,
             TOP_LEVEL,
-            not_a_mission=root_loc.at(_not_a_mission("this file", TOP_LEVEL)),
+            not_a_mission=root_loc.at(not_a_file_of("this file", "mission", TOP_LEVEL)),
             called="a mission file",
             unknown_key=lambda key: (
                 f"unknown top-level key {key!r}{closest(key, TOP_LEVEL)}; "
@@ -337,7 +342,7 @@ class Loader:
         names the file in that error). A key not in ``words`` is reported with
         ``unknown_key(key)`` and the others are read on; with ``read_misspelt`` (a mission,
         whose message says "did you mean"), as the section it misspells (:func:`_by_key`)."""
-        if not _is_mission(root, words):
+        if not holds_some_of(root, words):
             self.ctx.error(not_a_mission)
             return None
         try:
@@ -493,7 +498,7 @@ class Loader:
         # a whole mission, not a library: said at the include, whatever else it holds (one
         # with a description: was three errors at lines of the included file, none here); a
         # library with a stray tree: is a library, its subtrees read, the tree: an error there
-        if _is_mission(root, ("mission", "tree")) and not _is_mission(root, ("subtrees",)):
+        if holds_some_of(root, ("mission", "tree")) and not holds_some_of(root, ("subtrees",)):
             self.ctx.error(iloc.at(
                 f"included file {path_written(text)} is a mission (it has mission: or tree:), "
                 f"not a library: an included file may hold only {', '.join(_INCLUDED_KEYS)}"
@@ -504,7 +509,7 @@ class Loader:
             root_loc,
             _INCLUDED_KEYS,
             not_a_mission=iloc.at(
-                _not_a_mission(f"included file {path_written(text)}", _INCLUDED_KEYS)
+                not_a_file_of(f"included file {path_written(text)}", "mission", _INCLUDED_KEYS)
             ),
             called="an included file",
             unknown_key=lambda key: (
@@ -975,14 +980,6 @@ def _unreadable(target: Path) -> str | None:
     return None
 
 
-def _is_mission(root: yaml.Node, words: tuple[str, ...]) -> bool:
-    """A mapping with at least one mission word as a key: anything else is not a mission
-    file, and its content is never quoted back in an error."""
-    return isinstance(root, yaml.MappingNode) and any(
-        isinstance(key, yaml.ScalarNode) and key.value in words for key, _ in root.value
-    )
-
-
 def _is_world(root: yaml.Node) -> bool:
     """A mapping with ``rooms:`` and no ``tree:``: a simulator world (sim/world.py), not a
     mission (no mission has a ``rooms`` section)."""
@@ -1002,10 +999,6 @@ def _a_library(resolved: Path, path: Path) -> str:
         f"include it in a mission (include: [{name}]) and use them there with subtree: NAME "
         "(validate checks a library on its own)"
     )
-
-
-def _not_a_mission(what: str, words: tuple[str, ...]) -> str:
-    return f"{what} is not a mission file: expected a mapping with some of {', '.join(words)}"
 
 
 def _new_name(

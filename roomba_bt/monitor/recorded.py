@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from roomba_bt.monitor.feed import Ending, RunFeed
 from roomba_bt.monitor.session import STEP, MonitorSession
+from roomba_bt.printable import escaped
 from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.recording import (
     ENDED,
@@ -34,6 +35,8 @@ from roomba_bt.runtime.recording import (
     Record,
     ReplayTransport,
     ending_text,
+    header_text,
+    held_to_record,
     recorded_path,
 )
 from roomba_bt.runtime.stack import replay_record
@@ -103,19 +106,34 @@ def recorded_world(record: Record) -> DrawnWorld | str | None:
     frame, with no rooms, furniture or dock. None for a robot's record; a text saying why
     when the world named cannot be read (the page then draws the odometry alone)."""
     from roomba_bt.monitor.views import world_drawing
-    from roomba_bt.sim.world import WorldError, load_world
+    from roomba_bt.sim.world import WorldError, load_world, named_world
 
     options = record.header.get(SIMULATOR)
     if not isinstance(options, dict) or not isinstance(options.get("world"), str):
         return None
     name = options["world"]
+    shown = header_text(name)
     where = recorded_path(name, record.header, record.path)
-    if where is not None and not where.is_file() and "/" not in name:
-        where = None  # a shipped world's name (``apartment``), as ``run --world`` took it
+    if where is None or (not where.is_file() and "/" not in name):
+        # a world's name (``apartment``), as ``run --world`` took it: a shipped world or
+        # the user's own (ROOMBA_BT_WORLDS); never a file from the current folder
+        where = named_world(name)
+    elif not held_to_record(where, record.path.parent):
+        home = record.path.resolve().parent
+        return (
+            f"its world {shown} is outside the folder that holds the record ({home}): a "
+            "record names only worlds there or by name; not read, the page draws the "
+            "odometry alone"
+        )
+    if where is None:
+        return (
+            f"its world {shown}: no such world beside the record, nor a world of that name; "
+            "the page draws the odometry alone"
+        )
     try:
-        world = load_world(where if where is not None else name)
+        world = load_world(where)
     except WorldError as exc:
-        return f"its world {name}: {exc}; the page draws the odometry alone"
+        return f"its world {shown}: {escaped(str(exc))}; the page draws the odometry alone"
     seed = options.get("seed")
     start = (
         world.sample_start(seed)

@@ -41,6 +41,7 @@ from roomba_bt.runtime.recording import (
     MADE_BY,
     PLUGINS,
     SOURCES,
+    header_text,
     recorded_path,
 )
 
@@ -188,7 +189,7 @@ def changed_sources(
             f"{_shown(name)} changed since this record was made{releases}: a difference may "
             "come from it"
         )
-    return changed
+    return [header_text(line) for line in changed]
 
 
 def _by_place(
@@ -258,7 +259,7 @@ def changed_plugins(header: Mapping[str, Any], root: Behaviour) -> list[str]:
             what = (f"plugin {name} {(is_ or {}).get(VERSION)}'s code changed since this record "
                     "was made (the same version: an editable install, or a rebuild)")  # fmt: skip
         changed.append(f"{what}: a difference may come from it")
-    return changed
+    return [header_text(line) for line in changed]
 
 
 @dataclass(frozen=True)
@@ -331,7 +332,7 @@ def made_by_said(header: Mapping[str, Any]) -> str:
     header that names none (``roomba_bt_version`` is written since 0.2.0) what that tells."""
     made_by = header.get(MADE_BY)
     if isinstance(made_by, str):
-        return f"roomba-bt {made_by}"
+        return f"roomba-bt {header_text(made_by)}"
     return "roomba-bt 0.1.0 or earlier, as the record names no release"
 
 
@@ -371,4 +372,4 @@ def drift_line(
     if said:
         verb = "differs" if len(sources) + len(plugins) == 1 else "differ"
         line += f"; {' and '.join(said)} {verb} now"
-    return line
+    return header_text(line)

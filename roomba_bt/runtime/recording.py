@@ -587,6 +587,25 @@ def recorded_path(name: str, header: Mapping[str, Any], record: Path | None) -> 
     return Path(os.path.normpath(record.resolve().parent / path))
 
 
+def header_text(text: str) -> str:
+    """A text a record's header gave (its release, a file's or a plugin's name, its world),
+    as the terminal is shown it: a control or bidirectional character escaped (``\\x1b``,
+    ``\\u202e``), never written raw. A header may be hand-edited by someone else, and one
+    raw escape sequence retitles the window, recolours or hides lines, or (OSC 52) writes
+    the clipboard."""
+    return escaped(text, ANY_CONTROL)
+
+
+def held_to_record(path: Path, holder: Path) -> bool:
+    """Whether ``path``, symbolic links followed, is inside ``holder`` (the folder that holds
+    a record, or the one that holds it and its mission), and ``holder`` is no file system's
+    root: the rule every path a record names is held to before it is opened (its include
+    folders, its world). A record may come from someone else, and its header could name
+    ``~/.pgpass`` or ``/etc/shadow`` (docs/records.md)."""
+    holder = holder.resolve()
+    return holder != Path(holder.anchor) and path.resolve().is_relative_to(holder)
+
+
 def utc_stamp(moment: datetime) -> str:
     """``2025-03-04T09:12:05Z``: when a run started, as its record's header and the monitor's
     page say it (ISO 8601, UTC, to the second)."""
@@ -724,7 +743,7 @@ class Record:
         summary and a recorded run's page say it, as the run's did, so that replays of
         several robots' runs of one mission can be told apart. A hand-edited header's
         control characters are shown escaped (``\\n``), never written to the terminal."""
-        return escaped(self.header.get("label") or "", ANY_CONTROL)
+        return header_text(self.header.get("label") or "")
 
     @property
     def mission_file(self) -> str | None:

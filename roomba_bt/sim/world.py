@@ -789,6 +789,10 @@ def parse_world(text: str, source: str = "<world>") -> World:
     """Validate a world given as YAML text; :class:`WorldError` lists every problem."""
     try:
         root = _compose_world(text)
+        if root is not None and not yamlsource.holds_some_of(root, _TOP_KEYS):
+            line, col = yamlsource.position(root)
+            found = yamlsource.not_a_file_of("this file", "world", _TOP_KEYS)
+            raise WorldError([WorldProblem(source, line, col, "", found, "")])
         duplicates = [] if root is None else yamlsource.every_duplicate_key(root)
         data, marks = (
             (None, {})

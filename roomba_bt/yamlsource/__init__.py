@@ -675,6 +675,23 @@ def position(node: yaml.Node) -> tuple[int, int]:
     return mark.line + 1, mark.column + 1
 
 
+def holds_some_of(root: yaml.Node | None, words: tuple[str, ...]) -> bool:
+    """Whether ``root`` is a mapping with at least one of ``words`` as a key: a file of the
+    kind they are the top-level keys of (a mission, a world). Anything else is not one, and
+    its content is never quoted back in an error (:func:`not_a_file_of`): a path a stranger
+    chose (a record's world, an include) may name ``~/.pgpass`` or ``/etc/shadow``, whose
+    lines an "unknown key" error would print."""
+    return isinstance(root, yaml.MappingNode) and any(
+        isinstance(key, yaml.ScalarNode) and key.value in words for key, _ in root.value
+    )
+
+
+def not_a_file_of(what: str, kind: str, words: tuple[str, ...]) -> str:
+    """What a file that :func:`holds_some_of` none of ``words`` is said to be (``what``: the
+    file as the message names it; ``kind``: "mission", "world"), quoting none of it."""
+    return f"{what} is not a {kind} file: expected a mapping with some of {', '.join(words)}"
+
+
 def error_position(exc: yaml.YAMLError) -> tuple[int, int] | None:
     """1-based line and column of a YAML error (of the problem, else of its context)."""
     mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
