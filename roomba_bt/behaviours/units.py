@@ -295,6 +295,8 @@ def parse_quantity(dimension: str, value: object) -> float:
     if _is_number(value):
         if value == 0:
             return 0.0
+        if isinstance(value, int):  # 10**1000: no float holds it, and the hint computes one
+            _not_too_large(value)
         raise BareNumber(dimension, value)  # type: ignore[arg-type]
     if not isinstance(value, str):
         raise UnitError(f"expected {what} such as {EXAMPLES[dimension]}, got {described(value)}")

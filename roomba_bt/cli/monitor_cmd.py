@@ -613,12 +613,13 @@ def _usage_error(message: str) -> int:
     return ExitCode.INVALID
 
 
-def _draw_recorded_world(feed: Any, record: Any, shown: str) -> None:
+def _draw_recorded_world(feed: Any, record: Any, mission: Any, shown: str) -> None:
     """The world ``record`` names into its page (odometry's 0 where the robot started in
-    it), or why not on stderr (``shown``: the record as the user named it)."""
+    it), or why not on stderr (``shown``: the record as the user named it); ``mission``: the
+    compiled mission replayed, whose file, with the record's, bounds where the world may be."""
     from roomba_bt.monitor.recorded import recorded_world
 
-    drawn = recorded_world(record)
+    drawn = recorded_world(record, mission.files[0] if mission.files else record.path)
     if isinstance(drawn, str):
         print(f"monitor: {shown}: {drawn}", file=sys.stderr)
     elif drawn is not None:
@@ -662,7 +663,7 @@ def monitor_command(args: argparse.Namespace) -> int:
         record, mission, profile, packets, baud, args.record,
         progress=replay_progress("monitor", record), diverged_at=diverged_at, window=window,
     )  # fmt: skip
-    _draw_recorded_world(feed, record, args.record)
+    _draw_recorded_world(feed, record, mission, args.record)
     return _serve_record(feed, host, port, args.record)
 
 

@@ -17,7 +17,6 @@ has it), the absolute path, and the summary's wall-clock measurements.
 from __future__ import annotations
 
 import argparse
-import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -142,14 +141,13 @@ def replayed_include_dirs(record: str, header: dict[str, Any], mission: str) -> 
     the recording machine's absolute ones). What it does not grant is a warning, said once:
     the include it was meant for is refused at its own line, with ``--include-dir``."""
     from roomba_bt.cli.arguments import warn_once
-    from roomba_bt.runtime.recording import held_to_record, recorded_path
+    from roomba_bt.runtime.recording import held_to_record, record_holder, recorded_path
 
     options = header.get("options")
     names = options.get("include_dirs") if isinstance(options, dict) else None
     if not isinstance(names, list):
         return ()
-    home = Path(record).resolve().parent
-    common = Path(os.path.commonpath([home, Path(mission).resolve()]))
+    common = record_holder(Path(record), Path(mission))
     granted: list[Path] = []
     for name in names:
         folder = recorded_path(name, header, Path(record)) if isinstance(name, str) else None

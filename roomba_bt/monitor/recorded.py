@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable
 from datetime import datetime
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.monitor.feed import Ending, RunFeed
@@ -37,6 +38,7 @@ from roomba_bt.runtime.recording import (
     ending_text,
     header_text,
     held_to_record,
+    record_holder,
     recorded_path,
 )
 from roomba_bt.runtime.stack import replay_record
@@ -98,13 +100,17 @@ def replay_into_feed(
 DrawnWorld = tuple[dict[str, Any], tuple[float, float, float]]
 
 
-def recorded_world(record: Record) -> DrawnWorld | str | None:
+def recorded_world(record: Record, mission: Path) -> DrawnWorld | str | None:
     """The world a simulator run's record names (its header's ``simulator.world``: a shipped
     world's name, or a file's path from the record's folder, found as ``replay`` finds the
     mission's), drawn as the live page draws it, with the pose the robot started at (its
     seed's, under ``random_start``): the recorded page drew the bare odometry, in its own
     frame, with no rooms, furniture or dock. None for a robot's record; a text saying why
-    when the world named cannot be read (the page then draws the odometry alone)."""
+    when the world named cannot be read (the page then draws the odometry alone).
+
+    A world file is read only inside the folder that holds the record and its ``mission``
+    (the file replayed), as the record's include folders are granted: a record from someone
+    else named ``/etc/shadow`` as its world, and the world's errors quoted its lines."""
     from roomba_bt.monitor.views import world_drawing
     from roomba_bt.sim.world import WorldError, load_world, named_world
 
@@ -118,12 +124,11 @@ def recorded_world(record: Record) -> DrawnWorld | str | None:
         # a world's name (``apartment``), as ``run --world`` took it: a shipped world or
         # the user's own (ROOMBA_BT_WORLDS); never a file from the current folder
         where = named_world(name)
-    elif not held_to_record(where, record.path.parent):
-        home = record.path.resolve().parent
+    elif not held_to_record(where, holder := record_holder(record.path, mission)):
         return (
-            f"its world {shown} is outside the folder that holds the record ({home}): a "
-            "record names only worlds there or by name; not read, the page draws the "
-            "odometry alone"
+            f"its world {shown} is outside the folder that holds the record and its mission "
+            f"({header_text(str(holder))}): a record names only worlds there or by name; not "
+            "read, the page draws the odometry alone"
         )
     if where is None:
         return (

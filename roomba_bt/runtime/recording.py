@@ -596,14 +596,19 @@ def header_text(text: str) -> str:
     return escaped(text, ANY_CONTROL)
 
 
+def record_holder(record: Path, mission: Path) -> Path:
+    """The folder that holds both ``record`` and the ``mission`` it replays (a repository with
+    ``records/``, ``missions/`` and ``worlds/``), symbolic links followed: the only folder a
+    path the record names may lie in (:func:`held_to_record`)."""
+    return Path(os.path.commonpath([record.resolve().parent, mission.resolve()]))
+
+
 def held_to_record(path: Path, holder: Path) -> bool:
-    """Whether ``path``, symbolic links followed, is inside ``holder`` (the folder that holds
-    a record, or the one that holds it and its mission), and ``holder`` is no file system's
-    root: the rule every path a record names is held to before it is opened (its include
-    folders, its world). A record may come from someone else, and its header could name
-    ``~/.pgpass`` or ``/etc/shadow`` (docs/records.md)."""
-    holder = holder.resolve()
-    return holder != Path(holder.anchor) and path.resolve().is_relative_to(holder)
+    """Whether ``path``, symbolic links followed, is inside ``holder`` (:func:`record_holder`),
+    and ``holder`` is no file system's root: the rule every path a record names is held to
+    before it is opened (its include folders, its world). A record may come from someone
+    else, and its header could name ``~/.pgpass`` or ``/etc/shadow`` (docs/records.md)."""
+    return holder != Path(holder.anchor) and path.resolve().is_relative_to(holder.resolve())
 
 
 def utc_stamp(moment: datetime) -> str:

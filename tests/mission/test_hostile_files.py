@@ -249,6 +249,27 @@ def test_an_integer_too_long_to_read_is_placed_in_a_mission_a_world_and_a_parame
     assert "Traceback" not in out + err
 
 
+def test_a_bare_integer_no_float_holds_in_a_quantity_is_placed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """10**1000 (under 4,300 digits, so read) where a quantity needs its unit was "internal
+    error while compiling (OverflowError)" at 1:1: the "write the unit" hint computed a
+    float of it. It is said at its place, as ``repeat.times: 10**1000`` is."""
+    monkeypatch.chdir(tmp_path)
+    big = str(10**1000)
+    (tmp_path / "big.yaml").write_text(
+        "mission: num\ntree:\n  sequence:\n    - mode: safe\n"
+        f"    - drive: {{velocity: {big}, distance: 0.2 m}}\n    - wait: {{duration: {big}}}\n"
+    )
+    assert main(["validate", "big.yaml"]) == 2
+    too_large = "an integer of 1,001 digits is too large a number: at most about 1.8e+308"
+    assert capsys.readouterr().out.splitlines() == [
+        f"big.yaml:5:25: drive.velocity: {too_large} [tree.sequence[1].drive.velocity]",
+        f"big.yaml:6:24: wait.duration: {too_large} [tree.sequence[2].wait.duration]",
+        "big.yaml: failed (2 errors)",
+    ]
+
+
 def test_includes_that_are_no_library_say_what_they_are_at_the_include(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
 ) -> None:

@@ -29,10 +29,11 @@ SHUTTLE = Path(__file__).resolve().parent / "missions" / "shuttle.yaml"
 ServedRecord = Callable[..., tuple[str, str]]
 
 
-def _record_the_shuttle(record: Path, *options: str) -> int:
+def _record_the_shuttle(record: Path, *options: str, mission: Path = SHUTTLE) -> int:
     """Run the shuttle for 2 s of mission time into ``record`` (it times out): its exit code.
-    ``options``: more of ``run``'s (``--world apartment``)."""
-    return main(["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2",
+    ``options``: more of ``run``'s (``--world apartment``); ``mission``: a copy of it to run
+    (one in the folder that holds the record and its world)."""
+    return main(["run", str(mission), "--fast", "--display", "none", "--timeout", "2",
                  "--record", str(record), *options])  # fmt: skip
 
 
@@ -995,7 +996,7 @@ def test_a_recorded_view_draws_the_world_its_record_names_from_where_the_robot_s
 
     shipped = tmp_path / "shipped.jsonl"
     _record_the_shuttle(shipped, "--world", "apartment")
-    drawn = recorded_world(load_record(shipped))
+    drawn = recorded_world(load_record(shipped), SHUTTLE)
     assert isinstance(drawn, tuple)
     world, start = drawn
     apartment = load_world("apartment")
@@ -1006,16 +1007,19 @@ def test_a_recorded_view_draws_the_world_its_record_names_from_where_the_robot_s
     own.parent.mkdir()
     own.write_text((WORLDS_DIR / "apartment.yaml").read_text())
     (tmp_path / "records").mkdir()
+    (tmp_path / "missions").mkdir()
+    mission = tmp_path / "missions" / "shuttle.yaml"  # records/, missions/, worlds/: one project
+    mission.write_text(SHUTTLE.read_text())
     by_path = tmp_path / "records" / "run.jsonl"
-    _record_the_shuttle(by_path, "--world", str(own))
+    _record_the_shuttle(by_path, "--world", str(own), mission=mission)
     record = load_record(by_path)
     assert record.header[SIMULATOR]["world"] == "../worlds/mine.yaml"
-    drawn = recorded_world(record)
+    drawn = recorded_world(record, mission)
     assert isinstance(drawn, tuple) and drawn[0]["rooms"] == world["rooms"]
     capsys.readouterr()
 
     own.unlink()
-    problem = recorded_world(load_record(by_path))
+    problem = recorded_world(load_record(by_path), mission)
     assert isinstance(problem, str) and problem.startswith("its world ../worlds/mine.yaml: ")
     assert problem.endswith("; the page draws the odometry alone")
     _, err = served_record(by_path)
@@ -1023,4 +1027,43 @@ def test_a_recorded_view_draws_the_world_its_record_names_from_where_the_robot_s
 
     robot = load_record(shipped)
     del robot.header[SIMULATOR]
-    assert recorded_world(robot) is None
+    assert recorded_world(robot, SHUTTLE) is None
+
+
+def test_a_records_world_outside_its_folder_is_not_read_and_its_header_texts_are_escaped(
+    tmp_path: Path, served_record: ServedRecord
+) -> None:
+    """A stranger's record named ``../home/.pgpass`` (or ``/etc/shadow``) as its world, and
+    ``monitor RECORD`` opened it and quoted its lines in the world's errors: a user pasting
+    that output sent the record's author their secrets. A world is read only inside the
+    folder that holds the record and its mission, as the record's include folders are; its
+    name reaches the terminal escaped, as the label does."""
+    from roomba_bt.monitor.recorded import recorded_world
+    from roomba_bt.runtime.recording import SIMULATOR, load_record
+
+    secret = tmp_path / "home" / ".pgpass"
+    secret.parent.mkdir()
+    secret.write_text("db.example.com:5432:prod:admin:S3cretPgPass\n")
+    project = tmp_path / "shared"
+    project.mkdir()
+    mission = project / "shuttle.yaml"
+    mission.write_text(SHUTTLE.read_text())
+    made = project / "made.jsonl"
+    _record_the_shuttle(made, mission=mission)
+    lines = made.read_text().splitlines()
+    header = json.loads(lines[0])
+    for world in ("../home/.pgpass", str(secret)):
+        header[SIMULATOR]["world"] = world
+        stranger = project / "stranger.jsonl"
+        stranger.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+        problem = recorded_world(load_record(stranger), mission)
+        assert isinstance(problem, str) and "S3cret" not in problem, problem
+        assert f"its world {world} is outside the folder that holds the record" in problem
+        _, err = served_record(stranger)
+        assert "S3cret" not in err and "is outside the folder" in err, err
+
+    header[SIMULATOR]["world"] = "W\x1b]0;PWNED\x07\u202e"
+    stranger.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    _, err = served_record(stranger)
+    assert "\x1b" not in err and "\u202e" not in err, err
+    assert "its world W\\x1b]0;PWNED\\x07\\u202e" in err, err

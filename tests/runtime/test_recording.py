@@ -532,6 +532,15 @@ def test_a_ctrl_c_inside_a_tick_is_noted_before_it_and_replays_byte_for_byte(
     assert ending is not None
     assert (ending["reason"], ending["tick"], ending["at"]) == ("Ctrl-C", 68, "before")
     capsys.readouterr()
+    # the record's own "allow_plugin_files": true is never honoured: the flag is the fix
+    assert main(["replay", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "fix a copy" not in err, err
+    assert (
+        f"replay: the record's run was allowed the plugin files of its mission {source} "
+        "(--allow-plugin-files); a replay imports them only when told: pass "
+        "--allow-plugin-files if you trust them (they run as Python code)"
+    ) in err, err
     assert main(["replay", str(path), "--allow-plugin-files"]) == 0
     out = capsys.readouterr().out
     assert "replay: the tree wrote the same 38 bytes as the recorded run" in out, out
@@ -1066,6 +1075,30 @@ def test_a_replay_says_in_one_line_that_it_ran_on_other_files_than_the_record_wa
     out = capsys.readouterr().out
     assert f"replay: recorded with roomba-bt 0.1.0 (this is {__version__})\n" in out
     assert "changed since" not in out
+
+
+def test_a_hand_edited_header_reaches_the_terminal_escaped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A stranger's record wrote its ``roomba_bt_version`` raw in replay's "recorded with"
+    line: an escape sequence there retitled the window and recoloured the output (OSC 52
+    writes the clipboard). Every header text is shown escaped, as the label is."""
+    mission = _mission_with_a_library(tmp_path, "200 mm/s")
+    record = tmp_path / "trip.jsonl"
+    argv = ["run", str(mission), "--fast", "--display", "none", "--record", str(record)]
+    assert main(argv) == 0
+    lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
+    header = json.loads(lines[0])
+    header["roomba_bt_version"] = "V\x1b]0;PWNED\x07\x1b[31m\u202e"
+    header["label"] = "L\x1b[2J"
+    edited = tmp_path / "edited.jsonl"
+    edited.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
+    mission.write_text(mission.read_text() + "# a comment: the same tree\n", encoding="utf-8")
+    capsys.readouterr()
+    assert main(["replay", str(edited)]) == 0
+    out, err = capsys.readouterr()
+    assert "\x1b" not in out + err and "\u202e" not in out + err, out + err
+    assert "replay: recorded with roomba-bt V\\x1b]0;PWNED\\x07\\x1b[31m\\u202e (this is" in out
 
 
 TWO_A_TICK = """

@@ -291,13 +291,26 @@ def test_every_alias_tag_and_control_character_of_a_world_is_refused_at_once() -
     ]
 
 
-def test_a_file_that_is_no_world_is_quoted_short() -> None:
-    """A world given some other text file (a page in one scalar) names it in a line, not
-    the whole page."""
-    (problem,) = problems("root:x:0:0:root:/root:/bin/bash\n" * 40)
-    assert problem.startswith("w.yaml:1:1: (document): found 'root:x:0:0:root:/root:")
-    assert "... (1,279 characters); allowed: a mapping with keys name," in problem
-    assert len(problem) < 400
+@pytest.mark.parametrize(
+    "text",
+    [
+        "root:x:0:0:root:/root:/bin/bash\n" * 40,  # a page in one scalar (/etc/passwd)
+        "root:*:20228:0:99999:7:::\ndaemon:*:20228:0:99999:7:::\n",  # keys (/etc/shadow)
+        "db.example.com:5432:prod:admin:S3cretPgPass\n",  # ~/.pgpass
+        "- https://alice:ghp_SECRETTOKEN@github.com\n",  # a list
+    ],
+)
+def test_a_file_that_is_no_world_is_said_so_and_never_quoted(text: str) -> None:
+    """A world given some other text file quoted its lines back (its scalar, or each line
+    as an unknown key): a stranger's record naming ``/etc/shadow`` as its world had the
+    monitor print the password hashes. It is said not to be a world, as a file that is not
+    a mission is, and nothing of it is shown."""
+    (problem,) = problems(text)
+    assert problem == (
+        "w.yaml:1:1: this file is not a world file: expected a mapping with some of name, "
+        "description, rooms, walls, obstacles, drops, dirt, virtual_walls, lighthouses, dock, "
+        "robot, events, areas"
+    )
 
 
 def test_a_tab_and_a_byte_that_is_not_utf8_in_a_world_are_placed(tmp_path: pathlib.Path) -> None:
