@@ -28,9 +28,13 @@ stay as they were. Type checkers read the imports below.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from roomba_bt._safe_path import drop_current_folder
 
-from roomba_bt._lazy import lazy_exports
+drop_current_folder()  # before any module not loaded yet: ``python -m`` added the cwd first
+
+from typing import TYPE_CHECKING  # noqa: E402  (after the cwd is dropped)
+
+from roomba_bt._lazy import lazy_exports  # noqa: E402
 
 __version__ = "0.2.0"
 

@@ -44,8 +44,11 @@ PROJECT = "project"
 #: standard library only, so the simulator's plots say a half-installed matplotlib as the
 #: command line says any other
 INSTALLATION = "installation"
+#: below every layer too, run first by the top package: the current folder off ``sys.path``
+#: under ``python -m roomba_bt``, with only the modules Python loaded at start-up
+SAFE_PATH = "_safe_path"
 #: what every layer may import, the protocol's included
-STDLIB_ONLY = {LAZY, PRINTABLE, ERRORS, PROJECT, INSTALLATION}
+STDLIB_ONLY = {LAZY, PRINTABLE, ERRORS, PROJECT, INSTALLATION, SAFE_PATH}
 ALLOWED: dict[str, set[str]] = {
     BOTTOM: {BOTTOM, PRINTABLE},
     "oi": {"oi", *STDLIB_ONLY},  # the protocol stays standard-library only, so no YAML
@@ -133,11 +136,15 @@ def _runtime_imports(path: Path) -> set[str]:
 
 def test_the_top_package_imports_no_layer() -> None:
     """``roomba_bt/__init__.py`` names every layer's exports but imports none of them when
-    it runs (each when first asked for): only the lazy-export helper below them all."""
-    assert _runtime_imports(PACKAGE / "__init__.py") == {f"roomba_bt.{LAZY}"}
+    it runs (each when first asked for): only the lazy-export helper below them all, and
+    the one that takes ``python -m``'s current folder off ``sys.path`` first."""
+    assert _runtime_imports(PACKAGE / "__init__.py") == {
+        f"roomba_bt.{LAZY}",
+        f"roomba_bt.{SAFE_PATH}",
+    }
 
 
-@pytest.mark.parametrize("module", [LAZY, PRINTABLE])
+@pytest.mark.parametrize("module", [LAZY, PRINTABLE, SAFE_PATH])
 def test_the_modules_below_every_layer_import_nothing_of_ours(module: str) -> None:
     assert _runtime_imports(PACKAGE / f"{module}.py") == set()
 

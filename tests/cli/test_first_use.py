@@ -65,6 +65,27 @@ def test_python_m_roomba_bt_is_the_command(mission: Path, tmp_path: Path) -> Non
     assert usage.returncode == 2 and usage.stderr.startswith("usage: roomba-bt"), usage.stderr
 
 
+@pytest.mark.parametrize("module", ["typing", "yaml", "py_trees"])
+def test_python_m_roomba_bt_imports_nothing_from_the_current_folder(
+    mission: Path, tmp_path: Path, module: str
+) -> None:
+    """``python -m`` puts the current folder first on ``sys.path``: run inside a downloaded
+    mission folder, its ``yaml.py`` (or ``typing.py``, which the package itself imports
+    first) ran with no ``--allow-plugin-files``. The package drops that folder before it
+    imports anything Python had not loaded at start-up, as ``roomba-bt`` never adds it."""
+    ran = tmp_path / "ran"
+    (tmp_path / f"{module}.py").write_text(
+        f"import pathlib\npathlib.Path({str(ran)!r}).write_text('x')\n"
+        f"raise SystemExit('{module}.py from the current folder ran')\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-m", "roomba_bt", "validate", str(mission)],
+        capture_output=True, text=True, timeout=60, cwd=tmp_path,
+    )  # fmt: skip
+    assert (done.returncode, done.stdout.strip()) == (0, f"{mission}: ok"), done.stderr
+    assert not ran.exists()
+
+
 def test_behaviour_descriptions_survive_python_OO(tmp_path: Path) -> None:
     """``python -OO`` drops docstrings, where the behaviours' descriptions come from: they are
     read from the source then, so ``roomba-bt behaviours`` says the same either way."""
