@@ -326,6 +326,17 @@ def token_access(tokens: Tokens, request: web.Request) -> Access | None:
     return tokens.access(given) if given else None
 
 
+def _end_leftover_tasks(loop: asyncio.AbstractEventLoop) -> None:
+    """Cancel what the server's shutdown left running, and let it end, before ``loop`` is
+    closed: a request refused with 413 while its client still sends the body keeps its
+    handler reading it, and closing the loop on it wrote "ERROR asyncio: Task was destroyed
+    but it is pending!" after the run's summary, which read as a failed run."""
+    leftover = asyncio.all_tasks(loop)
+    for task in leftover:
+        task.cancel()
+    loop.run_until_complete(asyncio.gather(*leftover, return_exceptions=True))
+
+
 class MonitorServer:
     """Serves one feed (a live run with its session, or a recorded run without one)."""
 
@@ -437,6 +448,7 @@ class MonitorServer:
             loop.run_until_complete(self._close_sockets())
         finally:
             loop.run_until_complete(runner.cleanup())
+            _end_leftover_tasks(loop)
             loop.close()
 
     async def _close_sockets(self) -> None:

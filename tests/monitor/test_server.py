@@ -513,3 +513,27 @@ def test_the_pump_looks_just_after_the_first_tick_end_due_after_its_period() -> 
     assert next_look(10.000, 10.0465) == pytest.approx(10.061)
     # a tick that ended after the period was due: the next end
     assert next_look(10.000, 9.990) == pytest.approx(10.016)
+
+
+def test_a_body_refused_as_too_large_leaves_no_task_pending_at_the_end(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A POST over 64 KiB is refused with 413 while its client goes on sending: its handler
+    was still reading when the server closed, and "ERROR asyncio: Task was destroyed but it
+    is pending!" followed the run's summary, as if the run had failed."""
+    server = _serve()
+    size = 5_000_000
+    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as client:
+        client.sendall(
+            f"POST /api/control HTTP/1.1\r\nHost: 127.0.0.1:{server.port}\r\n"
+            f"Content-Type: application/json\r\nContent-Length: {size}\r\n\r\n".encode()
+        )
+        sender = threading.Thread(target=client.sendall, args=(b"a" * size,), daemon=True)
+        sender.start()  # the whole body, as curl sends it, while the 413 is read
+        assert client.recv(64).startswith(b"HTTP/1.1 413"), "the body is refused"
+        sender.join(10)
+        server.close()
+        del server  # its loop, and any task left on it, are destroyed with it
+        gc.collect()  # a pending task is said when it is destroyed
+    destroyed = [r for r in caplog.records if "Task was destroyed" in r.getMessage()]
+    assert destroyed == []
