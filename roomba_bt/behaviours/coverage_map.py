@@ -22,9 +22,12 @@ simulator map. With the grid it decides where to go::
             been on finds the nearest swept cell next to floor it has not swept (the
             frontier); it drives there along the path and sweeps lanes from there; a
             frontier that lies along a wall gets an edge instead
-    when no frontier is left: an edge from wherever it is; when that finds no new floor
-            either, SUCCESS (the whole floor it can reach is swept), its message the floor
-            it swept: ``floor done: 11.6 m² swept by its own map``
+    when no frontier is left: an edge from wherever it is; when two find no new floor
+            either, the way out to open floor past what it met, across cells it knows
+            nothing of (:meth:`FloorMap.escape`: chair legs 40 cm apart closed its map on
+            an island of legs), and lanes there; when there is none, SUCCESS (the whole
+            floor it can reach is swept), its message the floor it swept:
+            ``floor done: 11.6 m² swept by its own map``
 
 The cost per tick is the cells the strip and the rays touch (a few); the search runs only
 when a region ends, over the cells seen so far (a few thousand).
@@ -67,7 +70,7 @@ from roomba_bt.behaviours.blackboard import run_board
 from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.docking.common import DockWatch
 from roomba_bt.behaviours.driving import WHEEL
-from roomba_bt.behaviours.drops import DropEdge, KnownDrops
+from roomba_bt.behaviours.drops import DROP, DropEdge, KnownDrops
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
 from roomba_bt.behaviours.units import DISTANCE, DURATION
 from roomba_bt.oi import commands as oi
@@ -119,6 +122,10 @@ _ANCHOR_MM, _ANCHOR_SPREAD = 1000.0, math.radians(2.0)
 _SNAP = math.radians(25.0)
 #: an edge that found more new cells than this was worth it: another may be
 _EDGE_NEW_CELLS = 20
+#: escapes in a row past what it met (:meth:`FloorMap.escape`) that found no more new cells
+#: than that before the floor is done all the same: its map's outline has a gap, and the
+#: floor behind it is a wall's far side
+_FUTILE_ESCAPES = 2
 
 Cell = int
 
@@ -228,14 +235,34 @@ class FloorMap:
 
         return self.search(start, beside_open, through_near)
 
+    def escape(self, start: Cell) -> list[Cell] | None:
+        """The path (cells, from ``start``) to the nearest open floor over any cell nothing
+        was met in: floor it has not been on, and cells beside what it met. None when
+        blocked cells close the robot in: its map has found the room's outline.
+
+        Chair and table legs (3 cm, 40 cm apart: the robot passes between them) come out
+        as blobs of blocked cells with no free cell between them on a 10 cm grid (a thin
+        leg reflects little: the light bumper reads it farther off than it is, so the rays
+        smear it over the cells round it), drawn over the robot's own way in; ``frontier``
+        then finds no way out, and the map closed on an island of legs (a dining room:
+        "floor done" at 7-21 %). Open floor past them is not done floor, and a blocked cell
+        the robot's centre has been on cannot be solid (a drifted map's ghost, or a leg
+        smeared): the escape crosses it."""
+        return self.search(start, self.open_floor, through_unknown=True)
+
     def search(
-        self, start: Cell, goal: Callable[[Cell], bool], through_near: bool = False
+        self,
+        start: Cell,
+        goal: Callable[[Cell], bool],
+        through_near: bool = False,
+        through_unknown: bool = False,
     ) -> list[Cell] | None:
         """The path (cells, from ``start``) to the nearest cell other than ``start`` that
         ``goal`` takes, over the cells the robot has been on, or swept away from anything
-        (or near it too: ``through_near``, a narrow doorway), never blocked ones nor
-        :attr:`avoid`; None when none is reached. Breadth-first: ``frontier`` and
-        ``home_by_map`` plan with it."""
+        (or near it too: ``through_near``, a narrow doorway; or any cell not blocked:
+        ``through_unknown``, :meth:`escape`, which crosses a blocked cell the robot's
+        centre has been on too, unless a drop's), never blocked ones nor :attr:`avoid`; None
+        when none is reached. Breadth-first: ``frontier`` and ``home_by_map`` plan with it."""
         cells, near, avoid = self.cells, self.near, self.avoid
         parent: dict[Cell, Cell] = {start: start}
         queue = deque((start,))
@@ -253,8 +280,13 @@ class FloorMap:
             for d in NEIGHBOUR_STEPS:
                 nxt = cell + d
                 bits = cells[nxt]
-                passable = bits & VISITED or (bits & SWEPT and (through_near or not near[nxt]))
-                if passable and nxt not in parent and not bits & BLOCKED and nxt not in avoid:
+                if through_unknown:  # a blocked cell its centre has been on is a ghost
+                    passable = not bits & BLOCKED or bool(bits & VISITED and not bits & DROP)
+                else:
+                    passable = not bits & BLOCKED and bool(
+                        bits & VISITED or (bits & SWEPT and (through_near or not near[nxt]))
+                    )
+                if passable and nxt not in parent and nxt not in avoid:
                     parent[nxt] = cell
                     queue.append(nxt)
         return None
@@ -448,6 +480,42 @@ class Bearings:
             self.anchored += 1
 
 
+class NoFrontier:
+    """What ``cover`` does once no frontier is left: an edge again, unless two edges in a
+    row found nothing new (:data:`_EDGE_NEW_CELLS`); then the way out past what it met
+    (:meth:`FloorMap.escape`), after which the edges start over (the robot is out among the
+    room's walls); then done. An escape that found next to nothing by the next one (a leg's
+    far side, floor behind a wall its map has a gap in) counts, and after
+    :data:`_FUTILE_ESCAPES` of them in a row the floor is done all the same."""
+
+    def __init__(self) -> None:
+        self._idle_edges = 0  # edges in a row that followed no frontier
+        self._swept = -1 - _EDGE_NEW_CELLS  # the map's swept count when the last one started
+        self._futile = 0  # escapes in a row that found next to no floor
+
+    def edge_again(self, edge_found: int) -> bool:
+        """Is another edge worth it, the last one having found ``edge_found`` new cells?"""
+        if edge_found > _EDGE_NEW_CELLS:
+            self._idle_edges = 0
+        if self._idle_edges >= 2:
+            return False
+        self._idle_edges += 1
+        return True
+
+    def path_out(self, fmap: FloorMap, here: Cell | None) -> list[Cell] | None:
+        """The path out from ``here``, or None: the floor is done."""
+        if here is None:
+            return None
+        self._futile = self._futile + 1 if fmap.swept - self._swept <= _EDGE_NEW_CELLS else 0
+        if self._futile > _FUTILE_ESCAPES:
+            return None
+        path = fmap.escape(here)
+        if path is not None:
+            self._swept = fmap.swept
+            self._idle_edges = 0
+        return path
+
+
 @declare(
     "cover",
     kind="action",
@@ -501,7 +569,7 @@ class Cover(Action):
             return
         self._plan: list[Callable[[], None]] = []
         self._edge_found = 0  # new cells the last edge found
-        self._idle_edges = 0  # edges in a row that followed no frontier
+        self._no_frontier = NoFrontier()
         self._line: driving.Line = (odo.x_mm, odo.y_mm, odo.theta_rad)
         self._phase = ""
         why = driving.blocked(self.snapshot.frame) if kept else None
@@ -841,15 +909,14 @@ class Cover(Action):
         if here is not None:
             path = self._map.frontier(here) or self._map.frontier(here, through_near=True)
         if path is None:
-            if self._edge_found > _EDGE_NEW_CELLS:
-                self._idle_edges = 0
-            self._edge_found = 0
-            if self._idle_edges >= 2:
+            edge_found, self._edge_found = self._edge_found, 0
+            if self._no_frontier.edge_again(edge_found):
+                self._seek(then_edge=True)
+                return
+            path = self._no_frontier.path_out(self._map, here)
+            if path is None:
                 self._phase = "done"
                 return
-            self._idle_edges += 1
-            self._seek(then_edge=True)
-            return
         target = path[-1]
         waypoints = self._map.waypoints(path)
         self._map.cells[target] |= TRIED  # once reached, its lanes decide; never again
