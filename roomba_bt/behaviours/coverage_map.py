@@ -102,6 +102,9 @@ _HALF_SIDE = _SIDE // 2
 SWEPT, BLOCKED, VISITED, TRIED = 1, 2, 4, 8
 #: a cell's four neighbours, as steps in the cell index
 NEIGHBOUR_STEPS = (-_SIDE, _SIDE, -1, 1)
+#: the cells within two of a cell (5 x 5), as steps in the cell index: the robot's centre
+#: there would have its body (17 cm) over a drop on the map
+_AROUND = tuple(row * _SIDE + col for row in range(-2, 3) for col in range(-2, 3))
 #: the strip the brushes clean, as points across the body (x forward, y left; mm): the main
 #: brush 90 mm to the left, the side brush 185 mm to the right (kept a little inside both)
 _STRIP = (*((0.0, y) for y in (80.0, 40.0, 0.0, -40.0, -80.0)), (40.0, -120.0), (50.0, -160.0))
@@ -236,9 +239,12 @@ class FloorMap:
         return self.search(start, beside_open, through_near)
 
     def escape(self, start: Cell) -> list[Cell] | None:
-        """The path (cells, from ``start``) to the nearest open floor over any cell nothing
-        was met in: floor it has not been on, and cells beside what it met. None when
-        blocked cells close the robot in: its map has found the room's outline.
+        """The path (cells, from ``start``) to the nearest open floor over any cell not
+        blocked, floor it has not been on and cells beside what it met too, and over the
+        blocked cells the robot's centre has been on (never within two cells of a drop). None when
+        blocked cells close it in: its map has found the room's outline. A gap in a wall's
+        line on the map (a corner the edge cut) lets it out too: :class:`NoFrontier` stops
+        after one such escape that found nothing.
 
         Chair and table legs (3 cm, 40 cm apart: the robot passes between them) come out
         as blobs of blocked cells with no free cell between them on a 10 cm grid (a thin
@@ -260,8 +266,9 @@ class FloorMap:
         """The path (cells, from ``start``) to the nearest cell other than ``start`` that
         ``goal`` takes, over the cells the robot has been on, or swept away from anything
         (or near it too: ``through_near``, a narrow doorway; or any cell not blocked:
-        ``through_unknown``, :meth:`escape`, which crosses a blocked cell the robot's
-        centre has been on too, unless a drop's), never blocked ones nor :attr:`avoid`; None
+        ``through_unknown``, :meth:`escape`: any cell not blocked, and a blocked one the
+        robot's centre has been on, never a cell within two of a drop),
+        never blocked ones nor :attr:`avoid`; None
         when none is reached. Breadth-first: ``frontier`` and ``home_by_map`` plan with it."""
         cells, near, avoid = self.cells, self.near, self.avoid
         parent: dict[Cell, Cell] = {start: start}
@@ -281,7 +288,9 @@ class FloorMap:
                 nxt = cell + d
                 bits = cells[nxt]
                 if through_unknown:  # a blocked cell its centre has been on is a ghost
-                    passable = not bits & BLOCKED or bool(bits & VISITED and not bits & DROP)
+                    passable = (
+                        not bits & BLOCKED or bool(bits & VISITED and not bits & DROP)
+                    ) and not any(cells[nxt + a] & DROP for a in _AROUND)
                 else:
                     passable = not bits & BLOCKED and bool(
                         bits & VISITED or (bits & SWEPT and (through_near or not near[nxt]))
@@ -484,8 +493,9 @@ class NoFrontier:
     """What ``cover`` does once no frontier is left: an edge again, unless two edges in a
     row found nothing new (:data:`_EDGE_NEW_CELLS`); then the way out past what it met
     (:meth:`FloorMap.escape`), after which the edges start over (the robot is out among the
-    room's walls); then done. An escape that found next to nothing by the next one (a leg's
-    far side, floor behind a wall its map has a gap in) counts, and after
+    room's walls); then done. An escape that found
+    next to nothing by the next one (a leg's far side, floor behind a wall its map has a
+    gap in) counts, and after
     :data:`_FUTILE_ESCAPES` of them in a row the floor is done all the same."""
 
     def __init__(self) -> None:
@@ -512,7 +522,7 @@ class NoFrontier:
         path = fmap.escape(here)
         if path is not None:
             self._swept = fmap.swept
-            self._idle_edges = 0
+            self._idle_edges = 0  # out among the room's walls: edges are worth it again
         return path
 
 
