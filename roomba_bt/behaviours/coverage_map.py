@@ -129,6 +129,11 @@ _EDGE_NEW_CELLS = 20
 #: than that before the floor is done all the same: its map's outline has a gap, and the
 #: floor behind it is a wall's far side
 _FUTILE_ESCAPES = 2
+#: a map closed on less swept floor than this (cells: 6 m²) may be an island of legs
+#: rather than a room, and only then is a way out looked for; a room's map closed on more
+#: is done (with the encoders' error a larger map has ghost walls across floor it swept,
+#: and ways out through them led nowhere, the way home then running out of time)
+_ISLAND_CELLS = 600
 
 Cell = int
 
@@ -514,7 +519,7 @@ class NoFrontier:
 
     def path_out(self, fmap: FloorMap, here: Cell | None) -> list[Cell] | None:
         """The path out from ``here``, or None: the floor is done."""
-        if here is None:
+        if here is None or fmap.swept >= _ISLAND_CELLS:
             return None
         self._futile = self._futile + 1 if fmap.swept - self._swept <= _EDGE_NEW_CELLS else 0
         if self._futile > _FUTILE_ESCAPES:
