@@ -23,11 +23,11 @@ simulator map. With the grid it decides where to go::
             frontier); it drives there along the path and sweeps lanes from there; a
             frontier that lies along a wall gets an edge instead
     when no frontier is left: an edge from wherever it is; when two find no new floor
-            either, the way out to open floor past what it met, across cells it knows
-            nothing of (:meth:`FloorMap.escape`: chair legs 40 cm apart closed its map on
-            an island of legs), and lanes there; when there is none, SUCCESS (the whole
-            floor it can reach is swept), its message the floor it swept:
-            ``floor done: 11.6 m² swept by its own map``
+            either and the map closed on under 6 m², the way out to open floor past what
+            it met, across cells it knows nothing of (:meth:`FloorMap.escape`: chair legs
+            40 cm apart closed its map on an island of legs), and lanes there; when there
+            is none, SUCCESS (the whole floor it can reach is swept), its message the floor
+            it swept: ``floor done: 11.6 m² swept by its own map``
 
 The cost per tick is the cells the strip and the rays touch (a few); the search runs only
 when a region ends, over the cells seen so far (a few thousand).
