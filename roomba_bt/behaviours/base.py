@@ -14,6 +14,7 @@ tick when its lifecycle is its own. How a behaviour declares itself is
 
 from __future__ import annotations
 
+import functools
 import logging
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
@@ -195,7 +196,26 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
                 f"{declaration.name!r} does not have; it declares: {declared}"
             ) from None
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """A subclass's own ``initialise`` (the py_trees idiom, seldom with ``super()``, as
+        py_trees' own does nothing) is wrapped so that the parameters are read first
+        (:meth:`read_parameters`): left out, its ``@key`` values stayed references and the
+        first ``number()`` raised ``float() argument must be ... not 'BlackboardRef'``,
+        naming nothing it did wrong. Only such classes pay for the wrapper; ``start`` stays
+        the place for what this class's ``initialise`` should run."""
+        super().__init_subclass__(**kwargs)
+        own = vars(cls).get("initialise")
+        if callable(own) and not getattr(own, "reads_parameters_first", False):
+            cls.initialise = _parameters_read_first(own)  # type: ignore[method-assign,assignment]
+
     def initialise(self) -> None:
+        self.read_parameters()
+        self.start()
+
+    def read_parameters(self) -> None:
+        """This start's parameters: each ``@key`` value read from the blackboard (checked
+        against the parameter's range), and the last start's feedback message cleared.
+        Done at every start, before :meth:`start` or an ``initialise`` of a subclass's."""
         # started again (a retry's next attempt): what the last run said is not said of this
         # one (``cover [✓]`` showed an earlier attempt's cliff failure at the end of a clean)
         self.feedback_message = ""
@@ -224,10 +244,23 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
                     raise KeyRange(self, pname, ref, problem)
                 resolved[pname] = raw
             self._resolved = resolved
-        self.start()
 
     def start(self) -> None:
         """Called once each time the behaviour starts (after ``@key`` values are read)."""
+
+
+def _parameters_read_first(initialise: Callable[[Any], None]) -> Callable[[Any], None]:
+    """``initialise`` (a subclass's own) run after :meth:`RobotBehaviour.read_parameters`.
+    One that calls ``super().initialise()`` reads them twice, at its start only: the same
+    values, as nothing ticks between."""
+
+    @functools.wraps(initialise)
+    def reads_parameters_first(self: RobotBehaviour) -> None:
+        self.read_parameters()
+        initialise(self)
+
+    reads_parameters_first.reads_parameters_first = True  # type: ignore[attr-defined]
+    return reads_parameters_first
 
 
 class Action(RobotBehaviour):

@@ -210,3 +210,62 @@ def test_write_key_takes_values_of_the_declared_type_and_any_undeclared_key() ->
     py_trees.blackboard.Blackboard.clear()  # a test's fixture: the types go with the keys
     write_key("v", "fast")
     assert read_key("v") == "fast"
+
+
+@declare(
+    "pt_forward",
+    kind="action",
+    params=(Param("distance", DISTANCE, default="20 cm", minimum=0, maximum=5000),),
+)
+class PyTreesStyleForward(Action):
+    """Written as a py_trees user writes a leaf: ``initialise``, no ``super()``."""
+
+    def initialise(self) -> None:
+        self.goal = self.number("distance")
+
+    def update(self) -> Status:
+        return Status.RUNNING
+
+
+@declare("pt_near", kind="condition", params=(Param("closer_than", DISTANCE, default="10 cm"),))
+class PyTreesStyleNear(Condition):
+    """A condition whose ``initialise`` calls ``super()`` and keeps a count of its starts."""
+
+    starts = 0
+
+    def initialise(self) -> None:
+        super().initialise()
+        self.starts += 1
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return self.number("closer_than") > 150
+
+
+def test_an_initialise_without_super_still_has_its_key_parameters_read() -> None:
+    """py_trees' ``initialise`` does nothing, so its users override it without ``super()``:
+    that left ``@key`` values as references, and ``number()`` raised ``float() argument
+    must be ... not 'BlackboardRef'`` (the py_trees expert's ``pt_forward``, session 34)."""
+    leaf = PyTreesStyleForward("pt", {"distance": "@d"})
+    leaf.setup(robot=StubRobot())
+    write_key("d", 300.0)
+    leaf.tick_once()
+    assert leaf.goal == 300.0 and leaf.status is Status.RUNNING
+    leaf.stop(Status.INVALID)
+    write_key("d", 120.0)  # read again at the next start
+    leaf.tick_once()
+    assert leaf.goal == 120.0
+
+
+def test_an_initialise_calling_super_runs_once_and_reads_its_keys() -> None:
+    """The wrapper and ``super().initialise()`` both read the parameters: the same values,
+    the override itself run once per start, on the condition's whole tick."""
+    robot = StubRobot()
+    node = PyTreesStyleNear("near", {"closer_than": "@c"})
+    node.setup(robot=robot)
+    robot.set_frame({})
+    write_key("c", 200.0)
+    node.tick_once()
+    assert node.status is Status.SUCCESS and node.starts == 1
+    write_key("c", 100.0)
+    node.tick_once()
+    assert node.status is Status.FAILURE and node.starts == 2
