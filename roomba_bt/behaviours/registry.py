@@ -38,6 +38,8 @@ from dataclasses import dataclass, replace
 from importlib.metadata import Distribution, EntryPoint, distributions, entry_points
 from pathlib import Path
 
+import py_trees
+
 from roomba_bt.behaviours.base import RobotBehaviour
 from roomba_bt.behaviours.declare import Declaration, DeclarationError
 from roomba_bt.behaviours.language import RESERVED
@@ -157,6 +159,20 @@ class PluginError:
         if self.refused:
             return f"{self.refused!r} (refused alone: the plugin's other behaviours loaded)"
         return f"the behaviours of plugin {self.plugin}"
+
+
+def _plain_py_trees_hint(cls: object) -> str:
+    """What a plain py_trees behaviour given as ``behaviours=`` can be used in instead: a
+    mission's YAML names only declared behaviours, but a tree built in Python runs one as it
+    is (its user came from py_trees and meant to keep the class as written)."""
+    if isinstance(cls, type) and issubclass(cls, py_trees.behaviour.Behaviour):
+        return (
+            f"; {cls.__qualname__} is a plain py_trees behaviour, which a mission's YAML cannot "
+            "name, but a tree built in Python runs as it is: "
+            "roomba_bt.TreeMission(root, name) (docs/runtime.md, From Python: a tree built "
+            "by hand)"
+        )
+    return ""
 
 
 class Registry:
@@ -457,7 +473,7 @@ class Registry:
                 raise DeclarationError(
                     f"behaviours=[..., {cls!r}]: a behaviour class is one derived from "
                     "roomba_bt.behaviours.Action or Condition and decorated with "
-                    "@declare(name, ...)"
+                    f"@declare(name, ...){_plain_py_trees_hint(cls)}"
                 )
             try:
                 copy.register(cls, origin)

@@ -320,6 +320,22 @@ def test_a_behaviour_that_takes_a_built_ins_name_is_refused_by_name() -> None:
         roomba_bt.load_mission_text(FAR_ENOUGH, behaviours=[Mine])  # type: ignore[list-item]
 
 
+def test_a_plain_py_trees_behaviour_given_as_behaviours_is_told_of_tree_mission() -> None:
+    """A py_trees user's class, refused by the YAML, still runs in a tree built in Python:
+    the refusal says where (the py_trees expert, session 34); a class that is no py_trees
+    behaviour at all is not pointed there."""
+    with pytest.raises(roomba_bt.DeclarationError) as refused:
+        roomba_bt.load_mission_text(FAR_ENOUGH, behaviours=[Noop])  # type: ignore[list-item]
+    assert str(refused.value).endswith(
+        "; Noop is a plain py_trees behaviour, which a mission's YAML cannot name, but a "
+        "tree built in Python runs as it is: roomba_bt.TreeMission(root, name) "
+        "(docs/runtime.md, From Python: a tree built by hand)"
+    )
+    with pytest.raises(roomba_bt.DeclarationError) as other:
+        roomba_bt.load_mission_text(FAR_ENOUGH, behaviours=[Mine])  # type: ignore[list-item]
+    assert "TreeMission" not in str(other.value)
+
+
 # ------------------------------------------------------------------ 5. nested in a bigger tree
 class Noop(py_trees.behaviour.Behaviour):
     def update(self) -> py_trees.common.Status:
