@@ -23,6 +23,7 @@ import roomba_bt
 from roomba_bt import CREATE2, Outcome, RunStack, SimLink, Simulator, TreeMission, load_world
 from roomba_bt.behaviours import DISTANCE, Condition, Param, declare
 from roomba_bt.robot.interface import Snapshot
+from roomba_bt.robot.testing import StubRobot
 from roomba_bt.sim import Faults
 
 from .simrun import wait_for_the_guard
@@ -334,6 +335,34 @@ def test_a_plain_py_trees_behaviour_given_as_behaviours_is_told_of_tree_mission(
     with pytest.raises(roomba_bt.DeclarationError) as other:
         roomba_bt.load_mission_text(FAR_ENOUGH, behaviours=[Mine])  # type: ignore[list-item]
     assert "TreeMission" not in str(other.value)
+
+
+def _checks_n(mission: str, n: int) -> roomba_bt.CompiledMission:
+    """A mission declaring key ``n`` with ``n`` its initial value, and checking it holds it."""
+    return roomba_bt.load_mission_text(
+        f"mission: {mission}\nblackboard:\n  n: {{type: int, initial: {n}}}\n"
+        f"tree:\n  check: {{key: n, value: {n}}}\n",
+        name=f"{mission}.yaml",
+    )
+
+
+@pytest.mark.usefixtures("clean_blackboard")
+def test_missions_set_up_by_hand_share_the_plain_names_so_run_them_one_at_a_time() -> None:
+    """docs/plugins.md (Test it without a robot) says so: ``setup`` claims no board (a run's
+    is its thread's, and a bare ``tick_once`` has no run), so the last ``setup`` wins (the
+    py_trees expert's t5.py, session 34), and set up again before its ticks each passes."""
+    first, second = _checks_n("a", 1), _checks_n("b", 2)
+    robot_a, robot_b = StubRobot(), StubRobot()
+    first.setup(robot_a)
+    second.setup(robot_b)
+    robot_a.set_frame({})
+    first.root.tick_once()
+    assert first.root.status is py_trees.common.Status.FAILURE  # it read b's 2
+    for mission, robot in ((first, robot_a), (second, robot_b)):
+        mission.setup(robot)
+        robot.set_frame({})
+        mission.root.tick_once()
+        assert mission.root.status is py_trees.common.Status.SUCCESS, mission.name
 
 
 # ------------------------------------------------------------------ 5. nested in a bigger tree
