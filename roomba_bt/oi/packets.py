@@ -51,7 +51,7 @@ _PACKET_LIST: tuple[PacketSpec, ...] = (
     _p(11, "cliff_front_right", 1, False, 0, 1, "bool", "Cliff front right"),
     _p(12, "cliff_right", 1, False, 0, 1, "bool", "Cliff right"),
     _p(13, "virtual_wall", 1, False, 0, 1, "bool", "Virtual wall"),
-    _p(14, "overcurrents", 1, False, 0, 31, "bits", "Wheel overcurrents"),
+    _p(14, "overcurrents", 1, False, 0, 31, "bits", "Wheel and brush overcurrents"),
     _p(15, "dirt_detect", 1, False, 0, 255, "", "Dirt detect"),
     _p(16, "unused_16", 1, False, 0, 255, "", "Unused byte"),
     _p(17, "ir_omni", 1, False, 0, 255, "IR character", "Infrared character omni"),
