@@ -41,6 +41,7 @@ import os
 import re
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
+from decimal import Decimal
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -1061,9 +1062,35 @@ def _default_text(vtype: ValueType, declaration: yaml.Node, default: Any) -> str
     return str(default)
 
 
+#: a plain number on the command line, for a percent parameter (``-p low_battery=0.2``)
+_PLAIN_NUMBER = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?|\.[0-9]+)\s*$", re.ASCII)
+
+
+def _cli_percent(text: str) -> str:
+    """A percent given as ``-p``: a plain number below 1 is a share of the whole, as
+    ``--battery 0.2`` reads it (``0.2`` is ``20%``), so the two options of one command
+    agree; 1 and above stay refused, since ``1`` could mean 1% or all of it, and the
+    message says both ways to write it. A file's value is left to the type: there a
+    number's meaning is written once, with its unit."""
+    match = _PLAIN_NUMBER.match(text)
+    if match is None:
+        return text
+    number = Decimal(match.group(1))  # exact: 0.123456789 is 12.3456789%, not rounded
+    if 0 < number < 1:
+        return f"{number * 100}%"
+    if number == 0:
+        return text
+    raise UnitError(
+        f"{text.strip()!r} has no unit; write {number:g}% (a plain number below 1 is a "
+        "share of the whole: 0.2 is 20%)"
+    )
+
+
 def _cli_value(text: str, vtype: ValueType) -> object:
     """A ``-p name=value`` string as the type wants it: numbers and booleans as YAML reads
-    them, everything else as written."""
+    them, a percent's share as :func:`_cli_percent` reads it, everything else as written."""
+    if vtype.name == "percent":
+        return _cli_percent(text)
     if vtype.name in ("int", "float", "bool"):
         octal_or_base_60 = yaml11_number_problem(text, in_a_file=False)
         if octal_or_base_60 is not None:  # -p c=0200 sent 128: refused as in a file

@@ -552,6 +552,33 @@ def test_parameters_defaults_and_overrides(compile_text: Compile) -> None:
     assert r.sent() == [[137, 0, 150, 0x80, 0]]
 
 
+PERCENT_PARAMETER = """
+    parameters:
+      low: {type: percent, default: 15%}
+    tree: {sequence: [{mode: safe}, {battery: {below: "${low}"}}]}
+"""
+
+
+@pytest.mark.parametrize(("given", "percent"), [("0.2", 20.0), (".15", 15.0), ("20%", 20.0)])
+def test_a_percent_parameter_takes_a_share_below_one_as_battery_does(
+    compile_text: Compile, given: str, percent: float
+) -> None:
+    """``-p low_battery=0.2`` was refused ("has no unit") while the same command's
+    ``--battery 0.2`` was taken: a plain number below 1 is a share of the whole for both."""
+    assert compile_text(PERCENT_PARAMETER, {"low": given}).parameters == {"low": percent}
+
+
+def test_a_bare_percent_of_one_or_more_is_refused_with_both_ways_to_write_it(
+    errors_of: Callable[..., list[str]],
+) -> None:
+    """``1`` could mean 1% or all of it: refused, the message naming ``20%`` and the share."""
+    (said,) = errors_of(PERCENT_PARAMETER, {"low": "20"})
+    assert said == (
+        "2:3: parameter low=20 (given in params): '20' has no unit; write 20% (a plain number "
+        "below 1 is a share of the whole: 0.2 is 20%)"
+    )
+
+
 def test_blackboard_initial_values_set_and_check(compile_text: Compile) -> None:
     mission = compile_text(
         """
