@@ -35,7 +35,7 @@ import pathlib
 import random
 import re
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import yaml
@@ -839,6 +839,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     rooms = [_room(c, r, ("rooms", i)) for i, r in enumerate(c.items(top.get("rooms"), ("rooms",)))]
     if isinstance(top.get("rooms"), list) and not rooms:
         c.error(("rooms",), "no room", "at least one room polygon")
+    _check_room_spans(c, rooms)
     walls = _walls(c, top.get("walls"))
     obstacles = [
         c.shape(o, ("obstacles", i))
@@ -896,6 +897,32 @@ def _room(c: _Checker, value: object, path: PathKey) -> Polygon | None:
     if isinstance(value, dict):
         return c.shape(value, path)
     return c.polygon(value, path)
+
+
+#: The widest room a world may hold (m): a home's room is a few metres across, and one of
+#: hundreds is a room written in centimetres (``rect: [0, 0, 500, 400]``), which otherwise
+#: loads as a 500 m hall that every obstacle written in metres fits into. 150, not less: a
+#: test's open floor of 100 x 100 m (no wall in reach) is meant, and a room under 1.5 m
+#: written in centimetres is rare.
+ROOM_SPAN_M = 150.0
+
+
+def _check_room_spans(c: _Checker, rooms: list[Polygon | None]) -> None:
+    """Each room at most :data:`ROOM_SPAN_M` across; a wider one is asked whether it was
+    written in centimetres (the shapes outside every room are asked the same, but a room in
+    centimetres holds them all)."""
+    for i, room in enumerate(rooms):
+        if room is None:
+            continue
+        width = (max(x for x, _ in room) - min(x for x, _ in room)) / 1000.0
+        depth = (max(y for _, y in room) - min(y for _, y in room)) / 1000.0
+        if max(width, depth) > ROOM_SPAN_M:
+            c.error(
+                ("rooms", i),
+                f"a room {width:g} x {depth:g} m across (did you write centimetres? "
+                f"{width:g} cm is {width / 100:g} m)",
+                f"a room at most {ROOM_SPAN_M:g} m across, in metres",
+            )
 
 
 def _overlaps(shape: Polygon, rooms: tuple[Polygon, ...]) -> bool:
@@ -1061,6 +1088,62 @@ def _default_start(dock: DockSpec | None, rooms: tuple[Polygon, ...]) -> Pose:
     return Pose(sum(xs) / len(xs), sum(ys) / len(ys), 0.0)
 
 
+def _faces_floor(world: World, dock: DockSpec) -> bool:
+    """The floor just in front of the dock's plate (10 mm out along ``facing``)."""
+    return world.on_floor(dock.x + 10 * math.cos(dock.facing), dock.y + 10 * math.sin(dock.facing))
+
+
+def _docks_well(world: World, dock: DockSpec) -> bool:
+    """The dock faces the floor and a docked robot fits in front of it, not over a drop."""
+    docked = dock.docked_pose
+    return _faces_floor(world, dock) and world.pose_is_free(docked)
+
+
+def _facings_that_dock(world: World, dock: DockSpec) -> list[str]:
+    """The facings of the four walls' directions (0, 90, 180, -90 deg) at which the same
+    dock, at the same point, would face the floor with room for the docked robot: what
+    the message offers when ``facing`` is the mistake. The plate is part of the world's
+    walls, so each is judged in a world with the plate turned."""
+    fitting = []
+    for degrees in (0, 90, 180, -90):
+        turned = replace(dock, facing=math.radians(degrees))
+        if _docks_well(replace(world, dock=turned), turned):
+            fitting.append(f"{degrees}")
+    return fitting
+
+
+def _check_dock(c: _Checker, world: World, dock: DockSpec) -> None:
+    """The dock faces the floor and its docked robot fits there, as a start pose must: a
+    docked pose inside a wall validated and the dock mission then failed after 10 minutes.
+    When another facing at the same point would do, the mistake is said at ``facing``
+    (with the facings that fit), else at ``at``."""
+    docked = dock.docked_pose
+    if _docks_well(world, dock):
+        return
+    facings = _facings_that_dock(world, dock)
+    said = f"facing {math.degrees(dock.facing):g}"
+    into_room = (
+        f"a facing (deg) that turns the dock's front into the room: {' or '.join(facings)} here"
+        if facings
+        else "a point inside a room, against a wall, facing into the room"
+    )
+    field = "facing" if facings else "at"
+    if not _faces_floor(world, dock):
+        found = f"a dock {said}, out of the room" if facings else "a dock off the floor"
+        c.error(("dock", field), found, into_room)
+    elif world.over_drop(docked.x, docked.y):
+        c.error(("dock", "at"), "a dock whose docked robot stands over a drop",
+                "floor in front of the dock (a docked robot's centre is 0.17 m out)")  # fmt: skip
+    else:
+        c.error(
+            ("dock", field),
+            f"a dock ({said}) whose docked robot, at ({docked.x / 1000:.2f}, "
+            f"{docked.y / 1000:.2f}) m, does not fit there (0.17 m from the plate, it reaches "
+            "into a wall or an obstacle or off the floor)",
+            into_room,
+        )
+
+
 def _check_placement(
     c: _Checker, world: World, start_given: bool, broken: set[str] | frozenset[str] = frozenset()
 ) -> None:
@@ -1071,14 +1154,9 @@ def _check_placement(
     robot, dock or areas in error (it leans on them)."""
     _check_inside_rooms(c, world)
     dock = world.dock
-    dock_off = dock is not None and not world.on_floor(
-        dock.x + 10 * math.cos(dock.facing), dock.y + 10 * math.sin(dock.facing)
-    )
-    if dock_off:
-        c.error(("dock", "at"), "a dock off the floor", "a point inside a room, facing into it")
-    elif dock is not None and world.over_drop(dock.docked_pose.x, dock.docked_pose.y):
-        c.error(("dock", "at"), "a dock whose docked robot stands over a drop",
-                "floor in front of the dock (a docked robot's centre is 0.17 m out)")  # fmt: skip
+    dock_off = dock is not None and not _faces_floor(world, dock)
+    if dock is not None:
+        _check_dock(c, world, dock)
     if broken & {"robot", "dock", "areas"}:
         return
     if not world.pose_is_free(world.start) and not (dock_off and not start_given):

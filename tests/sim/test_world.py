@@ -528,6 +528,56 @@ def test_a_dock_at_the_top_of_the_stairs_is_refused() -> None:
     )
 
 
+SOUTH_WALL_ROOM = "rooms: [{rect: [0, 0, 5, 4]}]\nrobot: {start: {at: [2.5, 2], heading: 0}}\n"
+
+
+def test_a_dock_whose_docked_robot_would_stand_in_the_wall_is_refused_at_facing() -> None:
+    """A dock on the south wall with ``facing: 0`` validated ``ok``: its docked robot, 0.17 m
+    along the wall, stands half in it, and the dock mission failed after 10 minutes. The
+    start pose was checked for a fit; the docked pose is now, and ``facing`` is blamed
+    (with the facing that fits), since the point is right."""
+    [found] = problems(SOUTH_WALL_ROOM + "dock: {at: [0.8, 0], facing: 0}\n")
+    assert found == (
+        "w.yaml:3:30: dock.facing: found a dock (facing 0) whose docked robot, at (0.97, 0.00) "
+        "m, does not fit there (0.17 m from the plate, it reaches into a wall or an obstacle or "
+        "off the floor); allowed: a facing (deg) that turns the dock's front into the room: 90 "
+        "here"
+    )
+
+
+def test_a_dock_facing_out_of_the_room_is_said_at_facing_not_at() -> None:
+    """``facing: -90`` on the south wall read ``dock.at: found a dock off the floor``: the
+    point is on the floor, and the mistake is the facing."""
+    [found] = problems(SOUTH_WALL_ROOM + "dock: {at: [0.8, 0], facing: -90}\n")
+    assert found == (
+        "w.yaml:3:30: dock.facing: found a dock facing -90, out of the room; allowed: a facing "
+        "(deg) that turns the dock's front into the room: 90 here"
+    )
+
+
+def test_a_dock_against_nothing_is_still_said_at_at() -> None:
+    """Where no facing would do (the point off every room), ``at`` stays the one to mend."""
+    [found] = problems(SOUTH_WALL_ROOM + "dock: {at: [9, 9], facing: 90}\n")
+    assert found.startswith("w.yaml:3:12: dock.at: found a dock off the floor; allowed: a point")
+
+
+def test_a_dock_touching_a_corner_s_other_wall_fits_as_the_start_pose_does() -> None:
+    """The docked pose touching a wall fits (as a start pose does): a dock 0.17 m from a
+    corner is no mistake."""
+    world = parse_world(SOUTH_WALL_ROOM + "dock: {at: [0.17, 0], facing: 90}\n", "w.yaml")
+    assert world.dock is not None
+
+
+def test_a_room_written_in_centimetres_is_questioned() -> None:
+    """``rect: [0, 0, 500, 400]`` loaded as a 500 m hall: every obstacle in metres fit in it,
+    so the check for shapes outside every room never fired."""
+    found = problems("rooms: [{rect: [0, 0, 500, 400]}]\nobstacles: [{rect: [1, 1, 2, 2]}]\n")
+    assert found == [
+        "w.yaml:1:9: rooms[0]: found a room 500 x 400 m across (did you write centimetres? "
+        "500 cm is 5 m); allowed: a room at most 150 m across, in metres"
+    ]
+
+
 def test_a_room_may_be_written_as_a_rect() -> None:
     """Obstacles, drops and areas take ``{rect: ...}``; a room written so was refused."""
     world = parse_world("rooms: [{rect: [0, 0, 4, 3]}]\n", "w.yaml")
