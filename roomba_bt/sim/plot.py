@@ -171,7 +171,10 @@ def plot_run(simulator: Simulator, path: str | pathlib.Path, title: str | None =
             seen.add(label)
         handles, labels = ax.get_legend_handles_labels()
         unique = dict(zip(labels, handles, strict=True))
-        ax.legend(unique.values(), unique.keys(), loc="upper right", fontsize=7)
+        # below the map, not on it: "upper right" hid a world's hall and step (an owner's
+        # living room); the saved figure is cut to fit it (``bbox_inches``)
+        ax.legend(unique.values(), unique.keys(), loc="upper center", fontsize=7,
+                  bbox_to_anchor=(0.5, -0.09), ncol=4, frameon=False)  # fmt: skip
         ax.set_aspect("equal")
         ax.autoscale_view()
         ax.set_xlabel("x (m)")
@@ -181,6 +184,6 @@ def plot_run(simulator: Simulator, path: str | pathlib.Path, title: str | None =
             or f"{world.name}: {simulator.time:.1f} s, {len(simulator.violations)} "
             f"ignored commands, final mode {simulator.mode.label}"
         )
-        fig.savefig(str(path))
+        fig.savefig(str(path), bbox_inches="tight")
     finally:
         plt.close(fig)

@@ -71,3 +71,24 @@ def test_the_world_drawing_shows_each_dirt_patch_with_its_level(labels: bool) ->
         assert named == (["dirt (level, packet 15)"] * 2 if labels else [])
     finally:
         plt.close(fig)
+
+
+@pytest.mark.extra("plot")
+def test_the_legend_stands_beside_the_map_not_on_it(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``run --plot`` put its legend in the map's upper right corner, over an owner's hall
+    and step: it stands outside the axes now, and the saved image holds it."""
+    plt = pyplot()
+    drawn: list[object] = []
+    monkeypatch.setattr(plt, "close", drawn.append)  # keep the figure to look at
+    plot_run(run(), tmp_path / "run.png")
+    (fig,) = drawn
+    try:
+        (ax,) = [a for a in fig.axes if a.get_legend() is not None]  # type: ignore[attr-defined]
+        renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+        legend = ax.get_legend().get_window_extent(renderer)
+        assert not legend.overlaps(ax.get_window_extent(renderer))
+    finally:
+        monkeypatch.undo()
+        plt.close(fig)
