@@ -120,6 +120,13 @@ class Overcurrents(_ByteView):
 
 
 Overcurrents._decode_every_byte((0, 2, 3, 4))
+#: Each motor's bit of packet 14 (``side_brush`` 0b1 ... ``left_wheel`` 0b10000), read back
+#: from the decoded views: the simulator's ``overcurrent`` event sets the bit a mission's
+#: ``overcurrent: main_brush`` reads, with no second list of them to drift.
+OVERCURRENT_BITS: dict[str, int] = {
+    name: next(1 << n for n in range(8) if getattr(Overcurrents.by_byte[1 << n], name))
+    for name in Overcurrents.flag_names()
+}
 
 
 @dataclass(frozen=True, slots=True)

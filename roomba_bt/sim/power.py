@@ -148,7 +148,7 @@ class Power(Motion):
         """What the currents are computed from (:meth:`_power_changed`)."""
         return (
             self.left_speed, self.right_speed, self.brush_pwm, self.docked, self.dock_powered,
-            self.mode, self.blocked, self._stall_steps > 30,
+            self.mode, self.blocked, self._stall_steps > 30, self._event_overcurrents,
         )  # fmt: skip
 
     def _power_changed(self) -> None:
@@ -174,7 +174,7 @@ class Power(Motion):
         over = 0
         if self._stall_steps > 30:
             over |= (16 if left else 0) | (8 if right else 0)
-        v[14] = over
+        v[14] = over | self._event_overcurrents  # a world's overcurrent event: a tangled brush
         self._update_battery_values()
 
     def _update_battery_values(self) -> None:

@@ -316,8 +316,9 @@ class Simulator(OIProtocol):
         for button in timeline.pressed:
             self.press_button(button)
         effects = timeline.effects()
-        if effects != (self._event_bump, self.lifted, self.dock_powered):
-            self._event_bump, self.lifted, self.dock_powered = effects
+        held = (self._event_bump, self.lifted, self.dock_powered, self._event_overcurrents)
+        if effects != held:
+            self._event_bump, self.lifted, self.dock_powered, self._event_overcurrents = effects
             self._power_due = True  # the charger may have come on or gone off
             self._body_changed()
             self._geometry_dirty = True

@@ -130,8 +130,8 @@ class RobotState:
     """
 
     __slots__ = (
-        "_event_bump", "_fault_rng", "_power_due", "_time_ns", "asleep", "disconnected",
-        "dock_powered", "docked", "events", "fallen", "faults", "lifted", "mode",
+        "_event_bump", "_event_overcurrents", "_fault_rng", "_power_due", "_time_ns", "asleep",
+        "disconnected", "dock_powered", "docked", "events", "fallen", "faults", "lifted", "mode",
         "odometry_error", "old_firmware_angle", "profile", "seed", "theta", "ticks", "time",
         "trace", "values", "violations", "world", "x", "y",
     )  # fmt: skip
@@ -165,8 +165,10 @@ class RobotState:
         self.ticks = 0
         self.time = 0.0
         self._time_ns = 0.0  # the clock in whole nanoseconds: no drift (robot.py's step)
-        #: the timeline's effects on the body (timeline.py): held down, lifted, charger off
+        #: the timeline's effects on the body (timeline.py): held down, lifted, charger off,
+        #: a motor's overcurrent (packet 14's bits)
         self._event_bump = 0
+        self._event_overcurrents = 0
         self.lifted = False
         self.fallen = False
         self.docked = False

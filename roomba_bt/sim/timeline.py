@@ -1,7 +1,8 @@
 """The world's timeline: what happens to the robot at set times (a world file's ``events``).
 
 ``bump`` holds the bumper pressed on one side or both, ``lift`` picks the robot up (both wheel
-drops, every cliff, no traction), ``charger_step`` takes the dock's power away; each for its
+drops, every cliff, no traction), ``charger_step`` takes the dock's power away,
+``overcurrent`` sets a motor's bit of packet 14 (a tangled brush); each for its
 ``duration`` seconds; ``press`` presses a button for the spec's 1/6 s (the simulator presses
 it as Buttons 165 does: :meth:`~roomba_bt.sim.protocol.OIProtocol.press_button`). Every
 start and end is marked in the run's events.
@@ -12,6 +13,7 @@ asks it only while it has any, and drops it after the last one ends.
 
 from __future__ import annotations
 
+from roomba_bt.oi.bits import OVERCURRENT_BITS
 from roomba_bt.sim.sensing import BUMP_SIDE_BITS
 from roomba_bt.sim.world import TimelineEvent
 
@@ -42,6 +44,8 @@ class Timeline:
             if event.kind == "press":
                 self.pressed.append(event.button)
                 marks.append((event.kind, f"{event.button} start"))
+            elif event.kind == "overcurrent":
+                marks.append((event.kind, f"{event.motor} start"))
             else:
                 marks.append((event.kind, f"{event.side} start"))
         still = []
@@ -53,11 +57,13 @@ class Timeline:
         self.active = still
         return marks
 
-    def effects(self) -> tuple[int, bool, bool]:
-        """What the events under way do: (bumper bits held, lifted, dock powered)."""
+    def effects(self) -> tuple[int, bool, bool, int]:
+        """What the events under way do: (bumper bits held, lifted, dock powered, packet
+        14's overcurrent bits held)."""
         bump = 0
         lifted = False
         powered = True
+        overcurrents = 0
         for event in self.active:
             if event.kind == "bump":
                 bump |= BUMP_SIDE_BITS[event.side]
@@ -65,4 +71,6 @@ class Timeline:
                 lifted = True
             elif event.kind == "charger_step":
                 powered = False
-        return bump, lifted, powered
+            elif event.kind == "overcurrent":
+                overcurrents |= OVERCURRENT_BITS[event.motor]
+        return bump, lifted, powered, overcurrents

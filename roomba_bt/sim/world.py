@@ -42,7 +42,7 @@ import yaml
 
 from roomba_bt import yamlsource
 from roomba_bt.errors import RoombaBtError
-from roomba_bt.oi.bits import BUTTON_NAMES, PRESS_SECONDS
+from roomba_bt.oi.bits import BUTTON_NAMES, OVERCURRENT_BITS, PRESS_SECONDS
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import BODY_RADIUS_MM
 from roomba_bt.sim.geometry import (
@@ -71,7 +71,7 @@ WORLDS_DIR = pathlib.Path(__file__).resolve().parent / "worlds"
 #: finds before the shipped ones (:func:`world_folders`).
 WORLDS_VARIABLE = "ROOMBA_BT_WORLDS"
 
-EVENT_KINDS = ("bump", "lift", "charger_step", "press")
+EVENT_KINDS = ("bump", "lift", "charger_step", "press", "overcurrent")
 SIDES = ("left", "right", "both")
 DOCK_FAMILIES = ("drive-on", "discovery")
 
@@ -205,13 +205,16 @@ class TimelineEvent:
     ``bump``: the bumper is pressed (``side``); ``lift``: the robot is picked up (both wheel
     drops, cliffs, no traction); ``charger_step``: someone steps on the charger, which loses
     power for the duration; ``press``: a finger presses ``button`` (packet 18's name) for the
-    spec's 1/6 s, which in Passive starts the robot's own cycle for Clean, Spot or Dock."""
+    spec's 1/6 s, which in Passive starts the robot's own cycle for Clean, Spot or Dock;
+    ``overcurrent``: ``motor`` (packet 14's name: a brush wound with hair, a wheel jammed)
+    shows an overcurrent for the duration."""
 
     time: float
     kind: str
     duration: float
     side: str = "both"
     button: str = ""
+    motor: str = ""
 
 
 #: How far from the docked pose a start region may reach (m): the evaluation's ``--within``
@@ -717,20 +720,29 @@ def _start_region(c: _Checker, value: object, path: PathKey) -> StartRegion | No
 
 
 def _event(c: _Checker, value: object, path: PathKey) -> TimelineEvent | None:
-    spec = c.record(value, path, ("at", "kind", "side", "duration", "button"), ("at", "kind"))
+    keys = ("at", "kind", "side", "duration", "button", "motor")
+    spec = c.record(value, path, keys, ("at", "kind"))
     if spec is None:
         return None
     at = c.number(spec["at"], (*path, "at"), 0, 1e6, "s")
     kind = c.choice(spec["kind"], (*path, "kind"), EVENT_KINDS)
     if kind == "press":
         return _press(c, spec, path, at)
-    if "button" in spec:
-        c.error((*path, "button"), "a button for a " + str(kind), "button only with kind: press")
+    for key, own_kind in (("button", "press"), ("motor", "overcurrent")):
+        if key in spec and kind != own_kind:
+            c.error((*path, key), f"a {key} for a {kind}", f"{key} only with kind: {own_kind}")
+    motor: str | None = ""
+    if kind == "overcurrent":
+        motors = tuple(OVERCURRENT_BITS)
+        if "motor" not in spec:
+            c.error(path, "no 'motor'", f"kind: overcurrent with a motor: {', '.join(motors)}")
+            return None
+        motor = c.choice(spec["motor"], (*path, "motor"), motors)
     duration = c.number(spec.get("duration", 0.5), (*path, "duration"), SLOT_SECONDS, 1e6, "s")
     side = c.choice(spec.get("side", "both"), (*path, "side"), SIDES)
-    if at is None or kind is None or duration is None or side is None:
+    if at is None or kind is None or duration is None or side is None or motor is None:
         return None
-    return TimelineEvent(at, kind, duration, side)
+    return TimelineEvent(at, kind, duration, side, motor=motor)
 
 
 def _press(

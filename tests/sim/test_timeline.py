@@ -4,6 +4,7 @@ overlap, and the simulator lets go of the timeline once the last event has ended
 from __future__ import annotations
 
 from roomba_bt.oi import commands as C
+from roomba_bt.oi.bits import OVERCURRENT_BITS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.sim.timeline import Timeline
 from roomba_bt.sim.world import TimelineEvent
@@ -14,11 +15,11 @@ from .helpers import BOX, make
 def test_events_start_and_end_as_the_clock_passes_them() -> None:
     timeline = Timeline((TimelineEvent(1.0, "bump", 0.5, "left"), TimelineEvent(1.2, "lift", 1.0)))
     assert timeline.advance(0.9) == []
-    assert timeline.effects() == (0, False, True)
+    assert timeline.effects() == (0, False, True, 0)
     assert timeline.advance(1.2) == [("bump", "left start"), ("lift", "both start")]
-    assert timeline.effects() == (2, True, True)
+    assert timeline.effects() == (2, True, True, 0)
     assert timeline.advance(1.5) == [("bump", "end")]
-    assert timeline.effects() == (0, True, True)
+    assert timeline.effects() == (0, True, True, 0)
     assert not timeline.over
     assert timeline.advance(2.2) == [("lift", "end")]
     assert timeline.over
@@ -33,7 +34,7 @@ def test_a_charger_step_takes_the_docks_power_and_bumps_add_up() -> None:
         )
     )
     timeline.advance(0.0)
-    assert timeline.effects() == (3, False, False)
+    assert timeline.effects() == (3, False, False, 0)
 
 
 def test_the_simulator_marks_every_start_and_end_and_then_drops_the_timeline() -> None:
@@ -75,3 +76,31 @@ def test_a_press_of_a_button_the_robot_lacks_presses_nothing_and_is_said() -> No
     assert host.sim.values[18] == 0
     refused = [e.detail for e in host.sim.events if e.kind == "refused"]
     assert refused == ["press minute: the iRobot Create 2 has no minute button"]
+
+
+TANGLED_BRUSH = BOX + "events: [{at: 0.3, kind: overcurrent, motor: main_brush, duration: 0.5}]\n"
+
+
+def test_an_overcurrent_event_sets_the_motors_bit_of_packet_14_for_its_duration() -> None:
+    """A tangled brush could not be simulated (the events were bump, lift, charger_step and
+    press), so no mission's reaction to one could be tested: the event sets the bit of the
+    motor it names, the one ``overcurrent: main_brush`` reads, and the run marks it."""
+    host = make(TANGLED_BRUSH)
+    host.send(C.stream([14]))
+    host.run(0.45)
+    assert host.sim.values[14] == OVERCURRENT_BITS["main_brush"] == 0b100
+    host.run(0.5)
+    assert host.sim.values[14] == 0
+    marks = [(e.kind, e.detail) for e in host.sim.events if e.kind == "overcurrent"]
+    assert marks == [("overcurrent", "main_brush start"), ("overcurrent", "end")]
+
+
+def test_overcurrents_of_two_motors_add_up_as_the_packet_s_bits() -> None:
+    timeline = Timeline(
+        (
+            TimelineEvent(0.0, "overcurrent", 1.0, motor="side_brush"),
+            TimelineEvent(0.0, "overcurrent", 1.0, motor="left_wheel"),
+        )
+    )
+    timeline.advance(0.0)
+    assert timeline.effects() == (0, False, True, 0b10001)

@@ -121,6 +121,24 @@ def test_bad_event_kind_suggests_the_right_one() -> None:
     assert "did you mean 'lift'?" in problem
 
 
+def test_an_overcurrent_event_names_a_motor_of_packet_14() -> None:
+    """``motor`` is one of packet 14's names, only with ``kind: overcurrent``, and needed there."""
+    found = problems(
+        "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\nevents:\n"
+        "  - {at: 1, kind: overcurrent, motor: brush}\n"
+        "  - {at: 2, kind: overcurrent}\n"
+        "  - {at: 3, kind: bump, motor: main_brush}\n"
+    )
+    assert found == [
+        "w.yaml:3:39: events[0].motor: found 'brush'; allowed: one of side_brush, main_brush, "
+        "right_wheel, left_wheel (did you mean 'side_brush'?)",
+        "w.yaml:4:5: events[1]: found no 'motor'; allowed: kind: overcurrent with a motor: "
+        "side_brush, main_brush, right_wheel, left_wheel",
+        "w.yaml:5:32: events[2].motor: found a motor for a bump; allowed: motor only with "
+        "kind: overcurrent",
+    ]
+
+
 def test_a_press_event_takes_a_button_and_lasts_the_specs_press() -> None:
     room = "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\n"
     [event] = parse_world(room + "events: [{at: 1, kind: press, button: clean}]\n").events
