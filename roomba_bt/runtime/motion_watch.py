@@ -198,10 +198,18 @@ class MotionWatch:
         motors = writer.last_motors
         if motors is not None and sets_going(motors):
             again.append(motors)
+        # wheels that stood still under a going command are most often a wedge (a chair rung,
+        # a sofa's lip: no bump shown); lost bytes come first only for wheels that turned
+        cause = (
+            "the robot may be wedged with no bump shown or its wheels stalled, or bytes from "
+            "the computer to the robot were lost"
+            if not moved
+            else "bytes from the computer to the robot may have been lost"
+        )
         log.warning(
-            "%s: the robot did not do what it was told (%s): bytes from the computer to the "
-            "robot may have been lost; its command parser set in step and the command sent "
-            "again", self.connection.name, what, extra={"mission_time": mission_time},
+            "%s: the robot did not do what it was told (%s): %s; its command parser set in "
+            "step and the command sent again", self.connection.name, what, cause,
+            extra={"mission_time": mission_time},
         )  # fmt: skip
         writer.send_many(again, prefix=RESYNC_ZEROS)
         self._resent = command
