@@ -17,7 +17,9 @@ the path's straight legs (``FloorMap.waypoints``)::
             been on
     turn:   in place toward the next corner of the path
     drive:  along the line to it; a bump, a cliff or a virtual wall's beam: back off, keep
-            out of that leg's cell (``FloorMap.avoid``, as ``cover`` does) and plan again
+            out of that leg's cell (``FloorMap.avoid``, as ``cover`` does) and plan again;
+            no progress for ``driving.STALL_S`` (wedged with no bump shown: a stand's side
+            beyond the bumper): the same, backing off :data:`_WEDGED_BACK_MM`
 
 It keeps the map and pose up to date as ``cover`` does (the same :class:`Bearings`), so what
 it meets is mapped for the next plan. With no path that keeps off blocked cells (a drifted
@@ -91,6 +93,9 @@ ACROSS_PLANS = 10
 #: no path keeps off them (:func:`path_across`); a free cell's step costs 1
 _ACROSS_BLOCKED = 30
 _ACROSS_NEAR = 3
+#: how far (mm) it backs off a leg on which it stalled with no bump shown: a virtual wall's
+#: back-off, more than a bump's, as the side it is caught by is not known
+_WEDGED_BACK_MM = driving.BACK_OFF_MM["virtual wall"]
 
 
 @declare(
@@ -114,8 +119,10 @@ class HomeByMap(Action):
     was seen while it cleaned (or no ``cover`` ran in this run: nothing to go by); FAILURE
     with no way there, after
     ``timeout``, on a wheel drop, or when the
-    robot leaves Safe/Full (started again, it plans again from where it is). Drive Direct
-    (145)."""
+    robot leaves Safe/Full (started again, it plans again from where it is). A leg met by a
+    bump, a cliff or a virtual wall, or on which it makes no progress for 3 s (wedged with
+    no bump shown: a cabinet's side beyond the bumper), is backed off and kept out of the
+    next plans. Drive Direct (145)."""
 
     moves = True
 
@@ -259,7 +266,12 @@ class HomeByMap(Action):
             self._back(driving.BACK_OFF_MM[why])
             return None
         if now - self._progress[1] >= driving.STALL_S:
-            self._phase = "plan"
+            # wedged with no bump shown (a stand's side beyond the bumper, a sofa's lip): as
+            # after a bump, no path through that cell again, and back off before the next
+            # plan turns away; planning at once pushed the same way again, plan after plan
+            assert self._bearings is not None
+            self._bearings.map.avoid.add(self._cell)
+            self._back(_WEDGED_BACK_MM)
             return None
         if along >= self._limit:
             return self._leg()

@@ -347,3 +347,48 @@ def test_clean_stops_a_jammed_brush_and_goes_home_saying_so(
     assert summary.said is not None and "a brush is jammed" in summary.said
     assert sim.docked
     assert sim.swept is not None and sim.swept.cleaning_time < 24.0  # stopped at 20 s
+
+
+#: An owner's living room (5 x 4 m, a 1.2 m hall, a TV stand on the west wall), started on
+#: the dock: at 17 % the way home met the stand's side beyond the bumper's reach
+LIVING_ROOM = """
+rooms: [{rect: [0, 0, 7, 4]}]
+walls: [[5, 0, 5, 1.6], [5, 2.4, 5, 4], [5, 1.2, 7, 1.2], [5, 2.8, 7, 2.8]]
+obstacles:
+  - {name: sofa, rect: [1.0, 3.1, 3.2, 4.0]}
+  - {name: armchair, rect: [3.6, 3.2, 4.4, 4.0]}
+  - {rect: [1.5, 2.0, 1.55, 2.05]}
+  - {rect: [2.65, 2.0, 2.7, 2.05]}
+  - {rect: [1.5, 2.6, 1.55, 2.65]}
+  - {rect: [2.65, 2.6, 2.7, 2.65]}
+  - {rect: [3.3, 0.5, 3.36, 0.56]}
+  - {rect: [4.34, 0.5, 4.4, 0.56]}
+  - {rect: [3.3, 1.24, 3.36, 1.3]}
+  - {rect: [4.34, 1.24, 4.4, 1.3]}
+  - {rect: [3.5, 1.45, 3.53, 1.48]}
+  - {rect: [3.9, 1.45, 3.93, 1.48]}
+  - {rect: [3.5, 1.85, 3.53, 1.88]}
+  - {rect: [3.9, 1.85, 3.93, 1.88]}
+  - {rect: [3.5, 0.05, 3.53, 0.08]}
+  - {rect: [3.9, 0.05, 3.93, 0.08]}
+  - {rect: [3.5, 0.3, 3.53, 0.33]}
+  - {rect: [3.9, 0.3, 3.93, 0.33]}
+  - {name: tv-stand, rect: [0.0, 1.0, 0.4, 2.6]}
+drops: [{rect: [6.6, 1.2, 7.0, 2.8]}]
+dock: {at: [0.8, 0.0], facing: 90}
+robot: {start: {at: [0.8, 0.172], heading: -90}, battery: 0.17}
+"""
+
+
+def test_the_way_home_backs_off_a_wedge_rather_than_pushing_for_minutes(tmp_path: Path) -> None:
+    """At 17 % the way home stalled against the TV stand's side (no bump shown), and each of
+    ``home_by_map``'s plans pushed the same way again: 5 attempts of 75 s, 6.5 minutes of
+    battery spent with the wheels stalled, then the search found the dock 1.4 m away. A leg
+    that makes no progress is now left as after a bump (backed off, its cell avoided)."""
+    living = tmp_path / "living.yaml"
+    living.write_text(LIVING_ROOM)
+    sim, summary, _ = _clean_on_the_simulator(str(living), None, {}, 900.0)
+    assert summary.outcome.value == "success", summary.reason
+    assert sim.docked
+    assert sim.time < 300.0  # docked at 586 s before, cleaning having stopped at 194 s
+    assert summary.unheard == 0  # the wheels never stood still for a second under a drive
