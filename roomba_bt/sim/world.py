@@ -851,7 +851,6 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     rooms = [_room(c, r, ("rooms", i)) for i, r in enumerate(c.items(top.get("rooms"), ("rooms",)))]
     if isinstance(top.get("rooms"), list) and not rooms:
         c.error(("rooms",), "no room", "at least one room polygon")
-    _check_room_spans(c, rooms)
     walls = _walls(c, top.get("walls"))
     obstacles = [
         c.shape(o, ("obstacles", i))
@@ -905,10 +904,12 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
 
 def _room(c: _Checker, value: object, path: PathKey) -> Polygon | None:
     """A room: a polygon ``[[x, y], ...]``, or written as the other shapes are,
-    ``{rect: [...]}`` / ``{polygon: [...]}`` (a stranger's world wrote a room as a rect)."""
-    if isinstance(value, dict):
-        return c.shape(value, path)
-    return c.polygon(value, path)
+    ``{rect: [...]}`` / ``{polygon: [...]}`` (a stranger's world wrote a room as a rect); one
+    too wide for a room is said (:func:`_check_room_span`)."""
+    room = c.shape(value, path) if isinstance(value, dict) else c.polygon(value, path)
+    if room is not None:
+        _check_room_span(c, room, path)
+    return room
 
 
 #: The widest room a world may hold (m): a home's room is a few metres across, and one of
@@ -919,22 +920,19 @@ def _room(c: _Checker, value: object, path: PathKey) -> Polygon | None:
 ROOM_SPAN_M = 150.0
 
 
-def _check_room_spans(c: _Checker, rooms: list[Polygon | None]) -> None:
-    """Each room at most :data:`ROOM_SPAN_M` across; a wider one is asked whether it was
+def _check_room_span(c: _Checker, room: Polygon, path: PathKey) -> None:
+    """The room at most :data:`ROOM_SPAN_M` across; a wider one is asked whether it was
     written in centimetres (the shapes outside every room are asked the same, but a room in
     centimetres holds them all)."""
-    for i, room in enumerate(rooms):
-        if room is None:
-            continue
-        width = (max(x for x, _ in room) - min(x for x, _ in room)) / 1000.0
-        depth = (max(y for _, y in room) - min(y for _, y in room)) / 1000.0
-        if max(width, depth) > ROOM_SPAN_M:
-            c.error(
-                ("rooms", i),
-                f"a room {width:g} x {depth:g} m across (did you write centimetres? "
-                f"{width:g} cm is {width / 100:g} m)",
-                f"a room at most {ROOM_SPAN_M:g} m across, in metres",
-            )
+    width = (max(x for x, _ in room) - min(x for x, _ in room)) / 1000.0
+    depth = (max(y for _, y in room) - min(y for _, y in room)) / 1000.0
+    if max(width, depth) > ROOM_SPAN_M:
+        c.error(
+            path,
+            f"a room {width:g} x {depth:g} m across (did you write centimetres? "
+            f"{width:g} cm is {width / 100:g} m)",
+            f"a room at most {ROOM_SPAN_M:g} m across, in metres",
+        )
 
 
 def _overlaps(shape: Polygon, rooms: tuple[Polygon, ...]) -> bool:
