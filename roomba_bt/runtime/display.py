@@ -303,6 +303,11 @@ _MARKS = {
 }
 
 
+#: the kind symbols of :func:`node_kind` (``{-}``, ``[o]``, ``-->``): py_trees' ASCII ones,
+#: the same as its unicode ones and never coloured, so any stream can show them
+_KIND_SYMBOLS: dict[object, str] = py_trees.display.ascii_symbols
+
+
 def fitted_tree(
     root: py_trees.behaviour.Behaviour,
     rows: int,
@@ -315,7 +320,11 @@ def fitted_tree(
     line (``[✓] +3`` says it hides three nodes), so the running path stays in view however
     large the tree. If that is still too tall, the lines off the running path go first, from
     the bottom, and one line says how many were left out. ``marks``: the status marks
-    (default ``✓``, ``✕``; :func:`status_marks` for a stream's own)."""
+    (default ``✓``, ``✕``; :func:`status_marks` for a stream's own).
+
+    Each line starts with the node's kind as :func:`text_tree` draws it (``{-}`` a sequence
+    with memory, ``[o]`` a reactive fallback, ``-->`` a leaf): without it a reactive
+    composite could not be told from one with memory while the tree ran, folded or not."""
     shown = marks or _MARKS
     lines: list[tuple[str, bool]] = []  # (text, on the running path)
 
@@ -326,7 +335,9 @@ def fitted_tree(
         hidden = sum(1 for _ in node.iterate()) - 1 if folded else 0
         more = f" +{hidden}" if hidden else ""
         name = escaped(node.name, ANY_CONTROL)
-        lines.append((f"{'  ' * depth}{name} [{shown[node.status]}]{more}", running))
+        kind = _KIND_SYMBOLS[node_kind(node)]
+        line = f"{'  ' * depth}{kind} {name} [{shown[node.status]}]{more}"
+        lines.append((line, running))
         if running or depth == 0:
             for child in children:
                 walk(child, depth + 1)
@@ -535,9 +546,12 @@ class TerminalDisplay:
         self.period = 1.0 / refresh_hz
         self._last = 0.0
         self._size = size or _terminal_size
-        #: ``TERM=dumb``: each screen printed under the last, no clearing (``ESC [H ESC [J``
-        #: showed as garbage in an Emacs shell or on a serial console)
-        self.plain = plain_terminal()
+        #: each screen printed under the last, no clearing, on ``TERM=dumb`` (``ESC [H ESC
+        #: [J`` showed as garbage in an Emacs shell or on a serial console) and where the
+        #: stream is no terminal (``--display tree > run.log``, a pipe: decided, each screen
+        #: is kept as text rather than refused, and the log read with ``less`` had the cursor
+        #: codes in it before every screen)
+        self.plain = plain_terminal() or not stream.isatty()
         self.marks = status_marks(stream)
 
     def __call__(self, runner: MissionRunner) -> None:

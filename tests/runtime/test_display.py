@@ -72,7 +72,7 @@ def test_status_changes_are_logged_once_each(
 
 def test_terminal_display_draws_the_tree_with_statuses(run_mission: RunMission) -> None:
     run = run_mission(DRIVE)
-    out = io.StringIO()
+    out = _Terminal()
     display = TerminalDisplay(out)
     display.render(run.runner)
     assert display.writer.wait_written(5.0)  # written off the tick loop, by its own thread
@@ -89,7 +89,7 @@ def test_the_live_tree_and_the_log_lines_say_the_run_s_label(
     """Several runs in several terminals of one laptop could be told apart only by their
     ports: ``run --label`` is the live tree's first line and on each log line."""
     run = run_mission(DRIVE)
-    out = io.StringIO()
+    out = _Terminal()
     display = TerminalDisplay(out, label="robot 3")
     display.render(run.runner)
     assert display.writer.wait_written(5.0)
@@ -123,7 +123,7 @@ def test_the_live_tree_fits_the_terminal_and_keeps_the_running_path(
 ) -> None:
     """A 90-node tree on a 60x12 terminal: each redraw is the status line and at most 9 tree
     lines, finished subtrees folded, and the running leaf is always among them."""
-    out = io.StringIO()
+    out = _Terminal()
     display = TerminalDisplay(out, size=lambda: (60, 12))
     screens: list[str] = []
 
@@ -155,7 +155,7 @@ def test_fitted_tree_says_how_many_lines_it_left_out(run_mission: RunMission) ->
     lines = fitted_tree(run.runner.mission.root, rows=8, columns=80)
     assert len(lines) == 8
     assert lines[-1].startswith("... ") and "more lines" in lines[-1]
-    assert lines[0].startswith("sequence [✓]")
+    assert lines[0].startswith("{-} sequence [✓]")
 
 
 class _StalledTerminal(io.StringIO):
@@ -248,6 +248,47 @@ def test_log_lines_the_terminal_did_not_take_are_counted_after_the_run(
     assert f"{off.writer.dropped} log line(s) of the run were dropped" in caplog.text
 
 
+def test_the_live_tree_says_each_node_s_kind_folded_or_not() -> None:
+    """Folded, a reactive fallback read ``reactive [✓] +1`` and one with memory the same:
+    which ticks its children again could not be seen while the tree ran. Each line starts
+    with the kind as py_trees' ``unicode_tree`` draws it (``[o]`` reactive, ``{o}`` with
+    memory), the running path's lines too."""
+    reactive = py_trees.composites.Selector(
+        "reactive", memory=False, children=[py_trees.behaviours.Success(name="first")]
+    )
+    remembering = py_trees.composites.Selector(
+        "remembering", memory=True, children=[py_trees.behaviours.Success(name="second")]
+    )
+    running = py_trees.behaviours.Running(name="drive")
+    root = py_trees.composites.Sequence(
+        "steps", memory=True, children=[reactive, remembering, running]
+    )
+    root.tick_once()
+    assert fitted_tree(root, rows=10, columns=80) == [
+        "{-} steps [*]",
+        "  [o] reactive [✓] +1",
+        "  {o} remembering [✓] +1",
+        "  --> drive [*]",
+    ]
+
+
+def test_the_live_tree_into_a_pipe_prints_each_screen_without_cursor_codes(
+    run_mission: RunMission,
+) -> None:
+    """``--display tree`` into a log or a pipe wrote ``ESC [H ESC [J`` before every screen
+    (garbage in ``less``, in CI's log). Decided: where the stream is no terminal each screen
+    is printed under the last, as on ``TERM=dumb``, rather than the option refused."""
+    run = run_mission(DRIVE)
+    out = io.StringIO()  # no terminal: isatty() is False
+    display = TerminalDisplay(out)
+    for _ in range(2):
+        display.render(run.runner)
+        assert display.writer.wait_written(5.0)
+    text = out.getvalue()
+    assert "\x1b" not in text
+    assert text.count("{-} sequence [✓]") == 2  # two screens, one under the other
+
+
 def test_a_name_stays_on_its_line_in_the_live_tree_and_the_log() -> None:
     """A node's name printed raw: "\\n[ok] fake" drew a line of its own in the live tree and
     in a status-change log line, "\\x1b[2J" cleared the screen. Escaped, one line each; a
@@ -256,7 +297,7 @@ def test_a_name_stays_on_its_line_in_the_live_tree_and_the_log() -> None:
     root = py_trees.composites.Sequence("steps\n[ok] fake", memory=True, children=[leaf])
     root.tick_once()
     lines = fitted_tree(root, rows=10, columns=80)
-    assert lines == ["steps\\x0a[ok] fake [✓]", "  \\x1b[2J [✓]"]
+    assert lines == ["{-} steps\\x0a[ok] fake [✓]", "  --> \\x1b[2J [✓]"]
     formatter = MissionClockFormatter()
     record = logging.LogRecord("roomba_bt.run", logging.INFO, __file__, 1, "%s -> %s",
                                (root.name, "SUCCESS"), None)  # fmt: skip
@@ -380,7 +421,7 @@ def test_the_sensor_line_wraps_on_a_narrow_terminal(run_mission: RunMission) -> 
     """At 40 columns the sensor line was cut (``t=   0.84s  mode=Safe  bump=-  drop=-  c``):
     the cliffs, the battery and the odometry were lost. It wraps between fields."""
     run = run_mission(DRIVE)
-    out = io.StringIO()
+    out = _Terminal()
     display = TerminalDisplay(out, size=lambda: (40, 24))
     display.render(run.runner)
     assert display.writer.wait_written(5.0)
