@@ -36,6 +36,9 @@
   them: compiled, with a warning (:func:`blind_in_full`).
 * **Two wheel branches (a warning).** Two branches of a ``parallel`` with a leaf that turns
   the wheels: the robot gets the last wheel command of a tick only (:func:`parallel_wheels`).
+* **Two writers of a key (a warning).** Two branches of a ``parallel`` writing the same
+  blackboard key (``set``, ``mark``, a plugin's key, a ``for_each``): the last write of a
+  tick wins (:func:`parallel_keys`).
 * **A parallel's restarted branches.** With ``synchronise: false`` (policies ``all`` and
   ``selected``) a branch that succeeded is ticked again and starts over: one that can
   succeed and would start an action or a clock again is an error when another branch the
@@ -59,7 +62,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from enum import Enum
 from typing import Any
 
@@ -717,6 +720,39 @@ def _ends_again_at_once(node: Node) -> bool:
     return at_once(node) or (decorator is not None and decorator.replays) or settled
 
 
+def _claimed_in_two_branches(
+    root: Node, claims: Callable[[Node], list[str]]
+) -> Iterator[tuple[Node, str, Node, Node]]:
+    """Each thing (the wheels, a blackboard key) that nodes of two branches of a
+    ``parallel`` claim, as ``(parallel, thing, first, later)``: ``first`` the first node
+    claiming it in an earlier branch, ``later`` the first in a later one. A parallel ticks
+    its branches in order within one tick, so what two of them set on the same tick, the
+    later sets last. Said once per place of ``later`` (a subtree used twice is one place)."""
+    seen: set[tuple[str, str, int, int]] = set()
+    for node in root.walk():
+        if node.kind != "parallel":
+            continue
+        first: dict[str, Node] = {}
+        for branch in node.children:
+            here: dict[str, Node] = {}
+            for inner in branch.walk():
+                for thing in claims(inner):
+                    here.setdefault(thing, inner)
+            for thing, later in here.items():
+                if thing not in first:
+                    first[thing] = later
+                    continue
+                where = (thing, str(later.loc.file), later.loc.line, later.loc.column)
+                if where not in seen:
+                    seen.add(where)
+                    yield node, thing, first[thing], later
+
+
+def _wheels(node: Node) -> list[str]:
+    """``["wheels"]`` for a leaf that turns them (:func:`parallel_wheels`)."""
+    return ["wheels"] if node.decl is not None and node.decl.turns_wheels else []
+
+
 def parallel_wheels(root: Node) -> list[Diagnostic]:
     """Warnings: a leaf that turns the wheels in a branch of a ``parallel`` after another
     branch with one. The outbox keeps the last wheel command of a tick, so of two drives
@@ -726,36 +762,49 @@ def parallel_wheels(root: Node) -> list[Diagnostic]:
     time is not known here (a branch may finish its drive before the other starts one).
     Said at the later leaf, naming the first; a subtree used twice is one place."""
     warnings: list[Diagnostic] = []
-    seen: set[tuple[str, int, int]] = set()
-    for node in root.walk():
-        if node.kind != "parallel":
-            continue
-        first: Node | None = None
-        for branch in node.children:
-            wheels = [n for n in branch.walk() if n.decl is not None and n.decl.turns_wheels]
-            if not wheels:
-                continue
-            if first is None:
-                first = wheels[0]
-                continue
-            leaf, where = (
-                wheels[0],
-                (str(wheels[0].loc.file), wheels[0].loc.line, wheels[0].loc.column),
-            )
-            if where in seen:
-                continue
-            seen.add(where)
-            assert leaf.decl is not None and first.decl is not None
-            warnings.append(
-                leaf.loc.at(
-                    f"{leaf.decl.name} turns the wheels in one branch of the parallel "
-                    f"({node.loc.line}:{node.loc.column}) and {first.decl.name} "
-                    f"({_line_of(first.loc, leaf.loc)}) in another: when both run, only the "
-                    "last wheel command of a tick reaches the robot, so one of them never "
-                    "moves it (a distance drive never ends); run them one after the other "
-                    "(a sequence)"
-                ).as_warning()
-            )
+    for parallel, _, first, leaf in _claimed_in_two_branches(root, _wheels):
+        assert leaf.decl is not None and first.decl is not None
+        warnings.append(
+            leaf.loc.at(
+                f"{leaf.decl.name} turns the wheels in one branch of the parallel "
+                f"({parallel.loc.line}:{parallel.loc.column}) and {first.decl.name} "
+                f"({_line_of(first.loc, leaf.loc)}) in another: when both run, only the "
+                "last wheel command of a tick reaches the robot, so one of them never "
+                "moves it (a distance drive never ends); run them one after the other "
+                "(a sequence)"
+            ).as_warning()
+        )
+    return warnings
+
+
+def _keys_written(node: Node) -> list[str]:
+    """The blackboard keys ``node`` writes: a leaf's (``set``, ``mark``, a plugin's
+    ``writes_keys``, a subtree's among them once expanded) or a ``for_each``'s own key."""
+    word = WORDS.get(node.kind)
+    if word is not None and word.writes_key is not None:
+        return [str(node.options[word.writes_key])]
+    return node.keys_written()
+
+
+def parallel_keys(root: Node) -> list[Diagnostic]:
+    """Warnings: a blackboard key written in two branches of a ``parallel``. The branches
+    are ticked in order, so when both write on one tick the later branch's value is the one
+    read after it (two uses of a subtree setting ``n`` to 1 and 2 left 2, silently), and
+    which wins depends on the order of the branches, not on what happened. A warning, not
+    an error, as :func:`parallel_wheels`: the two writes may not fall on the same tick.
+    Said at the later writer, naming the first and the key."""
+    warnings: list[Diagnostic] = []
+    for parallel, key, first, later in _claimed_in_two_branches(root, _keys_written):
+        warnings.append(
+            later.loc.at(
+                f"{later.name} writes blackboard key {key!r} in one branch of the parallel "
+                f"({parallel.loc.line}:{parallel.loc.column}) and {first.name} "
+                f"({_line_of(first.loc, later.loc)}) in another: the branches are ticked in "
+                "order, so when both write on one tick the last write wins and the value "
+                "read after depends on the branches' order; write it in one branch, or use "
+                "a key for each"
+            ).as_warning()
+        )
     return warnings
 
 

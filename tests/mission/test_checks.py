@@ -569,6 +569,57 @@ def test_two_branches_of_a_parallel_that_turn_the_wheels_are_warned_of(
         assert w.severity == "warning"
 
 
+#: a mission's keys and a subtree that writes one, for the parallels of the test below
+#: (whose branches start on line 10)
+KEYED = """blackboard:
+  n: int
+  at: mark
+subtrees:
+  writer:
+    parameters: {v: {type: int}}
+    tree: {set: {key: n, value: "${v}"}}
+tree:
+  parallel:"""
+
+
+@pytest.mark.parametrize(
+    ("branches", "warned"),
+    [
+        # bb.yaml (the py_trees expert, session 34): two uses of one subtree set n to 1 and
+        # 2 in a parallel, and the check after it saw 2, silently
+        (["{subtree: {id: writer, v: 1}}", "{subtree: {id: writer, v: 2}}"],
+         ["7:12 set(key=n, value=2) ... set(key=n, value=1) (line 7)"]),
+        (["{set: {key: n, value: 1}}", "{wait: 1s}", "{set: {key: n, value: 2}}"],
+         ["12:8 set(key=n, value=2) ... set(key=n, value=1) (line 10)"]),
+        (["{mark: at}", "{sequence: [{wait: 1s}, {mark: at}]}"],
+         ["11:32 mark(at) ... mark(at) (line 10)"]),
+        (["{for_each: {key: n, in: [1, 2], do: {wait: 1s}}}", "{set: {key: n, value: 3}}"],
+         ["11:8 set(key=n, value=3) ... for_each (line 10)"]),
+        # one writer a key; two writes in one branch, one after the other
+        (["{set: {key: n, value: 1}}", "{mark: at}"], []),
+        (["{sequence: [{set: {key: n, value: 1}}, {set: {key: n, value: 2}}]}", "{mark: at}"],
+         []),
+    ],
+)  # fmt: skip
+def test_two_branches_of_a_parallel_that_write_one_key_are_warned_of(
+    compile_text: Callable[..., CompiledMission], branches: list[str], warned: list[str]
+) -> None:
+    """The last write of a tick wins, by the branches' order: said at the later writer,
+    naming the first (a subtree used twice at its one place), as for the wheels."""
+    items = "".join(f"\n    - {branch}" for branch in branches)
+    mission = compile_text(f"{KEYED}{items}\n")
+    keyed = [w for w in mission.warnings if "writes blackboard key" in w.message]
+    said = [
+        f"{w.line}:{w.column} {w.message.split(' writes')[0]} ... "
+        + w.message.split(" and ", 1)[1].split(" in another")[0]
+        for w in keyed
+    ]
+    assert said == warned
+    for w in keyed:
+        assert "in one branch of the parallel (9:3)" in w.message
+        assert "the last write wins" in w.message and w.severity == "warning"
+
+
 @pytest.mark.parametrize(
     ("children", "warned"),
     [
