@@ -953,6 +953,7 @@ def last_said(root: Behaviour) -> str | None:
     "set",
     kind="action",
     at_once=True,
+    never_fails=True,  # a value not of the key's type raises (KeyType), never FAILURE
     params=(
         Param("key", STR, required=True, from_blackboard=False, doc="a declared key"),
         Param("value", ANY, required=True, doc="typed by the key's declaration"),
@@ -971,6 +972,7 @@ class SetKey(Action):
     "mark",
     kind="action",
     at_once=True,
+    never_fails=True,  # as set: the odometry is always there to remember
     params=(Param("key", STR, required=True, from_blackboard=False,
                   doc="a key declared with type mark"),),
     reads=ENCODER_PACKETS,

@@ -119,6 +119,18 @@ class Answers:
     #: options without any of which it starts its child again after every success, for
     #: ever: it can only fail (``repeat``'s ``times`` and ``for``)
     forever_without: tuple[str, ...] = ()
+    #: what it answers on the tick it starts, whatever its child says, where that is not
+    #: what it answers later (``held``: FAILURE); None: the same from its first tick. A
+    #: guard's condition is judged by it, and a step of a sequence ticked once that can
+    #: only fail on its first tick is an error (:mod:`roomba_bt.mission.deadends`)
+    first_tick: Outcomes | None = None
+    #: why it answers :attr:`first_tick`, as validate says it (``its hold has lasted 0 s``)
+    first_tick_why: str = ""
+
+    def __post_init__(self) -> None:
+        """A first-tick answer without its why would be said in validate's error as ``()``."""
+        if self.first_tick is not None and not self.first_tick_why:
+            raise TypeError("Answers(first_tick=...) needs first_tick_why: why it answers so")
 
     @property
     def restarts_on(self) -> Outcomes:
@@ -319,7 +331,8 @@ _KINDS: tuple[NodeKind, ...] = (
              doc="SUCCESS once the child has succeeded on every tick for a while, else "
                  "FAILURE (never RUNNING: a debounced condition)",
              condition_child=True,
-             answers=Answers(SUCCEEDS | FAILS, FAILS, while_running=FAILS)),
+             answers=Answers(SUCCEEDS | FAILS, FAILS, while_running=FAILS, first_tick=FAILS,
+                             first_tick_why="its hold has lasted 0 s")),
     NodeKind("oneshot", Shape.CHILD_OR_DO, _oneshot,
              (Param("policy", enum_type("on_success", "on_completion"),
                     doc="on_success (the default) or on_completion"),),

@@ -10,10 +10,10 @@ its node or always fails; a ``retry`` around a child that never fails never retr
 ``parallel`` (policy ``all``) of a condition and its inverter never succeeds. These are
 warnings (errors under ``--strict``): the mission runs, and does not do what it says.
 
-One is an error: ``held`` as a step of a sequence, with nothing above it that ticks it
-again (a loop, a reactive composite, a guard). ``held`` is FAILURE on the tick it starts
-(its hold has lasted 0 s), and such a step is ticked once: it fails the sequence on every
-run, which is never meant.
+One is an error: a decorator whose :class:`Answers` say it can only fail on the tick it
+starts (``first_tick``: ``held``, whose hold has lasted 0 s then) as a step of a sequence,
+with nothing above it that ticks it again (a loop, a reactive composite, a guard). Such a
+step is ticked once: it fails the sequence on every run, which is never meant.
 
 Each answer is conservative where it is not sure (an action may fail, a plugin may do
 anything): it gives more results, so fewer findings, never a false one. What can end a
@@ -39,15 +39,13 @@ from roomba_bt.mission.plan import Node
 from roomba_bt.mission.ticks import SELECTORS, SEQUENCES, answers, at_once
 
 _BOTH: Outcomes = frozenset({SUCCESS, FAILURE})
-#: the word whose answer on the tick it starts is FAILURE whatever its child says: its
-#: hold has lasted 0 s (its Answers say what it answers later, once the hold has lasted)
-HELD = "held"
 
 
 def outcomes(node: Node, first_tick: bool = False) -> Outcomes:
     """The results ``node`` can end in by itself (empty: it never ends). ``first_tick``:
-    on the tick it starts, where ``held`` is always FAILURE (what a guard's condition
-    answers before its node starts)."""
+    on the tick it starts, where a decorator may answer otherwise than later
+    (:attr:`Answers.first_tick`: ``held`` is always FAILURE then), what a guard's condition
+    answers before its node starts."""
     kind = node.kind
     if kind == "leaf":
         return _leaf_outcomes(node)
@@ -61,8 +59,8 @@ def outcomes(node: Node, first_tick: bool = False) -> Outcomes:
     decorator = answers(node)
     if decorator is None or not children:
         return _BOTH  # unbuilt: anything
-    if kind == HELD and first_tick:
-        return FAILS  # its hold has lasted 0 s
+    if first_tick and decorator.first_tick is not None:
+        return decorator.first_tick
     return _decorated(node, decorator, outcomes(children[0], first_tick))
 
 
@@ -171,7 +169,7 @@ def dead_ends(root: Node) -> tuple[list[Diagnostic], list[Diagnostic]]:
     pending: list[tuple[Node, bool]] = [(root, False)]
     while pending:
         node, ticked_again = pending.pop()
-        errors += _held_steps(node, ticked_again)
+        errors += _failing_first_steps(node, ticked_again)
         warnings += _blocked_children(node) + _guard_answers(node) + _futile_retry(node)
         warnings += _parallel_never_succeeds(node)
         again = ticked_again or _ticks_again(node)
@@ -181,30 +179,44 @@ def dead_ends(root: Node) -> tuple[list[Diagnostic], list[Diagnostic]]:
 
 def _ticks_again(node: Node) -> bool:
     """Whether ``node`` ticks a child again after it ended, so that a ``held`` under it
-    may count a hold: a decorator that starts its child again (its :class:`Answers`:
-    ``repeat``, ``retry``, ``for_each``), a guard (both children every tick), a reactive
-    composite (its earlier children every tick)."""
+    may count a hold (:func:`_fails_first`): a decorator that starts its child again (its
+    :class:`Answers`: ``repeat``, ``retry``, ``for_each``), a guard (both children every
+    tick), a reactive composite (its earlier children every tick)."""
     decorator = answers(node)
     if decorator is not None:
         return bool(decorator.restarts_on)
     return node.kind == "guard" or node.options.get("memory", True) is False
 
 
-def _held_steps(node: Node, ticked_again: bool) -> list[Diagnostic]:
-    """A ``held`` step of a sequence with memory that nothing above ticks again."""
+def _fails_first(node: Node) -> Answers | None:
+    """The answers of ``node``'s word where they say it can only fail on the tick it
+    starts (``held``), else None."""
+    decorator = answers(node)
+    if decorator is None or decorator.first_tick != FAILS:
+        return None
+    return decorator
+
+
+def _failing_first_steps(node: Node, ticked_again: bool) -> list[Diagnostic]:
+    """A step of a sequence with memory that nothing above ticks again, and that can only
+    fail on the tick it starts (:func:`_fails_first`)."""
     if ticked_again or node.kind != "sequence":
         return []
-    return [
-        child.loc.at(
-            "held is FAILURE on the tick it starts (its hold has lasted 0 s), and as a step "
-            f"of this sequence ({node.loc.line}:{node.loc.column}) it is ticked once: the "
-            "sequence fails here on every run; "
-            "use it where it is ticked on every tick: until: {held: ...} around a node, or "
-            "the first child of a reactive_fallback"
+    errors: list[Diagnostic] = []
+    for child in node.children:
+        decorator = _fails_first(child)
+        if decorator is None:
+            continue
+        errors.append(
+            child.loc.at(
+                f"{child.kind} is FAILURE on the tick it starts ({decorator.first_tick_why}), "
+                f"and as a step of this sequence ({node.loc.line}:{node.loc.column}) it is "
+                "ticked once: the sequence fails here on every run; use it where it is "
+                f"ticked on every tick: until: {{{child.kind}: ...}} around a node, or the "
+                "first child of a reactive_fallback"
+            )
         )
-        for child in node.children
-        if child.kind == HELD
-    ]
+    return errors
 
 
 def _blocked_children(node: Node) -> list[Diagnostic]:
@@ -214,8 +226,8 @@ def _blocked_children(node: Node) -> list[Diagnostic]:
         return []
     go_on = SUCCESS if node.kind in SEQUENCES else FAILURE
     for child, after in zip(node.children, node.children[1:], strict=False):
-        if child.kind == HELD:
-            continue  # said by _held_steps, or ticked again by a loop above
+        if _fails_first(child) is not None:
+            continue  # said by _failing_first_steps, or ticked again by a loop above
         results = outcomes(child)
         if go_on in results:
             continue

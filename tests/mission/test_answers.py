@@ -28,7 +28,7 @@ from roomba_bt.behaviours.language import (
 from roomba_bt.behaviours.lean import DONE, DecoratorTick
 from roomba_bt.behaviours.registry import builtin_registry
 from roomba_bt.behaviours.units import DURATION
-from roomba_bt.mission import ticks
+from roomba_bt.mission import deadends, ticks
 from roomba_bt.mission.checks import KeyCheck, ModeCheck
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Loc
@@ -66,6 +66,10 @@ def _judged(word: str, child: Node) -> tuple[object, ...]:
         ticks.cliff_ends(node),
         [modes.visit(node, entry) for entry in entries],
         keys.visit(node, frozenset()),
+        deadends.outcomes(node),
+        deadends.outcomes(node, first_tick=True),  # held's FAILURE: Answers.first_tick
+        # a step of a sequence ticked once that can only fail on its first tick: an error
+        len(deadends.dead_ends(Node("sequence", _HERE, "sequence", [node]))[0]),
     )
 
 
@@ -78,6 +82,13 @@ def test_every_word_declares_answers_exactly_when_it_is_a_decorator() -> None:
 def test_a_decorator_without_answers_is_refused_when_it_is_declared() -> None:
     with pytest.raises(TypeError, match=r"'cooldown' is a decorator .* needs answers="):
         NodeKind("cooldown", Shape.DO, lambda n, k, o: k[0])
+
+
+def test_a_first_tick_answer_without_its_why_is_refused_when_it_is_declared() -> None:
+    """validate's error says why a step can only fail on its first tick: not said, it
+    would read ``held is FAILURE on the tick it starts ()``."""
+    with pytest.raises(TypeError, match="needs first_tick_why"):
+        Answers(SUCCEEDS, FAILS, first_tick=FAILS)
 
 
 @pytest.mark.parametrize("word", DECORATORS)

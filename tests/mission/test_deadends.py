@@ -108,6 +108,26 @@ def test_held_as_a_step_ticked_once_is_an_error(errors_of: Callable[..., list[st
     assert "until: {held: ...}" in errors[0]
 
 
+@pytest.mark.parametrize(
+    ("step", "said"),
+    [
+        ("retry: {times: 3, do: {set: {key: n, value: 1}}}",
+         "retry never retries: set(key=n, value=1) (line 7) never fails"),
+        ("fallback: [{mark: at}, {log: b}]",
+         "log(b) can never run: the alternative before it, mark(at) (line 7), never fails"),
+    ],
+)  # fmt: skip
+def test_set_and_mark_never_fail(
+    compile_text: Callable[..., CompiledMission], step: str, said: str
+) -> None:
+    """``set`` and ``mark`` write their key and succeed on the tick they start: a value
+    that is not of the key's type raises (``write_key``'s ``KeyType``, a behaviour error
+    that ends the run), never FAILURE. Declared ``never_fails``, as ``wait`` and ``log``:
+    a retry around one never retries, an alternative after one never runs."""
+    mission = compile_text("blackboard:\n  n: int\n  at: mark\n" + _steps([step]))
+    assert any(said in w.message for w in mission.warnings), mission.warnings
+
+
 def test_dead_ends_fail_validate_strict(
     compile_text: Callable[..., CompiledMission],
 ) -> None:
