@@ -535,42 +535,8 @@ def test_a_limit_a_reactive_fallback_restarts_is_refused_only_when_a_later_child
         assert [RESTARTED in e for e in errors] == ([True] if refused else []), (text, errors)
 
 
-@pytest.mark.parametrize(
-    ("branches", "warned"),
-    [
-        # two_drives (session 25): only the spin reached the robot; the distance drive ran on,
-        # stopped, until --timeout
-        (["{drive: {velocity: 200 mm/s, distance: 50cm}}",
-          "{drive: {velocity: 100 mm/s, radius: spin_left, duration: 1s}}"],
-         ["6:12 drive (line 5)"]),
-        (["{sequence: [{wait: 1s}, {turn: 90deg}]}", "{wait: 1s}",
-          "{drive: {velocity: 100 mm/s}, until: {bump: any}}"], ["7:12 turn (line 5)"]),
-        (["{turn: 90deg}", "{drive: {velocity: 100 mm/s}}", "{drive: {velocity: 50 mm/s}}"],
-         ["6:12 turn (line 5)", "7:12 turn (line 5)"]),
-        # one wheel branch; a stop only halts; a sequence runs its drives one after the other
-        (["{drive: {velocity: 200 mm/s, duration: 1s}}", "{leds: {dock: true}}", "wall"], []),
-        (["{drive: {velocity: 200 mm/s, duration: 1s}}", "stop"], []),
-        (["{sequence: [{turn: 90deg}, {drive: {velocity: 200 mm/s, duration: 1s}}]}", "wall"],
-         []),
-    ],
-)  # fmt: skip
-def test_two_branches_of_a_parallel_that_turn_the_wheels_are_warned_of(
-    compile_text: Callable[..., CompiledMission], branches: list[str], warned: list[str]
-) -> None:
-    items = "".join(f"\n        - {branch}" for branch in branches)
-    mission = compile_text(f"tree:\n  sequence:\n    - mode: safe\n    - parallel:{items}\n")
-    said = [
-        f"{w.line}:{w.column} " + w.message.split(" and ", 1)[1].split(" in another")[0]
-        for w in mission.warnings
-    ]
-    assert said == warned
-    for w in mission.warnings:
-        assert "turns the wheels in one branch of the parallel (4:7)" in w.message
-        assert w.severity == "warning"
-
-
-#: a mission's keys and a subtree that writes one, for the parallels of the test below
-#: (whose branches start on line 10)
+#: the keys' parallel: their declarations and a subtree that writes one (branches from
+#: line 10)
 KEYED = """blackboard:
   n: int
   at: mark
@@ -581,43 +547,77 @@ subtrees:
 tree:
   parallel:"""
 
+#: for each check, the mission around its parallel (the branches go under ``parallel:``),
+#: what its warning says a node does, where the parallel is, and what the warning says
+#: comes of it
+TWO_BRANCHES = {
+    "wheels": ("tree:\n  sequence:\n    - mode: safe\n    - parallel:", "turns the wheels", "4:7",
+               "only the last wheel command of a tick reaches the robot"),
+    "keys": (KEYED, "writes blackboard key", "9:3", "the last write wins"),
+}  # fmt: skip
+
 
 @pytest.mark.parametrize(
-    ("branches", "warned"),
+    ("check", "branches", "warned"),
     [
+        # two_drives (session 25): only the spin reached the robot; the distance drive ran on,
+        # stopped, until --timeout
+        ("wheels", ["{drive: {velocity: 200 mm/s, distance: 50cm}}",
+                    "{drive: {velocity: 100 mm/s, radius: spin_left, duration: 1s}}"],
+         ["6:12 drive ... drive (line 5)"]),
+        ("wheels", ["{sequence: [{wait: 1s}, {turn: 90deg}]}", "{wait: 1s}",
+                    "{drive: {velocity: 100 mm/s}, until: {bump: any}}"],
+         ["7:12 drive ... turn (line 5)"]),
+        ("wheels",
+         ["{turn: 90deg}", "{drive: {velocity: 100 mm/s}}", "{drive: {velocity: 50 mm/s}}"],
+         ["6:12 drive ... turn (line 5)", "7:12 drive ... turn (line 5)"]),
+        # one wheel branch; a stop only halts; a sequence runs its drives one after the other
+        ("wheels", ["{drive: {velocity: 200 mm/s, duration: 1s}}", "{leds: {dock: true}}",
+                    "wall"], []),
+        ("wheels", ["{drive: {velocity: 200 mm/s, duration: 1s}}", "stop"], []),
+        ("wheels",
+         ["{sequence: [{turn: 90deg}, {drive: {velocity: 200 mm/s, duration: 1s}}]}", "wall"],
+         []),
         # bb.yaml (the py_trees expert, session 34): two uses of one subtree set n to 1 and
         # 2 in a parallel, and the check after it saw 2, silently
-        (["{subtree: {id: writer, v: 1}}", "{subtree: {id: writer, v: 2}}"],
+        ("keys", ["{subtree: {id: writer, v: 1}}", "{subtree: {id: writer, v: 2}}"],
          ["7:12 set(key=n, value=2) ... set(key=n, value=1) (line 7)"]),
-        (["{set: {key: n, value: 1}}", "{wait: 1s}", "{set: {key: n, value: 2}}"],
+        ("keys", ["{set: {key: n, value: 1}}", "{wait: 1s}", "{set: {key: n, value: 2}}"],
          ["12:8 set(key=n, value=2) ... set(key=n, value=1) (line 10)"]),
-        (["{mark: at}", "{sequence: [{wait: 1s}, {mark: at}]}"],
+        ("keys", ["{mark: at}", "{sequence: [{wait: 1s}, {mark: at}]}"],
          ["11:32 mark(at) ... mark(at) (line 10)"]),
-        (["{for_each: {key: n, in: [1, 2], do: {wait: 1s}}}", "{set: {key: n, value: 3}}"],
+        ("keys", ["{for_each: {key: n, in: [1, 2], do: {wait: 1s}}}", "{set: {key: n, value: 3}}"],
          ["11:8 set(key=n, value=3) ... for_each (line 10)"]),
         # one writer a key; two writes in one branch, one after the other
-        (["{set: {key: n, value: 1}}", "{mark: at}"], []),
-        (["{sequence: [{set: {key: n, value: 1}}, {set: {key: n, value: 2}}]}", "{mark: at}"],
+        ("keys", ["{set: {key: n, value: 1}}", "{mark: at}"], []),
+        ("keys",
+         ["{sequence: [{set: {key: n, value: 1}}, {set: {key: n, value: 2}}]}", "{mark: at}"],
          []),
     ],
 )  # fmt: skip
-def test_two_branches_of_a_parallel_that_write_one_key_are_warned_of(
-    compile_text: Callable[..., CompiledMission], branches: list[str], warned: list[str]
+def test_two_branches_of_a_parallel_that_claim_one_thing_are_warned_of(
+    compile_text: Callable[..., CompiledMission],
+    check: str,
+    branches: list[str],
+    warned: list[str],
 ) -> None:
-    """The last write of a tick wins, by the branches' order: said at the later writer,
-    naming the first (a subtree used twice at its one place), as for the wheels."""
-    items = "".join(f"\n    - {branch}" for branch in branches)
-    mission = compile_text(f"{KEYED}{items}\n")
-    keyed = [w for w in mission.warnings if "writes blackboard key" in w.message]
-    said = [
-        f"{w.line}:{w.column} {w.message.split(' writes')[0]} ... "
-        + w.message.split(" and ", 1)[1].split(" in another")[0]
-        for w in keyed
-    ]
+    """Two branches turning the wheels (only the last wheel command of a tick reaches the
+    robot), or writing one blackboard key (the last write of a tick wins, by the branches'
+    order): said at the later node, naming the first (a subtree used twice at its one
+    place), each a warning. Every warning of the mission is such a one, as
+    ``line:col later ... first (line N)``."""
+    head, claim, parallel_at, outcome = TWO_BRANCHES[check]
+    indent = " " * (len(head.rsplit("\n", 1)[-1]) - len("parallel:") + 2)  # under its key
+    mission = compile_text(head + "".join(f"\n{indent}- {branch}" for branch in branches) + "\n")
+    said = []
+    for w in mission.warnings:
+        assert f" {claim} " in w.message and w.severity == "warning", w
+        assert outcome in w.message, w.message
+        later, rest = w.message.split(f" {claim} ", 1)
+        assert f"in one branch of the parallel ({parallel_at}) and " in rest, w.message
+        first = rest.split(" and ", 1)[1].split(" in another")[0]
+        said.append(f"{w.line}:{w.column} {later} ... {first}")
     assert said == warned
-    for w in keyed:
-        assert "in one branch of the parallel (9:3)" in w.message
-        assert "the last write wins" in w.message and w.severity == "warning"
 
 
 @pytest.mark.parametrize(
