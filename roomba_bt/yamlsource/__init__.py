@@ -411,7 +411,19 @@ def _compose(text: str, loader: type[Any]) -> yaml.Node | None:
     except RecursionError:  # PyYAML's own composer recurses: deeper than Python's stack
         refuse_deep_events(text, loader)
         raise
+    except yaml.MarkedYAMLError as exc:
+        if exc.problem == _LIBYAML_TOO_DEEP:  # libyaml's own bound, 1000: the documented message
+            refuse_deep_events(text, PURE_LOADER)
+        raise
     return root
+
+
+#: libyaml's scanner's problem past 1,000 levels (``while increasing flow level``, or block
+#: level), which named no bound the docs give. libyaml scans ahead for a key and gives no
+#: event of a line that goes that deep, so PyYAML's own parser (no bound of its own, no
+#: recursion) reads the events for :func:`refuse_deep_events`, which names the documented
+#: bound at the collection that goes over it; on this error only, so its pace costs nothing
+_LIBYAML_TOO_DEEP = "exceeded maximum nesting depth"
 
 
 def reader_offset(text: str, exc: yaml.reader.ReaderError) -> int | None:

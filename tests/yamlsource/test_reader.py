@@ -225,14 +225,25 @@ def test_nesting_up_to_the_limit_reads_and_deeper_is_refused_where_it_goes_over(
     loader: type,
 ) -> None:
     """A world nested 990 deep was a RecursionError traceback, a mission's description an
-    "internal error"; PyYAML's own composer fails at about 600 (it recurses), libyaml at 1000."""
+    "internal error"; PyYAML's own composer fails at about 600 (it recurses), libyaml at 1000
+    with its own "exceeded maximum nesting depth", flow or block."""
     limit = yamlsource.MAX_NESTING
     assert yamlsource.compose(_nested(limit), loader) is not None
-    for levels in (limit + 1, 700, 990):
+    for levels in (limit + 1, 700, 990, 1001, 5000):
         with pytest.raises(yamlsource.Refused) as caught:
             yamlsource.compose(_nested(levels), loader)
         assert yamlsource.error_position(caught.value) == (1, 3 + limit)
         assert f"nested more than {limit} deep" in str(caught.value.problem)
+
+
+@pytest.mark.parametrize("loader", [yamlsource.FAST_LOADER, yamlsource.PURE_LOADER])
+def test_block_nesting_past_libyamls_own_bound_gets_the_documented_message(loader: type) -> None:
+    """libyaml refuses 1,000 block levels with its own words ("exceeded maximum nesting
+    depth"), which named no bound a user could find in the docs."""
+    text = "x:\n" + "".join(" " * level + "-\n" for level in range(1, 1100))
+    with pytest.raises(yamlsource.Refused) as caught:
+        yamlsource.compose(text, loader)
+    assert f"nested more than {yamlsource.MAX_NESTING} deep" in str(caught.value.problem)
 
 
 def test_the_deepest_collection_first_in_the_file_is_the_one_named() -> None:
