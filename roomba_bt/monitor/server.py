@@ -268,14 +268,21 @@ def foreign_request(request: web.Request, bound: str, port: int) -> web.Response
     a name of another site that its DNS turned to 127.0.0.1 (DNS rebinding) makes the
     browser treat this server as that site; on any address, one whose ``Origin`` (the
     page that made it: every WebSocket and control has one) is not this server. ``bound``:
-    the address the server listens on, ``port`` its port."""
+    the address the server listens on, ``port`` its port. A request with no ``Host`` or an
+    empty one (HTTP/1.0 allows it) is refused on loopback too: every browser, curl and
+    urllib send one, so only a hand-made request lacks it, and "any Host but this machine's
+    is refused" held with one exception."""
     host = request.headers.get("Host", "")
-    if host and is_loopback(bound) and not _local_host(host, bound):
+    if is_loopback(bound) and not _local_host(host, bound):
+        said = (
+            f"Host {host!r} refused (another site's name pointed at this machine: DNS rebinding)"
+            if host
+            else "a request with no Host header refused"
+        )
         return _error(
             403,
             f"this monitor listens on {bound} and answers only requests addressed "
-            f"to 127.0.0.1, localhost or [::1] (http://127.0.0.1:{port}/); Host "
-            f"{host!r} refused (another site's name pointed at this machine: DNS rebinding)",
+            f"to 127.0.0.1, localhost or [::1] (http://127.0.0.1:{port}/); {said}",
         )
     origin = request.headers.get("Origin")
     if origin is not None and urlsplit(origin).netloc.lower() != host.lower():

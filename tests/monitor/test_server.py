@@ -259,11 +259,30 @@ def _ws_status(port: int, origin: str | None, host: str | None = None) -> int:
                "Sec-WebSocket-Key": "dGhlIHNhbXBsZSBub25jZQ=="}  # fmt: skip
     if origin is not None:
         headers["Origin"] = origin
+    lines = ["GET /ws HTTP/1.1", f"Host: {host or f'127.0.0.1:{port}'}"]
+    lines += [f"{k}: {v}" for k, v in headers.items()]
+    return _raw_status(port, "\r\n".join(lines))
+
+
+def _raw_status(port: int, head: str) -> int:
+    """The status of a request sent by hand with ``head`` (the request line and headers, no
+    blank line): what no browser or HTTP library sends."""
     with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
-        lines = ["GET /ws HTTP/1.1", f"Host: {host or f'127.0.0.1:{port}'}"]
-        lines += [f"{k}: {v}" for k, v in headers.items()]
-        sock.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
+        sock.sendall(f"{head}\r\n\r\n".encode())
         return int(sock.recv(200).split()[1])
+
+
+def test_a_request_with_no_host_or_an_empty_one_is_refused_on_loopback(
+    server: MonitorServer,
+) -> None:
+    """``GET / HTTP/1.0`` with no ``Host`` (or ``Host:`` empty) was answered 200: the
+    one exception to "any Host but this machine's is refused" on loopback."""
+    port = server.port
+    assert _raw_status(port, "GET / HTTP/1.0") == 403
+    assert _raw_status(port, "GET / HTTP/1.1\r\nHost:") == 403
+    assert _raw_status(port, f"GET / HTTP/1.0\r\nHost: 127.0.0.1:{port}") == 200
+    status, body = _call(f"http://127.0.0.1:{port}/")  # urllib: Host sent
+    assert status == 200, body
 
 
 def test_the_websocket_and_the_state_refuse_another_site_s_page(server: MonitorServer) -> None:
