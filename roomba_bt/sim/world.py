@@ -567,10 +567,16 @@ class _Checker:
         return self.polygon(spec["polygon"], (*path, "polygon"))
 
     def items(self, value: object, path: PathKey) -> list[Any]:
+        """A list of the world's (rooms, obstacles, walls...), none read past
+        :data:`MAX_LIST_ITEMS` (one error for the list, not one per item)."""
         if value is None:
             return []
         if not isinstance(value, list):
             self.error(path, _show(value), "a list")
+            return []
+        if len(value) > MAX_LIST_ITEMS:
+            allowed = f"at most {MAX_LIST_ITEMS:,} (a whole furnished home needs a few hundred)"
+            self.error(path, f"{len(value):,} items", allowed)
             return []
         return value
 
@@ -625,6 +631,13 @@ def _area(poly: Polygon) -> float:
     )
 
 
+#: How many items one list of a world file (``rooms``, ``obstacles``, ``walls``, ``drops``,
+#: ``dirt``, ``events``...) may hold (decided). A furnished home is a few hundred shapes (the
+#: shipped dining room's chair legs are 30); each obstacle costs the floor map three capsule
+#: fills, so a generated file of 12,000 took 13 s to load (the work is linear in the count,
+#: nothing to index: the cost is the count). A polygon's points are not items: a floor plan
+#: of 10,000 points is read.
+MAX_LIST_ITEMS = 1000
 #: Coordinates in a world file: metres, within a kilometre of the origin.
 _METRES = (-1000.0, 1000.0, "m")
 _TOP_KEYS = (
@@ -849,7 +862,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     name = _text(c, top, "name", pathlib.Path(source).stem)
     description = _text(c, top, "description", "")
     rooms = [_room(c, r, ("rooms", i)) for i, r in enumerate(c.items(top.get("rooms"), ("rooms",)))]
-    if isinstance(top.get("rooms"), list) and not rooms:
+    if top.get("rooms") == []:
         c.error(("rooms",), "no room", "at least one room polygon")
     walls = _walls(c, top.get("walls"))
     obstacles = [

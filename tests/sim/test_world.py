@@ -685,3 +685,27 @@ def test_where_things_stand_is_said_with_the_other_problems_at_once() -> None:
     ], found
     # rooms in error: nothing is placed against them
     assert len(problems("rooms: [[[0, 0], [4, 0]]]\ndrops: [{rect: [10, 10, 11, 11]}]\n")) == 1
+
+
+def _many_obstacles(count: int) -> str:
+    """A 40 m x 35 m room holding ``count`` small triangles, one a line (the hostile file's)."""
+    rows = [
+        f"  - {{polygon: [[{x},{y}],[{x + 0.05},{y}],[{x + 0.05},{y + 0.05}]]}}"
+        for x, y in ((1 + i % 38, 1 + i // 38 / 10) for i in range(count))
+    ]
+    room = "rooms: [[[0, 0], [40, 0], [40, 35], [0, 35]]]\nrobot: {start: {at: [0.5, 0.5]}}\n"
+    return room + "obstacles:\n" + "\n".join(rows) + "\n"
+
+
+def test_a_list_of_more_items_than_a_home_needs_is_one_error_at_the_list() -> None:
+    """12,000 small obstacles (700 KB) took 13 s to load, the floor map's fills linear in the
+    count: a list is held to MAX_LIST_ITEMS with one error, not read item by item."""
+    limit = world_module.MAX_LIST_ITEMS
+    assert len(parse_world(_many_obstacles(limit), "w.yaml").obstacles) == limit
+    [problem] = problems(_many_obstacles(limit + 1))
+    assert problem == (
+        f"w.yaml:4:3: obstacles: found {limit + 1:,} items; allowed: at most {limit:,} (a "
+        "whole furnished home needs a few hundred)"
+    )
+    [problem] = problems(f"rooms: [{', '.join(['[[0, 0], [1, 0], [1, 1]]'] * (limit + 1))}]\n")
+    assert f"rooms: found {limit + 1:,} items" in problem
