@@ -2,7 +2,8 @@
 stranger's file can carry, the invisible ones that reorder or hide what is shown, and
 :func:`escaped` to show them as ``\\x1b`` or ``\\u202e``; a path quoted as it was written
 (:func:`path_written`, one backslash where the file has one); and a duration as a person reads it
-(:func:`duration_said`: ``1 d``, not ``86400 s``), the one spelling of every layer's messages.
+(:func:`duration_said`: ``1 d``, not ``86400 s``), the one spelling of every layer's messages;
+and a long name or value cut with its length said (:func:`shortened`, :func:`name_shown`).
 
 Standard library only and importing nothing of ours, so that every layer may use it, the
 protocol's included, and the command line's parser can say a name without loading YAML
@@ -14,8 +15,8 @@ from __future__ import annotations
 import re
 
 __all__ = [
-    "ANY_CONTROL", "CONTROL", "INVISIBLE", "UNPRINTABLE", "duration_said", "duration_words",
-    "encodes", "escaped",
+    "ANY_CONTROL", "CONTROL", "INVISIBLE", "NAME_LIMIT", "UNPRINTABLE", "duration_said",
+    "duration_words", "encodes", "escaped", "name_shown", "shortened",
 ]  # fmt: skip
 
 #: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file
@@ -51,6 +52,27 @@ def escaped(text: str, which: re.Pattern[str] = UNPRINTABLE) -> str:
 def _escape(found: re.Match[str]) -> str:
     code = ord(found.group())
     return f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}"
+
+
+#: How much of a name a stranger wrote (a mission's, a node's) one line shows: a name is a
+#: few words, and a 200 KB ``mission:`` name was printed whole by ``show``, the live tree and
+#: the run's summary (200 KB on the terminal, once each)
+NAME_LIMIT = 80
+
+
+def shortened(text: str, limit: int = NAME_LIMIT, length: int | None = None) -> str:
+    """``text`` cut to ``limit`` characters, as a compiler cuts a long name it quotes: an
+    ellipsis and the whole length said (``length``, when ``text`` is a quoting of a longer
+    value: its own), ``NNNN... (200,000 characters)``; a text that fits is as it is."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text) if length is None else length:,} characters)"
+
+
+def name_shown(name: str) -> str:
+    """A name on one line of the terminal: :func:`shortened`, then :func:`escaped` with
+    :data:`ANY_CONTROL` (cut first, so an escape is never cut in half)."""
+    return escaped(shortened(name), ANY_CONTROL)
 
 
 def path_written(text: str) -> str:

@@ -38,7 +38,7 @@ from roomba_bt.cli.profile_choice import (
 )
 from roomba_bt.cli.validate_report import FORMATS, Checked
 from roomba_bt.oi.profiles import get_profile
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, escaped, shortened
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
@@ -347,7 +347,7 @@ def show_command(args: argparse.Namespace) -> int:
         for line in reported(diagnostics):
             print(line)
         return ExitCode.INVALID
-    header = f"{mission.name}: {mission.description.strip()}".rstrip(": ")
+    header = f"{shortened(mission.name)}: {mission.description.strip()}".rstrip(": ")
     print(escaped(header, ANY_CONTROL))  # one line: "\n[ok] ..." in a text faked one
     reviewed = mission.reviewed()  # a node's name: beside what it is
     # a name or a log message from -p may hold "\e[2J" (each name is one line already)

@@ -26,7 +26,7 @@ from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.plan import Node
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, escaped, shortened
 from roomba_bt.robot.interface import RobotHandle
 from roomba_bt.robot.safety import code_failure, failure_said, interrupts_told_apart
 
@@ -206,14 +206,16 @@ def _differs(initial: Mapping[str, Any], other: Mapping[str, Any], key: str) -> 
 
 
 def _as_reviewed(node: Node) -> Node:
-    """``node`` and its children, each renamed by ``name:`` named by what it is first."""
-    what = node.label or node.name
+    """``node`` and its children, each renamed by ``name:`` named by what it is first (a long
+    name cut, :func:`shortened`)."""
+    named = shortened(node.name)
+    what = node.label or named
     if node.options_written:  # a composite or decorator: its options, as a leaf's
         what = f"{node.kind}({node.options_written})"
         renamed = node.name != node.kind  # by name:, or as a subtree's body
-        name = f"{what} named {node.name!r}" if renamed else what
+        name = f"{what} named {named!r}" if renamed else what
     else:
-        name = f"{what} named {node.name!r}" if node.label else node.name
+        name = f"{what} named {named!r}" if node.label else named
     name = escaped(name, ANY_CONTROL)  # one line of show's tree: a -p text may hold "\n"
     children = [_as_reviewed(child) for child in node.children]
     if node.kind == GUARD.word:  # drawn as the composite it ticks as (Guard.drawn_as)

@@ -31,7 +31,7 @@ from roomba_bt.oi.frames import (
     IR_PACKETS,
 )
 from roomba_bt.oi.ir import IRCharacter
-from roomba_bt.printable import ANY_CONTROL, encodes, escaped
+from roomba_bt.printable import ANY_CONTROL, encodes, escaped, name_shown, shortened
 
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
@@ -277,7 +277,7 @@ def text_tree(
 
     def walk(node: py_trees.behaviour.Behaviour, depth: int) -> None:
         bold, reset = ("", "") if node.id != tip_id else (symbols["bold"], symbols["bold_reset"])
-        name = escaped(node.name, ANY_CONTROL)
+        name = name_shown(node.name)
         line = f"{'    ' * depth}{bold}{symbols[node_kind(node)]}{reset} "
         if show_status:  # py_trees' three bold spans, so that a terminal shows the same
             status, feedback = ticked.get(node.id) or (node.status, node.feedback_message)
@@ -334,7 +334,7 @@ def fitted_tree(
         folded = not running and children and depth > 0
         hidden = sum(1 for _ in node.iterate()) - 1 if folded else 0
         more = f" +{hidden}" if hidden else ""
-        name = escaped(node.name, ANY_CONTROL)
+        name = name_shown(node.name)
         kind = _KIND_SYMBOLS[node_kind(node)]
         line = f"{'  ' * depth}{kind} {name} [{shown[node.status]}]{more}"
         lines.append((line, running))
@@ -603,7 +603,8 @@ class StatusChangeLogger:
             status = node.status
             if last.get(node.id) is not status:
                 if status is not py_trees.common.Status.INVALID or node.id in last:
-                    self.logger.info("%s -> %s", node.name, status.value, extra={"mission_time": t})
+                    name = shortened(node.name)  # a 200 KB name was a 200 KB log line
+                    self.logger.info("%s -> %s", name, status.value, extra={"mission_time": t})
                 last[node.id] = status
 
 

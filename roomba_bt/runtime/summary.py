@@ -12,7 +12,13 @@ from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.printable import ANY_CONTROL, duration_said, duration_words, escaped
+from roomba_bt.printable import (
+    ANY_CONTROL,
+    duration_said,
+    duration_words,
+    escaped,
+    shortened,
+)
 from roomba_bt.robot.interface import UNKNOWN_CAUSE
 
 if TYPE_CHECKING:
@@ -486,7 +492,7 @@ class RunSummary:
         reason = f" ({self.reason})" if self.reason else ""
         lines = [
             *([f"label        {self.label}"] if self.label else []),
-            f"mission      {self.mission}",
+            f"mission      {shortened(self.mission)}",
             *([f"profile      {self.profile}"] if self.profile else []),
             *([f"robot        {self.robot}"] if self.robot else []),
             *([f"started      {self.started}"] if self.started else []),

@@ -26,7 +26,7 @@ from typing import Any, NoReturn
 
 import yaml
 
-from roomba_bt.printable import CONTROL, repr_written
+from roomba_bt.printable import CONTROL, repr_written, shortened
 
 #: libyaml's parser where installed (much faster on large missions), else PyYAML's own
 FAST_LOADER: type[Any] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -60,9 +60,7 @@ def quoted(value: object, limit: int = QUOTE_LIMIT) -> str:
     length said:
     ``'root:x:0:0:root:/root:/bin/bash daemon:x:1:1:daemon:/usr/sb... (1,234 characters)``."""
     text = repr_written(value)
-    if len(text) <= limit:
-        return text
-    return f"{text[:limit]}... ({len(str(value)):,} characters)"
+    return shortened(text, limit, len(str(value)))
 
 
 def tab_hint(text: str, line: int, column: int) -> str:

@@ -3,6 +3,7 @@ mission files, findings 2-6)."""
 
 from __future__ import annotations
 
+import logging
 import re
 from pathlib import Path
 
@@ -97,6 +98,31 @@ def test_bidi_and_zero_width_characters_are_escaped_wherever_names_are_printed(
     assert not INVISIBLE.search(printed)
     assert "gentle\\u202e s/mm 005" in ran.out + ran.err
     assert escaped("a\u202eb\u200dc\ufeff", ANY_CONTROL) == "a\\u202eb\\u200dc\\ufeff"
+
+
+def test_a_200_kb_name_is_cut_with_its_length_said_wherever_it_is_printed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A 200 KB ``mission:`` name was printed whole by ``show`` and the run's summary, a node's
+    by the tree and each log line (200 KB on the terminal, each time)."""
+    caplog.set_level(logging.INFO)
+    long = "N" * 200_000
+    path = _mission(
+        tmp_path,
+        f"mission: {long}\ntree:\n  sequence:\n    - mode: safe\n"
+        f"    - name: {long}\n      wait: {{duration: 30ms}}\n",
+    )
+    assert main(["show", str(path)]) == 0
+    shown = capsys.readouterr().out
+    assert main(["run", str(path), "--fast", "--display", "log"]) == 0
+    ran = capsys.readouterr()
+    lines = (shown + ran.out + ran.err).splitlines()
+    assert max(len(line) for line in lines) < 200
+    cut = "N" * 80 + "... (200,000 characters)"
+    assert shown.startswith(cut + "\n")
+    assert f"wait(duration=30ms) named '{cut}'" in shown
+    assert f"mission      {cut}" in ran.out
+    assert f"{cut} -> SUCCESS" in caplog.messages
 
 
 def test_a_key_yaml_reads_as_a_boolean_says_to_quote_it(tmp_path: Path) -> None:
