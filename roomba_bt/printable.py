@@ -3,7 +3,8 @@ stranger's file can carry, the invisible ones that reorder or hide what is shown
 :func:`escaped` to show them as ``\\x1b`` or ``\\u202e``; a path quoted as it was written
 (:func:`path_written`, one backslash where the file has one); and a duration as a person reads it
 (:func:`duration_said`: ``1 d``, not ``86400 s``), the one spelling of every layer's messages;
-and a long name or value cut with its length said (:func:`shortened`, :func:`name_shown`).
+a long name or value cut with its length said (:func:`shortened`, :func:`name_shown`); and a
+long list of errors cut after its first hundred, how many more said (:func:`listed`).
 
 Standard library only and importing nothing of ours, so that every layer may use it, the
 protocol's included, and the command line's parser can say a name without loading YAML
@@ -15,8 +16,9 @@ from __future__ import annotations
 import re
 
 __all__ = [
-    "ANY_CONTROL", "CONTROL", "INVISIBLE", "NAME_LIMIT", "UNPRINTABLE", "duration_said",
-    "duration_words", "encodes", "escaped", "name_shown", "shortened",
+    "ANY_CONTROL", "CONTROL", "INVISIBLE", "MAX_LISTED", "NAME_LIMIT", "UNPRINTABLE",
+    "duration_said", "duration_words", "encodes", "escaped", "listed", "more_listed",
+    "name_shown", "shortened",
 ]  # fmt: skip
 
 #: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file
@@ -67,6 +69,27 @@ def shortened(text: str, limit: int = NAME_LIMIT, length: int | None = None) -> 
     if len(text) <= limit:
         return text
     return f"{text[:limit]}... ({len(text) if length is None else length:,} characters)"
+
+
+#: How many errors a command lists of one file (decided: a compiler's convention), a
+#: mission's (``mission.diagnostics.MAX_REPORTED``) and a world's alike. A stranger's file of
+#: 1 MiB can hold 350,000 errors (an alias, a duplicate key, repeated), and a world of 20,000
+#: bad obstacles printed 20,000 lines: the first hundred say what is wrong, the rest would
+#: only scroll them away
+MAX_LISTED = 100
+
+
+def more_listed(count: int, noun: str = "errors", limit: int = MAX_LISTED) -> str:
+    """The line that ends a list cut after its first ``limit``: ``... and 19,900 more errors
+    (the first 100 are listed)``."""
+    return f"... and {count:,} more {noun} (the first {limit} are listed)"
+
+
+def listed(lines: list[str], limit: int = MAX_LISTED) -> list[str]:
+    """``lines`` (errors, one a line), the first ``limit`` of them and :func:`more_listed`."""
+    if len(lines) <= limit:
+        return lines
+    return [*lines[:limit], more_listed(len(lines) - limit, limit=limit)]
 
 
 def name_shown(name: str) -> str:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import add_command
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, escaped, listed
 from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:
@@ -144,5 +144,5 @@ def world_error_text(exc: WorldError) -> str:
     """A world's problems as ``run`` and ``sensors`` print them on stderr: a problem at a
     place as its own ``file:line:col: ...`` line, as ``validate`` prints it (the first line
     began ``roomba-bt: `` and broke a ``^file:line:col`` matcher), one without a place (no
-    such file) after ``roomba-bt: ``."""
-    return "\n".join(str(p) if p.line else f"roomba-bt: {p}" for p in exc.problems)
+    such file) after ``roomba-bt: ``; the first hundred, then how many more (:func:`listed`)."""
+    return "\n".join(listed([str(p) if p.line else f"roomba-bt: {p}" for p in exc.problems]))

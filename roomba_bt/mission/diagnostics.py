@@ -18,7 +18,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
 from roomba_bt.errors import RoombaBtError
-from roomba_bt.printable import ANY_CONTROL, UNPRINTABLE, escaped
+from roomba_bt.printable import ANY_CONTROL, MAX_LISTED, UNPRINTABLE, escaped, more_listed
 
 
 @dataclass(frozen=True, slots=True, order=True)
@@ -108,10 +108,9 @@ def shortened_path(path: str, ends: int = 3) -> str:
     return f"{'.'.join(steps[:ends])} ... ({hidden} more) ... {'.'.join(steps[-ends:])}"
 
 
-#: How many diagnostics a command prints of one file (decided): a compiler's convention. A
-#: stranger's file of 1 MiB can hold 350,000 errors (an alias, a duplicate key, repeated):
-#: the first hundred say what is wrong, the rest would only scroll them away.
-MAX_REPORTED = 100
+#: How many diagnostics a command prints of one file (decided): a compiler's convention, the
+#: one a world's errors keep too (:data:`~roomba_bt.printable.MAX_LISTED`).
+MAX_REPORTED = MAX_LISTED
 
 
 def reported(diagnostics: Iterable[Diagnostic], limit: int = MAX_REPORTED) -> list[str]:
@@ -124,7 +123,7 @@ def reported(diagnostics: Iterable[Diagnostic], limit: int = MAX_REPORTED) -> li
         errors = sum(d.severity == "error" for d in hidden)
         noun = ("errors" if errors == len(hidden) else
                 "warnings" if not errors else "errors and warnings")  # fmt: skip
-        lines.append(f"... and {len(hidden):,} more {noun} (the first {limit} are listed)")
+        lines.append(more_listed(len(hidden), noun, limit))
     return lines
 
 

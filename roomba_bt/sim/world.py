@@ -45,6 +45,7 @@ from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.bits import BUTTON_NAMES, OVERCURRENT_BITS, PRESS_SECONDS
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import BODY_RADIUS_MM
+from roomba_bt.printable import listed
 from roomba_bt.sim.geometry import (
     Point,
     Polygon,
@@ -380,11 +381,12 @@ class WorldProblem:
 
 class WorldError(ValueError, RoombaBtError):
     """A world that cannot be loaded; ``problems`` lists every one found, in the file's
-    order (those without a place last)."""
+    order (those without a place last); its message, the first hundred
+    (:func:`~roomba_bt.printable.listed`: 20,000 bad obstacles were 20,000 lines)."""
 
     def __init__(self, problems: list[WorldProblem]) -> None:
         self.problems = sorted(problems, key=lambda p: (not p.line, p.line, p.column))
-        super().__init__("\n".join(str(p) for p in self.problems))
+        super().__init__("\n".join(listed([str(p) for p in self.problems])))
 
 
 # ----------------------------------------------------------------------------- loading

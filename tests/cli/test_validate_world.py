@@ -86,3 +86,30 @@ def test_worlds_given_a_file_says_how_to_check_it(worlds: Path, capsys: Capsys) 
         "roomba-bt worlds: worlds/lab.yaml is a file, not a shipped world's name: check it with "
         "roomba-bt validate worlds/lab.yaml; run a mission in it with --world worlds/lab.yaml\n"
     )
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["validate", "worlds/many.yaml"],
+        ["run", "dock", "--fast", "--display", "none", "--world", "worlds/many.yaml"],
+        ["sim", "--tcp", "0", "--world", "worlds/many.yaml"],
+        ["eval", "dock", "--runs", "1", "--world", "worlds/many.yaml"],
+    ],
+    ids=["validate", "run", "sim", "eval"],
+)
+def test_a_world_of_thousands_of_errors_lists_the_first_hundred(
+    worlds: Path, capsys: Capsys, argv: list[str]
+) -> None:
+    """A world of 20,000 bad obstacles printed 20,000 error lines on ``run``: a world's
+    errors are cut as a mission's are, the first hundred and how many more."""
+    bad = "".join(f"  - {{polygon: [[x, 1], [2, 2], [3, {n}]]}}\n" for n in range(900))
+    text = f"rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\nobstacles:\n{bad}drops:\n{bad}"
+    (worlds / "worlds" / "many.yaml").write_text(text)
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    lines = (out + err).splitlines()
+    assert len(lines) < 110
+    assert "... and 1,700 more errors (the first 100 are listed)" in lines
+    first = "worlds/many.yaml:3:17: obstacles[0].polygon[0][0]: found 'x'"
+    assert any(first in line for line in lines[:2]), lines[:2]  # after "sim: invalid world:"
