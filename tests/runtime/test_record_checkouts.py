@@ -273,3 +273,28 @@ def test_a_record_grants_no_folder_outside_the_one_that_holds_it_and_its_mission
     patrol.write_text(PATROL.replace("../common/escapes.yaml", "../../../elsewhere/escapes.yaml"))
     assert main(["replay", "records/patrol.jsonl"]) == 2
     assert "is outside the mission's folder" in capsys.readouterr().err
+
+
+def test_a_record_naming_a_file_outside_its_folder_as_its_mission_never_shows_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A record's mission is not held to its folder (decided, docs/runtime.md: a record made
+    in /tmp of ~/m.yaml shares only the root with it, and replays): what makes that safe is
+    that the file is only ever compiled, never quoted, never run, and a replay writes to no
+    robot. A stranger's header naming a secret file gets "not a mission file", no line of it."""
+    repo = _repository(tmp_path / "repo")
+    assert _record(repo, monkeypatch) == 0
+    secret = tmp_path / "home" / ".pgpass"
+    secret.parent.mkdir()
+    secret.write_text("db.example.com:5432:prod:admin:S3cretPgPass\n")
+    record = repo / "records" / "patrol.jsonl"
+    lines = record.read_text().splitlines()
+    header = json.loads(lines[0])
+    for named in (str(secret), "../../home/.pgpass"):
+        header["mission"] = named
+        record.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+        capsys.readouterr()
+        assert main(["replay", "records/patrol.jsonl"]) == 2
+        out, err = capsys.readouterr()
+        assert "this file is not a mission file" in out + err
+        assert "S3cret" not in out + err and "db.example" not in out + err
