@@ -16,7 +16,7 @@ from roomba_bt.cli.arguments import (
     refresh_rate,
 )
 from roomba_bt.oi.frames import stream_frame_size
-from roomba_bt.oi.modes import OI_MODE_PACKET, mode_from_packet
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.oi.stream import stream_budget
@@ -64,23 +64,26 @@ def register(sub: Any) -> None:
     )
 
 
-def format_table(frame: Any, plus_one: bool | None = None) -> str:
-    """One row a packet of ``frame``. ``plus_one``: packet 35 reads the mode + 1 (a Roomba
-    600's firmware bug, as the connection learned at start-up): the mode row shows the mode
-    corrected and says so (it showed the raw reading: "2 safe" for a robot in Passive)."""
+def format_table(frame: Any) -> str:
+    """One row a packet of ``frame``. On a robot whose packet 35 reads the mode + 1 (a Roomba
+    600's firmware bug, as the connection learned at start-up and its parser was told) the
+    frame already reads the mode corrected; the row says so (it showed the raw reading:
+    "2 safe" for a robot in Passive)."""
     rows = []
     for name, value in frame.as_dict().items():
         pid = next(p.id for p in PACKETS.values() if p.name == name)
         unit = PACKETS[pid].unit
-        shown = _show_mode(frame[pid]) if pid == OI_MODE_PACKET and plus_one else _show(value)
+        shown = _show(value)
+        if pid == OI_MODE_PACKET and frame.layout.mode_plus_one:
+            shown = _show_plus_one(value, frame[pid])
         rows.append(f"{pid:>3}  {name:<32} {shown:<40} {unit}")
     return "\n".join(rows)
 
 
-def _show_mode(raw: int) -> str:
-    """Packet 35 of a robot that reports the mode + 1, corrected."""
-    mode = mode_from_packet(raw, plus_one=True)
-    if mode is None:
+def _show_plus_one(mode: object, raw: int) -> str:
+    """Packet 35 of a robot that reports the mode + 1: the frame's corrected mode, or the
+    byte as sent when it is no mode even less 1."""
+    if not isinstance(mode, OIMode):
         return f"{raw} (no mode, even less 1 for a 600's mode + 1)"
     return f"{mode.value} {mode.name.lower()} (reads {raw}: a 600's mode + 1)"
 
@@ -191,7 +194,7 @@ def _show_live(
             if not frames or time.monotonic() - last < 1.0 / args.rate:
                 continue
             last = time.monotonic()
-            table = format_table(frames[-1].frame, connection.modes.plus_one)
+            table = format_table(frames[-1].frame)
             prefix = "\x1b[H\x1b[J" if interactive else ""
             print(f"{prefix}{connection.name}  ({profile.title})\n{table}\n", flush=True)
             shown += 1

@@ -35,7 +35,7 @@ from roomba_bt.oi.bits import (
 )
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.ir import IR_CHARACTERS
-from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode, mode_from_packet
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, VALID_PACKET_IDS, PacketSpec, expand
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
@@ -85,14 +85,29 @@ class FrameLayout:
 
     __slots__ = (
         "encoder_slots", "frame_id_mask", "frame_mask", "frame_template", "id_offsets", "index",
-        "members", "packet_ids", "payload_size", "profile", "range_checks", "struct", "with_ids",
+        "members", "mode_plus_one", "oi_modes", "packet_ids", "payload_size", "profile",
+        "range_checks", "struct", "with_ids",
     )  # fmt: skip
 
-    def __init__(self, packet_ids: tuple[int, ...], profile: RobotProfile, with_ids: bool) -> None:
+    def __init__(
+        self,
+        packet_ids: tuple[int, ...],
+        profile: RobotProfile,
+        with_ids: bool,
+        mode_plus_one: bool | None = None,
+    ) -> None:
+        """``mode_plus_one``: packet 35 reads the mode + 1 (the Roomba 600's firmware bug),
+        as the session learned it; None: as the profile says. The frames decoded here read
+        their mode through it, so a library user of a 600 does not read Passive as Safe."""
         _check_ids("sensors", packet_ids)
         self.packet_ids = packet_ids
         self.with_ids = with_ids
         self.profile = profile
+        self.mode_plus_one: bool = (
+            profile.reports_mode_plus_one if mode_plus_one is None else mode_plus_one
+        )
+        #: packet 35 by byte, the offset undone: :attr:`SensorFrame.oi_mode` reads it
+        self.oi_modes = _OI_MODES_BY_BYTE[self.mode_plus_one]
         places = _Places(packet_ids, profile, with_ids)
         index = places.index
         self.members = tuple(places.members)
@@ -141,7 +156,7 @@ class FrameLayout:
         """Pickled (and copied) as what it is made from: unpickled through
         :func:`layout_for`, so a process gets its own cached layout back (the compiled
         ``struct.Struct`` does not pickle, and one layout a packet list is shared)."""
-        return layout_for, (self.packet_ids, self.profile, self.with_ids)
+        return layout_for, (self.packet_ids, self.profile, self.with_ids, self.mode_plus_one)
 
     @property
     def frame_size(self) -> int:
@@ -237,12 +252,27 @@ def _range_rule(spec: PacketSpec) -> tuple[bytes, tuple[int, int] | None]:
     return zeros, (spec.minimum, spec.maximum)
 
 
-@lru_cache(maxsize=256)
 def layout_for(
-    packet_ids: tuple[int, ...], profile: RobotProfile = DEFAULT_PROFILE, with_ids: bool = True
+    packet_ids: Iterable[int],
+    profile: RobotProfile = DEFAULT_PROFILE,
+    with_ids: bool = True,
+    mode_plus_one: bool | None = None,
 ) -> FrameLayout:
-    """The (cached) layout of ``packet_ids`` as a stream frame (``with_ids``) or a reply."""
-    return FrameLayout(tuple(packet_ids), profile, with_ids)
+    """The (cached) layout of ``packet_ids`` as a stream frame (``with_ids``) or a reply;
+    ``mode_plus_one`` as :class:`FrameLayout` takes it. Any iterable of ids is taken (a list
+    raised a bare "unhashable type" from the cache); a wrong id is an :class:`EncodeError`."""
+    if isinstance(packet_ids, (str, bytes)) or not isinstance(packet_ids, Iterable):
+        raise EncodeError("sensors", "packet ids", "a list of packet ids", packet_ids)
+    if mode_plus_one is None:
+        mode_plus_one = profile.reports_mode_plus_one
+    return _cached_layout(tuple(packet_ids), profile, with_ids, mode_plus_one)
+
+
+@lru_cache(maxsize=256)
+def _cached_layout(
+    packet_ids: tuple[int, ...], profile: RobotProfile, with_ids: bool, mode_plus_one: bool
+) -> FrameLayout:
+    return FrameLayout(packet_ids, profile, with_ids, mode_plus_one)
 
 
 def _check_ids(command: str, packet_ids: Iterable[int]) -> None:
@@ -329,10 +359,27 @@ def _by_byte(decode: Callable[[int], _T]) -> tuple[_T, ...]:
     return tuple(decode(value) for value in range(256))
 
 
-#: Packets 21, 35 and 58 by byte: a value past the enum reads as its last member (a charging
-#: fault; Full for the "mode + 1" reading 4); stasis keeps its two low bits.
+#: Packets 21 and 58 by byte: a charging state past the enum reads as a fault; stasis keeps
+#: its two low bits.
 _CHARGING_STATE_BY_BYTE = _by_byte(lambda v: ChargingState(v) if v <= 5 else ChargingState.FAULT)
-_OI_MODE_BY_BYTE = _by_byte(lambda v: OIMode(v) if v <= 3 else OIMode.FULL)
+
+
+def _oi_modes_by_byte(plus_one: bool) -> tuple[OIMode, ...]:
+    """Packet 35 by byte through :func:`~roomba_bt.oi.modes.mode_from_packet` (the one place
+    that undoes the "mode + 1"); a byte that is no mode reads as the nearest end (Full past
+    it, as the 600's reading 4 did before; Off below), so the view never raises."""
+
+    def mode(raw: int) -> OIMode:
+        found = mode_from_packet(raw, plus_one)
+        if found is not None:
+            return found
+        return OIMode.OFF if raw < int(plus_one) else OIMode.FULL
+
+    return _by_byte(mode)
+
+
+#: indexed by ``mode_plus_one`` (False, True): each layout picks its table once
+_OI_MODES_BY_BYTE = (_oi_modes_by_byte(False), _oi_modes_by_byte(True))
 _STASIS_BY_BYTE = _by_byte(lambda v: Stasis(v & 3))
 
 
@@ -443,6 +490,11 @@ class SensorFrame:
             name = PACKETS[pid].name
             view = _VIEWS.get(pid)
             out[name] = view(raw) if view is not None else raw
+        if OI_MODE_PACKET in self.layout.index:
+            # the mode corrected as :attr:`oi_mode` is; a byte that is no mode stays as sent
+            raw = self[OI_MODE_PACKET]
+            mode = mode_from_packet(raw, self.layout.mode_plus_one)
+            out[PACKETS[OI_MODE_PACKET].name] = raw if mode is None else mode
         return out
 
     # The readings: each reads its value straight from the slots (no ``__getitem__`` call:
@@ -469,7 +521,6 @@ class SensorFrame:
     buttons = _decoded(18, BUTTONS_BY_BYTE)
     charging_state = _decoded(21, _CHARGING_STATE_BY_BYTE)
     charging_sources = _decoded(34, CHARGING_SOURCES_BY_BYTE)
-    oi_mode = _decoded(35, _OI_MODE_BY_BYTE)
     light_bumper = _decoded(45, LIGHT_BUMPER_BY_BYTE)
     ir_left = _decoded(52, IR_CHARACTERS)
     ir_right = _decoded(53, IR_CHARACTERS)
@@ -484,7 +535,7 @@ class SensorFrame:
     battery_charge_mah = _raw(25)
     battery_capacity_mah = _raw(26)
     wall_signal = _raw(27)
-    #: Packet 35 as sent (see the robot layer for the 600-series "mode + 1" fix).
+    #: Packet 35 as sent: on a 600 that reports the mode + 1, one more than :attr:`oi_mode`.
     oi_mode_raw = _raw(35)
     song_number = _raw(36)
     stream_packet_count = _raw(38)
@@ -500,6 +551,15 @@ class SensorFrame:
     light_bump_center_right_signal = _raw(49)
     light_bump_front_right_signal = _raw(50)
     light_bump_right_signal = _raw(51)
+
+    @property
+    def oi_mode(self) -> OIMode:
+        """Packet 35 as the OI mode, the "mode + 1" of the layout (the profile, or what the
+        session learned) undone: a roomba600 in Passive reads Passive, not Safe."""
+        try:
+            return self.layout.oi_modes[self.values[self.layout.index[OI_MODE_PACKET]] & 0xFF]
+        except KeyError:
+            raise self._missing(OI_MODE_PACKET) from None
 
     @property
     def any_cliff(self) -> bool:
@@ -545,8 +605,3 @@ class SensorFrame:
     def motor_currents_ma(self) -> tuple[int, int, int, int]:
         """Left wheel, right wheel, main brush, side brush."""
         return (self[54], self[55], self[56], self[57])
-
-
-#: The OI mode in :meth:`SensorFrame.as_dict` is the value as sent past Full (the "mode + 1"
-#: reading 4 stays 4), where :attr:`SensorFrame.oi_mode` reads it as Full.
-_VIEWS[OI_MODE_PACKET] = lambda raw: OIMode(raw) if raw <= 3 else raw

@@ -144,10 +144,11 @@ class StreamParser:
         mode_plus_one: bool | None = None,
     ) -> None:
         """``mode_plus_one``: whether packet 35 reads the mode + 1 (1-4 in range instead of
-        0-3), as the session learned at start-up; None: as the profile expects."""
-        self.layout: FrameLayout = layout_for(tuple(packet_ids), profile, True)
+        0-3), as the session learned at start-up; None: as the profile expects. The frames'
+        :attr:`~roomba_bt.oi.frames.SensorFrame.oi_mode` reads the mode with it undone."""
+        self.layout: FrameLayout = layout_for(packet_ids, profile, True, mode_plus_one)
         layout = self.layout
-        plus_one = profile.reports_mode_plus_one if mode_plus_one is None else mode_plus_one
+        plus_one = layout.mode_plus_one
         checks = list(layout.range_checks)
         if OI_MODE_PACKET in layout.index:
             checks.append((layout.index[OI_MODE_PACKET], int(plus_one), 3 + int(plus_one)))
@@ -465,8 +466,15 @@ class ReplyParser:
 
     __slots__ = ("_buffer", "layout")
 
-    def __init__(self, packet_ids: Iterable[int], profile: RobotProfile = DEFAULT_PROFILE) -> None:
-        self.layout = layout_for(tuple(packet_ids), profile, False)
+    def __init__(
+        self,
+        packet_ids: Iterable[int],
+        profile: RobotProfile = DEFAULT_PROFILE,
+        *,
+        mode_plus_one: bool | None = None,
+    ) -> None:
+        """``mode_plus_one`` as :class:`StreamParser` takes it."""
+        self.layout = layout_for(packet_ids, profile, False, mode_plus_one)
         self._buffer = bytearray()
 
     @property
@@ -489,10 +497,16 @@ class ReplyParser:
 
 
 def decode_reply(
-    packet_ids: Iterable[int], data: bytes, profile: RobotProfile = DEFAULT_PROFILE
+    packet_ids: Iterable[int],
+    data: bytes,
+    profile: RobotProfile = DEFAULT_PROFILE,
+    *,
+    mode_plus_one: bool | None = None,
 ) -> SensorFrame:
-    """Decode a complete reply to 142/149; ``ValueError`` if it has the wrong length."""
-    layout = layout_for(tuple(packet_ids), profile, False)
+    """Decode a complete reply to 142/149; ``ValueError`` if it has the wrong length.
+    ``mode_plus_one`` as :class:`StreamParser` takes it."""
+    packet_ids = tuple(packet_ids)
+    layout = layout_for(packet_ids, profile, False, mode_plus_one)
     if len(data) != layout.payload_size:
         raise ValueError(
             f"reply to {list(packet_ids)} must be {layout.payload_size} bytes, got {len(data)}"

@@ -368,7 +368,7 @@ class Connection:
         user's later ``query()`` does not change it)."""
         if self.link.streaming:
             raise RobotError("query() needs the stream paused: a reply cannot be told apart")
-        reply = ReplyParser(tuple(packet_ids), self.profile)
+        reply = ReplyParser(tuple(packet_ids), self.profile, mode_plus_one=self.link.mode_plus_one)
         clock = self.link.transport.now
         asked = clock()
         self.send(oi.query_list(packet_ids))

@@ -38,7 +38,7 @@ class StubRobot(BaseHandle):
         self._mode = mode
         self._odometry = Odometry()
         self._snapshot = Snapshot(
-            frame=layout_for((OI_MODE_PACKET,), profile, False).decode(bytes((int(mode),))),
+            frame=layout_for((OI_MODE_PACKET,), profile, False, False).decode(bytes((int(mode),))),
             tick=0,
             time=0.0,
             mode=mode,
@@ -58,7 +58,7 @@ class StubRobot(BaseHandle):
         snapshot before it stays the tree's previous tick (``Snapshot.previous_tick``): the
         slots jumped over are frames lost on the way, not ticks a node missed."""
         ids = tuple(sorted(values))
-        layout = layout_for(ids, self._profile, False)
+        layout = layout_for(ids, self._profile, False, False)  # packet 35 holds the mode itself
         frame = layout.decode(layout.pack(values))
         if mode is not None:
             self._mode = mode
