@@ -479,9 +479,16 @@ def query_list(packet_ids: Iterable[int]) -> Command:
 
 def stream(packet_ids: Iterable[int]) -> Command:
     """Stream (148): ``stream([29, 13]) -> [148][2][29][13]``. See
-    :func:`roomba_bt.oi.stream.check_bandwidth` for the 15 ms budget."""
+    :func:`roomba_bt.oi.stream.check_bandwidth` for the 15 ms budget. A list whose ids and
+    data pass 255 bytes is refused: n-bytes could not say it, so the robot could never send
+    a frame of it (``[100, 100, 100, 100]``, 324 bytes, was encoded)."""
+    # here, not at the top: frames imports profiles, which imports this module's baud codes
+    from roomba_bt.oi.frames import refuse_unframeable, stream_frame_size
+
     ids = _packet_ids("stream", packet_ids)
-    return encode(148, len(ids), tail=ids)
+    command = encode(148, len(ids), tail=ids)  # each id checked first, with its own message
+    refuse_unframeable(stream_frame_size(ids) - 3)
+    return command
 
 
 def pause_stream() -> Command:

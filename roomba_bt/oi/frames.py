@@ -121,10 +121,8 @@ class FrameLayout:
         self.struct = struct.Struct(">" + "".join(places.codes))
         offset = places.offset
         self.payload_size = offset
-        if with_ids and offset > 255:  # n-bytes is one byte: such a stream cannot be framed
-            raise EncodeError(
-                "stream", "packet ids", "at most 255 bytes of ids and data per frame", offset
-            )
+        if with_ids:
+            refuse_unframeable(offset)
         self.id_offsets = tuple(places.id_offsets)
         self._set_masks(places.zero_bits)
 
@@ -279,6 +277,22 @@ def _check_ids(command: str, packet_ids: Iterable[int]) -> None:
     for pid in packet_ids:
         if isinstance(pid, bool) or not isinstance(pid, int) or pid not in VALID_PACKET_IDS:
             raise EncodeError(command, PACKET_ID_ARG.name, PACKET_ID_ARG.allowed, pid)
+
+
+#: n-bytes is one byte: a stream whose ids and data are more cannot be framed
+MAX_STREAM_PAYLOAD = 255
+
+
+def refuse_unframeable(payload_size: int) -> None:
+    """Raise :class:`EncodeError` for a stream payload (ids and data) over
+    :data:`MAX_STREAM_PAYLOAD`: the encoder's Stream and a stream layout say the same."""
+    if payload_size > MAX_STREAM_PAYLOAD:
+        raise EncodeError(
+            "stream",
+            "packet ids",
+            f"at most {MAX_STREAM_PAYLOAD} bytes of ids and data per frame",
+            payload_size,
+        )
 
 
 def stream_frame_size(packet_ids: Iterable[int]) -> int:

@@ -178,6 +178,10 @@ HELPER_ERRORS: list[tuple[str, Callable[[], object], str]] = [
     ("day name not str", lambda: day_bits(3), "day_bits"),  # type: ignore[arg-type]
     ("pwm vacuum negative", lambda: c.pwm_motors(0, 0, -1), "vacuum_pwm"),
     ("motors 32", lambda: c.motors(32), "motor_bits"),
+    # n-bytes is one byte: 4 x group 100 (324 bytes), 5 x group 6 (265) cannot be framed
+    ("stream of 324 bytes", lambda: c.stream([100] * 4), "packet ids"),
+    ("stream of 265 bytes", lambda: c.stream([6] * 5), "packet ids"),
+    ("stream of 264 bytes", lambda: c.stream(list(range(7, 59)) * 2), "packet ids"),
 ]
 
 

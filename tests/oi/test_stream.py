@@ -222,6 +222,14 @@ def test_a_stream_too_long_for_its_n_byte_is_refused() -> None:
         StreamParser((*LONGEST, 22))
 
 
+def test_the_encoder_refuses_the_stream_the_parser_could_not_frame() -> None:
+    """The same limit in ``commands.stream``: a library user's ``link.write(c.stream(...))``
+    asked for a stream the robot cannot frame (it was encoded)."""
+    assert c.stream(LONGEST).data[:2] == bytes((148, len(LONGEST)))
+    with pytest.raises(EncodeError, match="at most 255 bytes of ids and data per frame, got 257"):
+        c.stream((*LONGEST, 22))
+
+
 def test_adler32_holds_one_plus_the_byte_sum_up_to_256_bytes() -> None:
     """The parser and the simulator take a frame's byte sum from ``zlib.adler32``."""
     for data in (bytes(256), b"\xff" * 256, bytes(range(256)), b"\x13\x05" * 100):
