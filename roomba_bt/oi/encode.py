@@ -12,6 +12,7 @@ Drive (137), velocity -200 mm/s, radius 500 mm (the spec's example)::
 
 from __future__ import annotations
 
+import operator
 import struct
 import sys
 import types
@@ -19,6 +20,7 @@ import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
+from typing import SupportsIndex
 
 from roomba_bt.oi.bits import DIGIT_ASCII, day_bits
 from roomba_bt.oi.errors import EncodeError
@@ -68,17 +70,26 @@ class Command:
         return f"Command({self.spec.name}, {list(self.data)})"
 
 
-def _is_int(value: object) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool)
+#: What an argument must be, said before its range in a refusal ("an integer in -500..500")
+_INTEGER = "an integer (int, or a type with __index__ such as numpy's; not a bool)"
+
+
+def _as_int(value: object) -> int | None:
+    """``value`` as a plain int, or None if it is no integer. Anything with ``__index__`` is
+    one (``numpy.int64`` from a computed velocity, an IntEnum); a bool is not (``True`` for
+    a velocity is a slip), nor is a float or a Decimal (no ``__index__``: never rounded)."""
+    if isinstance(value, bool) or not isinstance(value, SupportsIndex):
+        return None
+    return operator.index(value)
 
 
 def _check(spec: CommandSpec, arg: ArgSpec, value: object) -> int:
-    if not _is_int(value):
-        raise EncodeError(spec.name, arg.name, f"an integer {arg.allowed}", value)
-    assert isinstance(value, int)
-    if not arg.accepts(value):
+    number = _as_int(value)
+    if number is None:
+        raise EncodeError(spec.name, arg.name, f"{_INTEGER} {arg.allowed}", value)
+    if not arg.accepts(number):
         raise EncodeError(spec.name, arg.name, arg.allowed, value)
-    return value
+    return number
 
 
 def _spec(command: int | str | CommandSpec) -> CommandSpec:
@@ -176,13 +187,14 @@ def _check_tail(spec: CommandSpec, checked: list[int], tail: Sequence[int]) -> t
 
 
 def _radius(spec: CommandSpec, value: object) -> int:
-    if not isinstance(value, int) or isinstance(value, bool):
-        raise EncodeError(spec.name, "radius", f"an integer {_RADIUS_ALLOWED}", value)
-    if value in STRAIGHT_RADII:
-        return 0x7FFF if value == 0x7FFF else 0x8000
-    if not spec.args[1].accepts(value):
+    number = _as_int(value)
+    if number is None:
+        raise EncodeError(spec.name, "radius", f"{_INTEGER} {_RADIUS_ALLOWED}", value)
+    if number in STRAIGHT_RADII:
+        return 0x7FFF if number == 0x7FFF else 0x8000
+    if not spec.args[1].accepts(number):
         raise EncodeError(spec.name, "radius", _RADIUS_ALLOWED, value)
-    return int(value)
+    return number
 
 
 def decode_command(data: bytes | bytearray) -> tuple[Command, int] | None:
@@ -265,9 +277,10 @@ BAUD_RATES: Mapping[int, int] = {code: rate for rate, code in BAUD_CODES.items()
 
 def baud_rate(rate: int) -> Command:
     """Baud (129) by rate in bps rather than code: ``baud_rate(57600) -> [129][10]``."""
-    if not _is_int(rate) or rate not in BAUD_CODES:
+    number = _as_int(rate)
+    if number is None or number not in BAUD_CODES:
         raise EncodeError("baud", "rate", f"one of {sorted(BAUD_CODES)} bps", rate)
-    return baud(BAUD_CODES[rate])
+    return baud(BAUD_CODES[number])
 
 
 def drive(velocity: int, radius: int | Radius) -> Command:
@@ -283,9 +296,18 @@ def drive_straight(velocity: int) -> Command:
 
 
 def spin(velocity: int, clockwise: bool) -> Command:
-    """Turn in place; ``velocity`` is the wheel speed (its sign flips the direction)."""
+    """Turn in place at wheel speed ``velocity`` (0..500 mm/s) in the direction ``clockwise``
+    names. A negative speed is refused: on the wire it turns the other way (radius -1 with
+    -100 turns counter-clockwise), so ``spin(-100, clockwise=True)`` would do the opposite
+    of what it says; a caller who wants a signed speed uses :func:`drive` with a
+    :class:`Radius`."""
     if not isinstance(clockwise, bool):
         raise EncodeError("drive", "clockwise", "True or False", clockwise)
+    speed = _as_int(velocity)
+    if speed is not None and speed < 0:
+        raise EncodeError(
+            "drive", "velocity", "0..500 mm/s for spin (clockwise gives the direction)", velocity
+        )
     radius = Radius.TURN_CLOCKWISE if clockwise else Radius.TURN_COUNTER_CLOCKWISE
     return encode(137, velocity, radius)
 
@@ -403,11 +425,12 @@ def note_name(number: int) -> str:
     is an :class:`EncodeError`."""
     if number == 0:
         return "rest"
-    if not _is_int(number) or number not in NAMED_NOTES:
+    note = _as_int(number)
+    if note is None or note not in NAMED_NOTES:
         raise EncodeError(
             "song", "note", f"0 (rest) or {NAMED_NOTES[0]} (C0) to {NAMED_NOTES[-1]} (B9)", number
         )
-    return f"{NOTE_NAMES[number % 12]}{number // 12 - 1}"
+    return f"{NOTE_NAMES[note % 12]}{note // 12 - 1}"
 
 
 def note_number(name: str) -> int:

@@ -137,6 +137,9 @@ HELPER_ERRORS: list[tuple[str, Callable[[], object], str]] = [
     ("radius as float", lambda: c.drive(100, 1.0), "radius"),  # type: ignore[arg-type]
     ("velocity 501", lambda: c.drive_straight(501), "velocity"),
     ("spin direction not bool", lambda: c.spin(100, 1), "clockwise"),  # type: ignore[arg-type]
+    # a negative speed turned the other way than ``clockwise`` says
+    ("spin negative clockwise", lambda: c.spin(-100, clockwise=True), "velocity"),
+    ("spin negative counter-clockwise", lambda: c.spin(-100, clockwise=False), "velocity"),
     ("baud rate not in table", lambda: c.baud_rate(9601), "rate"),
     ("baud code 12", lambda: c.baud(12), "baud_code"),
     ("digit '*' not displayable", lambda: c.digit_leds_ascii("A*"), "character"),
@@ -200,3 +203,30 @@ def test_motor_bits_take_booleans_only() -> None:
 
     with pytest.raises(EncodeError, match="side_brush"):
         motor_bits(side_brush=2)  # type: ignore[arg-type]
+
+
+class _Index:
+    """An integer type that is no ``int`` (as ``numpy.int64`` is not): it has ``__index__``."""
+
+    def __init__(self, value: int) -> None:
+        self.value = value
+
+    def __index__(self) -> int:
+        return self.value
+
+    def __repr__(self) -> str:
+        return f"_Index({self.value})"
+
+
+def test_anything_with_index_is_an_integer_argument() -> None:
+    """A velocity computed with numpy (``np.int64(200)``) was refused as "must be an integer"."""
+    assert c.drive(_Index(200), _Index(100)).data == c.drive(200, 100).data  # type: ignore[arg-type]
+    assert c.drive_direct(_Index(-100), _Index(100)).data == bytes((145, 255, 156, 0, 100))  # type: ignore[arg-type]
+    assert c.baud_rate(_Index(57600)).data == bytes((129, 10))  # type: ignore[arg-type]
+    assert c.spin(_Index(0), clockwise=True).args == (0, -1)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("value", [True, 200.0, "200"], ids=["bool", "float", "str"])
+def test_what_is_no_integer_is_refused_saying_what_is_allowed(value: object) -> None:
+    with pytest.raises(EncodeError, match=r"an integer \(int, or a type with __index__"):
+        c.drive(value, 100)  # type: ignore[arg-type]
