@@ -1,8 +1,10 @@
 """Names that moved to the module a reader looks in still import from where they were.
 
 Plugins and their tests import from ``roomba_bt.behaviours.declare``, ``roomba_bt.oi.*`` and
-``roomba_bt.transport.testing``: each old path gives the very object its new home defines.
-And the 15 ms slot, a protocol fact, is a number in one place only.
+``roomba_bt.transport.testing``: each old path gives the very object its new home defines,
+and (until 0.3.0 drops it: docs/runtime.md, "Moved names") warns at the importer's line with
+a DeprecationWarning naming the new import; the new path, and an old one the docs still
+teach, does not. And the 15 ms slot, a protocol fact, is a number in one place only.
 """
 
 from __future__ import annotations
@@ -10,9 +12,12 @@ from __future__ import annotations
 import ast
 import importlib
 import sys
+import warnings
 from pathlib import Path
 
 import pytest
+
+from roomba_bt._lazy import REMOVED_IN
 
 PACKAGE = Path(__file__).resolve().parents[1] / "roomba_bt"
 
@@ -114,19 +119,117 @@ def test_every_name_the_old_declare_module_offered_still_imports_from_it() -> No
     importlib.import_module("roomba_bt.behaviours.declare")
     declare = sys.modules["roomba_bt.behaviours.declare"]  # the package's `declare` is the function
     assert len(DECLARE_AT_E80F20A) == 88
-    assert [name for name in DECLARE_AT_E80F20A if not hasattr(declare, name)] == []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        assert [name for name in DECLARE_AT_E80F20A if not hasattr(declare, name)] == []
 
 
 #: what each moved name is called in its new home, where it was renamed
 RENAMED = {("roomba_bt.transport.testing", "RecordingTransport"): "WriteLogTransport"}
 
+#: old paths of :data:`MOVED` that stay, without a warning: what the docs teach
+#: (docs/missions.md: ``from roomba_bt.mission import load_mission, validate_files``), and a
+#: name the old module imports for its own use (the stream parser reads the slot;
+#: ``declare`` checks a class against ``Action``, ...), found there as in any module
+NOT_DEPRECATED = {
+    ("roomba_bt.mission", "compile_mission"),
+    ("roomba_bt.mission", "load_mission"),
+    ("roomba_bt.mission", "validate_files"),
+    ("roomba_bt.oi.stream", "SLOT_SECONDS"),
+    *(
+        ("roomba_bt.behaviours.declare", name)
+        for name in ("Action", "Condition", "RobotBehaviour", "BlackboardRef", "blackboard_ref",
+                     "WHEEL")
+    ),
+}  # fmt: skip
+
+
+#: modules kept only for old imports -> what their warning says to write instead
+MOVED_MODULES = {
+    "roomba_bt.mission.ir": "import from roomba_bt.mission.plan instead",
+    "roomba_bt.robot.handshake": "import from roomba_bt.robot.discovery instead",
+    "roomba_bt.commands": "write from roomba_bt import commands",
+    "roomba_bt.oi.commands": "write from roomba_bt.oi import commands",
+}
+
+
+def _imported(statement: str) -> list[warnings.WarningMessage]:
+    """The warnings of ``statement`` run as a module of its own, ``importer.py``: a
+    warning's place must be the importer's line, not roomba_bt's."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        exec(compile(statement, "importer.py", "exec"), {})
+    return caught
+
+
+def _said(caught: list[warnings.WarningMessage]) -> list[tuple[str, int, str]]:
+    return [(w.filename, w.lineno, str(w.message)) for w in caught]
+
 
 @pytest.mark.parametrize(("old", "name", "home"), MOVED, ids=lambda v: str(v))
 def test_an_old_path_gives_the_new_home_s_object(old: str, name: str, home: str) -> None:
     new_name = RENAMED.get((old, name), name)
-    assert getattr(importlib.import_module(old), name) is getattr(
-        importlib.import_module(home), new_name
-    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        old_value = getattr(importlib.import_module(old), name)
+    assert old_value is getattr(importlib.import_module(home), new_name)
+
+
+@pytest.mark.parametrize(
+    ("old", "name", "home"),
+    [row for row in MOVED if row[:2] not in NOT_DEPRECATED and row[0] not in MOVED_MODULES],
+    ids=lambda v: str(v),
+)
+def test_an_old_path_warns_at_the_importer_s_line_naming_the_new_one(
+    old: str, name: str, home: str
+) -> None:
+    new_name = RENAMED.get((old, name), name)
+    with pytest.warns(DeprecationWarning, match=rf"^{old}\.{name} is deprecated"):
+        getattr(importlib.import_module(old), name)
+    assert _said(_imported(f"from {old} import {name}")) == [
+        (
+            "importer.py",
+            1,
+            f"{old}.{name} is deprecated and goes in roomba-bt {REMOVED_IN}: "
+            f"import {new_name} from {home} instead",
+        )
+    ]
+
+
+@pytest.mark.parametrize(("old", "name", "home"), MOVED, ids=lambda v: str(v))
+def test_a_new_path_and_a_taught_old_one_do_not_warn(old: str, name: str, home: str) -> None:
+    new_name = RENAMED.get((old, name), name)
+    assert _imported(f"from {home} import {new_name}") == []
+    if (old, name) in NOT_DEPRECATED:
+        assert _imported(f"from {old} import {name}") == []
+
+
+@pytest.mark.parametrize(("old", "instead"), MOVED_MODULES.items())
+def test_a_module_kept_for_old_imports_warns_at_the_import_line(
+    old: str, instead: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Its first import warns (a module runs once: later ones find it imported), at the
+    importer's line, through the import system's frames."""
+    monkeypatch.delitem(sys.modules, old, raising=False)
+    caught = _imported(f"import {old}")
+    old_said = f"import {old} (as a module)" if old.endswith(".commands") else old
+    assert _said(caught) == [
+        (
+            "importer.py",
+            1,
+            f"{old_said} is deprecated and goes in roomba-bt {REMOVED_IN}: {instead}",
+        )
+    ]
+    assert caught[0].category is DeprecationWarning
+    monkeypatch.delitem(sys.modules, old)
+    with pytest.warns(DeprecationWarning, match=REMOVED_IN):
+        importlib.import_module(old)
+
+
+def test_the_spellings_the_docs_teach_for_the_commands_do_not_warn() -> None:
+    """docs/plugins.md ``from roomba_bt.oi import commands``; docs/runtime.md ``from
+    roomba_bt import commands``: the names, not the module paths, give no warning."""
+    assert _imported("from roomba_bt.oi import commands\nfrom roomba_bt import commands") == []
 
 
 def test_the_simulator_steps_one_slot() -> None:
@@ -157,10 +260,12 @@ def test_every_public_name_of_0_1_0_still_imports() -> None:
     """The CHANGELOG's upgrade notes promise it: a 0.1.0 program's imports all work."""
     import json
 
-    missing = [
-        f"{module}.{name}"
-        for module, names in json.loads(NAMES_0_1_0.read_text()).items()
-        for name in names
-        if not hasattr(importlib.import_module(module), name)
-    ]
+    with warnings.catch_warnings():  # RecordingTransport's old name warns (tested above)
+        warnings.simplefilter("ignore", DeprecationWarning)
+        missing = [
+            f"{module}.{name}"
+            for module, names in json.loads(NAMES_0_1_0.read_text()).items()
+            for name in names
+            if not hasattr(importlib.import_module(module), name)
+        ]
     assert missing == []

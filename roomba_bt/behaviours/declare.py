@@ -17,93 +17,82 @@ The modes a behaviour needs are not written by hand: they are the intersection o
 ``modes`` of the opcodes it declares in ``sends`` (read from :mod:`roomba_bt.oi.opcodes`), so
 Drive (137) needs Safe or Full because the table says so.
 
-The rest of what a plugin author uses has a module of its own, each name importable from
-here too (as it was before they moved): the leaves to derive from (:mod:`.base`:
-``RobotBehaviour``, ``Action``, ``Condition``), the mission's blackboard (:mod:`.blackboard`:
-``read_key``, ``write_key``, ``declare_keys``, ``@key`` references), the driving leaves'
-shared helpers (:mod:`.driving`: ``WHEEL``, ``cycle_may_run``, ``left_driving_message``) and
-the guard's memo of pure conditions (:mod:`.frame_inputs`: ``FrameInputs``).
+The rest of what a plugin author uses has a module of its own: the leaves to derive from
+(:mod:`.base`: ``RobotBehaviour``, ``Action``, ``Condition``), the mission's blackboard
+(:mod:`.blackboard`: ``read_key``, ``write_key``, ``declare_keys``, ``@key`` references), the
+driving leaves' shared helpers (:mod:`.driving`: ``WHEEL``, ``cycle_may_run``,
+``left_driving_message``) and the guard's memo of pure conditions (:mod:`.frame_inputs`:
+``FrameInputs``); ``roomba_bt.behaviours`` names the ones a plugin needs.
 
 Every other public name this module's namespace held at e80f20a (the release before
-session 28) still imports from here too, as the very object its home defines: a plugin
-written then imported what it found here (``InvalidStatus``, ``Snapshot``, ``SensorFrame``,
-``DRIVING_MODES``, ``halt``...), not only what was defined here. tests/test_moved_names.py
-holds the whole list, so a name dropped from the imports below fails a test, not a plugin.
+session 28) still imports from here, as the very object its home defines: a plugin written
+then imported what it found here (``InvalidStatus``, ``Snapshot``, ``SensorFrame``,
+``DRIVING_MODES``, ``halt``...), not only what was defined here. Each is in :data:`MOVED`
+and warns (a DeprecationWarning naming its home) until 0.3.0 drops it;
+tests/test_moved_names.py holds the whole list, so a name dropped fails a test, not a plugin.
 """
 
 from __future__ import annotations
 
-import logging
 import math
-import operator
 import re
 import sys
-import uuid
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any, Literal, TypeVar
+from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
-import py_trees
-
-from roomba_bt.behaviours.base import (
-    Action,
-    CheckedParams,
-    Condition,
-    InvalidCheck,
-    RobotBehaviour,
-    UndeclaredCommand,
-    checked_truth,
-)
-from roomba_bt.behaviours.blackboard import (
-    BLACKBOARD_REF,
-    KEY_TYPES_KEY,
-    MISSION_NAMESPACE,
-    SNAPSHOT_KEY,
-    BlackboardRef,
-    KeyRange,
-    KeyType,
-    UnwrittenKey,
-    blackboard_ref,
-    declare_keys,
-    read_key,
-    write_key,
-)
-from roomba_bt.behaviours.driving import (
-    CHARGER_ADVICE,
-    WHEEL,
-    cycle_may_run,
-    left_driving_message,
-    on_home_base,
-)
-from roomba_bt.behaviours.frame_inputs import FrameInputs
-from roomba_bt.behaviours.lean import (
-    DirectLeaf,
-    InvalidStatus,
-    Selector,
-    Sequence,
-    behaviour_tick,
-    checked_status,
-)
-from roomba_bt.behaviours.units import (
-    MARK,
-    SPEED,
-    VALUE_TYPES,
-    UnitError,
-    ValueType,
-    closest,
-    held,
-)
+from roomba_bt._lazy import moved_names
+from roomba_bt.behaviours.base import Action, Condition, RobotBehaviour
+from roomba_bt.behaviours.blackboard import BlackboardRef, blackboard_ref
+from roomba_bt.behaviours.driving import WHEEL
+from roomba_bt.behaviours.units import SPEED, VALUE_TYPES, UnitError, ValueType, closest
 from roomba_bt.errors import RoombaBtError
-from roomba_bt.oi.encode import Command, halt, motors_off, turns_wheels
-from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, SensorFrame
-from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
+from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.odometry import SLOWEST_MOVING_SPEED_MM_S, WHEEL_SPEED_STEP_MM_S
-from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, Effect
+from roomba_bt.oi.opcodes import COMMANDS, Effect
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.printable import CONTROL
-from roomba_bt.robot.interface import ModeChange, Odometry, RobotHandle, Snapshot
 from roomba_bt.yamlsource import character_name, quoted
+
+#: The names this module offered that other modules define (each -> its module): moved in
+#: session 28, or only imported here for a declaration's use then, and so found here by
+#: plugins written before (``InvalidStatus`` from lean, ``Snapshot`` from robot.interface,
+#: the modules ``logging``...). Each still gives the very object, with a DeprecationWarning
+#: naming its home until 0.3.0 (tests/test_moved_names.py holds the whole list of 0.1.0's).
+MOVED: dict[str, str] = {
+    **dict.fromkeys(
+        ("CheckedParams", "InvalidCheck", "UndeclaredCommand", "checked_truth"),
+        "roomba_bt.behaviours.base",
+    ),
+    **dict.fromkeys(
+        ("BLACKBOARD_REF", "KEY_TYPES_KEY", "MISSION_NAMESPACE", "SNAPSHOT_KEY", "KeyRange",
+         "KeyType", "UnwrittenKey", "declare_keys", "read_key", "write_key"),
+        "roomba_bt.behaviours.blackboard",
+    ),
+    **dict.fromkeys(
+        ("CHARGER_ADVICE", "cycle_may_run", "left_driving_message", "on_home_base"),
+        "roomba_bt.behaviours.driving",
+    ),
+    "FrameInputs": "roomba_bt.behaviours.frame_inputs",
+    **dict.fromkeys(
+        ("DirectLeaf", "InvalidStatus", "Selector", "Sequence", "behaviour_tick",
+         "checked_status"),
+        "roomba_bt.behaviours.lean",
+    ),
+    **dict.fromkeys(("MARK", "held"), "roomba_bt.behaviours.units"),
+    **dict.fromkeys(("Command", "halt", "motors_off", "turns_wheels"), "roomba_bt.oi.encode"),
+    **dict.fromkeys(("CHARGING_SOURCES_PACKETS", "SensorFrame"), "roomba_bt.oi.frames"),
+    "DRIVING_MODES": "roomba_bt.oi.modes",
+    "COMMANDS_BY_NAME": "roomba_bt.oi.opcodes",
+    **dict.fromkeys(
+        ("ModeChange", "Odometry", "RobotHandle", "Snapshot"), "roomba_bt.robot.interface"
+    ),
+    **{module: module for module in ("logging", "operator", "py_trees", "uuid")},
+}  # fmt: skip
+
+if not TYPE_CHECKING:  # to a type checker the old names are gone, and a typo no Any (PEP 562)
+    __getattr__ = moved_names(__name__, MOVED)
 
 __all__ = [
     # the declaration, defined here
@@ -123,61 +112,13 @@ __all__ = [
     "from_python",
     "mode_after_sending",
     "wheel_speed_param",
-    # defined in base, blackboard, driving and frame_inputs, and named here too: plugins
-    # written before they moved import them from this module
-    "BLACKBOARD_REF",
-    "CHARGER_ADVICE",
-    "KEY_TYPES_KEY",
-    "MISSION_NAMESPACE",
-    "SNAPSHOT_KEY",
+    # defined in base, blackboard and driving, and used here
     "WHEEL",
     "Action",
     "BlackboardRef",
-    "CheckedParams",
     "Condition",
-    "FrameInputs",
-    "InvalidCheck",
-    "KeyRange",
-    "KeyType",
     "RobotBehaviour",
-    "UndeclaredCommand",
-    "UnwrittenKey",
     "blackboard_ref",
-    "checked_truth",
-    "cycle_may_run",
-    "declare_keys",
-    "left_driving_message",
-    "on_home_base",
-    "read_key",
-    "write_key",
-    # imported here for a declaration's use before session 28, and so found here by
-    # plugins written then (InvalidStatus from lean, Snapshot from robot.interface, ...):
-    # kept importable from here, the same objects (tests/test_moved_names.py)
-    "CHARGING_SOURCES_PACKETS",
-    "COMMANDS_BY_NAME",
-    "DRIVING_MODES",
-    "MARK",
-    "Command",
-    "DirectLeaf",
-    "InvalidStatus",
-    "ModeChange",
-    "Odometry",
-    "RobotHandle",
-    "Selector",
-    "Sequence",
-    "SensorFrame",
-    "Snapshot",
-    "behaviour_tick",
-    "checked_status",
-    "halt",
-    "held",
-    "motors_off",
-    "turns_wheels",
-    # the modules it imported, for the same reason
-    "logging",
-    "operator",
-    "py_trees",
-    "uuid",
 ]
 
 Kind = Literal["action", "condition"]

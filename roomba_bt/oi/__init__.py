@@ -8,9 +8,12 @@ its function is ``roomba_bt.oi.encode.encode`` (``commands.encode``). The packag
 exported the function under the module's name, so the module, once imported, was out of
 reach by its own path (``import roomba_bt.oi.encode as e`` gave the function, which has no
 ``drive``): nothing here takes a submodule's name.
-"""
 
-import sys
+``commands`` is the encoder's name for plugin authors, a name of this package: ``from
+roomba_bt.oi import commands`` (docs/plugins.md). As a module path (``import
+roomba_bt.oi.commands``, ``from roomba_bt.oi.commands import drive``) it still gives the one
+module, with a DeprecationWarning until 0.3.0 (:mod:`roomba_bt.oi.commands`).
+"""
 
 from roomba_bt.oi import encode as commands
 from roomba_bt.oi.bits import (
@@ -84,7 +87,3 @@ __all__ = [
     "stream_budget",
     "stream_frame_size",
 ]
-
-# ``roomba_bt.oi.commands`` is the encoder's name for plugin authors: importable by that path
-# too (``from roomba_bt.oi.commands import drive``), the one module, as ``os.path`` is.
-sys.modules[f"{__name__}.commands"] = commands

@@ -14,7 +14,11 @@ tests' folders are not an importable package once installed).
 
 from __future__ import annotations
 
-__all__ = ["NullTransport", "RecordingTransport", "WriteLogTransport"]
+from typing import TYPE_CHECKING
+
+from roomba_bt._lazy import moved_names
+
+__all__ = ["NullTransport", "WriteLogTransport"]
 
 
 class NullTransport:
@@ -59,6 +63,10 @@ class WriteLogTransport(NullTransport):
         self.writes.append(bytes(data))
 
 
-#: Its old name, the same as ``--record``'s :class:`~roomba_bt.runtime.recording.RecordingTransport`
-#: (a file of the run's bytes, not a list): kept for the tests of plugins that import it so.
-RecordingTransport = WriteLogTransport
+#: ``RecordingTransport``, :class:`WriteLogTransport`'s old name, the same as ``--record``'s
+#: :class:`~roomba_bt.runtime.recording.RecordingTransport` (a file of the run's bytes, not a
+#: list): kept for the tests of plugins that import it so, with a DeprecationWarning until 0.3.0
+if not TYPE_CHECKING:  # to a type checker the old name is gone, and a typo no Any (PEP 562)
+    __getattr__ = moved_names(
+        __name__, {"RecordingTransport": "roomba_bt.transport.testing:WriteLogTransport"}
+    )

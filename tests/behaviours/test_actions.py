@@ -13,7 +13,9 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import actions as a
 from roomba_bt.behaviours import builtin_registry
-from roomba_bt.behaviours.declare import Action, BlackboardRef, declare, read_key, write_key
+from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.blackboard import BlackboardRef, read_key, write_key
+from roomba_bt.behaviours.declare import declare
 from roomba_bt.behaviours.units import ItemErrors
 from roomba_bt.oi.encode import (
     NAMED_NOTES,
@@ -25,6 +27,7 @@ from roomba_bt.oi.encode import (
     song,
     turns_wheels,
 )
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import mm_to_counts
 from roomba_bt.oi.opcodes import (
@@ -35,7 +38,7 @@ from roomba_bt.oi.opcodes import (
     SONG_LENGTH,
     SONG_NUMBER,
 )
-from roomba_bt.robot.interface import SLOT_SECONDS, Odometry
+from roomba_bt.robot.interface import Odometry
 from roomba_bt.robot.testing import StubRobot
 
 from .example_params import EXAMPLE_PARAMS

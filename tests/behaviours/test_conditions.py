@@ -11,7 +11,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours import conditions as c
-from roomba_bt.behaviours.declare import write_key
+from roomba_bt.behaviours.blackboard import write_key
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import mm_to_counts
 from roomba_bt.robot.interface import Odometry

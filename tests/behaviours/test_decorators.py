@@ -16,7 +16,8 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import decorators as d
 from roomba_bt.behaviours import lean
-from roomba_bt.behaviours.declare import ParamError, read_key
+from roomba_bt.behaviours.blackboard import read_key
+from roomba_bt.behaviours.declare import ParamError
 from roomba_bt.robot.testing import StubRobot
 
 

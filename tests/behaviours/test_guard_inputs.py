@@ -24,7 +24,9 @@ from py_trees.common import Status
 from roomba_bt.behaviours import conditions as c
 from roomba_bt.behaviours import decorators as d
 from roomba_bt.behaviours import lean
-from roomba_bt.behaviours.declare import BlackboardRef, Condition, FrameInputs, write_key
+from roomba_bt.behaviours.base import Condition
+from roomba_bt.behaviours.blackboard import BlackboardRef, write_key
+from roomba_bt.behaviours.frame_inputs import FrameInputs
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.robot.testing import StubRobot

@@ -14,15 +14,9 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import Action, Condition, ParamError, declare, lean
 from roomba_bt.behaviours.actions import Drive, Wait
-from roomba_bt.behaviours.declare import (
-    InvalidCheck,
-    KeyRange,
-    KeyType,
-    Param,
-    declare_keys,
-    read_key,
-    write_key,
-)
+from roomba_bt.behaviours.base import InvalidCheck
+from roomba_bt.behaviours.blackboard import KeyRange, KeyType, declare_keys, read_key, write_key
+from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.units import ANGLE, BOOL, DISTANCE, DURATION, INT, MARK, SPEED, ValueType
 from roomba_bt.robot.interface import Odometry, Snapshot
 from roomba_bt.robot.testing import StubRobot

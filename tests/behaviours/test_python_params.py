@@ -114,8 +114,8 @@ def test_check_refuses_a_value_it_could_never_order() -> None:
 
 
 def test_check_raises_when_the_key_holds_what_cannot_be_compared() -> None:
+    from roomba_bt.behaviours.blackboard import write_key
     from roomba_bt.behaviours.conditions import CheckKey
-    from roomba_bt.behaviours.declare import write_key
 
     node = CheckKey("leg", {"key": "leg_to_compare", "op": ">", "value": 200.0})
     assert node.check(None) is False  # type: ignore[arg-type]  # never written: False

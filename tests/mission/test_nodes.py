@@ -10,7 +10,7 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import read_key
+from roomba_bt.behaviours.blackboard import read_key
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.mission import CompiledMission
 from roomba_bt.oi.modes import OIMode

@@ -20,9 +20,9 @@ from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.server import AFTER_TICK_S, MonitorServer, next_look
 from roomba_bt.monitor.session import MonitorSession
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.interface import SLOT_SECONDS
 from roomba_bt.runtime.loop import MissionRunner, stream_request
 from roomba_bt.sim import SimLink, Simulator, load_world
 

@@ -269,14 +269,12 @@ def test_pack_wraps_values_as_the_robot_counters_do() -> None:
 
 
 def test_the_commands_module_is_importable_by_the_name_the_docs_give_it() -> None:
-    """docs/plugins.md: "a Command from roomba_bt.oi.commands"; that import path raised
-    ModuleNotFoundError (only ``from roomba_bt.oi import commands`` worked)."""
-    import importlib
+    """docs/plugins.md: ``from roomba_bt.oi import commands``, "a Command from
+    roomba_bt.oi.commands", with no warning (the module path ``import roomba_bt.oi.commands``
+    gives it too, and warns: tests/test_moved_names.py)."""
+    from roomba_bt.oi import commands
 
-    module = importlib.import_module("roomba_bt.oi.commands")
-    from roomba_bt.oi.commands import drive
-
-    assert module is sys.modules["roomba_bt.oi.encode"] and module.drive is drive
+    assert commands is c is sys.modules["roomba_bt.oi.encode"]
 
 
 def test_the_encoder_module_is_reached_as_a_module_by_every_import() -> None:
@@ -284,17 +282,16 @@ def test_the_encoder_module_is_reached_as_a_module_by_every_import() -> None:
     AttributeError: the package exported the function ``encode`` under the module's name,
     so its own path, ``import ... as`` too, gave the function. The function stays where the
     docs name it: ``roomba_bt.oi.encode.encode``, the commands module's ``encode``."""
-    from roomba_bt.oi.commands import encode as by_commands
-
-    import roomba_bt.commands
     import roomba_bt.oi.encode
     import roomba_bt.oi.encode as imported_as
+    from roomba_bt import commands as top_commands
+    from roomba_bt.oi import commands
     from roomba_bt.oi import encode as imported_from
 
     module = sys.modules["roomba_bt.oi.encode"]
     assert roomba_bt.oi.encode is imported_as is imported_from is module
     assert roomba_bt.oi.encode.drive(-200, 500).data == bytes([137, 255, 56, 1, 244])
-    assert module.encode is encode is by_commands is roomba_bt.commands.encode
+    assert module.encode is encode is commands.encode is top_commands.encode
     assert "encode" not in roomba_bt.oi.__all__  # no name of the package hides a submodule
 
 

@@ -9,10 +9,10 @@ from collections import deque
 import pytest
 
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import StreamStalled
-from roomba_bt.robot.interface import SLOT_SECONDS
 from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 
 PACKETS = (7, 9, 10, 11, 12, 35, 43, 44)

@@ -521,6 +521,8 @@ def test_without_visitors_the_tree_is_ticked_directly_as_before() -> None:
 
 # ------------------------------------------------------------------ 8. the small things
 def test_import_roomba_bt_commands_is_the_module_from_roomba_bt_import_commands() -> None:
+    """The module path still gives the module, and warns at the importer's line (here the
+    script's first) naming the spelling the docs teach."""
     done = subprocess.run(
         [sys.executable, "-c", "import roomba_bt.commands as c\nfrom roomba_bt import commands\n"
          "print(c is commands, c.drive(200, 32767).args)"],
@@ -528,6 +530,10 @@ def test_import_roomba_bt_commands_is_the_module_from_roomba_bt_import_commands(
         env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
     )  # fmt: skip
     assert done.stdout == "True (200, 32767)\n", done.stderr
+    assert (
+        "<string>:1: DeprecationWarning: import roomba_bt.commands (as a module) is" in done.stderr
+    )
+    assert "write from roomba_bt import commands" in done.stderr
 
 
 def test_the_packages_errors_share_one_base_and_keep_their_own() -> None:
