@@ -269,3 +269,30 @@ def test_every_public_name_of_0_1_0_still_imports() -> None:
             if not hasattr(importlib.import_module(module), name)
         ]
     assert missing == []
+
+
+def test_doctor_s_old_table_of_exit_codes_warns_and_gives_exit_code_s_numbers() -> None:
+    """0.1.0's ``DoctorExit``: doctor's codes are ``ExitCode``'s now (docs/runtime.md, Exit
+    codes); the old table keeps its members' names, each the same number."""
+    import roomba_bt.cli.doctor_cmd as doctor
+    from roomba_bt.runtime.summary import ExitCode
+
+    assert _said(_imported("from roomba_bt.cli.doctor_cmd import DoctorExit")) == [
+        (
+            "importer.py",
+            1,
+            f"roomba_bt.cli.doctor_cmd.DoctorExit is deprecated and goes in roomba-bt "
+            f"{REMOVED_IN}: use ExitCode from roomba_bt.runtime.summary instead (FOUND is OK, "
+            "PORT is CONNECTION, SILENT is NO_ANSWER)",
+        )
+    ]
+    with pytest.warns(DeprecationWarning, match="DoctorExit is deprecated"):
+        old = doctor.DoctorExit
+    assert {member.name: int(member) for member in old} == {
+        "FOUND": ExitCode.OK,
+        "INVALID": ExitCode.INVALID,
+        "PORT": ExitCode.CONNECTION,
+        "SILENT": ExitCode.NO_ANSWER,
+        "UNHEALTHY": ExitCode.UNHEALTHY,
+        "INTERRUPTED": ExitCode.INTERRUPTED,
+    }

@@ -18,10 +18,11 @@ Each step prints what it saw and, when it fails, what to do next::
     missions  each shipped mission's stream frame against the bytes a 15 ms slot carries
     firmware  the release the banner names, and whether it wakes by BRC on the dock
 
-The robot is left in Passive with the stream paused. Exit codes (:class:`DoctorExit`): 0 the
-robot was found and named; 2 usage; 3 the port could not be opened; 5 nothing answered at
-any OI rate (even after a BRC pulse, or none could be given); 6 the robot answered but a
-later step failed (no stream, the link lost, a reply that makes no sense); 130 interrupted.
+The robot is left in Passive with the stream paused. Exit codes
+(:class:`~roomba_bt.runtime.summary.ExitCode`, one table for every command): 0 the robot was
+found and named; 2 usage; 3 the port could not be opened; 5 nothing answered at any OI rate
+(even after a BRC pulse, or none could be given); 6 the robot answered but a later step
+failed (no stream, the link lost, a reply that makes no sense); 130 interrupted.
 """
 
 from __future__ import annotations
@@ -30,17 +31,19 @@ import argparse
 import contextlib
 import itertools
 import sys
+import warnings
 from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import TYPE_CHECKING, Any, TextIO
 
+from roomba_bt._lazy import moved_warning
 from roomba_bt.cli.arguments import add_command, baud_or_auto, duration, port_name
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.identify import MODEL_RANGE_PACKETS
 from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
-from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, POOR_LINK
+from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, POOR_LINK, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
@@ -172,15 +175,35 @@ def _garbled(probes: Any) -> str:
     return ", ".join(f"{baud}: {count} bytes" for baud, count in seen.items())
 
 
-class DoctorExit(IntEnum):
-    """``roomba-bt doctor``'s exit codes (docs/doctor.md)."""
+class _DoctorExit(IntEnum):
+    """0.1.0's ``DoctorExit``, doctor's exit codes by their names there: the codes are
+    :class:`ExitCode`'s now, one table for every command."""
 
-    FOUND = 0
-    INVALID = 2
-    PORT = 3  # the port could not be opened
-    SILENT = 5  # nothing answered at any OI rate, even after a BRC pulse (or none possible)
-    UNHEALTHY = 6  # it answered, but a later step failed
-    INTERRUPTED = 130
+    FOUND = ExitCode.OK
+    INVALID = ExitCode.INVALID
+    PORT = ExitCode.CONNECTION
+    SILENT = ExitCode.NO_ANSWER
+    UNHEALTHY = ExitCode.UNHEALTHY
+    INTERRUPTED = ExitCode.INTERRUPTED
+
+
+def _old_name(name: str) -> Any:
+    """``DoctorExit``, kept for old imports until 0.3.0 with a DeprecationWarning at the
+    importer's line: its codes are the same numbers, :class:`ExitCode`'s."""
+    if name != "DoctorExit":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    instead = (
+        "use ExitCode from roomba_bt.runtime.summary instead (FOUND is OK, PORT is "
+        "CONNECTION, SILENT is NO_ANSWER)"
+    )
+    warnings.warn(
+        moved_warning(f"{__name__}.DoctorExit", instead), DeprecationWarning, stacklevel=2
+    )
+    return _DoctorExit
+
+
+if not TYPE_CHECKING:  # to a type checker the old name is gone, and a typo no Any (PEP 562)
+    __getattr__ = _old_name
 
 
 def register(sub: Any) -> None:
@@ -271,7 +294,7 @@ def _words_of(port: str) -> LinkWords:
 class _Failed(Exception):
     """A step failed (already reported); the exit code to end with."""
 
-    def __init__(self, code: DoctorExit) -> None:
+    def __init__(self, code: ExitCode) -> None:
         super().__init__(code.name)
         self.code = code
 
@@ -295,7 +318,7 @@ def doctor_command(args: argparse.Namespace) -> int:
             if isinstance(exc.cause, str)
             else report.link.open_fix,
         )
-        return DoctorExit.PORT
+        return ExitCode.CONNECTION
     report.ok("port", f"opened {url} (8N1, no flow control; RTS and DTR released: BRC high)")
     try:
         return _examine(transport, rates, args.allow_reset, report, args.listen)
@@ -303,10 +326,10 @@ def doctor_command(args: argparse.Namespace) -> int:
         return failed.code
     except KeyboardInterrupt:
         print("roomba-bt doctor: interrupted", file=sys.stderr)
-        return DoctorExit.INTERRUPTED
+        return ExitCode.INTERRUPTED
     except OSError as exc:
         report.fail("link", f"the port failed: {exc}", _link_fix(exc, report.fixes))
-        return DoctorExit.UNHEALTHY
+        return ExitCode.UNHEALTHY
     finally:
         _leave_passive(transport)
         transport.close()
@@ -360,7 +383,7 @@ def _after_pulse(transport: Any, rates: tuple[int, ...], before: Search, report:
         )
     else:
         report.fail("baud", "silent at every OI rate, even after a BRC pulse", report.fixes.silent)
-    raise _Failed(DoctorExit.SILENT)
+    raise _Failed(ExitCode.NO_ANSWER)
 
 
 def _examine(
@@ -378,7 +401,7 @@ def _examine(
     if found is None and all(probe.echoed for probe in searched.probes):
         report.fail("port", "it gives back every byte written to it: a loopback, no robot",
                     report.fixes.echo)  # fmt: skip
-        raise _Failed(DoctorExit.SILENT)
+        raise _Failed(ExitCode.NO_ANSWER)
     if found is None:
         pulse = wake_pulse(transport)
         if pulse.problem is not None:
@@ -388,7 +411,7 @@ def _examine(
                 f"BRC: {pulse.problem}",
                 report.fixes.wake,
             )
-            raise _Failed(DoctorExit.SILENT)
+            raise _Failed(ExitCode.NO_ANSWER)
         report.ok("wake", f"silent at every rate: {pulse.how}")
         found = _after_pulse(transport, rates, searched, report)
         report.ok("wake", "it answered after the pulse: the robot was asleep")
@@ -420,7 +443,7 @@ def _examine(
         f"{facts.get('charging', '?')}",
         flush=True,
     )
-    return DoctorExit.UNHEALTHY if report.failed else DoctorExit.FOUND
+    return ExitCode.UNHEALTHY if report.failed else ExitCode.OK
 
 
 def _left_running(left: Any, plus_one: bool, report: Report) -> None:
@@ -483,7 +506,7 @@ def _reset(transport: Any, baud: int, allow_reset: bool, report: Report) -> tupl
             "the robot did not answer after Reset (7)",
             "wait a few seconds (it reboots) and run doctor again without --allow-reset",
         )
-        raise _Failed(DoctorExit.UNHEALTHY)
+        raise _Failed(ExitCode.UNHEALTHY)
     if again.found.baud != baud:
         report.warn("reset", f"after Reset the robot talks at {again.found.baud} baud")
     return banner, True
@@ -528,7 +551,7 @@ def _stream(
             "the robot answers queries but does not stream: another program may be talking "
             f"to it, or the line drops bytes ({report.fixes.drops})",
         )
-        raise _Failed(DoctorExit.UNHEALTHY)
+        raise _Failed(ExitCode.UNHEALTHY)
     if expected and lost >= POOR_LINK * expected:
         report.warn(
             "stream",
@@ -818,7 +841,7 @@ def _agreed_status(transport: Any, profile: Any, plus_one: bool, report: Report)
                 f"no answer to Query List {list(ids)} within {0.5 + 2 * latency:.2g} s",
                 "the line drops bytes or another program talks to the robot: run doctor again",
             )
-            raise _Failed(DoctorExit.UNHEALTHY)
+            raise _Failed(ExitCode.UNHEALTHY)
         wrong = _implausible(frame, plus_one)
         replies.append(frame)
         if len(replies) >= 2 and _agree(replies[-2], frame):
@@ -826,7 +849,7 @@ def _agreed_status(transport: Any, profile: Any, plus_one: bool, report: Report)
                 return frame
             agreed = True
     _status_failed(report, replies, wrong if agreed else "", latency)
-    raise _Failed(DoctorExit.UNHEALTHY)
+    raise _Failed(ExitCode.UNHEALTHY)
 
 
 def _status_failed(report: Report, replies: list[SensorFrame], wrong: str, latency: float) -> None:
@@ -888,7 +911,7 @@ def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> Non
             f"packet {OI_MODE_PACKET} reads {frame.oi_mode_raw}, which is no OI mode",
             "another program may be talking to the robot; run doctor again",
         )
-        raise _Failed(DoctorExit.UNHEALTHY)
+        raise _Failed(ExitCode.UNHEALTHY)
     report.facts["mode"] = mode.label
     quirk = "mode + 1 firmware: the runtime subtracts 1" if plus_one else "as is"
     report.ok("mode", f"{mode.label} ({OI_MODE_PACKET} = {frame.oi_mode_raw}, {quirk})")

@@ -34,7 +34,10 @@ DEFAULT_TICK_LIMIT = 0.25
 
 
 class ExitCode(IntEnum):
-    """Exit codes of ``roomba-bt``, documented in the README and ``docs/runtime.md``."""
+    """Exit codes of every ``roomba-bt`` command, the one table (``docs/runtime.md``, "Exit
+    codes"): each command exits with one of these, and no two mean different things; a
+    command's ``--help`` lists those it uses. ``run``'s are its outcomes'; 5 and 6 are
+    ``doctor``'s alone (0.1.0 had them in a table of its own, ``DoctorExit``)."""
 
     OK = 0  # mission succeeded / command did what was asked
     MISSION_FAILED = 1  # the tree ended in FAILURE (or the timeout ran out)
@@ -60,6 +63,12 @@ class ExitCode(IntEnum):
     #: and 6 are ``roomba-bt doctor``'s (nothing answered; a later step failed). Also
     #: ``validate --strict``: every file valid, but warnings failed one (docs/ci.md)
     STRICT = 7
+    #: ``doctor``: nothing answered at any OI rate, even after a BRC pulse (or none could be
+    #: given), or the port echoes every byte (docs/doctor.md)
+    NO_ANSWER = 5
+    #: ``doctor``: the robot answered, but a later step failed (no stream, the link lost, a
+    #: reply that makes no sense)
+    UNHEALTHY = 6
     #: roomba-bt itself raised (a bug in the runner, the display, the monitor, the record),
     #: not a behaviour: said in one line, the traceback with ``-v``, after the run's port was
     #: closed. 70 is sysexits.h's EX_SOFTWARE ("internal software error"): Python's own exit

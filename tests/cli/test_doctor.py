@@ -24,7 +24,6 @@ from runtime.simrun import BridgeLink  # tests/runtime: a WiFi bridge on the vir
 import roomba_bt.transport as transport_package
 from roomba_bt.cli.doctor_cmd import (
     CABLE_FIXES,
-    DoctorExit,
     Report,
     _examine,
     _Failed,
@@ -36,6 +35,7 @@ from roomba_bt.cli.doctor_cmd import (
 )
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.profiles import CREATE2, ROOMBA600
+from roomba_bt.runtime.summary import ExitCode
 from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 from roomba_bt.transport import SerialTransport, TransportError
 from roomba_bt.transport.link_kind import link_of
@@ -117,7 +117,7 @@ def test_doctor_finds_an_awake_create2_on_a_pty_at_either_rate(
 ) -> None:
     sim = served_sim("--pty", "--baud", str(baud))
     done = _doctor(sim.address)
-    assert done.returncode == DoctorExit.FOUND, done.stdout
+    assert done.returncode == ExitCode.OK, done.stdout
     out = done.stdout
     assert f"found: {CREATE2_OR_500} on {sim.address} at {baud} baud, Passive, battery " in out
     assert "not charging" in out.splitlines()[-1]
@@ -152,7 +152,7 @@ def test_a_line_losing_a_third_of_the_frames_is_warned_at_run_s_bar_over_a_longe
     (``POOR_LINK``), and ``--listen`` samples as long as told."""
     sim = served_sim("--pty", "--drop-rate", "0.3", "--seed", "1")
     done = _doctor(sim.address, "--listen", "2s")
-    assert done.returncode == DoctorExit.FOUND, done.stdout  # a warning, not a failure
+    assert done.returncode == ExitCode.OK, done.stdout  # a warning, not a failure
     [stream] = _step(done.stdout, "stream")
     assert stream.startswith("[warn]") and " in 2 s (one per 15 ms: " in stream, stream
     assert re.search(r"; [2-4]\d % of the frames lost$", stream), stream
@@ -174,7 +174,7 @@ def test_doctor_wakes_an_asleep_robot_by_brc_over_rfc2217_and_names_it(
 ) -> None:
     sim = served_sim("--rfc2217", "127.0.0.1:0", "--asleep", "--baud", str(baud))
     done = _doctor(sim.address)
-    assert done.returncode == DoctorExit.FOUND, done.stdout
+    assert done.returncode == ExitCode.OK, done.stdout
     out = done.stdout
     assert "[--]   baud      115200: nothing" in out and "[--]   baud      19200: nothing" in out
     assert "[ok]   wake      silent at every rate: pulsed BRC low for 1 s (RTS and DTR)" in out
@@ -189,7 +189,7 @@ def test_doctor_wakes_an_asleep_robot_on_a_pty_by_a_hang_up_and_names_it(
     """A pty's modem lines cannot be set (ENOTTY): the pulse is a 1 s hang-up (speed 0)."""
     sim = served_sim("--pty", "--asleep", "--baud", str(baud))
     done = _doctor(sim.address)
-    assert done.returncode == DoctorExit.FOUND, done.stdout
+    assert done.returncode == ExitCode.OK, done.stdout
     out = done.stdout
     assert "[--]   baud      115200: nothing" in out and "[--]   baud      19200: nothing" in out
     assert (
@@ -222,7 +222,7 @@ def test_a_port_that_can_neither_set_its_lines_nor_hang_up_says_press_clean_exit
         argparse.Namespace(port=sim.address, baud=None, allow_reset=False, listen=None)
     )
     out = capsys.readouterr().out
-    assert code == DoctorExit.SILENT, out
+    assert code == ExitCode.NO_ANSWER, out
     wake = _step(out, "wake")[0]
     assert wake.startswith("[FAIL]") and "cannot pulse BRC" in wake
     assert "Inappropriate ioctl" in wake
@@ -235,7 +235,7 @@ def test_a_port_that_can_neither_set_its_lines_nor_hang_up_says_press_clean_exit
 def test_a_roomba600_is_told_by_its_mode_plus_one(served_sim: Callable[..., Any]) -> None:
     sim = served_sim("--pty", "--profile", "roomba600")
     done = _doctor(sim.address)
-    assert done.returncode == DoctorExit.FOUND, done.stdout
+    assert done.returncode == ExitCode.OK, done.stdout
     assert "Start (128): Passive; packet 35 reads 2 (this firmware reports the OI mode + 1)" in (
         done.stdout
     )
@@ -248,7 +248,7 @@ def test_with_allow_reset_a_roomba500_is_told_by_its_silence_and_its_checksum(
 ) -> None:
     sim = served_sim("--rfc2217", "127.0.0.1:0", "--profile", "roomba500", "--baud", "19200")
     done = _doctor(sim.address, "--allow-reset")
-    assert done.returncode == DoctorExit.FOUND, done.stdout
+    assert done.returncode == ExitCode.OK, done.stdout
     profile = _step(done.stdout, "profile")[0]
     assert profile.startswith("[ok]   profile   Roomba 500 series (--profile roomba500)")
     assert "ignored Reset (7)" in profile and "leaves the header out" in profile
@@ -261,7 +261,7 @@ def test_with_allow_reset_the_banner_gives_the_firmware_and_the_dock_wake(
 ) -> None:
     sim = served_sim("--pty", "--firmware", firmware)
     done = _doctor(sim.address, "--allow-reset")
-    assert done.returncode == DoctorExit.FOUND, done.stdout
+    assert done.returncode == ExitCode.OK, done.stdout
     reset = _step(done.stdout, "reset")[0]
     assert f"last: 'r3_robot/tags/{firmware} CLEAN'" in reset
     line = _step(done.stdout, "firmware")[0]
@@ -278,7 +278,7 @@ def test_a_pty_with_nothing_behind_it_says_so_and_exits_non_zero_within_10_s(
     """Nobody reads the other side of this pty: doctor says so within the 10 s bar."""
     done, took = _doctor_timed(silent_port)
     assert took < DOCTOR_TIMEOUT_S, took
-    assert done.returncode == DoctorExit.SILENT, done.stdout
+    assert done.returncode == ExitCode.NO_ANSWER, done.stdout
     assert "[--]   baud      115200: nothing" in done.stdout
     assert "[--]   baud      19200: nothing" in done.stdout
     assert _step(done.stdout, "wake")[0].startswith("[ok]"), "a pty can be hung up"
@@ -291,12 +291,12 @@ def test_a_port_that_does_not_open_is_exit_3_with_what_to_check(tmp_path: Path) 
     """No such device: said with the serial ports present (the cause known, no list of
     guesses); a failure whose error tells nothing more: what to check."""
     done = _doctor(str(tmp_path / "ttyUSB9"))
-    assert done.returncode == DoctorExit.PORT
+    assert done.returncode == ExitCode.CONNECTION
     assert "[FAIL] port      could not open" in done.stdout
     assert ": no such device: the cable unplugged, or the adapter has another name" in done.stdout
     assert "(serial ports present: " in done.stdout and "fix:" not in done.stdout
     done = _doctor("hwgrep://^no-such-adapter$")  # pyserial's search by name: no errno
-    assert done.returncode == DoctorExit.PORT
+    assert done.returncode == ExitCode.CONNECTION
     assert "fix: check the device path" in done.stdout
     done = _doctor("nosuchscheme://x")  # a URL typo is a usage error (it was exit 3)
     assert done.returncode == 2
@@ -307,7 +307,7 @@ def test_a_port_that_echoes_is_named_a_loopback_not_a_silent_robot() -> None:
     """loop:// (or a cable with its data lines joined) gives the query back: said at once,
     exit 5, with no BRC pulse and no "is the robot on?"."""
     done = _doctor("loop://")
-    assert done.returncode == DoctorExit.SILENT
+    assert done.returncode == ExitCode.NO_ANSWER
     assert _step(done.stdout, "baud") == [
         f"[--]   baud      {rate}: the Query List itself back ([149, 3, 35, 21, 34]): "
         "the port echoes"
@@ -319,7 +319,7 @@ def test_a_port_that_echoes_is_named_a_loopback_not_a_silent_robot() -> None:
 
 def test_a_bad_baud_is_a_usage_error() -> None:
     done = _cli("doctor", "--port", "/dev/null", "--baud", "1234")
-    assert done.returncode == DoctorExit.INVALID
+    assert done.returncode == ExitCode.INVALID
     assert "allowed: " in done.stderr and "or auto" in done.stderr
 
 
@@ -463,7 +463,7 @@ def test_a_line_that_garbles_every_byte_is_called_garbled_not_silent(
     swapped TX/RX, though it had seen bytes that were no answer at 115200."""
     sim = served_sim("--pty", "--corrupt-rate", "1.0")
     done = _doctor(sim.address)
-    assert done.returncode == DoctorExit.SILENT, done.stdout
+    assert done.returncode == ExitCode.NO_ANSWER, done.stdout
     failed = [line for line in done.stdout.splitlines() if line.startswith("[FAIL]")]
     assert len(failed) == 1 and "the line garbles them" in failed[0], done.stdout
     assert "silent at every OI rate" not in done.stdout
@@ -498,7 +498,7 @@ def test_a_500_whose_checksum_covers_the_header_is_not_called_a_create2(
 
     robot = dataclasses.replace(ROOMBA500, checksum_includes_header=True)
     code, out = _doctor_in_process(robot, allow_reset=False)
-    assert code == DoctorExit.FOUND, out
+    assert code == ExitCode.OK, out
     [profile] = _step(out, "profile")
     assert profile.startswith(
         "[ok]   profile   iRobot Create 2 (--profile create2, the default), "
@@ -510,7 +510,7 @@ def test_a_500_whose_checksum_covers_the_header_is_not_called_a_create2(
     assert "doctor --allow-reset (Reset is not in the Roomba 500 spec" in fix
     assert f"found: {CREATE2_OR_500} on " in capsys.readouterr().out
     code, out = _doctor_in_process(robot, allow_reset=True)
-    assert code == DoctorExit.FOUND, out
+    assert code == ExitCode.OK, out
     [profile] = _step(out, "profile")
     assert profile.startswith("[ok]   profile   Roomba 500 series (--profile roomba500): "), out
     assert "it ignored Reset (7)" in profile
@@ -541,7 +541,7 @@ def _doctor_through_a_bridge(jitter: float, hold: tuple[float, float] | None) ->
     20 ms each way (tests/runtime/simrun.py's ``BridgeLink``: on the virtual clock)."""
     link = BridgeLink(Simulator(load_world("empty-room"), ROOMBA600, seed=0), 0.02, jitter, hold)
     out = io.StringIO()
-    assert _examine(link, (115200,), False, Report(out), 3.0) == DoctorExit.FOUND
+    assert _examine(link, (115200,), False, Report(out), 3.0) == ExitCode.OK
     return out.getvalue()
 
 
@@ -588,7 +588,7 @@ def test_an_asleep_robot_behind_a_raw_tcp_bridge_is_told_how_brc_crosses_a_bridg
     """socket:// carries no modem lines: the fix said to "use a cable that wires BRC"."""
     sim = served_sim("--tcp", "127.0.0.1:0", "--asleep")
     done = _doctor(sim.address)
-    assert done.returncode == DoctorExit.SILENT, done.stdout
+    assert done.returncode == ExitCode.NO_ANSWER, done.stdout
     fix = _fix_of(done.stdout, "wake")
     bridge = "the bridge at " + sim.address.removeprefix("socket://")
     assert fix.startswith("fix: a robot asleep (5 minutes in Passive) answers nothing"), fix
@@ -653,7 +653,7 @@ def test_a_robot_not_found_behind_a_network_bridge_is_told_of_the_bridge_not_a_c
     report = _bridge_report()
     with pytest.raises(_Failed) as failed:
         _examine(link(), (115200, 19200), False, report)
-    assert failed.value.code == DoctorExit.SILENT
+    assert failed.value.code == ExitCode.NO_ANSWER
     out = report.out.getvalue()
     assert _fix_of(out, step).startswith(said), out
     assert "cable" not in out and "adapter" not in out
@@ -730,7 +730,7 @@ def test_a_network_bridge_lost_while_doctor_used_it_is_checked_not_a_cable(
     """doctor_command gives the report the port's link: the fix names the bridge at its URL."""
     monkeypatch.setattr(transport_package, "SerialTransport", _BridgeThatDrops)
     args = argparse.Namespace(port=BRIDGE_PORT, baud=None, allow_reset=False, listen=None)
-    assert doctor_command(args) == DoctorExit.UNHEALTHY
+    assert doctor_command(args) == ExitCode.UNHEALTHY
     out = capsys.readouterr().out
     assert _step(out, "link")[0].startswith("[FAIL] link      the port failed: "), out
     assert _fix_of(out, "link") == (
@@ -766,7 +766,7 @@ def test_a_bridge_that_does_not_open_is_told_by_its_address_not_a_device_path(
         argparse.Namespace(port=BRIDGE_PORT, baud=None, allow_reset=False, listen=None)
     )
     out = capsys.readouterr().out
-    assert code == DoctorExit.PORT
+    assert code == ExitCode.CONNECTION
     assert _fix_of(out, "port") == (
         f"fix: check the address, that {BRIDGE} is powered and in Wi-Fi range on this "
         "computer's network, and that no other client holds it"
@@ -784,7 +784,7 @@ def test_a_bridge_not_listening_is_named_by_its_address(scheme: str, serves: str
         unused.bind(("127.0.0.1", 0))
         closed = unused.getsockname()[1]
     done = _doctor(f"{scheme}://127.0.0.1:{closed}")
-    assert done.returncode == DoctorExit.PORT
+    assert done.returncode == ExitCode.CONNECTION
     assert f"nothing listens at 127.0.0.1:{closed}: is the bridge there running" in done.stdout
     assert f"(roomba-bt sim {serves} serves one)" in done.stdout
 
