@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -37,11 +38,9 @@ def test_a_served_simulator_with_plot_keeps_its_trajectory(tmp_path: Path) -> No
 
 
 def test_help_says_what_latency_is_and_the_least_inject_every(
-    capsys: pytest.CaptureFixture[str],
+    help_text: Callable[[str], str],
 ) -> None:
-    with pytest.raises(SystemExit):
-        main(["sim", "--help"])
-    text = " ".join(capsys.readouterr().out.split())
+    text = help_text("sim")
     assert "per byte" not in text
     assert "before the robot's bytes become readable" in text
     assert "at least 0.015" in text
