@@ -846,8 +846,9 @@ def _where_it_ended(simulator: Any) -> str:
     fell = next((e for e in simulator.events if e.kind == "fell"), None)
     if fell is not None:
         where = f"({fell.x / 1000:.2f}, {fell.y / 1000:.2f}) m at {fell.time:.1f} s"
-        return (f"simulator    the robot FELL off a drop at {where} (it had no cliff safety: "
-                "Full mode, or a mission that drove on)")  # fmt: skip
+        return (f"simulator    the robot FELL off a drop at {where} (a wheel went past the "
+                "edge: Full mode, a reverse the Safe-mode cliff stop does not cover, or a "
+                "mission that drove on)")  # fmt: skip
     if simulator.docked:
         charging = ", charging" if simulator.dock_powered else ", the dock unpowered"
         return f"simulator    ended on the dock's contacts{charging}"

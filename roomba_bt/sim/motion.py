@@ -383,7 +383,8 @@ class Motion(Sensing):
         return False
 
     def _fall(self) -> None:
-        """Off a drop (Full mode has no cliff safety): wheel drops, all cliffs, stuck."""
+        """A drive wheel off a drop (:meth:`_wheel_over_drop`), in any mode: wheel drops, all
+        cliffs, stuck. Safe mode's own rules then see the wheel drop and give Passive."""
         self.fallen = True
         self._body_changed()
         self.left_speed = self.right_speed = 0.0

@@ -32,6 +32,7 @@ from roomba_bt.sim.cycles import BUTTON_CYCLES, CYCLES, BuiltinCycle
 from roomba_bt.sim.faults import HostLine
 from roomba_bt.sim.replies import StreamOutput
 from roomba_bt.sim.state import TracePoint, Violation
+from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
 #: Passive without a byte from the host for this long: the robot sleeps.
 PASSIVE_SLEEP_SECONDS = 300.0
@@ -266,9 +267,9 @@ class OIProtocol(StreamOutput):
         cause = ""
         if v[7] & WHEEL_DROP_BITS:
             cause = "wheel drop"
-        elif (v[9] or v[10] or v[11] or v[12]) and self.left_speed + self.right_speed > 0:
-            cause = "cliff while driving forward"
-        elif self.docked and self.dock_powered:
+        elif v[9] or v[10] or v[11] or v[12]:
+            cause = self._cliff_cause(self.left_speed, self.right_speed)
+        if not cause and self.docked and self.dock_powered:
             cause = "powered charger"
         if cause:
             self._stop_wheels()
@@ -276,6 +277,21 @@ class OIProtocol(StreamOutput):
             self.motor_bits = 0
             self.brush_pwm = (0, 0, 0)
             self._set_mode(OIMode.PASSIVE, f"safety: {cause}")
+
+    def _cliff_cause(self, left: float, right: float) -> str:
+        """Why a cliff stops these wheel speeds in Safe mode, or "" if it does not. The spec's
+        words: "a cliff while moving forward (or moving backward with a small turning radius,
+        less than one robot radius)". Forward is the centre moving forward (the wheels' speeds
+        sum > 0); a turn in place has radius 0. A differential drive's centre turns on a
+        radius of half the wheel base x |right + left| / |right - left|: compared with the
+        body's radius multiplied out, so a spin needs no division by 0. Straight back, or
+        back on a wide arc, no cliff sensor leads and the robot goes on (and may fall)."""
+        forward = left + right
+        if forward > 0.0:
+            return "cliff while driving forward"
+        if -forward * self.profile.wheel_base_mm / 2.0 < ROBOT_RADIUS_MM * abs(right - left):
+            return "cliff while turning tighter than the robot's radius"
+        return ""
 
     def set_brc(self, low: bool) -> None:
         """The BRC pin (wired to a modem line on the USB cables). Its falling edge resets the

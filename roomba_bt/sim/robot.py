@@ -158,11 +158,12 @@ class Simulator(OIProtocol):
             stream = self._stream
             far = 0 if stream is None else stream.far
             self._sense(FAR_ALL if self.builtin is not None else far)
-        if mode is _SAFE:
-            if self._safety_due:
-                self._safety()
-        elif mode is _FULL and self._drops and not self.fallen and self._over_drop(self.x, self.y):
-            self._fall()
+            # a drive wheel over a drop: the robot falls in any mode (in Safe its wheel drop
+            # then gives Passive, below); moving forward, the cliff sensors saw it first
+            if self._drops and not self.fallen and self._wheel_over_drop():
+                self._fall()
+        if mode is _SAFE and self._safety_due:
+            self._safety()
         if self._power_due or self.ticks >= self._battery_at or dt != STEP_SECONDS:
             self._battery(dt)
             if self._charge <= 0.0 and self._current < 0.0:  # drained: it switches off

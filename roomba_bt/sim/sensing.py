@@ -733,6 +733,19 @@ class Sensing(RobotState):
     def _over_drop(self, x: float, y: float) -> bool:
         return any(point_in_polygon(x, y, drop) for drop in self._drops)
 
+    def _wheel_over_drop(self) -> bool:
+        """Is a drive wheel's contact point (half the wheel base either side of the centre,
+        on the axle) over a drop? The robot rests on its two wheels and the front caster: a
+        wheel past the edge tips it over, whatever the mode and whichever way it moved. The
+        centre need not be over it: a robot driving along an edge falls when its outer wheel
+        leaves the floor."""
+        half_base = self.profile.wheel_base_mm / 2.0
+        x, y, theta = self.x, self.y, self.theta
+        across_x, across_y = -half_base * math.sin(theta), half_base * math.cos(theta)
+        return self._over_drop(x + across_x, y + across_y) or self._over_drop(
+            x - across_x, y - across_y
+        )
+
     def _sense_ir(self, x: float, y: float, theta: float, ticks: int, powered: bool) -> None:
         """The IR receivers at the pose (``x``, ``y``, ``theta``) of step ``ticks``, the
         dock ``powered`` or not. A character takes tens of milliseconds to send, so they are
