@@ -158,10 +158,8 @@ class Simulator(OIProtocol):
             stream = self._stream
             far = 0 if stream is None else stream.far
             self._sense(FAR_ALL if self.builtin is not None else far)
-            # a drive wheel over a drop: the robot falls in any mode (in Safe its wheel drop
-            # then gives Passive, below); moving forward, the cliff sensors saw it first
-            if self._drops and not self.fallen and self._wheel_over_drop():
-                self._fall()
+            if self._drops:  # one test a moved step where no drop is (the usual world)
+                self._fall_check()
         if mode is _SAFE and self._safety_due:
             self._safety()
         if self._power_due or self.ticks >= self._battery_at or dt != STEP_SECONDS:
@@ -208,6 +206,15 @@ class Simulator(OIProtocol):
                 self._frame = frame
             else:
                 self._send_frame(frame)
+
+    def _fall_check(self) -> None:
+        """A drive wheel over a drop: the robot falls, in any mode (in Safe its wheel drop then
+        gives Passive: :meth:`_safety`); driving forward in Safe, the cliff sensors saw the
+        edge first and stopped it. A method of its own, called only where there are drops:
+        inline, the test measured 1 % of a step more in a world with none (``bench.icount
+        --sim dock``)."""
+        if not self.fallen and self._wheel_over_drop():
+            self._fall()
 
     def settle_wheels(self) -> None:
         """The wheels' speeds (``left_speed``, ``right_speed``: the last step's) set now to
