@@ -22,7 +22,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
     add_command,
@@ -34,6 +34,9 @@ from roomba_bt.cli.arguments import (
 from roomba_bt.monitor import INSTALL_HINT, server_available
 from roomba_bt.monitor.address import DEFAULT_HOST, lan_addresses, parse_address
 from roomba_bt.runtime.summary import ExitCode
+
+if TYPE_CHECKING:  # loaded when a world is drawn
+    from roomba_bt.sim.world import World
 
 log = logging.getLogger("roomba_bt.monitor")
 KEYS_HELP = "keys: p pause, r resume, n step, q stop"
@@ -566,6 +569,12 @@ def register(sub: Any) -> None:
         help="where to serve the page (default 127.0.0.1:8765)",
     )  # fmt: skip
     monitor.add_argument("--mission", help="mission to replay against (default: the recorded one)")
+    monitor.add_argument(
+        "--world", metavar="FILE_OR_NAME",
+        help="the world to draw the run in (a file, or a world's name as run --world takes it; "
+        "default: the one the record names, read only beside the record and its mission, in "
+        "your world folders or by name)",
+    )  # fmt: skip
     add_param_option(monitor, "set a mission parameter for the replay (repeatable)")
     add_permission_options(monitor)
     add_window_options(monitor, start=True)
@@ -613,13 +622,30 @@ def _usage_error(message: str) -> int:
     return ExitCode.INVALID
 
 
-def _draw_recorded_world(feed: Any, record: Any, mission: Any, shown: str) -> None:
-    """The world ``record`` names into its page (odometry's 0 where the robot started in
-    it), or why not on stderr (``shown``: the record as the user named it); ``mission``: the
-    compiled mission replayed, whose file, with the record's, bounds where the world may be."""
+def _chosen_world(given: str | None) -> World | str | None:
+    """``monitor --world``'s world (None: none given), or its problems as the lines to print:
+    read before the replay, which takes minutes for a long record."""
+    if given is None:
+        return None
+    from roomba_bt.cli.worlds_cmd import world_error_text
+    from roomba_bt.sim.world import WorldError, load_world
+
+    try:
+        return load_world(given)
+    except WorldError as exc:
+        return world_error_text(exc)
+
+
+def _draw_recorded_world(
+    feed: Any, record: Any, mission: Any, shown: str, chosen: World | None
+) -> None:
+    """The world ``record`` names (or the user's ``chosen``, ``--world``) into its page
+    (odometry's 0 where the robot started in it), or why not on stderr (``shown``: the record
+    as the user named it); ``mission``: the compiled mission replayed, whose file, with the
+    record's, bounds where the record's world may be."""
     from roomba_bt.monitor.recorded import recorded_world
 
-    drawn = recorded_world(record, mission.files[0] if mission.files else record.path)
+    drawn = recorded_world(record, mission.files[0] if mission.files else record.path, chosen)
     if isinstance(drawn, str):
         print(f"monitor: {shown}: {drawn}", file=sys.stderr)
     elif drawn is not None:
@@ -643,6 +669,10 @@ def monitor_command(args: argparse.Namespace) -> int:
     window = parse_window(args)
     if isinstance(window, str):
         return _usage_error(window)
+    chosen = _chosen_world(args.world)
+    if isinstance(chosen, str):  # each problem at its file:line:col, as run --world says them
+        print(chosen, file=sys.stderr)
+        return ExitCode.INVALID
     notice = reading_notice(args.record)  # load_recorded says what is wrong with the file
     if notice is not None:  # a second or more before the page
         print(notice, file=sys.stderr, flush=True)
@@ -663,7 +693,7 @@ def monitor_command(args: argparse.Namespace) -> int:
         record, mission, profile, packets, baud, args.record,
         progress=replay_progress("monitor", record), diverged_at=diverged_at, window=window,
     )  # fmt: skip
-    _draw_recorded_world(feed, record, mission, args.record)
+    _draw_recorded_world(feed, record, mission, args.record, chosen)
     return _serve_record(feed, host, port, args.record)
 
 

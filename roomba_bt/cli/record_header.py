@@ -86,21 +86,26 @@ def recording(
 
 
 def simulator_options(args: argparse.Namespace, folder: Path) -> dict[str, Any] | None:
-    """The simulator's options as given: the world (a shipped world's name, a file's path
-    from the record's ``folder``) and its file's digest, the seed, ``--random-start``,
-    ``--battery``, ``--odometry-error`` and ``--fast``; None on a robot's port."""
+    """The simulator's options as given: the world (its name when it was given by name, a
+    shipped world's or one of ``ROOMBA_BT_WORLDS``'s; a file's path from the record's
+    ``folder``) and its file's digest, the seed, ``--random-start``, ``--battery``,
+    ``--odometry-error`` and ``--fast``; None on a robot's port.
+
+    A world of ``ROOMBA_BT_WORLDS``'s was written as its file's path from the record's
+    folder (``../../worlds/living.yaml``), and ``monitor RECORD``, which reads a record's world
+    file only inside the folder holding the record and its mission, refused it: by its name,
+    it is found again where the user keeps their worlds, and the digest tells whether it is
+    the same file."""
     if args.port:
         return None
     from roomba_bt.cli.links import DEFAULT_WORLD
     from roomba_bt.runtime.provenance import file_digest, source_name
-    from roomba_bt.sim.world import WORLDS_DIR
 
     given = args.world or DEFAULT_WORLD
     source = Path(getattr(args, "world_source", "") or given)
-    shipped = source.resolve().is_relative_to(WORLDS_DIR.resolve()) and not Path(given).is_file()
+    by_name = not Path(given).is_file()  # as load_world took it: no file, so a name
     return {
-        # one of ROOMBA_BT_WORLDS's by its name: by its file, which a replay can find
-        "world": given if shipped else source_name(source, folder),
+        "world": given if by_name else source_name(source, folder),
         "world_sha256": file_digest(source),
         "seed": args.seed,
         "random_start": bool(args.random_start),

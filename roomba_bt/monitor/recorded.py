@@ -46,6 +46,7 @@ from roomba_bt.runtime.summary import RunSummary
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
+    from roomba_bt.sim.world import World
 
 
 def replay_into_feed(
@@ -100,52 +101,79 @@ def replay_into_feed(
 DrawnWorld = tuple[dict[str, Any], tuple[float, float, float]]
 
 
-def recorded_world(record: Record, mission: Path) -> DrawnWorld | str | None:
-    """The world a simulator run's record names (its header's ``simulator.world``: a shipped
-    world's name, or a file's path from the record's folder, found as ``replay`` finds the
-    mission's), drawn as the live page draws it, with the pose the robot started at (its
-    seed's, under ``random_start``): the recorded page drew the bare odometry, in its own
-    frame, with no rooms, furniture or dock. None for a robot's record; a text saying why
-    when the world named cannot be read (the page then draws the odometry alone).
+def recorded_world(
+    record: Record, mission: Path, chosen: World | None = None
+) -> DrawnWorld | str | None:
+    """The world a simulator run's record names (its header's ``simulator.world``: a world's
+    name, shipped or of ``ROOMBA_BT_WORLDS``'s, or a file's path from the record's folder,
+    found as ``replay`` finds the mission's), drawn as the live page draws it, with the pose
+    the robot started at (its seed's, under ``random_start``): the recorded page drew the
+    bare odometry, in its own frame, with no rooms, furniture or dock. ``chosen``: the world
+    the user gave instead (``monitor --world``), drawn whatever the record names, a robot's
+    record too. None for a robot's record; a text saying why when the world named cannot be
+    read (the page then draws the odometry alone).
 
     A world file is read only inside the folder that holds the record and its ``mission``
-    (the file replayed), as the record's include folders are granted: a record from someone
-    else named ``/etc/shadow`` as its world, and the world's errors quoted its lines."""
+    (the file replayed), as the record's include folders are, or in a folder of the user's
+    worlds (:func:`~roomba_bt.sim.world.world_folders`): a record from someone else named
+    ``/etc/shadow`` as its world, and the world's errors quoted its lines."""
     from roomba_bt.monitor.views import world_drawing
-    from roomba_bt.sim.world import WorldError, load_world, named_world
+    from roomba_bt.sim.world import WorldError, load_world
 
     options = record.header.get(SIMULATOR)
-    if not isinstance(options, dict) or not isinstance(options.get("world"), str):
-        return None
-    name = options["world"]
-    shown = header_text(name)
-    where = recorded_path(name, record.header, record.path)
-    if where is None or (not where.is_file() and "/" not in name):
-        # a world's name (``apartment``), as ``run --world`` took it: a shipped world or
-        # the user's own (ROOMBA_BT_WORLDS); never a file from the current folder
-        where = named_world(name)
-    elif not held_to_record(where, holder := record_holder(record.path, mission)):
-        return (
-            f"its world {shown} is outside the folder that holds the record and its mission "
-            f"({header_text(str(holder))}): a record names only worlds there or by name; not "
-            "read, the page draws the odometry alone"
-        )
-    if where is None:
-        return (
-            f"its world {shown}: no such world beside the record, nor a world of that name; "
-            "the page draws the odometry alone"
-        )
-    try:
-        world = load_world(where)
-    except WorldError as exc:
-        return f"its world {shown}: {escaped(str(exc))}; the page draws the odometry alone"
+    options = options if isinstance(options, dict) else {}
+    if chosen is None:
+        name = options.get("world")
+        if not isinstance(name, str):
+            return None
+        shown = header_text(name)
+        try:
+            where = _recorded_world_file(name, record, mission)
+            if isinstance(where, str):
+                return f"its world {shown}{where}; the page draws the odometry alone"
+            chosen = load_world(where)
+        except WorldError as exc:
+            return f"its world {shown}: {escaped(str(exc))}; the page draws the odometry alone"
     seed = options.get("seed")
     start = (
-        world.sample_start(seed)
+        chosen.sample_start(seed)
         if options.get("random_start") and isinstance(seed, int)
-        else world.start
+        else chosen.start
     )
-    return world_drawing(world), (start.x, start.y, start.theta)
+    return world_drawing(chosen), (start.x, start.y, start.theta)
+
+
+#: how a world the record names and the monitor does not read can be drawn all the same
+OWN_WORLD = "monitor --world FILE_OR_NAME draws the one you give"
+
+
+def _recorded_world_file(name: str, record: Record, mission: Path) -> Path | str:
+    """The file of the world ``name`` a record's header names, or why none is read (a text
+    following ``its world NAME``): a path beside the record, held to the folder holding the
+    record and its ``mission`` or to one of the user's world folders (a record made before
+    worlds were named wrote a ``ROOMBA_BT_WORLDS`` world's path); a name, found where
+    ``run --world`` finds one."""
+    from roomba_bt.sim.world import named_world, world_folders
+
+    where = recorded_path(name, record.header, record.path)
+    if where is not None and (where.is_file() or "/" in name):
+        holder = record_holder(record.path, mission)
+        yours = where.suffix == ".yaml" and any(
+            where.resolve().parent == folder.resolve() for folder in world_folders()
+        )
+        if yours or held_to_record(where, holder):
+            return where
+        return (
+            " is outside the folder that holds the record and its mission "
+            f"({header_text(str(holder))}): a record names only worlds there, in your world "
+            f"folders or by name; not read ({OWN_WORLD})"
+        )
+    # a world's name (``apartment``), as ``run --world`` took it: a shipped world or the
+    # user's own (ROOMBA_BT_WORLDS); never a file from the current folder
+    found = named_world(name)
+    if found is None:
+        return f": no such world beside the record, nor a world of that name ({OWN_WORLD})"
+    return found
 
 
 def recorded_start(record: Record) -> datetime | None:

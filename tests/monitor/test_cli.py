@@ -1067,3 +1067,69 @@ def test_a_records_world_outside_its_folder_is_not_read_and_its_header_texts_are
     _, err = served_record(stranger)
     assert "\x1b" not in err and "\u202e" not in err, err
     assert "its world W\\x1b]0;PWNED\\x07\\u202e" in err, err
+
+
+def test_a_world_given_by_name_is_recorded_by_name_and_drawn_from_the_users_world_folders(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, served_record: ServedRecord
+) -> None:
+    """A world of ``ROOMBA_BT_WORLDS``'s, given by name, was recorded as its path from the
+    record's folder (``../../worlds/living.yaml``), and ``monitor RECORD`` refused it as
+    outside the folder holding the record and its mission: with nothing to grant it. It is
+    recorded by its name now, and found again through the variable; a record made before,
+    naming a file in one of the user's world folders, is read; and ``--world`` draws the
+    world the user gives, the refusal naming it."""
+    from roomba_bt.monitor.recorded import recorded_world
+    from roomba_bt.monitor.views import world_drawing
+    from roomba_bt.runtime.recording import SIMULATOR, load_record
+    from roomba_bt.sim.world import WORLDS_DIR, load_world
+
+    worlds = tmp_path / "worlds"  # beside the project, as the variable invites
+    worlds.mkdir()
+    own = worlds / "living.yaml"
+    own.write_text((WORLDS_DIR / "apartment.yaml").read_text())
+    project = tmp_path / "project"
+    (project / "records").mkdir(parents=True)
+    (project / "missions").mkdir()
+    mission = project / "missions" / "shuttle.yaml"
+    mission.write_text(SHUTTLE.read_text())
+    record = project / "records" / "run.jsonl"
+    monkeypatch.setenv("ROOMBA_BT_WORLDS", str(worlds))
+    _record_the_shuttle(record, "--world", "living", mission=mission)
+    assert load_record(record).header[SIMULATOR]["world"] == "living"
+    drawn = recorded_world(load_record(record), mission)
+    assert isinstance(drawn, tuple) and drawn[0] == world_drawing(load_world(own))
+    _, err = served_record(record)
+    assert "its world" not in err, err
+
+    lines = record.read_text().splitlines()
+    header = json.loads(lines[0])
+    header[SIMULATOR]["world"] = "../../worlds/living.yaml"  # as a record made before says it
+    before = project / "records" / "before.jsonl"
+    before.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    assert isinstance(recorded_world(load_record(before), mission), tuple)
+
+    monkeypatch.delenv("ROOMBA_BT_WORLDS")  # another shell: neither is found nor granted
+    for made, said in ((record, "living: no such world"), (before, "living.yaml is outside")):
+        problem = recorded_world(load_record(made), mission)
+        assert isinstance(problem, str) and said in problem, problem
+        assert "monitor --world FILE_OR_NAME" in problem, problem
+        assert isinstance(recorded_world(load_record(made), mission, load_world(own)), tuple)
+        _, err = served_record(made, "--world", str(own))
+        assert "its world" not in err, err
+
+
+def test_monitor_world_that_cannot_be_read_is_exit_2_before_the_replay(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``monitor --world`` is the user's own choice, as ``run --world`` is: a name that finds
+    no world, or a broken file, is said as ``run`` says it (each problem at its file:line:col)
+    and ends the command before the record is read."""
+    record = tmp_path / "run.jsonl"
+    _record_the_shuttle(record)
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("name: broken\nrooms: 3\n")
+    capsys.readouterr()
+    for given, said in (("nosuch", "roomba-bt: nosuch: "), (str(broken), f"{broken}:2:")):
+        assert main(["monitor", str(record), "--monitor", "0", "--world", given]) == 2
+        captured = capsys.readouterr()
+        assert said in captured.err and "monitor: http" not in captured.out, captured
