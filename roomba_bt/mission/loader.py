@@ -41,7 +41,7 @@ import os
 import re
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from decimal import Decimal
+from decimal import Decimal, InvalidOperation
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -665,13 +665,17 @@ def _bind_override(
         return
     vtype, key_loc = declared[name]
     try:
-        value = vtype.parse(_cli_value(text, vtype))
+        given = _cli_value(text, vtype)
+        value = vtype.parse(given)
     except UnitError as exc:
         where = f"parameter {name}={text} ({wording.set_from})"
         ctx.error(key_loc.at(f"{where}: {exc}"))
         env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
         return
-    env[name] = Bound(vtype, value, text, f"{name}={text}, {wording.set_by}")
+    # a percent's share as the percent it means (``-p low=0.2``: ``below 20%``); the origin
+    # keeps what was typed, so the user finds it on their command line
+    written = given if vtype.name == "percent" and isinstance(given, str) else text
+    env[name] = Bound(vtype, value, written, f"{name}={text}, {wording.set_by}")
 
 
 def known_fields(
@@ -1062,28 +1066,33 @@ def _default_text(vtype: ValueType, declaration: yaml.Node, default: Any) -> str
     return str(default)
 
 
-#: a plain number on the command line, for a percent parameter (``-p low_battery=0.2``)
-_PLAIN_NUMBER = re.compile(r"^\s*([0-9]+(?:\.[0-9]*)?|\.[0-9]+)\s*$", re.ASCII)
-
-
 def _cli_percent(text: str) -> str:
-    """A percent given as ``-p``: a plain number below 1 is a share of the whole, as
-    ``--battery 0.2`` reads it (``0.2`` is ``20%``), so the two options of one command
-    agree; 1 and above stay refused, since ``1`` could mean 1% or all of it, and the
-    message says both ways to write it. A file's value is left to the type: there a
-    number's meaning is written once, with its unit."""
-    match = _PLAIN_NUMBER.match(text)
-    if match is None:
+    """A percent given as ``-p``, as the text its uses insert and its nodes' names show: a
+    plain number below 1 is a share of the whole, as ``--battery 0.2`` reads it, written as
+    the percent it means (``0.2``, ``.2`` and ``2e-1`` are ``20%``: ``below 0.2`` read as
+    0.2 %), so the two options of one command agree; a plain number is one as ``--battery``
+    reads it (Python's number syntax, so ``1e-1`` as well as ``.2``). 1 and
+    above stay refused, since ``1`` could mean 1% or all of it, and the message says both
+    ways to write it; a negative number, or one with its unit, is left to the type, as a
+    file's value is: there a number's meaning is written once, with its unit."""
+    try:
+        number = Decimal(text.strip())  # exact: 0.123456789 is 12.3456789%, not rounded
+    except InvalidOperation:
         return text
-    number = Decimal(match.group(1))  # exact: 0.123456789 is 12.3456789%, not rounded
-    if 0 < number < 1:
-        return f"{number * 100}%"
-    if number == 0:
+    if not number.is_finite() or number <= 0:
         return text
+    if number < 1:
+        return f"{_plain_number(number * 100)}%"
     raise UnitError(
-        f"{text.strip()!r} has no unit; write {number:g}% (a plain number below 1 is a "
-        "share of the whole: 0.2 is 20%)"
+        f"{text.strip()!r} has no unit; write {_plain_number(number)}% (a plain number below 1 "
+        "is a share of the whole: 0.2 is 20%)"
     )
+
+
+def _plain_number(number: Decimal) -> str:
+    """``number`` as people write it: ``20``, not ``20.0`` or ``2E+1``; ``12.3456789``."""
+    digits = format(number, "f")
+    return digits.rstrip("0").rstrip(".") if "." in digits else digits
 
 
 def _cli_value(text: str, vtype: ValueType) -> object:

@@ -555,27 +555,45 @@ def test_parameters_defaults_and_overrides(compile_text: Compile) -> None:
 PERCENT_PARAMETER = """
     parameters:
       low: {type: percent, default: 15%}
-    tree: {sequence: [{mode: safe}, {battery: {below: "${low}"}}]}
+    tree: {sequence: [{mode: safe}, {battery: {below: "${low}"}}, {log: "below ${low}"}]}
 """
 
 
-@pytest.mark.parametrize(("given", "percent"), [("0.2", 20.0), (".15", 15.0), ("20%", 20.0)])
+@pytest.mark.parametrize(
+    ("given", "percent", "shown"),
+    [
+        ("0.2", 20.0, "20%"),
+        (".15", 15.0, "15%"),
+        ("1e-1", 10.0, "10%"),
+        ("2E-1", 20.0, "20%"),
+        ("0.125", 12.5, "12.5%"),
+        ("20%", 20.0, "20%"),
+    ],
+)
 def test_a_percent_parameter_takes_a_share_below_one_as_battery_does(
-    compile_text: Compile, given: str, percent: float
+    compile_text: Compile, given: str, percent: float, shown: str
 ) -> None:
     """``-p low_battery=0.2`` was refused ("has no unit") while the same command's
-    ``--battery 0.2`` was taken: a plain number below 1 is a share of the whole for both."""
-    assert compile_text(PERCENT_PARAMETER, {"low": given}).parameters == {"low": percent}
+    ``--battery 0.2`` was taken: a plain number below 1 is a share of the whole for both,
+    as ``--battery`` reads a plain number (``1e-1`` as well as ``.2``). It is shown as the
+    percent it means wherever the value is inserted: ``battery(below=0.2)`` and the log's
+    ``below 0.2`` read as 0.2 %."""
+    mission = compile_text(PERCENT_PARAMETER, {"low": given})
+    assert mission.parameters == {"low": percent}
+    names = [node.name for node in mission.root.iterate()]
+    assert names[1:3] == [f"battery(below={shown})", f"log(below {shown})"], names
 
 
+@pytest.mark.parametrize(("given", "percent"), [("20", "20%"), ("1e1", "10%"), ("1.50", "1.5%")])
 def test_a_bare_percent_of_one_or_more_is_refused_with_both_ways_to_write_it(
-    errors_of: Callable[..., list[str]],
+    errors_of: Callable[..., list[str]], given: str, percent: str
 ) -> None:
-    """``1`` could mean 1% or all of it: refused, the message naming ``20%`` and the share."""
-    (said,) = errors_of(PERCENT_PARAMETER, {"low": "20"})
+    """``1`` could mean 1% or all of it: refused, the message naming the percent and the
+    share, the percent as people write it (``10%``, not ``1e+1%``)."""
+    (said,) = errors_of(PERCENT_PARAMETER, {"low": given})
     assert said == (
-        "2:3: parameter low=20 (given in params): '20' has no unit; write 20% (a plain number "
-        "below 1 is a share of the whole: 0.2 is 20%)"
+        f"2:3: parameter low={given} (given in params): '{given}' has no unit; write {percent} "
+        "(a plain number below 1 is a share of the whole: 0.2 is 20%)"
     )
 
 
