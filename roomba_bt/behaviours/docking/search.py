@@ -10,9 +10,12 @@ The search is a state machine (:class:`SearchState`)::
                │                          │
                └────── (bump, cliff) ─────┘
 
+    any of them ──(trapped: a chair's legs)──> RETRACE ──(clear of the trap)──> TURN
+                                                  └────(bump, cliff)──> BACK
+
 A state's method returns the tick's status, or None after handing over to the next state,
 which then acts in the same tick (every such hand-over goes down the list above:
-SPIN, FOLLOW, BACK, UNWEDGE, TURN, FORWARD).
+SPIN, FOLLOW, BACK, UNWEDGE, TURN, FORWARD; RETRACE hands over to TURN or BACK).
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from roomba_bt.behaviours.docking.common import (
     declare_stage,
     hazard_of,
 )
+from roomba_bt.behaviours.docking.escape import Point, Trail, way_through
 from roomba_bt.behaviours.units import BOOL, DISTANCE, enum
 from roomba_bt.oi.bits import BUMP_BITS, LIGHT_BUMPER_AHEAD_BITS, LIGHT_BUMPER_BITS
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
@@ -117,6 +121,16 @@ FOLLOW_BUMPS = 6
 #: not one: a correction a still wheel makes a pivot is still made, and sooner
 SPEED_SHARES = ((CORNER_INNER_SHARE, "on the inside of its arc round a wall's end"),)
 
+# Leaving a trap the way it came in (:mod:`~roomba_bt.behaviours.docking.escape`).
+#: speed on the way out (mm/s): slow, since a gap 3 cm wider than the robot is threaded by
+#: odometry
+RETRACE_MM_S = 100.0
+#: a point of the way out counts as reached this close (mm), or this close and behind
+REACHED_MM = 8.0
+PASSED_MM = 30.0
+#: further off the heading to the next point than this (rad), the robot stops and turns to it
+REAIM_RAD = math.radians(30)
+
 Cell = tuple[int, int]
 
 
@@ -127,13 +141,16 @@ class SearchState(IdentityEnum):
     UNWEDGE = "unwedge"
     TURN = "turn"
     FORWARD = "forward"
+    RETRACE = "retrace"
 
 
 #: The hazards each state stops for (backs off, or follows what is ahead): on a leg, any;
 #: along a wall, all but an obstacle ahead (the wall itself); turning or backing off, none.
+#: Leaving a trap, the legs beside the way are seen all along: it stops for a bump or a drop.
 STOPS_FOR: dict[SearchState, frozenset[Hazard]] = {
     SearchState.FORWARD: frozenset(Hazard),
     SearchState.FOLLOW: frozenset(Hazard) - {Hazard.OBSTACLE},
+    SearchState.RETRACE: frozenset(Hazard) - {Hazard.OBSTACLE},
 }
 
 
@@ -222,6 +239,8 @@ class DockSearch(DockingAction):
     from the wall and follows on; after six bumps on one wall it crosses the room instead.
     Bumps, cliffs and virtual walls met while crossing make it back off and choose again;
     the spin happens once per leaf, not again when a retry restarts it after a cliff.
+    Trapped (30 s within a 0.5 m circle, ten hazards met there: between a chair's legs), it
+    drives back out the way it came in, by odometry (:mod:`.escape`), and searches on.
     """
 
     stage = "search"
@@ -235,12 +254,13 @@ class DockSearch(DockingAction):
         "_follow_for", "_follow_hand", "_follow_lost", "_follow_side", "_follow_speed",
         "_follow_steer", "_hazard", "_kept", "_leg", "_lit", "_lit_ahead", "_old_cells",
         "_resume_follow", "_signals", "_speed", "_spun", "_target", "_wall_seen_at", "_want_wall",
-        "state",
+        "_way", "_aimed", "_retreat", "state",
     )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)
         self.grid = VisitGrid()
+        self.trail = Trail()  # kept across starts, as the grid
         #: an attribute of each node, not a class default: CPython 3.11 does not specialise
         #: reading an attribute whose class holds an instance of a Python class (an enum
         #: member) under the same name, read on every tick (``_ACTS[self.state]``)
@@ -276,6 +296,7 @@ class DockSearch(DockingAction):
         self._follow_steer = speed * WALL_STEER_SHARE
         self._follow_hand = 1 if self.value("wall_side") == "right" else -1
         self._kept = None  # the speeds may differ from the last start's
+        self.trail.restart(self.snapshot.odometry, self.snapshot.time)
 
     def bind(self, frame: SensorFrame) -> None:
         super().bind(frame)
@@ -310,6 +331,9 @@ class DockSearch(DockingAction):
         self._cell = cell = (math.floor(odo.x_mm / CELL_MM), math.floor(odo.y_mm / CELL_MM))
         visits = self.grid.visits
         visits[cell] = visits.get(cell, 0.0) + TICK_VISIT_WEIGHT
+        trail = self.trail
+        if odo.path_mm >= trail.next_crumb_at:
+            trail.drop(odo, now)
         hazard = self._hazard
         if hazard is not None and hazard in STOPS_FOR.get(self.state, ()):
             self._meet(hazard, odo, now)
@@ -329,6 +353,18 @@ class DockSearch(DockingAction):
         cliff = hazard is Hazard.CLIFF
         self.grid.visit(hx, hy, CLIFF_VISIT_WEIGHT if cliff else HAZARD_VISIT_WEIGHT)
         self.grid.hazards.append((hx, hy))
+        if self.state is SearchState.RETRACE:
+            if len(self._way) == 1 and self._retreat is not None:
+                # the line on through the trap is blocked: back along it, out the way in
+                self._way, self._retreat = [self._retreat], None
+                self._aimed = False
+                return
+            # off the way out after all (odometry drift, or something moved): search on,
+            # and give the next stay its full time before another way out
+            self.trail.restart(odo, now)
+        elif self.trail.met_hazard(now):
+            self._leave_trap(odo)
+            return
         if (
             hazard is Hazard.OBSTACLE
             and self.state is SearchState.FORWARD
@@ -432,6 +468,52 @@ class DockSearch(DockingAction):
         self.wheels(speed - turn, speed + turn)
         return RUNNING
 
+    # leaving a trap ----------------------------------------------------------------
+    def _leave_trap(self, odo: Odometry) -> None:
+        """Trapped (:meth:`.escape.Trail.met_hazard`): back to where it came into the trap,
+        then on along the line it came in by, through and out the far side
+        (:func:`.escape.way_through`); a bump on that line sends it back out the way it came
+        (:meth:`_meet`)."""
+        self.state = SearchState.RETRACE
+        back = self.trail.way_back(odo)
+        through = way_through(back)
+        if through is None:
+            self._way, self._retreat = back[::-1], None
+        else:
+            self._way, self._retreat = [through, *back[-2::-1]], back[-1]
+        self._aimed = False
+
+    def _retrace(self, snap: Snapshot) -> Status | None:
+        """The way out, point by point: turn in place to face the next point, drive to it
+        steering onto it; clear of the trap, the search chooses a heading away from it (its
+        centre is marked as a hazard, and its cells are heavy with the ticks spent there)."""
+        odo = snap.odometry
+        way = self._way
+        while way:
+            x, y = way[-1]
+            dx, dy = x - odo.x_mm, y - odo.y_mm
+            distance = math.hypot(dx, dy)
+            err = math.remainder(math.atan2(dy, dx) - odo.theta_rad, math.tau)
+            if distance < REACHED_MM or (distance < PASSED_MM and abs(err) > math.pi / 2):
+                way.pop()
+                self._aimed = False
+                continue
+            if not self._aimed or abs(err) > REAIM_RAD:
+                self._aimed = self.spin_to(err, TURN)
+                if not self._aimed:
+                    return RUNNING
+            turn = max(-STEER_LIMIT_MM_S, min(STEER_LIMIT_MM_S, STEER_MM_S_PER_RAD * err))
+            self.wheels(RETRACE_MM_S - turn, RETRACE_MM_S + turn)
+            return RUNNING
+        trap_x, trap_y = self.trail.anchor
+        self.grid.hazards.append((trap_x, trap_y))
+        self.trail.restart(odo, snap.time)
+        self._target = self.grid.choose_heading(
+            odo, math.atan2(trap_y - odo.y_mm, trap_x - odo.x_mm)
+        )
+        self.state = SearchState.TURN
+        return None
+
     # wall following ----------------------------------------------------------------
     def _start_follow(self) -> None:
         self.state = SearchState.FOLLOW
@@ -513,6 +595,11 @@ class DockSearch(DockingAction):
     state: SearchState
     _wall_seen_at: float | None
     _cell: Cell
+    #: the way out of a trap, the next point last (RETRACE), and whether facing it
+    _way: list[Point]
+    _aimed: bool
+    #: where the way back leaves the trap, while the line through it is being tried
+    _retreat: Point | None
     # the readings (read)
     _hazard: Hazard | None
     _signals: Callable[[tuple[int, ...]], tuple[int, int, int, int, int, int]]
@@ -529,4 +616,5 @@ _ACTS: dict[SearchState, Callable[[DockSearch, Snapshot], Status | None]] = {
     SearchState.UNWEDGE: DockSearch._unwedge,
     SearchState.TURN: DockSearch._turn,
     SearchState.FORWARD: DockSearch._forward,
+    SearchState.RETRACE: DockSearch._retrace,
 }

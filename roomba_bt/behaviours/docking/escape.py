@@ -1,0 +1,156 @@
+"""How ``dock_search`` notices it is trapped, and the way out it then drives.
+
+A chair's four legs stand about 40 cm apart: a 34 cm robot drives in between two of them by
+chance, and inside, every heading but the one it came in by meets a leg. The search's rule
+(back off a bump, choose the least visited heading, drive on) then bumps about in a 37 cm
+space until the time limit (a floor owner's dining room, ``tests/data/dining.yaml``: ten
+minutes under chair N2). The way in is the one way out the robot knows of, and it knows it
+from its odometry alone: :class:`Trail` keeps where the robot has been (a crumb every
+:data:`CRUMB_MM` of path), says when the search has stayed near one point for long with many
+hazards met there (:meth:`Trail.met_hazard`), and gives the crumbs back to a point clear of
+the trap (:meth:`Trail.way_out`), which the search then drives in reverse order. Every crumb
+is a place the robot stood, so the way out touches nothing the way in did not.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+from roomba_bt.robot.interface import Odometry
+
+Point = tuple[float, float]
+
+#: a crumb of the trail every this much path (mm): fine enough for a gap 3 cm wider than the
+#: robot, where the way in is the line through it
+CRUMB_MM = 20.0
+#: crumbs kept: the last 40 m of the way, far more than a trap's tangle and the way into it
+CRUMBS_KEPT = 2000
+#: trapped: within this distance (mm) of one point (a 0.5 m circle) ...
+TRAPPED_RADIUS_MM = 250.0
+#: ... for this long (s) ...
+TRAPPED_S = 30.0
+#: ... meeting this many hazards there (a wall follow along a short wall meets two or three;
+#: inside a chair the search meets one every two or three seconds)
+TRAPPED_HAZARDS = 10
+#: the way out ends at the first crumb (going back) this far (mm) from the trap's centre: the
+#: robot's diameter beyond the circle, clear of the legs that held it
+CLEAR_OF_TRAP_MM = 600.0
+#: two crumbs in the same square of this side (mm) are joined, the loop between them left out:
+#: the robot stood at both, and no leg fits between two places it stood 3 cm apart
+JOIN_MM = 20.0
+#: crumbs closer than this (mm) to the straight line between two kept ones are left out: the
+#: way out is driven as straight lines between the corners of the way in
+STRAIGHT_WITHIN_MM = 5.0
+
+
+class Trail:
+    """The robot's recent way (odometry frame), and whether it is trapped in a small space.
+
+    :meth:`drop` is called each time the path has grown by :data:`CRUMB_MM` (the caller
+    compares ``odometry.path_mm`` with :attr:`next_crumb_at` on every tick: one comparison).
+    The trap's centre (the anchor) is the first crumb of the current stay: a crumb farther
+    than :data:`TRAPPED_RADIUS_MM` from it starts a new stay there."""
+
+    def __init__(self) -> None:
+        self.crumbs: deque[Point] = deque(maxlen=CRUMBS_KEPT)
+        self.next_crumb_at = 0.0
+        self.anchor: Point = (0.0, 0.0)
+        self._anchored_at = 0.0
+        self._hazards = 0
+
+    def restart(self, odo: Odometry, now: float) -> None:
+        """A new stay from here (a search started, or a way out driven): the time and the
+        hazards of the last stay no longer count."""
+        self.anchor = (odo.x_mm, odo.y_mm)
+        self._anchored_at = now
+        self._hazards = 0
+        self.next_crumb_at = odo.path_mm
+
+    def drop(self, odo: Odometry, now: float) -> None:
+        """A crumb where the robot is; a new stay if it has left the last one's circle."""
+        x, y = odo.x_mm, odo.y_mm
+        self.crumbs.append((x, y))
+        self.next_crumb_at = odo.path_mm + CRUMB_MM
+        ax, ay = self.anchor
+        if (x - ax) ** 2 + (y - ay) ** 2 > TRAPPED_RADIUS_MM**2:
+            self.anchor = (x, y)
+            self._anchored_at = now
+            self._hazards = 0
+
+    def met_hazard(self, now: float) -> bool:
+        """Count a hazard met in this stay: True when the stay has lasted
+        :data:`TRAPPED_S` with :data:`TRAPPED_HAZARDS` met (time to leave the way it came)."""
+        self._hazards += 1
+        return self._hazards >= TRAPPED_HAZARDS and now - self._anchored_at >= TRAPPED_S
+
+    def way_back(self, odo: Odometry) -> list[Point]:
+        """The crumbs back to the first one :data:`CLEAR_OF_TRAP_MM` from the trap's centre
+        (or the oldest kept), loops left out and straight runs reduced to their ends, in the
+        order driven: the robot's place first, the point clear of the trap last."""
+        crumbs = list(self.crumbs)
+        crumbs.append((odo.x_mm, odo.y_mm))
+        # the earliest crumb in each square: going back, a loop since then is left out
+        earliest: dict[tuple[int, int], int] = {}
+        for index, point in enumerate(crumbs):
+            earliest.setdefault(_square(point), index)
+        ax, ay = self.anchor
+        way: list[Point] = []
+        index = len(crumbs) - 1
+        while index >= 0:
+            index = earliest[_square(crumbs[index])]
+            x, y = crumbs[index]
+            way.append((x, y))
+            if math.hypot(x - ax, y - ay) >= CLEAR_OF_TRAP_MM:
+                break
+            index -= 1
+        return straightened(way)
+
+
+def way_through(way_back: list[Point]) -> Point | None:
+    """Where the line the robot came in by leads on, as far past the trap again: a chair's
+    far gap lies on that line when the robot came in square to the chair, and beyond it is
+    open floor (the way back may lead only into a table's cage of chairs). None when the way
+    back is one straight line (no corner inside the trap to go on from)."""
+    if len(way_back) < 3:
+        return None
+    (cx, cy), (px, py) = way_back[-1], way_back[-2]
+    dx, dy = px - cx, py - cy
+    length = math.hypot(dx, dy)
+    if not length:
+        return None
+    reach = 2.0 * CLEAR_OF_TRAP_MM
+    return (cx + dx / length * reach, cy + dy / length * reach)
+
+
+def _square(point: Point) -> tuple[int, int]:
+    return (math.floor(point[0] / JOIN_MM), math.floor(point[1] / JOIN_MM))
+
+
+def straightened(way: list[Point]) -> list[Point]:
+    """``way`` with the points within :data:`STRAIGHT_WITHIN_MM` of the line between their
+    neighbours left out (Douglas-Peucker, with a stack rather than recursion: a straight
+    leg of the trail is hundreds of crumbs); the first and last are always kept."""
+    if len(way) < 3:
+        return list(way)
+    keep = [False] * len(way)
+    keep[0] = keep[-1] = True
+    spans = [(0, len(way) - 1)]
+    while spans:
+        first, last = spans.pop()
+        (x0, y0), (x1, y1) = way[first], way[last]
+        dx, dy = x1 - x0, y1 - y0
+        length = math.hypot(dx, dy)
+        farthest, far_index = 0.0, first
+        for index in range(first + 1, last):
+            px, py = way[index]
+            if length:
+                off = abs(dx * (py - y0) - dy * (px - x0)) / length
+            else:
+                off = math.hypot(px - x0, py - y0)
+            if off > farthest:
+                farthest, far_index = off, index
+        if farthest > STRAIGHT_WITHIN_MM:
+            keep[far_index] = True
+            spans += [(first, far_index), (far_index, last)]
+    return [point for point, kept in zip(way, keep, strict=True) if kept]
