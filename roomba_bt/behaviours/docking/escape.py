@@ -36,9 +36,12 @@ TRAPPED_HAZARDS = 10
 #: the way out ends at the first crumb (going back) this far (mm) from the trap's centre: the
 #: robot's diameter beyond the circle, clear of the legs that held it
 CLEAR_OF_TRAP_MM = 600.0
-#: two crumbs in the same square of this side (mm) are joined, the loop between them left out:
-#: the robot stood at both, and no leg fits between two places it stood 3 cm apart
+#: two crumbs in the same or neighbouring squares of this side (mm), at most 6 cm apart, are
+#: joined and the loop between them left out: the robot stood at both, and what lies between
+#: two places a 34 cm disc stood 6 cm apart is at most 2.3 mm from both (no leg fits there)
 JOIN_MM = 20.0
+#: the line on through the trap is tried up to this far (mm) from where it left the circle
+THROUGH_MM = 1200.0
 #: crumbs closer than this (mm) to the straight line between two kept ones are left out: the
 #: way out is driven as straight lines between the corners of the way in
 STRAIGHT_WITHIN_MM = 5.0
@@ -98,7 +101,10 @@ class Trail:
         way: list[Point] = []
         index = len(crumbs) - 1
         while index >= 0:
-            index = earliest[_square(crumbs[index])]
+            sx, sy = _square(crumbs[index])
+            index = min(
+                earliest.get((sx + dx, sy + dy), index) for dx in (-1, 0, 1) for dy in (-1, 0, 1)
+            )
             x, y = crumbs[index]
             way.append((x, y))
             if math.hypot(x - ax, y - ay) >= CLEAR_OF_TRAP_MM:
@@ -107,20 +113,29 @@ class Trail:
         return straightened(way)
 
 
-def way_through(way_back: list[Point]) -> Point | None:
-    """Where the line the robot came in by leads on, as far past the trap again: a chair's
-    far gap lies on that line when the robot came in square to the chair, and beyond it is
-    open floor (the way back may lead only into a table's cage of chairs). None when the way
-    back is one straight line (no corner inside the trap to go on from)."""
-    if len(way_back) < 3:
-        return None
-    (cx, cy), (px, py) = way_back[-1], way_back[-2]
-    dx, dy = px - cx, py - cy
-    length = math.hypot(dx, dy)
-    if not length:
-        return None
-    reach = 2.0 * CLEAR_OF_TRAP_MM
-    return (cx + dx / length * reach, cy + dy / length * reach)
+def plan_way_out(way_back: list[Point], trap: Point) -> tuple[list[Point], list[Point]]:
+    """The way out of the trap centred on ``trap``, and the way back should it be blocked,
+    each with the next point last (popped as each is reached).
+
+    The way out goes back to the straight line the robot came into the trap's circle by, and
+    on along it, :data:`THROUGH_MM` from where it crossed the circle: a chair's far gap lies
+    on that line when the robot came in square to the chair, and beyond it is open floor,
+    where the way back may lead only into a table's cage of chairs (``tests/data/dining.yaml``:
+    under the table every way out is through a chair). The way back is the rest of
+    ``way_back``, from where that line crossed the circle."""
+    tx, ty = trap
+    outside = [
+        index
+        for index, (x, y) in enumerate(way_back)
+        if (x - tx) ** 2 + (y - ty) ** 2 > TRAPPED_RADIUS_MM**2
+    ]
+    if not outside or outside[0] == 0:
+        return way_back[::-1], []
+    crossed = outside[0]
+    (ox, oy), (ix, iy) = way_back[crossed], way_back[crossed - 1]
+    length = math.hypot(ix - ox, iy - oy)
+    through = (ox + (ix - ox) / length * THROUGH_MM, oy + (iy - oy) / length * THROUGH_MM)
+    return [through, *way_back[crossed - 1 :: -1]], way_back[: crossed - 1 : -1]
 
 
 def _square(point: Point) -> tuple[int, int]:

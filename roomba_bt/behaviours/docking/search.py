@@ -39,7 +39,7 @@ from roomba_bt.behaviours.docking.common import (
     declare_stage,
     hazard_of,
 )
-from roomba_bt.behaviours.docking.escape import Point, Trail, way_through
+from roomba_bt.behaviours.docking.escape import CLEAR_OF_TRAP_MM, Point, Trail, plan_way_out
 from roomba_bt.behaviours.units import BOOL, DISTANCE, enum
 from roomba_bt.oi.bits import BUMP_BITS, LIGHT_BUMPER_AHEAD_BITS, LIGHT_BUMPER_BITS
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
@@ -130,6 +130,8 @@ REACHED_MM = 8.0
 PASSED_MM = 30.0
 #: further off the heading to the next point than this (rad), the robot stops and turns to it
 REAIM_RAD = math.radians(30)
+#: hazards met on the way out (off the line through) before it is given up
+WAY_BUMPS = 3
 
 Cell = tuple[int, int]
 
@@ -250,11 +252,11 @@ class DockSearch(DockingAction):
 
     #: the stage's own state in slots (see :class:`~.common.DockingAction`)
     __slots__ = (
-        "_avoid", "_back_until", "_bumped", "_cell", "_follow_bumps", "_follow_cells",
-        "_follow_for", "_follow_hand", "_follow_lost", "_follow_side", "_follow_speed",
-        "_follow_steer", "_hazard", "_kept", "_leg", "_lit", "_lit_ahead", "_old_cells",
-        "_resume_follow", "_signals", "_speed", "_spun", "_target", "_wall_seen_at", "_want_wall",
-        "_way", "_aimed", "_retreat", "state",
+        "_aimed", "_avoid", "_back_until", "_bumped", "_cell", "_escaping", "_follow_bumps",
+        "_follow_cells", "_follow_for", "_follow_hand", "_follow_lost", "_follow_side",
+        "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_lit", "_lit_ahead",
+        "_old_cells", "_resume_follow", "_retreat", "_signals", "_speed", "_spun", "_target",
+        "_trap", "_wall_seen_at", "_want_wall", "_way", "_way_bumps", "state",
     )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
@@ -297,6 +299,7 @@ class DockSearch(DockingAction):
         self._follow_hand = 1 if self.value("wall_side") == "right" else -1
         self._kept = None  # the speeds may differ from the last start's
         self.trail.restart(self.snapshot.odometry, self.snapshot.time)
+        self._escaping = False
 
     def bind(self, frame: SensorFrame) -> None:
         super().bind(frame)
@@ -353,17 +356,14 @@ class DockSearch(DockingAction):
         cliff = hazard is Hazard.CLIFF
         self.grid.visit(hx, hy, CLIFF_VISIT_WEIGHT if cliff else HAZARD_VISIT_WEIGHT)
         self.grid.hazards.append((hx, hy))
-        if self.state is SearchState.RETRACE:
-            if len(self._way) == 1 and self._retreat is not None:
-                # the line on through the trap is blocked: back along it, out the way in
-                self._way, self._retreat = [self._retreat], None
-                self._aimed = False
-                return
-            # off the way out after all (odometry drift, or something moved): search on,
-            # and give the next stay its full time before another way out
-            self.trail.restart(odo, now)
-        elif self.trail.met_hazard(now):
-            self._leave_trap(odo)
+        if self._escaping:
+            self._met_leaving(odo, now, cliff)
+            return
+        if self.trail.met_hazard(now):
+            # trapped: back off this, then out (:meth:`_back` plans the way)
+            self._escaping, self._way, self._retreat = True, [], []
+            self._way_bumps = 0
+            self._back_off(odo, now, cliff)
             return
         if (
             hazard is Hazard.OBSTACLE
@@ -375,6 +375,9 @@ class DockSearch(DockingAction):
         # a bump while following (a door jamb, a chair leg) is part of the same wall:
         # back off and follow on with the same hand
         self._resume_follow = self.state is SearchState.FOLLOW and hazard is Hazard.BUMP
+        self._back_off(odo, now, cliff)
+
+    def _back_off(self, odo: Odometry, now: float, cliff: bool) -> None:
         self.state = SearchState.BACK
         self._back_until = now + (BACK_OFF_CLIFF_S if cliff else BACK_OFF_S)
         self._avoid = odo.theta_rad
@@ -411,6 +414,15 @@ class DockSearch(DockingAction):
         if snap.time < self._back_until:
             self.wheels(-BACK_MM_S, -BACK_MM_S)
             return RUNNING
+        if self._escaping:
+            if not self._way:
+                self._way, self._retreat = plan_way_out(
+                    self.trail.way_back(snap.odometry), self.trail.anchor
+                )
+                self._trap = self.trail.anchor
+            self.state = SearchState.RETRACE
+            self._aimed = False
+            return None
         if self._resume_follow:
             # turn away from the wall side, then follow on with the same hand; a wall
             # that keeps bumping (a corner too tight for the robot) is given up
@@ -469,19 +481,19 @@ class DockSearch(DockingAction):
         return RUNNING
 
     # leaving a trap ----------------------------------------------------------------
-    def _leave_trap(self, odo: Odometry) -> None:
-        """Trapped (:meth:`.escape.Trail.met_hazard`): back to where it came into the trap,
-        then on along the line it came in by, through and out the far side
-        (:func:`.escape.way_through`); a bump on that line sends it back out the way it came
-        (:meth:`_meet`)."""
-        self.state = SearchState.RETRACE
-        back = self.trail.way_back(odo)
-        through = way_through(back)
-        if through is None:
-            self._way, self._retreat = back[::-1], None
+    def _met_leaving(self, odo: Odometry, now: float, cliff: bool) -> None:
+        """A hazard on the way out of a trap: on the line through it, that way is shut (back
+        off, then out the way it came in); elsewhere, back off and go on, and after
+        :data:`WAY_BUMPS` such the way out is given up (odometry drift, or something moved)
+        and the search goes on, the next stay given its full time before another way out."""
+        if len(self._way) == 1 and self._retreat:
+            self._way, self._retreat = self._retreat, []
         else:
-            self._way, self._retreat = [through, *back[-2::-1]], back[-1]
-        self._aimed = False
+            self._way_bumps += 1
+            if self._way_bumps > WAY_BUMPS:
+                self._escaping = False
+                self.trail.restart(odo, now)
+        self._back_off(odo, now, cliff)
 
     def _retrace(self, snap: Snapshot) -> Status | None:
         """The way out, point by point: turn in place to face the next point, drive to it
@@ -489,7 +501,8 @@ class DockSearch(DockingAction):
         centre is marked as a hazard, and its cells are heavy with the ticks spent there)."""
         odo = snap.odometry
         way = self._way
-        while way:
+        trap_x, trap_y = self._trap
+        while way and math.hypot(odo.x_mm - trap_x, odo.y_mm - trap_y) < CLEAR_OF_TRAP_MM:
             x, y = way[-1]
             dx, dy = x - odo.x_mm, y - odo.y_mm
             distance = math.hypot(dx, dy)
@@ -505,8 +518,9 @@ class DockSearch(DockingAction):
             turn = max(-STEER_LIMIT_MM_S, min(STEER_LIMIT_MM_S, STEER_MM_S_PER_RAD * err))
             self.wheels(RETRACE_MM_S - turn, RETRACE_MM_S + turn)
             return RUNNING
-        trap_x, trap_y = self.trail.anchor
-        self.grid.hazards.append((trap_x, trap_y))
+        self._escaping = False
+        way.clear()
+        self.grid.hazards.append(self._trap)
         self.trail.restart(odo, snap.time)
         self._target = self.grid.choose_heading(
             odo, math.atan2(trap_y - odo.y_mm, trap_x - odo.x_mm)
@@ -595,11 +609,14 @@ class DockSearch(DockingAction):
     state: SearchState
     _wall_seen_at: float | None
     _cell: Cell
-    #: the way out of a trap, the next point last (RETRACE), and whether facing it
+    #: leaving a trap (centred on ``_trap``): the way out, the next point last, and whether
+    #: facing it; the way back out should the line through be shut; the hazards met on it
+    _escaping: bool
+    _trap: Point
     _way: list[Point]
     _aimed: bool
-    #: where the way back leaves the trap, while the line through it is being tried
-    _retreat: Point | None
+    _retreat: list[Point]
+    _way_bumps: int
     # the readings (read)
     _hazard: Hazard | None
     _signals: Callable[[tuple[int, ...]], tuple[int, int, int, int, int, int]]
