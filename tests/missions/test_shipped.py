@@ -162,6 +162,24 @@ def test_dock_from_another_room(tmp_path: Path, x: float, y: float, heading: int
                        timeout_s=660))  # fmt: skip
 
 
+DINING = ROOT / "tests" / "data" / "dining.yaml"
+
+
+def test_dock_from_under_a_table_ringed_by_chairs(tmp_path: Path) -> None:
+    """A floor owner's dining room (cleaner's finding 1, seed 109): under the table every way
+    out passes between a chair's legs (37 cm apart, the robot 34 cm), in and out again. The
+    search got into chair N2 at about 130 s, bumped about in it and failed on the 10-minute
+    limit. Now it notices the trap and leaves along the line it came in by, out through the
+    chair's far side, and docks within the limit (the mission's own ``time_limit``)."""
+    text = DINING.read_text()
+    start = "start: {at: [3.5, 0.172], heading: -90}"
+    assert start in text
+    world = tmp_path / "dining-under-the-table.yaml"
+    world.write_text(text.replace(start, "start: {at: [2.40, 2.00], heading: 0}"))
+    _docks(EpisodeSpec(str(MISSIONS / "dock.yaml"), str(world), random_start=False,
+                       timeout_s=660))  # fmt: skip
+
+
 def test_dock_gives_up_naming_the_stage(cliff_world: str) -> None:
     """No dock in the world: the time limit fails with the stage that was running."""
     result = run_episode(
