@@ -21,7 +21,8 @@ The stages, each a leaf whose failure message names the stage (``search: ...``,
 ``dock_search``
     spin once in place, then wander toward the least visited space (a coarse visit grid in
     the odometry frame), backing away from bumps, cliffs and light-bumper obstacles, until a
-    dock character is seen.
+    dock character is seen; trapped in a small space (between a chair's legs), it leaves
+    along the line it came in by (:mod:`.escape`).
 ``dock_approach``
     face the dock; if off its axis, turn toward the axis and move until the centre is on it
     (the omni receiver finds both edges of the band where it sees both buoys), then face the

@@ -8,8 +8,10 @@ minutes under chair N2). The way in is the one way out the robot knows of, and i
 from its odometry alone: :class:`Trail` keeps where the robot has been (a crumb every
 :data:`CRUMB_MM` of path), says when the search has stayed near one point for long with many
 hazards met there (:meth:`Trail.met_hazard`), and gives the crumbs back to a point clear of
-the trap (:meth:`Trail.way_out`), which the search then drives in reverse order. Every crumb
-is a place the robot stood, so the way out touches nothing the way in did not.
+the trap (:meth:`Trail.way_back`). Every crumb is a place the robot stood, so that way
+touches nothing the way in did not. :func:`plan_way_out` makes of it the way the search
+drives: back to the line it came in by, then on along it through the trap; the rest of the
+way back is kept for when that line is shut.
 """
 
 from __future__ import annotations
