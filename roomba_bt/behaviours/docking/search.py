@@ -10,12 +10,13 @@ The search is a state machine (:class:`SearchState`)::
                │                          │
                └────── (bump, cliff) ─────┘
 
-    any of them ──(trapped: a chair's legs)──> RETRACE ──(clear of the trap)──> TURN
-                                                  └────(bump, cliff)──> BACK
+    FORWARD, FOLLOW ──(trapped: a chair's legs)──> BACK ──> RETRACE ──(clear of it)──> TURN
+                                                     ^          │
+                                                     └─(bump)───┘
 
 A state's method returns the tick's status, or None after handing over to the next state,
 which then acts in the same tick (every such hand-over goes down the list above:
-SPIN, FOLLOW, BACK, UNWEDGE, TURN, FORWARD; RETRACE hands over to TURN or BACK).
+SPIN, FOLLOW, BACK, UNWEDGE, TURN, FORWARD; and BACK to RETRACE, RETRACE to TURN).
 """
 
 from __future__ import annotations
@@ -242,7 +243,8 @@ class DockSearch(DockingAction):
     Bumps, cliffs and virtual walls met while crossing make it back off and choose again;
     the spin happens once per leaf, not again when a retry restarts it after a cliff.
     Trapped (30 s within a 0.5 m circle, ten hazards met there: between a chair's legs), it
-    drives back out the way it came in, by odometry (:mod:`.escape`), and searches on.
+    goes back to the line it came in by and on along it through the trap, or back out the way
+    it came if that line is shut, by odometry (:mod:`.escape`), and searches on.
     """
 
     stage = "search"
@@ -378,6 +380,8 @@ class DockSearch(DockingAction):
         self._back_off(odo, now, cliff)
 
     def _back_off(self, odo: Odometry, now: float, cliff: bool) -> None:
+        """Back away from what was met (longer from a drop), and remember the heading it
+        was met at: the next heading chosen turns well away from it."""
         self.state = SearchState.BACK
         self._back_until = now + (BACK_OFF_CLIFF_S if cliff else BACK_OFF_S)
         self._avoid = odo.theta_rad
