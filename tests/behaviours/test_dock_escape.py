@@ -20,34 +20,47 @@ from roomba_bt.robot.interface import Odometry
 
 
 def walk(trail: Trail, points: list[Point], start_s: float = 0.0) -> Odometry:
-    """Drop a crumb at each point, one a second, as the search's ticks would; the odometry
+    """A crumb at each point, one a second, as the search's ticks leave them; the odometry
     at the last point."""
-    odo = Odometry()
     for second, (x, y) in enumerate(points):
-        odo = Odometry(x_mm=x, y_mm=y, path_mm=odo.path_mm + CRUMB_MM)
-        trail.drop(odo, start_s + second)
-    return odo
+        trail.crumbs.append((x, y, start_s + second))
+    x, y = points[-1]
+    return Odometry(x_mm=x, y_mm=y)
 
 
-def test_a_long_stay_with_many_hazards_is_a_trap_and_a_short_or_quiet_one_is_not() -> None:
+def hazards(trail: Trail, odo: Odometry, times: list[float]) -> list[bool]:
+    return [trail.met_hazard(odo, now) for now in times]
+
+
+def test_a_long_stay_with_many_hazards_is_a_trap() -> None:
     trail = Trail()
-    trail.restart(Odometry(), 0.0)
-    walk(trail, [(10.0 * (i % 5), 0.0) for i in range(40)])  # to and fro within 5 cm
-    assert not any(trail.met_hazard(now=TRAPPED_S - 1.0) for _ in range(TRAPPED_HAZARDS))
-    assert trail.met_hazard(now=TRAPPED_S)
-    quiet = Trail()
-    quiet.restart(Odometry(), 0.0)
-    assert not quiet.met_hazard(now=TRAPPED_S * 10)  # one hazard in a long stay: no trap
+    odo = walk(trail, [(10.0 * (i % 5), 0.0) for i in range(40)])  # to and fro within 5 cm
+    found = hazards(trail, odo, [39.0 - i for i in range(TRAPPED_HAZARDS, 0, -1)] + [39.0])
+    assert found == [False] * (TRAPPED_HAZARDS - 1) + [True, True]
+    assert 15.0 < trail.centre[0] < 25.0 and trail.centre[1] == 0.0  # the stay's middle
 
 
-def test_leaving_the_circle_starts_a_new_stay() -> None:
+def test_few_hazards_a_short_stay_or_a_restart_is_no_trap() -> None:
     trail = Trail()
-    trail.restart(Odometry(), 0.0)
-    for _ in range(TRAPPED_HAZARDS):
-        trail.met_hazard(now=1.0)
-    walk(trail, [(0.0, 100.0 * i) for i in range(5)], start_s=TRAPPED_S)  # 40 cm away
-    assert trail.anchor == (0.0, 300.0)  # the first crumb past the circle's 25 cm
-    assert not trail.met_hazard(now=2 * TRAPPED_S)  # the hazards of the last stay are gone
+    odo = walk(trail, [(10.0 * (i % 5), 0.0) for i in range(40)])
+    spread = [39.0 - 4.0 * i for i in range(TRAPPED_HAZARDS, 0, -1)]  # over 40 s
+    assert not any(hazards(trail, odo, spread))  # ten, but not within TRAPPED_S
+    young = Trail()
+    odo = walk(young, [(0.0, 0.0)] * int(TRAPPED_S - 5))  # the trail is younger than a stay
+    assert not any(hazards(young, odo, [TRAPPED_S - 6.0] * (TRAPPED_HAZARDS + 1)))
+    restarted = Trail()
+    odo = walk(restarted, [(0.0, 0.0)] * 40)
+    hazards(restarted, odo, [39.0] * (TRAPPED_HAZARDS - 1))
+    restarted.restart()
+    assert not restarted.met_hazard(odo, 39.0)
+
+
+def test_a_stay_is_within_the_circle_all_the_time() -> None:
+    """Ten hazards within 30 s, but ten seconds ago the robot was 40 cm away: no trap."""
+    trail = Trail()
+    points = [(0.0, 0.0)] * 20 + [(400.0, 0.0)] + [(0.0, 0.0)] * 10
+    odo = walk(trail, points, start_s=0.0)
+    assert not any(hazards(trail, odo, [30.0] * TRAPPED_HAZARDS))
 
 
 def test_the_way_back_leaves_out_the_loops_and_ends_clear_of_the_trap() -> None:
@@ -57,7 +70,7 @@ def test_the_way_back_leaves_out_the_loops_and_ends_clear_of_the_trap() -> None:
     way_in = [(0.0, -1000.0 + CRUMB_MM * i) for i in range(51)]
     loop = [(100.0 * math.sin(a / 10), 100.0 * (1 - math.cos(a / 10))) for a in range(63)]
     odo = walk(trail, way_in + loop)
-    trail.restart(Odometry(), 0.0)  # the trap's centre at the origin
+    assert trail.centre == (0.0, 0.0)  # the trap's centre at the origin
     back = trail.way_back(odo)
     assert math.dist(back[0], (odo.x_mm, odo.y_mm)) < 60.0  # where it is, or a crumb by it
     assert all(abs(x) < 1e-6 for x, _ in back)  # the loop is left out

@@ -49,57 +49,65 @@ THROUGH_MM = 1200.0
 STRAIGHT_WITHIN_MM = 5.0
 
 
+#: a crumb: where the robot was (mm, odometry frame) and when (s)
+Crumb = tuple[float, float, float]
+
+
 class Trail:
     """The robot's recent way (odometry frame), and whether it is trapped in a small space.
 
-    :meth:`drop` is called each time the path has grown by :data:`CRUMB_MM` (the caller
-    compares ``odometry.path_mm`` with :attr:`next_crumb_at` on every tick: one comparison).
-    The trap's centre (the anchor) is the first crumb of the current stay: a crumb farther
-    than :data:`TRAPPED_RADIUS_MM` from it starts a new stay there."""
+    The search appends a crumb to :attr:`crumbs` each time its path has grown by
+    :data:`CRUMB_MM` (inline, on the tick path: one comparison a tick, an append every few);
+    all the rest is worked out when a hazard is met (:meth:`met_hazard`), a few times a
+    minute. The trap's centre is the middle of the crumbs of the stay that trapped it."""
 
     def __init__(self) -> None:
-        self.crumbs: deque[Point] = deque(maxlen=CRUMBS_KEPT)
-        self.next_crumb_at = 0.0
-        self.anchor: Point = (0.0, 0.0)
-        self._anchored_at = 0.0
-        self._hazards = 0
+        self.crumbs: deque[Crumb] = deque(maxlen=CRUMBS_KEPT)
+        #: when the last :data:`TRAPPED_HAZARDS` hazards were met (s)
+        self._hazards: deque[float] = deque(maxlen=TRAPPED_HAZARDS)
+        self.centre: Point = (0.0, 0.0)
 
-    def restart(self, odo: Odometry, now: float) -> None:
-        """A new stay from here (a search started, or a way out driven): the time and the
-        hazards of the last stay no longer count."""
-        self.anchor = (odo.x_mm, odo.y_mm)
-        self._anchored_at = now
-        self._hazards = 0
-        self.next_crumb_at = odo.path_mm
+    def restart(self) -> None:
+        """A new count (a search started, or a way out driven): the hazards met before no
+        longer count toward a trap."""
+        self._hazards.clear()
 
-    def drop(self, odo: Odometry, now: float) -> None:
-        """A crumb where the robot is; a new stay if it has left the last one's circle."""
+    def met_hazard(self, odo: Odometry, now: float) -> bool:
+        """Note a hazard met: True (the trap's centre noted) when
+        :data:`TRAPPED_HAZARDS` were met in the last :data:`TRAPPED_S` and the robot was
+        within :data:`TRAPPED_RADIUS_MM` of here all that time (time to leave)."""
+        hazards = self._hazards
+        hazards.append(now)
+        since = now - TRAPPED_S
+        if len(hazards) < TRAPPED_HAZARDS or hazards[0] < since:
+            return False
         x, y = odo.x_mm, odo.y_mm
-        self.crumbs.append((x, y))
-        self.next_crumb_at = odo.path_mm + CRUMB_MM
-        ax, ay = self.anchor
-        if (x - ax) ** 2 + (y - ay) ** 2 > TRAPPED_RADIUS_MM**2:
-            self.anchor = (x, y)
-            self._anchored_at = now
-            self._hazards = 0
-
-    def met_hazard(self, now: float) -> bool:
-        """Count a hazard met in this stay: True when the stay has lasted
-        :data:`TRAPPED_S` with :data:`TRAPPED_HAZARDS` met (time to leave the way it came)."""
-        self._hazards += 1
-        return self._hazards >= TRAPPED_HAZARDS and now - self._anchored_at >= TRAPPED_S
+        stay: list[Crumb] = []
+        for crumb in reversed(self.crumbs):
+            crumb_x, crumb_y, then = crumb
+            if (crumb_x - x) ** 2 + (crumb_y - y) ** 2 > TRAPPED_RADIUS_MM**2:
+                return False
+            stay.append(crumb)
+            if then <= since:
+                # the middle of where it moved: a chair's middle, whichever leg it is at
+                self.centre = (
+                    sum(crumb[0] for crumb in stay) / len(stay),
+                    sum(crumb[1] for crumb in stay) / len(stay),
+                )
+                return True
+        return False  # the trail is younger than a stay
 
     def way_back(self, odo: Odometry) -> list[Point]:
         """The crumbs back to the first one :data:`CLEAR_OF_TRAP_MM` from the trap's centre
         (or the oldest kept), loops left out and straight runs reduced to their ends, in the
         order driven: the robot's place first, the point clear of the trap last."""
-        crumbs = list(self.crumbs)
+        crumbs = [(x, y) for x, y, _ in self.crumbs]
         crumbs.append((odo.x_mm, odo.y_mm))
         # the earliest crumb in each square: going back, a loop since then is left out
         earliest: dict[tuple[int, int], int] = {}
         for index, point in enumerate(crumbs):
             earliest.setdefault(_square(point), index)
-        ax, ay = self.anchor
+        ax, ay = self.centre
         way: list[Point] = []
         index = len(crumbs) - 1
         while index >= 0:

@@ -40,7 +40,14 @@ from roomba_bt.behaviours.docking.common import (
     declare_stage,
     hazard_of,
 )
-from roomba_bt.behaviours.docking.escape import CLEAR_OF_TRAP_MM, Point, Trail, plan_way_out
+from roomba_bt.behaviours.docking.escape import (
+    CLEAR_OF_TRAP_MM,
+    CRUMB_MM,
+    Crumb,
+    Point,
+    Trail,
+    plan_way_out,
+)
 from roomba_bt.behaviours.units import BOOL, DISTANCE, enum
 from roomba_bt.oi.bits import BUMP_BITS, LIGHT_BUMPER_AHEAD_BITS, LIGHT_BUMPER_BITS
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
@@ -254,17 +261,20 @@ class DockSearch(DockingAction):
 
     #: the stage's own state in slots (see :class:`~.common.DockingAction`)
     __slots__ = (
-        "_aimed", "_avoid", "_back_until", "_bumped", "_cell", "_escaping", "_follow_bumps",
-        "_follow_cells", "_follow_for", "_follow_hand", "_follow_lost", "_follow_side",
-        "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_lit", "_lit_ahead",
-        "_old_cells", "_resume_follow", "_retreat", "_signals", "_speed", "_spun", "_target",
-        "_trap", "_wall_seen_at", "_want_wall", "_way", "_way_bumps", "state",
+        "_aimed", "_avoid", "_back_until", "_bumped", "_cell", "_crumbs", "_escaping",
+        "_follow_bumps", "_follow_cells", "_follow_for", "_follow_hand", "_follow_lost",
+        "_follow_side", "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_lit",
+        "_lit_ahead", "_next_crumb_at", "_old_cells", "_resume_follow", "_retreat", "_signals",
+        "_speed", "_spun", "_target", "_trap", "_wall_seen_at", "_want_wall", "_way", "_way_bumps",
+        "state",
     )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)
         self.grid = VisitGrid()
         self.trail = Trail()  # kept across starts, as the grid
+        self._crumbs = self.trail.crumbs  # appended to on the tick path
+        self._next_crumb_at = 0.0
         #: an attribute of each node, not a class default: CPython 3.11 does not specialise
         #: reading an attribute whose class holds an instance of a Python class (an enum
         #: member) under the same name, read on every tick (``_ACTS[self.state]``)
@@ -300,7 +310,7 @@ class DockSearch(DockingAction):
         self._follow_steer = speed * WALL_STEER_SHARE
         self._follow_hand = 1 if self.value("wall_side") == "right" else -1
         self._kept = None  # the speeds may differ from the last start's
-        self.trail.restart(self.snapshot.odometry, self.snapshot.time)
+        self.trail.restart()
         self._escaping = False
 
     def bind(self, frame: SensorFrame) -> None:
@@ -336,9 +346,11 @@ class DockSearch(DockingAction):
         self._cell = cell = (math.floor(odo.x_mm / CELL_MM), math.floor(odo.y_mm / CELL_MM))
         visits = self.grid.visits
         visits[cell] = visits.get(cell, 0.0) + TICK_VISIT_WEIGHT
-        trail = self.trail
-        if odo.path_mm >= trail.next_crumb_at:
-            trail.drop(odo, now)
+        path = odo.path_mm
+        if path >= self._next_crumb_at:
+            # a crumb of the way (:class:`.escape.Trail`), inline: this runs every tick
+            self._next_crumb_at = path + CRUMB_MM
+            self._crumbs.append((odo.x_mm, odo.y_mm, now))
         hazard = self._hazard
         if hazard is not None and hazard in STOPS_FOR.get(self.state, ()):
             self._meet(hazard, odo, now)
@@ -361,7 +373,7 @@ class DockSearch(DockingAction):
         if self._escaping:
             self._met_leaving(odo, now, cliff)
             return
-        if self.trail.met_hazard(now):
+        if self.trail.met_hazard(odo, now):
             # trapped: back off this, then out (:meth:`_back` plans the way)
             self._escaping, self._way, self._retreat = True, [], []
             self._way_bumps = 0
@@ -421,9 +433,9 @@ class DockSearch(DockingAction):
         if self._escaping:
             if not self._way:
                 self._way, self._retreat = plan_way_out(
-                    self.trail.way_back(snap.odometry), self.trail.anchor
+                    self.trail.way_back(snap.odometry), self.trail.centre
                 )
-                self._trap = self.trail.anchor
+                self._trap = self.trail.centre
             self.state = SearchState.RETRACE
             self._aimed = False
             return None
@@ -496,7 +508,7 @@ class DockSearch(DockingAction):
             self._way_bumps += 1
             if self._way_bumps > WAY_BUMPS:
                 self._escaping = False
-                self.trail.restart(odo, now)
+                self.trail.restart()
         self._back_off(odo, now, cliff)
 
     def _retrace(self, snap: Snapshot) -> Status | None:
@@ -525,7 +537,7 @@ class DockSearch(DockingAction):
         self._escaping = False
         way.clear()
         self.grid.hazards.append(self._trap)
-        self.trail.restart(odo, snap.time)
+        self.trail.restart()
         self._target = self.grid.choose_heading(
             odo, math.atan2(trap_y - odo.y_mm, trap_x - odo.x_mm)
         )
@@ -616,6 +628,8 @@ class DockSearch(DockingAction):
     #: leaving a trap (centred on ``_trap``): the way out, the next point last, and whether
     #: facing it; the way back out should the line through be shut; the hazards met on it
     _escaping: bool
+    _crumbs: deque[Crumb]
+    _next_crumb_at: float
     _trap: Point
     _way: list[Point]
     _aimed: bool
