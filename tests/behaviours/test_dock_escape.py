@@ -6,13 +6,18 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from roomba_bt.behaviours.docking.escape import (
+    CLEAR_OF_TRAP_MM,
     CRUMB_MM,
     THROUGH_MM,
     TRAPPED_HAZARDS,
     TRAPPED_S,
+    WAY_BUMPS,
     Point,
     Trail,
+    WayOut,
     plan_way_out,
     straightened,
 )
@@ -89,3 +94,21 @@ def test_the_way_out_goes_on_through_the_trap_and_the_way_back_is_kept_for_a_shu
 def test_straightened_keeps_the_corners() -> None:
     line = [(float(x), 0.0) for x in range(0, 101, 10)] + [(100.0, float(y)) for y in (10, 20)]
     assert straightened(line) == [(0.0, 0.0), (100.0, 0.0), (100.0, 20.0)]
+
+
+def test_the_way_out_turns_to_its_points_and_a_shut_line_through_sends_it_back() -> None:
+    """In along y to the trap's centre, then 10 cm to the side: back to the line, then on
+    along it; a bump on the line through takes the way back out instead; clear of the trap
+    there is nothing more to do."""
+    trail = Trail()
+    walk(trail, [(0.0, -1000.0 + CRUMB_MM * i) for i in range(51)] + [(100.0, 0.0)])
+    trail.centre = (0.0, 0.0)
+    beside = Odometry(x_mm=100.0, theta_rad=math.pi / 2)  # facing +y
+    way_out = WayOut(trail, beside)
+    assert way_out.turn_to_next(beside) == pytest.approx(math.pi / 2, abs=0.3)  # to -x
+    on_the_line = Odometry(theta_rad=math.pi / 2)
+    assert way_out.turn_to_next(on_the_line) == pytest.approx(0.0)  # on along +y: through
+    assert not way_out.shut()  # the line through is shut: the way back instead
+    assert abs(way_out.turn_to_next(on_the_line) or 0.0) == pytest.approx(math.pi)
+    assert way_out.turn_to_next(Odometry(y_mm=-CLEAR_OF_TRAP_MM - 1.0)) is None
+    assert [way_out.shut() for _ in range(WAY_BUMPS + 1)] == [False] * WAY_BUMPS + [True]

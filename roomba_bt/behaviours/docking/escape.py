@@ -47,6 +47,11 @@ THROUGH_MM = 1200.0
 #: crumbs closer than this (mm) to the straight line between two kept ones are left out: the
 #: way out is driven as straight lines between the corners of the way in
 STRAIGHT_WITHIN_MM = 5.0
+#: a point of the way out counts as reached this close (mm), or this close and behind
+REACHED_MM = 8.0
+PASSED_MM = 30.0
+#: hazards met on the way out (off the line through) before it is given up
+WAY_BUMPS = 3
 
 
 #: a crumb: where the robot was (mm, odometry frame) and when (s)
@@ -179,3 +184,44 @@ def straightened(way: list[Point]) -> list[Point]:
             keep[far_index] = True
             spans += [(first, far_index), (far_index, last)]
     return [point for point, kept in zip(way, keep, strict=True) if kept]
+
+
+class WayOut:
+    """The way out of one trap (:func:`plan_way_out`), driven point by point by the search:
+    which point is next, and what a hazard met on the way means."""
+
+    def __init__(self, trail: Trail, odo: Odometry) -> None:
+        self.trap = trail.centre
+        self.way, self.retreat = plan_way_out(trail.way_back(odo), self.trap)
+        #: facing the next point (the search turns in place until it is)
+        self.aimed = False
+        self._hazards = 0
+
+    def turn_to_next(self, odo: Odometry) -> float | None:
+        """How far (rad, counter-clockwise positive) the robot is to turn to face the next
+        point, the points reached (or just passed) dropped; None once clear of the trap
+        (:data:`CLEAR_OF_TRAP_MM` from its centre) or at the way's end."""
+        way = self.way
+        trap_x, trap_y = self.trap
+        while way and math.hypot(odo.x_mm - trap_x, odo.y_mm - trap_y) < CLEAR_OF_TRAP_MM:
+            x, y = way[-1]
+            dx, dy = x - odo.x_mm, y - odo.y_mm
+            distance = math.hypot(dx, dy)
+            err = math.remainder(math.atan2(dy, dx) - odo.theta_rad, math.tau)
+            if distance >= REACHED_MM and (distance >= PASSED_MM or abs(err) <= math.pi / 2):
+                return err
+            way.pop()
+            self.aimed = False
+        return None
+
+    def shut(self) -> bool:
+        """A hazard met on the way: on the line through the trap, that way is shut and the
+        way back out is taken instead; elsewhere the way goes on, and after
+        :data:`WAY_BUMPS` such the way out is given up (True: odometry drift, or something
+        moved)."""
+        self.aimed = False
+        if len(self.way) == 1 and self.retreat:
+            self.way, self.retreat = self.retreat, []
+            return False
+        self._hazards += 1
+        return self._hazards > WAY_BUMPS

@@ -40,14 +40,7 @@ from roomba_bt.behaviours.docking.common import (
     declare_stage,
     hazard_of,
 )
-from roomba_bt.behaviours.docking.escape import (
-    CLEAR_OF_TRAP_MM,
-    CRUMB_MM,
-    Crumb,
-    Point,
-    Trail,
-    plan_way_out,
-)
+from roomba_bt.behaviours.docking.escape import CRUMB_MM, Crumb, Trail, WayOut
 from roomba_bt.behaviours.units import BOOL, DISTANCE, enum
 from roomba_bt.oi.bits import BUMP_BITS, LIGHT_BUMPER_AHEAD_BITS, LIGHT_BUMPER_BITS
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
@@ -133,13 +126,8 @@ SPEED_SHARES = ((CORNER_INNER_SHARE, "on the inside of its arc round a wall's en
 #: speed on the way out (mm/s): slow, since a gap 3 cm wider than the robot is threaded by
 #: odometry
 RETRACE_MM_S = 100.0
-#: a point of the way out counts as reached this close (mm), or this close and behind
-REACHED_MM = 8.0
-PASSED_MM = 30.0
 #: further off the heading to the next point than this (rad), the robot stops and turns to it
 REAIM_RAD = math.radians(30)
-#: hazards met on the way out (off the line through) before it is given up
-WAY_BUMPS = 3
 
 Cell = tuple[int, int]
 
@@ -261,12 +249,11 @@ class DockSearch(DockingAction):
 
     #: the stage's own state in slots (see :class:`~.common.DockingAction`)
     __slots__ = (
-        "_aimed", "_avoid", "_back_until", "_bumped", "_cell", "_crumbs", "_escaping",
-        "_follow_bumps", "_follow_cells", "_follow_for", "_follow_hand", "_follow_lost",
-        "_follow_side", "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_lit",
-        "_lit_ahead", "_next_crumb_at", "_old_cells", "_resume_follow", "_retreat", "_signals",
-        "_speed", "_spun", "_target", "_trap", "_wall_seen_at", "_want_wall", "_way", "_way_bumps",
-        "state",
+        "_avoid", "_back_until", "_bumped", "_cell", "_crumbs", "_escaping", "_follow_bumps",
+        "_follow_cells", "_follow_for", "_follow_hand", "_follow_lost", "_follow_side",
+        "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_lit", "_lit_ahead",
+        "_next_crumb_at", "_old_cells", "_resume_follow", "_signals", "_speed", "_spun", "_target",
+        "_wall_seen_at", "_want_wall", "_way_out", "state",
     )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
@@ -375,8 +362,7 @@ class DockSearch(DockingAction):
             return
         if self.trail.met_hazard(odo, now):
             # trapped: back off this, then out (:meth:`_back` plans the way)
-            self._escaping, self._way, self._retreat = True, [], []
-            self._way_bumps = 0
+            self._escaping, self._way_out = True, None
             self._back_off(odo, now, cliff)
             return
         if (
@@ -431,13 +417,9 @@ class DockSearch(DockingAction):
             self.wheels(-BACK_MM_S, -BACK_MM_S)
             return RUNNING
         if self._escaping:
-            if not self._way:
-                self._way, self._retreat = plan_way_out(
-                    self.trail.way_back(snap.odometry), self.trail.centre
-                )
-                self._trap = self.trail.centre
+            if self._way_out is None:
+                self._way_out = WayOut(self.trail, snap.odometry)
             self.state = SearchState.RETRACE
-            self._aimed = False
             return None
         if self._resume_follow:
             # turn away from the wall side, then follow on with the same hand; a wall
@@ -498,17 +480,12 @@ class DockSearch(DockingAction):
 
     # leaving a trap ----------------------------------------------------------------
     def _met_leaving(self, odo: Odometry, now: float, cliff: bool) -> None:
-        """A hazard on the way out of a trap: on the line through it, that way is shut (back
-        off, then out the way it came in); elsewhere, back off and go on, and after
-        :data:`WAY_BUMPS` such the way out is given up (odometry drift, or something moved)
-        and the search goes on, the next stay given its full time before another way out."""
-        if len(self._way) == 1 and self._retreat:
-            self._way, self._retreat = self._retreat, []
-        else:
-            self._way_bumps += 1
-            if self._way_bumps > WAY_BUMPS:
-                self._escaping = False
-                self.trail.restart()
+        """A hazard on the way out of a trap: back off, then on by the way out left
+        (:meth:`.escape.WayOut.shut`), or, given up, search on, the hazards before no longer
+        counting toward another trap."""
+        if self._way_out is not None and self._way_out.shut():
+            self._escaping = False
+            self.trail.restart()
         self._back_off(odo, now, cliff)
 
     def _retrace(self, snap: Snapshot) -> Status | None:
@@ -516,27 +493,20 @@ class DockSearch(DockingAction):
         steering onto it; clear of the trap, the search chooses a heading away from it (its
         centre is marked as a hazard, and its cells are heavy with the ticks spent there)."""
         odo = snap.odometry
-        way = self._way
-        trap_x, trap_y = self._trap
-        while way and math.hypot(odo.x_mm - trap_x, odo.y_mm - trap_y) < CLEAR_OF_TRAP_MM:
-            x, y = way[-1]
-            dx, dy = x - odo.x_mm, y - odo.y_mm
-            distance = math.hypot(dx, dy)
-            err = math.remainder(math.atan2(dy, dx) - odo.theta_rad, math.tau)
-            if distance < REACHED_MM or (distance < PASSED_MM and abs(err) > math.pi / 2):
-                way.pop()
-                self._aimed = False
-                continue
-            if not self._aimed or abs(err) > REAIM_RAD:
-                self._aimed = self.spin_to(err, TURN)
-                if not self._aimed:
+        way_out = self._way_out
+        assert way_out is not None  # RETRACE follows BACK, which made it
+        err = way_out.turn_to_next(odo)
+        if err is not None:
+            if not way_out.aimed or abs(err) > REAIM_RAD:
+                way_out.aimed = self.spin_to(err, TURN)
+                if not way_out.aimed:
                     return RUNNING
             turn = max(-STEER_LIMIT_MM_S, min(STEER_LIMIT_MM_S, STEER_MM_S_PER_RAD * err))
             self.wheels(RETRACE_MM_S - turn, RETRACE_MM_S + turn)
             return RUNNING
-        self._escaping = False
-        way.clear()
-        self.grid.hazards.append(self._trap)
+        self._escaping, self._way_out = False, None
+        trap_x, trap_y = way_out.trap
+        self.grid.hazards.append(way_out.trap)
         self.trail.restart()
         self._target = self.grid.choose_heading(
             odo, math.atan2(trap_y - odo.y_mm, trap_x - odo.x_mm)
@@ -625,16 +595,12 @@ class DockSearch(DockingAction):
     state: SearchState
     _wall_seen_at: float | None
     _cell: Cell
-    #: leaving a trap (centred on ``_trap``): the way out, the next point last, and whether
-    #: facing it; the way back out should the line through be shut; the hazards met on it
+    #: leaving a trap: from the hazard that said so (then backing off) to clear of it
     _escaping: bool
+    _way_out: WayOut | None
+    #: the trail's crumbs, and the path (mm) at which the next is dropped
     _crumbs: deque[Crumb]
     _next_crumb_at: float
-    _trap: Point
-    _way: list[Point]
-    _aimed: bool
-    _retreat: list[Point]
-    _way_bumps: int
     # the readings (read)
     _hazard: Hazard | None
     _signals: Callable[[tuple[int, ...]], tuple[int, int, int, int, int, int]]
