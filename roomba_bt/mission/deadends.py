@@ -11,9 +11,11 @@ its node or always fails; a ``retry`` around a child that never fails never retr
 warnings (errors under ``--strict``): the mission runs, and does not do what it says.
 
 One is an error: a decorator whose :class:`Answers` say it can only fail on the tick it
-starts (``first_tick``: ``held``, whose hold has lasted 0 s then) as a step of a sequence,
-with nothing above it that ticks it again (a loop, a reactive composite, a guard). Such a
-step is ticked once: it fails the sequence on every run, which is never meant.
+starts (``first_tick``: ``held``, whose hold has lasted 0 s then) as a step of a sequence
+(with memory or reactive) or a branch of a parallel, where nothing ticks it again after
+that failure (a ``retry`` above it, a guard's condition, an earlier alternative of a
+reactive fallback would; a ``repeat`` stops at it). It fails its parent on every run,
+which is never meant.
 
 Each answer is conservative where it is not sure (an action may fail, a plugin may do
 anything): it gives more results, so fewer findings, never a false one. What can end a
@@ -166,26 +168,47 @@ def dead_ends(root: Node) -> tuple[list[Diagnostic], list[Diagnostic]]:
     twice."""
     errors: list[Diagnostic] = []
     warnings: list[Diagnostic] = []
-    pending: list[tuple[Node, bool]] = [(root, False)]
+    # each node with the endings after which something above ticks it again (the root: none)
+    pending: list[tuple[Node, Outcomes]] = [(root, frozenset())]
     while pending:
-        node, ticked_again = pending.pop()
-        errors += _failing_first_steps(node, ticked_again)
+        node, again = pending.pop()
+        children_again = [_child_again(node, again, index) for index in range(len(node.children))]
+        errors += _failing_first_steps(node, children_again)
         warnings += _blocked_children(node) + _guard_answers(node) + _futile_retry(node)
         warnings += _parallel_never_succeeds(node)
-        again = ticked_again or _ticks_again(node)
-        pending.extend((child, again) for child in reversed(node.children))
+        pending.extend(reversed(list(zip(node.children, children_again, strict=True))))
     return list(dict.fromkeys(errors)), list(dict.fromkeys(warnings))
 
 
-def _ticks_again(node: Node) -> bool:
-    """Whether ``node`` ticks a child again after it ended, so that a ``held`` under it
-    may count a hold (:func:`_fails_first`): a decorator that starts its child again (its
-    :class:`Answers`: ``repeat``, ``retry``, ``for_each``), a guard (both children every
-    tick), a reactive composite (its earlier children every tick)."""
+def _child_again(node: Node, again: Outcomes, index: int) -> Outcomes:
+    """The endings of ``node``'s child at ``index`` after which something ticks it again,
+    so that a ``held`` there may count a hold (:func:`_failing_first_steps`); ``again``:
+    ``node``'s own. A decorator ticks its child again after an ending it answers with
+    RUNNING (``retry`` after a failure; ``repeat`` only after a success, so a failure
+    under it ends the loop), or passes it up as an answer ticked again above. A failed
+    step fails its sequence, a failed branch its parallel (whatever the policy), the last
+    alternative its fallback: each is ticked again when its parent is. A guard reads its
+    condition on every tick its node runs, a reactive fallback its earlier alternatives.
+    A success that something else follows (a step before the last, a branch) is counted
+    as ticked again: not sure, so fewer findings, never a false one."""
     decorator = answers(node)
     if decorator is not None:
-        return bool(decorator.restarts_on)
-    return node.kind == "guard" or node.options.get("memory", True) is False
+        return frozenset(
+            ending
+            for ending in _BOTH
+            if RUNNING in decorator.answer(ending) or decorator.answer(ending) & again
+        )
+    last = index == len(node.children) - 1
+    if node.kind in SEQUENCES:
+        return (again & FAILS) | (again & SUCCEEDS if last else SUCCEEDS)
+    if node.kind in SELECTORS:
+        reactive = node.options.get("memory", True) is False
+        return (again & SUCCEEDS) | (FAILS if reactive and not last else again & FAILS)
+    if node.kind == "parallel":
+        return (again & FAILS) | SUCCEEDS
+    if node.kind == "guard" and index == 1:
+        return again  # the guarded node's ending is the guard's
+    return _BOTH  # a guard's condition; a node not known
 
 
 def _fails_first(node: Node) -> Answers | None:
@@ -197,23 +220,28 @@ def _fails_first(node: Node) -> Answers | None:
     return decorator
 
 
-def _failing_first_steps(node: Node, ticked_again: bool) -> list[Diagnostic]:
-    """A step of a sequence with memory that nothing above ticks again, and that can only
-    fail on the tick it starts (:func:`_fails_first`)."""
-    if ticked_again or node.kind != "sequence":
+def _failing_first_steps(node: Node, children_again: list[Outcomes]) -> list[Diagnostic]:
+    """A step of a sequence (with memory or reactive) or a branch of a parallel that can
+    only fail on the tick it starts (:func:`_fails_first`), and that nothing ticks again
+    after that failure (:func:`_child_again`): its failure fails its parent on every run."""
+    if node.kind in SEQUENCES:
+        role = "step"
+    elif node.kind == "parallel":
+        role = "branch"
+    else:
         return []
     errors: list[Diagnostic] = []
-    for child in node.children:
+    for child, again in zip(node.children, children_again, strict=True):
         decorator = _fails_first(child)
-        if decorator is None:
+        if decorator is None or FAILURE in again:
             continue
         errors.append(
             child.loc.at(
                 f"{child.kind} is FAILURE on the tick it starts ({decorator.first_tick_why}), "
-                f"and as a step of this sequence ({node.loc.line}:{node.loc.column}) it is "
-                "ticked once: the sequence fails here on every run; use it where it is "
-                f"ticked on every tick: until: {{{child.kind}: ...}} around a node, or the "
-                "first child of a reactive_fallback"
+                f"and as a {role} of this {node.kind} ({node.loc.line}:{node.loc.column}) it "
+                f"is ticked once: the {node.kind} fails here on every run; use it where it "
+                f"is ticked on every tick: until: {{{child.kind}: ...}} around a node, or "
+                "the first child of a reactive_fallback"
             )
         )
     return errors

@@ -88,6 +88,12 @@ def test_a_dead_end_is_warned_of(
         ["fallback: [{bump: any}, {log: b}]"],
         # held ticked on every tick: under a loop, a guard, a reactive fallback
         ["retry: {times: 50, do: {sequence: [{held: {for: 45ms, do: wall}}, {log: held}]}}"],
+        ["repeat: {do: {retry: {times: 50, do: {parallel: [{held: {for: 45ms, do: wall}}]}}}}"],
+        ["wait: 1s\n      until: {sequence: [{held: {for: 45ms, do: wall}}, {bump: any}]}"],
+        ["reactive_fallback: [{reactive_sequence: [{held: {for: 45ms, do: wall}}, {wait: 1s}]},"
+         " {wait: 1s}]"],
+        ["retry: {times: 9, do: {inverter: {inverter: {sequence: [{held: {for: 45ms, do:"
+         " wall}}]}}}}"],
         ["reactive_fallback: [{sequence: [{held: {for: 45ms, do: wall}}, {log: held}]},"
          " {wait: 1s}]"],
     ],
@@ -106,6 +112,37 @@ def test_held_as_a_step_ticked_once_is_an_error(errors_of: Callable[..., list[st
     assert errors[0].startswith("4:7: held is FAILURE on the tick it starts")
     assert "ticked once: the sequence fails here on every run" in errors[0]
     assert "until: {held: ...}" in errors[0]
+
+
+@pytest.mark.parametrize(
+    ("steps", "where"),
+    [
+        # verify session 34: n03_repeatheld.yaml, a repeat stops at its child's FAILURE
+        (["repeat: {times: 3, do: {sequence: [{held: {for: 45ms, do: wall}}, {log: held}]}}"],
+         "4:43: held is FAILURE on the tick it starts (its hold has lasted 0 s), and as a step "
+         "of this sequence (4:31) it is ticked once: the sequence fails here"),
+        # n10_rseqheld.yaml: a reactive_sequence fails when a child fails
+        (["reactive_sequence: [{held: {for: 100ms, do: wall}}, {wait: 1s}]"],
+         "4:28: held is FAILURE on the tick it starts (its hold has lasted 0 s), and as a step "
+         "of this reactive_sequence (4:7) it is ticked once: the reactive_sequence fails here"),
+        # parheld.yaml: a failed branch fails a parallel, whatever its policy
+        (["parallel: {policy: one, children: [{wait: 3s}, {held: {for: 2s, do: wall}}]}"],
+         "4:55: held is FAILURE on the tick it starts (its hold has lasted 0 s), and as a branch "
+         "of this parallel (4:7) it is ticked once: the parallel fails here"),
+        # the node a guard runs ends the guard as it ends: not ticked again
+        (["sequence: [{held: {for: 45ms, do: wall}}, {log: held}]\n      until: {bump: any}"],
+         "4:19: held is FAILURE on the tick it starts (its hold has lasted 0 s), and as a step "
+         "of this sequence (4:7) it is ticked once: the sequence fails here"),
+    ],
+)  # fmt: skip
+def test_held_whose_first_failure_fails_its_parent_is_an_error(
+    errors_of: Callable[..., list[str]], steps: list[str], where: str
+) -> None:
+    """Under a loop that stops at a failure, in a reactive sequence, as a parallel's branch:
+    each ran ``outcome FAILURE (held: held 0 s of ... so far)`` on every run."""
+    errors = errors_of(_steps(steps))
+    assert len(errors) == 1, errors
+    assert errors[0].startswith(where)
 
 
 @pytest.mark.parametrize(
