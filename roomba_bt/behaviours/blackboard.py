@@ -454,6 +454,16 @@ def read_key(key: str) -> Any:
     return _RUNNING.board.read(key)
 
 
+def declared_type(key: str) -> ValueType | None:
+    """The type this thread's run's mission declares for ``key`` (``key.field``: the
+    record's field's), None for a key it does not declare or a tree built in Python: what a
+    message writes a value in (``500 mm``, where the key holds ``500.0``)."""
+    types = py_trees.blackboard.Blackboard.storage.get(_RUNNING.board.types_key) or {}
+    name, _, field = key.partition(".")
+    vtype = types.get(name)
+    return dict(vtype.fields).get(field) if vtype is not None and field else vtype
+
+
 def declare_keys(types: Mapping[str, ValueType]) -> None:
     """The mission's keys and their declared types (``blackboard:``), which
     :func:`write_key` holds every write to from now on; they replace those declared before

@@ -20,11 +20,12 @@ from types import MappingProxyType
 from typing import Any, ClassVar
 
 from roomba_bt.behaviours.base import Condition
-from roomba_bt.behaviours.blackboard import BlackboardRef, UnwrittenKey, read_key
+from roomba_bt.behaviours.blackboard import BlackboardRef, UnwrittenKey, declared_type, read_key
 from roomba_bt.behaviours.declare import Comparison, Param, declare
 from roomba_bt.behaviours.units import (
     ANGLE,
     ANY,
+    CANONICAL,
     DISTANCE,
     INT,
     MARK,
@@ -35,6 +36,7 @@ from roomba_bt.behaviours.units import (
     described,
     enum,
     miswritten,
+    shown,
 )
 from roomba_bt.oi.bits import (
     BUTTON_NAMES,
@@ -716,8 +718,18 @@ class CheckKey(Condition):
                 f"check: key {key!r} holds {current!r} ({type(current).__name__}), which "
                 f"cannot be compared with {value!r} ({type(value).__name__}) by {op}"
             ) from None
-        self.feedback_message = "" if holds else f"{key} is {current!r}, not {op} {value!r}"
+        self.feedback_message = "" if holds else _not_held(key, current, op, value)
         return holds
+
+
+def _not_held(key: str, current: Any, op: str, value: Any) -> str:
+    """``d is 500 mm, not < 200 mm``: a quantity in its unit, as ``set`` and ``show`` write
+    it (the key holds the canonical ``500.0``, which read as no distance at all); any other
+    value as Python writes it (``'bye'``), so that a text is told from a number."""
+    vtype = declared_type(key)
+    if vtype is None or vtype.name not in CANONICAL:
+        return f"{key} is {current!r}, not {op} {value!r}"
+    return f"{key} is {shown(vtype, current)}, not {op} {shown(vtype, value)}"
 
 
 CONDITIONS: tuple[type[Condition], ...] = (

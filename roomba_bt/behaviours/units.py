@@ -428,6 +428,13 @@ def format_quantity(dimension: str, value: float) -> str:
     )
 
 
+def shown(vtype: ValueType, value: Any) -> str:
+    """A value as a mission would write it: ``150 mm/s`` rather than ``150.0``."""
+    if vtype.name in CANONICAL and isinstance(value, int | float):
+        return format_quantity(vtype.name, value)
+    return str(value)
+
+
 @dataclass(frozen=True, slots=True)
 class ValueType:
     """One parameter type: its name in missions and schema, how to parse a YAML value into

@@ -251,8 +251,9 @@ def leaf_name(
         text = written_text(node, env)
         if key_loc is value_loc:
             parts.append(text)
-        else:  # check's op, "==", was op===: a text holding = or , is quoted
-            parts.append(f"{pname}={_quoted(text) if any(c in text for c in '=,') else text}")
+        else:  # check's op, "==", was op===: a text holding = or , is quoted, and < or >
+            # with it, so that every op reads alike (op="<" as op="<="; op=> read as an arrow)
+            parts.append(f"{pname}={_quoted(text) if any(c in text for c in '=,<>') else text}")
     return f"{behaviour}({', '.join(parts)})"
 
 

@@ -20,7 +20,6 @@ from roomba_bt.behaviours.blackboard import BLACKBOARD_REF, BlackboardRef
 from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.registry import Registry
 from roomba_bt.behaviours.units import (
-    CANONICAL,
     MARK,
     STR,
     VALUE_TYPES,
@@ -31,7 +30,7 @@ from roomba_bt.behaviours.units import (
     closest,
     compatible,
     convert,
-    format_quantity,
+    shown,
     with_article,
 )
 from roomba_bt.mission.diagnostics import Diagnostic
@@ -814,13 +813,6 @@ def _reference(
             )
         )
     return BlackboardRef(key, fname)
-
-
-def shown(vtype: ValueType, value: Any) -> str:
-    """A value as a mission would write it: ``150 mm/s`` rather than ``150.0``."""
-    if vtype.name in CANONICAL and isinstance(value, int | float):
-        return format_quantity(vtype.name, value)
-    return str(value)
 
 
 def as_written(vtype: ValueType, value: Any, node: yaml.Node, env: Mapping[str, Bound]) -> str:

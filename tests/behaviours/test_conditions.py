@@ -11,7 +11,8 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours import conditions as c
-from roomba_bt.behaviours.blackboard import write_key
+from roomba_bt.behaviours.blackboard import declare_keys, write_key
+from roomba_bt.behaviours.units import ANGLE, DISTANCE, STR, ValueType
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import mm_to_counts
 from roomba_bt.robot.interface import Odometry
@@ -286,6 +287,30 @@ def test_a_failed_check_says_the_value_it_found(robot: StubRobot, make: Make) ->
     write_key("count", 1)
     assert holds(check)
     assert check.feedback_message == ""
+
+
+@pytest.mark.parametrize(
+    ("key", "op", "value", "said"),
+    [
+        # verify session 34, chk.yaml: "d is 500.0, not < 200.0" for 50 cm and 20 cm
+        ("d", "<", 200.0, "d is 500 mm, not < 200 mm"),
+        ("wp.turn", "==", 45.0, "wp.turn is 90 deg, not == 45 deg"),  # a record's field
+        ("s", "==", "hi", "s is 'bye', not == 'hi'"),  # a text quoted, told from a number
+    ],
+)
+def test_a_failed_check_writes_a_quantity_in_its_unit(
+    robot: StubRobot, make: Make, key: str, op: str, value: object, said: str
+) -> None:
+    """The key holds the canonical number; the message writes it as ``set`` and ``show``
+    do, by the type the mission declares for the key."""
+    record = ValueType("record", dict, fields=(("distance", DISTANCE), ("turn", ANGLE)))
+    declare_keys({"d": DISTANCE, "wp": record, "s": STR})
+    write_key("d", 500.0)
+    write_key("wp", {"distance": 10.0, "turn": 90.0})
+    write_key("s", "bye")
+    check = make(c.CheckKey, key=key, op=op, value=value)
+    assert not holds(check)
+    assert check.feedback_message == said
 
 
 def test_a_check_of_a_key_not_written_says_so(robot: StubRobot, make: Make) -> None:
