@@ -8,6 +8,11 @@ the project's repository, not in the wheel a pip user has.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from roomba_bt.behaviours.declare import Param
+
 #: what each shape of the language's words is called (docs/missions.md, "Nodes")
 _WORD_KINDS = {
     "children": "a composite",
@@ -32,21 +37,29 @@ def language_word(name: str) -> str | None:
     decorator, ``subtree``, a modifier, a file section), which is no behaviour: what it is
     and its options; None for any other name. ``behaviours retry`` said ``unknown behaviour
     'retry' (did you mean 'odometry'?)``."""
+    facts = word_facts(name)
+    if facts is None:
+        return None
+    what, doc, options = facts
+    listed = "; ".join(f"{p.name}: {p.describe()}" for p in options)
+    takes = f" (options: {listed})" if listed else ""
+    return f"{name!r} is {what}, not a behaviour: {doc}{takes}"
+
+
+def word_facts(name: str) -> tuple[str, str, tuple[Param, ...]] | None:
+    """What a word of the mission language is (``a decorator of the mission language``),
+    its description and its options: said as text by :func:`language_word`, as data by
+    ``behaviours --json``. None for any other name."""
     from roomba_bt.behaviours.language import MODIFIERS, WORDS
 
     kind = WORDS.get(name)
     if kind is not None:
-        what = _WORD_KINDS[kind.shape.value]
-        options = "; ".join(f"{p.name}: {p.describe()}" for p in kind.options)
-        takes = f" (options: {options})" if options else ""
-        return f"{name!r} is {what} of the mission language, not a behaviour: {kind.doc}{takes}"
+        return f"{_WORD_KINDS[kind.shape.value]} of the mission language", kind.doc, kind.options
     if name in MODIFIERS:
-        return (
-            f"{name!r} is a modifier of the mission language, written beside any node's word, "
-            f"not a behaviour: {MODIFIERS[name]}"
-        )
+        what = "a modifier of the mission language, written beside any node's word"
+        return what, MODIFIERS[name], ()
     if name in _SECTIONS:
-        return f"{name!r} is a section of a mission file, not a behaviour: {_SECTIONS[name]}"
+        return "a section of a mission file", _SECTIONS[name], ()
     return None
 
 

@@ -28,7 +28,7 @@ from roomba_bt.cli.arguments import (
     parse_params,
     permissions,
 )
-from roomba_bt.cli.language_words import EVERY_WORD, every_word, language_word
+from roomba_bt.cli.language_words import EVERY_WORD, every_word, language_word, word_facts
 from roomba_bt.cli.profile_choice import (
     BadSetting,
     chosen_profile,
@@ -42,7 +42,7 @@ from roomba_bt.printable import ANY_CONTROL, escaped, shortened
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
-    from roomba_bt.behaviours.declare import Declaration
+    from roomba_bt.behaviours.declare import Declaration, Param
     from roomba_bt.behaviours.registry import Registry
 
 
@@ -492,20 +492,7 @@ def describe_behaviours(
                 # two plugins declare the name (a mission using it is refused), or a plugin
                 # declares a built-in's (the built-in is used): said where it is listed
                 "clash": None if clash is None else {"severity": clash[0], "why": clash[1]},
-                "parameters": [
-                    {
-                        "name": p.name,
-                        "type": p.type.name,
-                        "unit": p.type.unit,
-                        "choices": list(p.type.choices),
-                        "minimum": p.minimum,
-                        "maximum": p.maximum,
-                        "default": p.default,
-                        "required": p.required,
-                        "doc": p.doc,
-                    }
-                    for p in decl.params
-                ],
+                "parameters": [_parameter_entry(p) for p in decl.params],
                 "reads": "depends on parameters" if callable(decl.reads) else list(decl.reads),
                 # the parameters naming blackboard keys, each with its value's type (None:
                 # untyped, any key but a mark): what validate holds the mission's keys to
@@ -517,6 +504,40 @@ def describe_behaviours(
             }
         )
     return out
+
+
+def _parameter_entry(p: Param) -> dict[str, Any]:
+    """A behaviour's parameter, or a language word's option, as ``behaviours --json``
+    lists it."""
+    return {
+        "name": p.name,
+        "type": p.type.name,
+        "unit": p.type.unit,
+        "choices": list(p.type.choices),
+        "minimum": p.minimum,
+        "maximum": p.maximum,
+        "default": p.default,
+        "required": p.required,
+        "doc": p.doc,
+    }
+
+
+def _word_entry(name: str) -> dict[str, Any] | None:
+    """A word of the mission language (``retry``, ``until``, ``include``) as ``behaviours
+    --json`` lists it, beside the behaviours: its ``kind`` says it is no behaviour, ``is``
+    what it is, ``parameters`` its options. It was said as text on stderr, and stdout was
+    empty, exit 0: a script read an empty document as success."""
+    facts = word_facts(name)
+    if facts is None:
+        return None
+    what, doc, options = facts
+    return {
+        "name": name,
+        "kind": "language word",
+        "is": what,
+        "doc": doc,
+        "parameters": [_parameter_entry(p) for p in options],
+    }
 
 
 def _key_roles(decl: Declaration, names: tuple[str, ...]) -> list[dict[str, str | None]]:
@@ -559,9 +580,11 @@ def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -
         return ExitCode.OK
     # a word of the language asked about is answered (its meaning and options), not an error
     words = [word for word in map(language_word, args.names) if word is not None]
-    # beside --json or --markdown output the answer goes to stderr: stdout stays the format's
-    said_to = sys.stderr if args.json or args.markdown else sys.stdout
-    for word in words:
+    # --json lists it as data beside the behaviours; beside --markdown the answer goes to
+    # stderr: stdout stays the format's
+    said_to = sys.stderr if args.markdown else sys.stdout
+    word_entries = [e for e in map(_word_entry, args.names) if e is not None]
+    for word in [] if args.json else words:
         print(f"{word}\n    ({EVERY_WORD})", file=said_to)
     unknown = [n for n in args.names if n not in registry and language_word(n) is None]
     if unknown:
@@ -576,15 +599,17 @@ def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -
             )
         _plugin_warnings(installed)  # it may be one of a plugin that did not load
         return ExitCode.INVALID
-    if words and len(words) == len(args.names):
-        return ExitCode.OK  # only words asked for: listing every behaviour would bury them
+    if words and len(words) == len(args.names):  # only words: every behaviour would bury them
+        if args.json:
+            print(json.dumps(word_entries, indent=2, default=str))
+        return ExitCode.OK
     data = describe_behaviours(args.names, registry)
     # a name two plugins declare is no behaviour a mission can use (it is refused, exit 2):
     # asked for by name, the answer is that error, not one of the two as if it were in use
     contested = [e for e in data if e["clash"] and e["clash"]["severity"] == "error"]
     said = ExitCode.INVALID if args.names and contested else ExitCode.OK
     if args.json:
-        print(json.dumps(data, indent=2, default=str))
+        print(json.dumps(word_entries + data, indent=2, default=str))
     elif args.markdown:
         from roomba_bt.behaviours.reference import markdown_entry
 

@@ -406,7 +406,8 @@ def test_behaviours_of_a_word_of_the_language_says_what_it_is(
 
 def test_behaviours_of_a_word_and_a_behaviour_lists_both(capsys: Capsys) -> None:
     """A word beside a behaviour: the word's answer, then the behaviour as ever; beside
-    --json the answer goes to stderr, so stdout stays JSON."""
+    --json the word is an entry of the JSON list, before the behaviour, and stderr says
+    nothing."""
     assert main(["behaviours", "timeout", "wait"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("'timeout' is a decorator of the mission language")
@@ -414,10 +415,32 @@ def test_behaviours_of_a_word_and_a_behaviour_lists_both(capsys: Capsys) -> None
     assert "\nwait  (action" in out
     assert main(["behaviours", "--json", "timeout", "wait"]) == 0
     out, err = capsys.readouterr()
-    assert [entry["name"] for entry in json.loads(out)] == ["wait"]
-    assert err.startswith("'timeout' is a decorator")
+    assert [entry["name"] for entry in json.loads(out)] == ["timeout", "wait"]
+    assert not err
     assert main(["behaviours", "timeout", "no_such_thing"]) == 2
     assert "unknown behaviour 'no_such_thing'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("name", "is_", "options"),
+    [
+        ("retry", "a decorator of the mission language", ["times"]),
+        ("reactive_sequence", "a composite of the mission language", ["memory", "name"]),
+        ("until", "a modifier of the mission language, written beside any node's word", []),
+        ("include", "a section of a mission file", []),
+    ],
+)
+def test_behaviours_json_of_a_word_of_the_language_is_its_entry(
+    capsys: Capsys, name: str, is_: str, options: list[str]
+) -> None:
+    """``behaviours --json retry`` printed nothing on stdout (the answer as text on
+    stderr), exit 0: a script read an empty document as success (verify session 34)."""
+    assert main(["behaviours", "--json", name]) == 0
+    out, err = capsys.readouterr()
+    [entry] = json.loads(out)
+    assert (entry["name"], entry["kind"], entry["is"]) == (name, "language word", is_)
+    assert [option["name"] for option in entry["parameters"]] == options
+    assert entry["doc"] and not err
 
 
 def test_behaviours_words_lists_every_word_of_the_language(capsys: Capsys) -> None:
