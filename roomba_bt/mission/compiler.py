@@ -217,10 +217,10 @@ def _checked(
         blackboard_keys={k: d.type for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
-        warnings=(
-            *ctx.warnings,
-            *_tree_warnings(tree, modes, profile, ignored),
-            *dead_warnings,
+        # in the order of the file, as the errors are (by check, a warning on line 8 came
+        # before one on line 5)
+        warnings=tuple(
+            sorted((*ctx.warnings, *_tree_warnings(tree, modes, profile, ignored), *dead_warnings))
         ),
     )
     return mission, []
@@ -230,7 +230,7 @@ def _tree_warnings(
     tree: Node, modes: ModeCheck, profile: RobotProfile, ignored: list[Diagnostic]
 ) -> tuple[Diagnostic, ...]:
     """The checks of a tree that compiled whose findings are warnings (a mission that runs,
-    and may not do what its writer meant), in the order ``validate`` says them; ``ignored``:
+    and may not do what its writer meant); ``ignored``:
     the commands the profile's firmware ignores (:func:`profile_commands`)."""
     return (
         *blind_in_full(tree, modes),

@@ -163,6 +163,22 @@ def _line(node: Node) -> str:
     return f"line {node.loc.line}"
 
 
+def _guarded(node: Node) -> Node:
+    """The node a ``while:``/``until:`` runs (through a guard of a guard), else ``node``:
+    what a warning names, where the guard's own name (``until force_success``, at the
+    guard's line) read as another node than the ``drive`` written above it."""
+    while node.kind == "guard":
+        node = node.children[1]
+    return node
+
+
+def _described(node: Node) -> str:
+    """``drive(...) (line 5, while held)``: a node by the one it runs, with its guard."""
+    inner = _guarded(node)
+    guard = f", {node.name}" if inner is not node else ""
+    return f"{inner.name} ({_line(inner)}{guard})"
+
+
 def dead_ends(root: Node) -> tuple[list[Diagnostic], list[Diagnostic]]:
     """Errors and warnings (see the module docstring), each said once for a subtree used
     twice."""
@@ -265,11 +281,12 @@ def _blocked_children(node: Node) -> list[Diagnostic]:
         else:
             what, needs = "alternative", "fails"
             fix = "let it fail (no force_success around it)"
+        blocked = _guarded(after)
         return [
-            after.loc.at(
-                f"{after.name} can never run: the {what} before it, {child.name} "
-                f"({_line(child)}), {_why(results)}, and the {node.kind} goes on only "
-                f"when it {needs}; {fix}, or remove what follows it"
+            blocked.loc.at(
+                f"{blocked.name} can never run: the {what} before it, {_described(child)}, "
+                f"{_why(results)}, and the {node.kind} goes on only when it {needs}; {fix}, "
+                "or remove what follows it"
             ).as_warning()
         ]
     return []
@@ -302,7 +319,7 @@ def _futile_retry(node: Node) -> list[Diagnostic]:
     child = node.children[0]
     return [
         node.loc.at(
-            f"retry never retries: {child.name} ({_line(child)}) never fails, and retry "
+            f"retry never retries: {_described(child)} never fails, and retry "
             "starts it again only after a failure; remove the retry, or retry what can fail"
         ).as_warning()
     ]

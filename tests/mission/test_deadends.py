@@ -173,3 +173,32 @@ def test_dead_ends_fail_validate_strict(
     [warning] = [w for w in mission.warnings if "can never run" in w.message]
     assert warning.severity == "warning"
     assert "drive(velocity=100 mm/s) (line 4), never succeeds" in warning.message
+
+
+def test_warnings_come_in_line_order_and_a_guarded_step_is_named_by_its_node(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    """pytrees session 34, guards.yaml: the warnings came by check (lines 8, 5, 7, 9), and
+    the step blocked after ``while: {held: ...}`` was named ``until force_success`` at its
+    guard's line, not the ``drive`` written above it."""
+    drive = "drive(velocity=100 mm/s, duration=1s)"
+    mission = compile_text(
+        _steps(
+            [
+                "drive: {velocity: 100 mm/s, duration: 1s}\n"
+                "      while: {held: {for: 1s, do: {inverter: {bump: any}}}}",
+                "drive: {velocity: 100 mm/s, duration: 1s}\n"
+                "      until: {force_success: {bump: any}}",
+            ]
+        )
+    )
+    assert _dead_ends(mission) == [
+        f"4:7 {drive} never runs",
+        f"6:7 {drive} can never run",
+        f"6:7 {drive} never runs",
+    ]
+    [blocked] = [w.message for w in mission.warnings if "can never run" in w.message]
+    assert f"the step before it, {drive} (line 4, while held), never succeeds" in blocked
+    assert [(w.file, w.line, w.column) for w in mission.warnings] == sorted(
+        (w.file, w.line, w.column) for w in mission.warnings
+    )
