@@ -722,7 +722,7 @@ RERUN = "can succeed, and the parallel (4:7) has synchronise: false"
         ("all", ["{wait: 1s}", "{inverter: {cliff: any}}"], []),
         ("all", ["{wait: 1s, while: {inverter: {bump: any}}, name: w}", "{inverter: {cliff: any}}"],
          []),
-        ("all", ["{turn: 90deg}", "{held: {for: 1s, do: {inverter: {bump: any}}}}",
+        ("all", ["{turn: 90deg}", "{inverter: {held: {for: 1s, do: {bump: any}}}}",
                  "{sequence: [{inverter: {bump: any}}, {inverter: {cliff: any}}]}",
                  "{parallel: [{inverter: {wheel_drop: any}}, {timeout: {after: 1s, do: {inverter:"
                  " {cliff: any}}}}]}", "{bump: any, until: {cliff: any}, name: b}"],
@@ -730,7 +730,7 @@ RERUN = "can succeed, and the parallel (4:7) has synchronise: false"
         # what starts nothing over: conditions, held, a oneshot (it answers as the first
         # time), a branch that never succeeds (a drive with no end, a repeat for ever)
         ("all", ["{oneshot: {drive: {velocity: 200 mm/s, distance: 20cm}}}",
-                 "{inverter: {cliff: any}}", "{held: {for: 1s, do: {inverter: {bump: any}}}}",
+                 "{inverter: {cliff: any}}", "{inverter: {held: {for: 1s, do: {bump: any}}}}",
                  "{sequence: [{bump: any}, {inverter: {cliff: any}}]}"], []),
         ("all", ["{drive: {velocity: 200 mm/s}}", "{repeat: {do: {wait: 1s}}}",
                  "{drive: {velocity: 200 mm/s}, while: {inverter: {bump: any}}}",

@@ -205,10 +205,10 @@ def test_a_lone_doubled_dollar_is_warned_of_where_0_1_0_read_two(
     assert _logged(mission, caplog) == ["cost $5, $$5, $$5 and $5", "$5 and $$", "ok", "pay $"]
     said = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
     assert said == [
-        '5:35: parameter note: "$$" reads "$" since 0.2.0 ("$$" is one "$", as in Python\'s '
-        'string.Template); in 0.1.0 it read "$$": write "$" for one "$", or "$$$$" to keep two',
         '2:21: description: "$$ " reads "$ " since 0.2.0 ("$$" is one "$", as in Python\'s '
         'string.Template); in 0.1.0 it read "$$ ": write "$ " for one "$", or "$$$$ " to keep two',
+        '5:35: parameter note: "$$" reads "$" since 0.2.0 ("$$" is one "$", as in Python\'s '
+        'string.Template); in 0.1.0 it read "$$": write "$" for one "$", or "$$$$" to keep two',
         '8:18: log.message: "$$5" reads "$5" since 0.2.0 ("$$" is one "$", as in Python\'s '
         'string.Template); in 0.1.0 it read "$$5": write "$5" for one "$", or "$$$$5" to keep two',
         '11:18: name: "$$5" reads "$5" since 0.2.0 ("$$" is one "$", as in Python\'s '

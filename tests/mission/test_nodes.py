@@ -321,19 +321,23 @@ def test_held_until_a_drive_stops_it_only_after_the_hold(compile_text: Compile) 
 
 def test_held_in_a_fallback_does_not_count_an_old_hold(compile_text: Compile) -> None:
     """A reactive sequence's ``held`` not ticked while an earlier child fails: when it is
-    ticked again, its hold starts again (the wall it saw before the gap does not count)."""
+    ticked again, its hold starts again (the wall it saw before the gap does not count).
+    The first alternative of a reactive fallback, ticked on every tick the wait runs (a
+    failed root would end the run: validate refuses held so)."""
     r = run(
         compile_text,
         """
         tree:
-          reactive_sequence:
-            - inverter: {bump: any}
-            - held: {for: 45ms, do: wall}
+          reactive_fallback:
+            - reactive_sequence:
+                - inverter: {bump: any}
+                - held: {for: 45ms, do: wall}
+            - wait: 1h
         """,
     )
-    assert r.ticks(3, wall=1) == [F, F, F]  # held 30 ms
-    assert r.tick(wall=1, bump=1) is F  # held not ticked
-    assert r.ticks(4, wall=1) == [F, F, F, S]
+    assert r.ticks(3, wall=1) == [R, R, R]  # held 30 ms
+    assert r.tick(wall=1, bump=1) is R  # held not ticked
+    assert r.ticks(4, wall=1) == [R, R, R, S]
 
 
 @pytest.mark.parametrize(
