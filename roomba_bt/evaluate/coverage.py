@@ -1,5 +1,5 @@
 """Coverage across a batch of episodes: mean and spread at fixed times and at the end, per
-area, and the longest a robot went without new floor (stuck).
+area, and the longest a robot went without new floor with its brushes on (idle).
 
 Each episode's :class:`~roomba_bt.evaluate.episode.Coverage` comes from the simulator's swept
 area (:mod:`roomba_bt.sim.coverage`); episodes whose brushes never ran have none and are left
@@ -89,7 +89,7 @@ class CoverageSummary:
                 "figures are of that part"
             )
         out.append(
-            f"  stuck      {self.stuck} of {self.episodes} episodes went {STUCK_S:.0f} s of "
+            f"  idle       {self.stuck} of {self.episodes} episodes went {STUCK_S:.0f} s of "
             f"brush time without new floor (longest {self.longest_idle_s:.0f} s)"
         )
         return out

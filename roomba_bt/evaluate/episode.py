@@ -218,6 +218,9 @@ class EpisodeResult:
     #: with less than 0.3 m of progress around it
     loops: float
     longest_stall_s: float
+    #: the longest time (s) off the dock with no new floor cleaned and no move of
+    #: TRAPPED_RADIUS_MM (:attr:`_MeasuredSimulator.longest_trapped`): brushes on or off
+    longest_trapped_s: float = 0.0
     trajectory: tuple[tuple[float, float], ...] = field(repr=False, default=())
     #: per bump onset, steps from the bump frame to the first wheel request that no longer
     #: drives forward (a drive 0 or the reaction) and to the first that backs out (-1: none
@@ -283,6 +286,13 @@ class _MeasuredSimulator(Simulator):
         self._longest_before_mark = 0.0
         self._stalled_at: float | None = None
         self._radius = max(1.0, math.hypot(self.x - centre[0], self.y - centre[1]))
+        # the trap measure: where and when the robot last made progress (new floor cleaned,
+        # or a move of TRAPPED_RADIUS_MM), the floor cleaned then, the longest stretch off
+        # the dock without progress before it, and the last step off the dock since
+        self._anchor_x, self._anchor_y, self._anchor_time = self.x, self.y, 0.0
+        self._anchor_cleaned = 0
+        self._longest_before_anchor = 0.0
+        self._off_dock_at = 0.0
         self.reaction_steps: list[tuple[int, int]] = []
         self._since_onset: int | None = None  # steps since the last onset, while awaited
         self._stopped_after = -1
@@ -301,8 +311,18 @@ class _MeasuredSimulator(Simulator):
                 self.contact_steps[-1] += 1
         self._in_contact = pressed
         x, y = self.x, self.y
+        if self.docked:  # on the dock's contacts: where a robot is meant to wait
+            self._progress(x, y)
+        else:
+            self._off_dock_at = self.time
         if x != self._last_x or y != self._last_y:  # moved (no tuple built to compare)
             self._last_x, self._last_y = x, y
+            dx, dy = x - self._anchor_x, y - self._anchor_y
+            swept = self.swept
+            if dx * dx + dy * dy >= _TRAPPED_RADIUS_SQ or (
+                swept is not None and swept.cleaned_total != self._anchor_cleaned
+            ):
+                self._progress(x, y)
             bearing = _atan2(y - self._centre_y, x - self._centre_x)
             loop_angle = self._loop_angle = self._loop_angle + _remainder(
                 bearing - self._last_bearing, _TAU
@@ -323,6 +343,21 @@ class _MeasuredSimulator(Simulator):
             return self._longest_before_mark
         return max(self._longest_before_mark, stalled_at - self._mark_time)
 
+    def _progress(self, x: float, y: float) -> None:
+        """The robot made progress at ``(x, y)`` (or stands on the dock): the stretch without
+        progress before it is folded in, and a new one starts here."""
+        self._longest_before_anchor = self.longest_trapped
+        self._anchor_x, self._anchor_y, self._anchor_time = x, y, self.time
+        swept = self.swept
+        self._anchor_cleaned = swept.cleaned_total if swept is not None else 0
+
+    @property
+    def longest_trapped(self) -> float:
+        """The longest time (s) off the dock in which the robot cleaned no new floor and
+        went no further than :data:`TRAPPED_RADIUS_MM` from where it was: brushes on or
+        off, so it also counts a robot trapped on its way home or in the dock search."""
+        return max(self._longest_before_anchor, self._off_dock_at - self._anchor_time)
+
     def _watch_reaction(self, waited: int) -> None:
         """The wheels as requested before the step, ``waited`` steps after a bump frame."""
         mean = self.requested_left + self.requested_right
@@ -340,6 +375,11 @@ class _MeasuredSimulator(Simulator):
 
 
 _simulator_step = Simulator.step
+#: a robot that goes no further than this (mm) from where it was, cleaning no new floor,
+#: makes no progress: trapped under chairs or wedged, it moves about within a chair's
+#: footprint; driving home or searching for the dock, it gets further than this
+TRAPPED_RADIUS_MM = 500.0
+_TRAPPED_RADIUS_SQ = TRAPPED_RADIUS_MM * TRAPPED_RADIUS_MM
 #: read on every step that moves, as globals (a module attribute is one read more)
 _atan2, _remainder, _TAU = math.atan2, math.remainder, math.tau
 #: the bumper's packet (7) in the simulator's values, read every step for the contacts
@@ -636,6 +676,7 @@ def _measured(
         violations=len(simulator.violations),
         loops=simulator.loops,
         longest_stall_s=simulator.longest_stall,
+        longest_trapped_s=simulator.longest_trapped,
         trajectory=(
             *((p.x / 1000.0, p.y / 1000.0) for p in trace),
             (simulator.x / 1000.0, simulator.y / 1000.0),

@@ -82,6 +82,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "commands_refused": ("commands_refused", "int"),
     "loops": ("loops", "float"),
     "longest_stall": ("longest_stall_s", "float"),
+    "longest_trapped": ("longest_trapped_s", "float?"),
     "worker": ("worker", "str"),
     "cpu_time": ("cpu_s", "float?"),
     "falls": ("falls", "falls total"),

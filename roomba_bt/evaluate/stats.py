@@ -16,11 +16,14 @@ from collections import Counter
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from roomba_bt.evaluate.episode import EpisodeResult
+from roomba_bt.evaluate.episode import TRAPPED_RADIUS_MM, EpisodeResult
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import falls_in_order, falls_said, hazard_falls
 
 Z95 = 1.959963984540054
+#: an episode that spends this long (s) off the dock without progress (no new floor, no move
+#: of TRAPPED_RADIUS_MM: :attr:`EpisodeResult.longest_trapped_s`) was trapped
+TRAPPED_S = 60.0
 
 
 def wilson_interval(successes: int, runs: int, z: float = Z95) -> tuple[float, float]:
@@ -102,6 +105,10 @@ class Summary:
     #: where, and the episodes it was written in (:attr:`EpisodeResult.undeclared`): said
     #: once, where each episode's run would have warned of it
     undeclared: tuple[tuple[str, str, int], ...] = ()
+    #: the longest time (s) an episode spent off the dock without progress, brushes on or
+    #: off (:attr:`EpisodeResult.longest_trapped_s`), and how many spent TRAPPED_S or more
+    longest_trapped_s: float = 0.0
+    trapped: int = 0
 
     @property
     def rate(self) -> float:
@@ -128,6 +135,9 @@ class Summary:
             f"time         median {med}, p90 {p90} (successful episodes, mission time)",
             f"bumps        {self.mean_bumps:.1f} per episode (bumper onsets in the simulator)",
             f"docked       {self.docked} of {self.runs} episodes ended on the dock's contacts",
+            f"trapped      {self.trapped} of {self.runs} episodes spent {TRAPPED_S:.0f} s off the "
+            f"dock without progress (no new floor, no move of {TRAPPED_RADIUS_MM / 1000:g} m; "
+            f"brushes on or off; longest {self.longest_trapped_s:.0f} s)",
             *([f"falls        {self.falls_text()}"] if self.hazard_falls else []),
             *([f"charger      {self.charger_text()}"] if self.charger_arrivals else []),
             f"simulated    {self.simulated_s:.0f} s of mission time"
@@ -212,6 +222,8 @@ class Summary:
             "p90_time": self.p90_time_s,
             "mean_bumps": self.mean_bumps,
             "docked": self.docked,
+            "trapped": self.trapped,
+            "longest_trapped": self.longest_trapped_s,
             "failures": {reason: count for reason, count in self.failures},
             "falls": dict(self.falls),
             "episodes_with_falls": self.episodes_with_falls,
@@ -283,6 +295,8 @@ def summarize(
         episodes_with_falls_by_cause=tuple((c, episodes_by_cause[c]) for c, _ in in_order),
         episodes_with_hazard_falls=sum(1 for r in results if hazard_falls(dict(r.falls))),
         undeclared=tuple((key, where, n) for key, (where, n) in undeclared.items()),
+        longest_trapped_s=max((r.longest_trapped_s for r in results), default=0.0),
+        trapped=sum(1 for r in results if r.longest_trapped_s >= TRAPPED_S),
     )
 
 
