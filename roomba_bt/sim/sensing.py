@@ -54,6 +54,9 @@ CLIFF_FLOOR_SIGNAL = 2600
 CLIFF_DROP_SIGNAL = 20
 WALL_SENSOR_RANGE_MM = 120.0
 WALL_SENSOR_TRIGGER_MM = 50.0
+#: half a drive wheel's tyre width (mm): a wheel falls once its inner edge has left the floor
+WHEEL_HALF_WIDTH_MM = 10.0
+
 #: Bumper: contacts within this angle of the heading press both switches.
 BUMP_CENTRE_ANGLE = math.radians(12.0)
 BUMP_HALF_SPAN = math.radians(85.0)
@@ -734,12 +737,13 @@ class Sensing(RobotState):
         return any(point_in_polygon(x, y, drop) for drop in self._drops)
 
     def _wheel_over_drop(self) -> bool:
-        """Is a drive wheel's contact point (half the wheel base either side of the centre,
-        on the axle) over a drop? The robot rests on its two wheels and the front caster: a
+        """Is a drive wheel's whole tyre over a drop (its inner edge, half the wheel base less
+        :data:`WHEEL_HALF_WIDTH_MM` either side of the centre, on the axle)? A tyre partly over
+        an edge still rests on the floor. The robot rests on its two wheels and the front caster: a
         wheel past the edge tips it over, whatever the mode and whichever way it moved. The
         centre need not be over it: a robot driving along an edge falls when its outer wheel
         leaves the floor."""
-        half_base = self.profile.wheel_base_mm / 2.0
+        half_base = self.profile.wheel_base_mm / 2.0 - WHEEL_HALF_WIDTH_MM
         x, y, theta = self.x, self.y, self.theta
         across_x, across_y = -half_base * math.sin(theta), half_base * math.cos(theta)
         return self._over_drop(x + across_x, y + across_y) or self._over_drop(

@@ -64,6 +64,18 @@ def test_a_wheel_over_the_drop_falls_in_full_mode_with_the_centre_still_on_the_f
     assert host.query([7])[7] & WHEEL_DROP_BITS == WHEEL_DROP_BITS
 
 
+@pytest.mark.parametrize(("over_mm", "falls"), [(5.0, False), (15.0, True)])
+def test_a_wheel_falls_once_its_whole_tyre_is_past_the_edge(over_mm: float, falls: bool) -> None:
+    """A tyre partly over an edge still rests on the floor (the apartment's stairs' corner
+    tipped a cleaning robot with one wheel's axle point 1 cm past it): it falls once its
+    inner edge, ``WHEEL_HALF_WIDTH_MM`` inside the axle's end, has left the floor."""
+    axle_end_x = 2.0 + over_mm / 1000.0  # the right wheel's contact point, heading north
+    host = make(STAIRS_AT_2_M, start=pose(axle_end_x - 0.1175, 1, 90), mode="full")
+    host.send(C.drive_straight(100))
+    host.run(2.0)
+    assert host.sim.fallen is falls
+
+
 def test_driving_forward_in_safe_mode_the_cliff_sensors_stop_it_before_a_wheel_falls() -> None:
     host = make(STAIRS_AT_2_M, start=pose(1.5, 2, 0))
     host.send(C.drive_straight(200))
