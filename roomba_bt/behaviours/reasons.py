@@ -115,10 +115,19 @@ def while_stopped(condition: Behaviour, guarded: str, started: bool = True) -> s
 
     It said "condition no longer holds: wheel_drop(any) held", under the guard's own name
     ("while inverter"). ``started`` False: the condition failed on the guard's first tick,
-    and the node never ran (``before 'drive(...)' started``; it said "while ... ran")."""
+    and the node never ran (``before 'drive(...)' started``; it said "while ... ran").
+
+    A condition the mission named ``stopped: ...`` says the reason itself, and is said as it
+    stands: ``stopped: cliff front left, while 'bump and turn for a while' ran``."""
     said, held, told = _explain(condition)
     said = escaped(said, ANY_CONTROL)  # one line, as failure_reason's
     when = f"while {guarded!r} ran" if started else f"before {guarded!r} started"
+    if held is None and said.startswith(GUARD_STOPPED):
+        # the mission named the condition by what its failing means (bump-and-turn's
+        # ``{name: "stopped: cliff front left", sensor: cliff_front_left == 0}``): the reason
+        # as it stands, said once; it read "stopped: stopped: cliff front left no longer
+        # holds while ...", the name's words the opposite of what held
+        return f"{said}, {when}"
     if held is None and told:  # its own message says what happened (the monitor's force)
         return f"{GUARD_STOPPED}{said}, {when}"
     if held is None:

@@ -108,3 +108,40 @@ def test_a_reason_is_one_line_whatever_the_names_it_quotes() -> None:
     running = py_trees.behaviours.Running(name="drive\n[ok] fake(speed=1)")
     running.tick_once()
     assert running_in(running) == " in drive\\x0a[ok] fake"
+
+
+def _guard_of(*leaves: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour:
+    """A ``while`` guard's condition as bump-and-turn writes it, ticked once: a reactive
+    sequence of the leaves, which leave no message (as the ``sensor`` leaves do not)."""
+    condition = py_trees.composites.Sequence("guard", memory=False, children=list(leaves))
+    condition.tick_once()
+    for leaf in leaves:
+        leaf.feedback_message = ""  # py_trees' canned "failure"
+    return condition
+
+
+def test_a_condition_named_by_what_stopped_the_run_is_said_once() -> None:
+    """bump-and-turn and wall-follow name each guard leaf by what its failing means
+    (``stopped: cliff front left``); the reason said "stopped: stopped: cliff front left no
+    longer holds while ...", the words doubled and the meaning backwards."""
+    held = py_trees.behaviours.Success(name="stopped: cliff on the left")
+    seen = py_trees.behaviours.Failure(name="stopped: cliff front left")
+    condition = _guard_of(held, seen)
+    guarded = "bump and turn for a while"
+    said = while_stopped(condition, guarded)
+    assert said == "stopped: cliff front left, while 'bump and turn for a while' ran"
+    said = while_stopped(condition, guarded, started=False)
+    assert said == "stopped: cliff front left, before 'bump and turn for a while' started"
+    seen.feedback_message = "forced to FAILURE by the operator"
+    assert while_stopped(condition, guarded) == (
+        "stopped: cliff front left: forced to FAILURE by the operator, "
+        "while 'bump and turn for a while' ran"
+    )
+
+
+def test_a_condition_named_otherwise_still_no_longer_holds() -> None:
+    """A name that says what holds keeps the runtime's words around it."""
+    condition = _guard_of(py_trees.behaviours.Failure(name="no cliff ahead"))
+    assert while_stopped(condition, "clean") == (
+        "stopped: no cliff ahead no longer holds while 'clean' ran"
+    )

@@ -323,7 +323,11 @@ def test_bump_and_turn_stops_and_fails_on_a_cliff(cliff_world: str) -> None:
                     timeout_s=60)
     )  # fmt: skip
     assert result.outcome == "failure"
-    assert "stopped: cliff" in result.reason
+    # the guard leaf's name is the reason, said once ("stopped: stopped: cliff front left
+    # no longer holds while ..." before)
+    assert result.reason.startswith("stopped: cliff "), result.reason
+    assert ", while 'bump and turn for a while' ran" in result.reason, result.reason
+    assert "stopped: stopped" not in result.reason and "no longer" not in result.reason
     assert not result.fell
     assert result.cliffs >= 1
 
