@@ -196,6 +196,13 @@ def clean_blackboard() -> Iterator[None]:
     py_trees.blackboard.Blackboard.clear()
 
 
+#: The most a test waits for ``roomba-bt sim`` to print its address, or to end once told:
+#: each wait ends as soon as it does, so this stops only a hung simulator. Its start is an
+#: interpreter's (imports: seconds on a loaded 2-core machine), and 10 s for its end was as
+#: fixed a bet as the pty tests' 30 s that failed there.
+SIM_WAIT_S = 120.0
+
+
 class ServedSim:
     """``roomba-bt sim ARGS`` in a child process, in real time; ``address`` is the first line
     it printed: the pty's path or the URL to open."""
@@ -208,7 +215,7 @@ class ServedSim:
             text=True,
         )
         assert self.proc.stdout is not None
-        ready, _, _ = select.select([self.proc.stdout], [], [], 30.0)
+        ready, _, _ = select.select([self.proc.stdout], [], [], SIM_WAIT_S)
         assert ready, "the simulator printed no address"
         self.address = self.proc.stdout.readline().strip()
 
@@ -217,7 +224,7 @@ class ServedSim:
         summary line: simulated time, frames, mode, wheels)."""
         if self.proc.poll() is None:
             self.proc.send_signal(sig)
-        _, err = self.proc.communicate(timeout=10)
+        _, err = self.proc.communicate(timeout=SIM_WAIT_S)
         return self.proc.returncode, err
 
 

@@ -4,6 +4,7 @@ byte tapped."""
 from __future__ import annotations
 
 import random
+import subprocess
 import textwrap
 import threading
 import time
@@ -447,3 +448,37 @@ class LosesTheOpcodeOf(SimLink):
             data = data[1:]
         self.written += data
         super().write(data)
+
+
+#: The most a test waits for a child process (a run over a pty, its replay, the simulator)
+#: to end: :func:`ended` returns as soon as it does, so this stops only a hung test, never a
+#: slow one. Fixed 30 s waits failed on a loaded 2-core machine: a run's start alone (its
+#: imports, the simulator's first answer) took over 10 s there, and its end may wait out the
+#: safe stop's own last resort (10 s).
+CHILD_WAIT_S = 120.0
+
+
+def ended(proc: subprocess.Popen[str], ceiling: float = CHILD_WAIT_S) -> tuple[str, str]:
+    """What ``proc`` wrote on stdout and stderr, once it ended. Still running at
+    ``ceiling``: SIGTERM (a run closes its port and says why; SIGKILL would leave a pty in
+    the kernel's exclusive mode for the tests after), SIGKILL only if that is not heeded,
+    and the test fails with what it said."""
+    try:
+        return proc.communicate(timeout=ceiling)
+    except subprocess.TimeoutExpired:
+        proc.terminate()
+        try:
+            out, err = proc.communicate(timeout=ceiling)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out, err = proc.communicate()
+    raise AssertionError(f"{proc.args} still ran after {ceiling:g} s; it said: {out}{err}")
+
+
+def finished(args: list[str], ceiling: float = CHILD_WAIT_S) -> subprocess.CompletedProcess[str]:
+    """``args`` run to its end, its output read through text pipes (:func:`ended`:
+    ``subprocess.run``'s timeout ends a late one with SIGKILL, and its ceiling was the
+    same fixed 30 s)."""
+    with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as proc:
+        out, err = ended(proc, ceiling)
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)

@@ -22,7 +22,7 @@ from roomba_bt.robot.discovery import PROBE_QUERY
 from roomba_bt.runtime.recording import load_record
 
 from .bridge import ResettingBridge
-from .simrun import SPIN, write_mission
+from .simrun import SPIN, ended, finished, write_mission
 
 SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
 
@@ -61,10 +61,11 @@ def _start_run(
     )  # fmt: skip
 
 
-#: The most a run is waited for to start driving, or to end after a signal: the waits end as
-#: soon as it does, so this bounds only a run that never will. A run's start (its imports,
-#: the simulator's answer) took over 10 s on 2 cores under load, and its end may wait out the
-#: safe stop's own last resort (``STOP_WALL_S``, 10 s); 10 s failed such runs.
+#: The most a run is waited for to start driving (or to read its first frames, or to log
+#: what a test waits for): the waits end as soon as it does, so this bounds only a run that
+#: never will. A run's start (its imports, the simulator's answer) took over 10 s on 2 cores
+#: under load; 10 s failed such runs. Its end is waited for by :func:`~.simrun.ended`, up
+#: to :data:`~.simrun.CHILD_WAIT_S` (the safe stop's own last resort alone may take 10 s).
 RUN_WAIT_S = 60.0
 
 
@@ -115,17 +116,17 @@ def test_signal_ends_with_the_safe_stop_and_exit_130(
 ) -> None:
     proc, record = _driving(sim_port, tmp_path)
     proc.send_signal(signum)
-    out, err = proc.communicate(timeout=RUN_WAIT_S)
+    out, err = ended(proc)
     assert proc.returncode == 130, err
     assert "INTERRUPTED" in out
     assert ends_with_the_safe_stop(load_record(record).outbound)
 
 
-def _still_running(proc: subprocess.Popen[str], record: Path, timeout: float = 10.0) -> bool:
+def _still_running(proc: subprocess.Popen[str], record: Path) -> bool:
     """Whether the run goes on: its record grows by 20 lines (about 0.3 s of the robot's
     frames) before it ends."""
     lines = record.read_text().count("\n") + 20
-    deadline = time.monotonic() + timeout
+    deadline = time.monotonic() + RUN_WAIT_S
     while proc.poll() is None and time.monotonic() < deadline:
         if record.read_text().count("\n") >= lines:
             return proc.poll() is None
@@ -141,9 +142,9 @@ def test_a_run_started_by_nohup_outlives_a_hang_up(sim_port: str, tmp_path: Path
     proc = _start_run(sim_port, write_mission(tmp_path, SPIN), record, ignoring=signal.SIGHUP)
     _wait_for_driving(record, proc)
     proc.send_signal(signal.SIGHUP)
-    assert _still_running(proc, record), proc.communicate()
+    assert _still_running(proc, record), ended(proc)
     proc.send_signal(signal.SIGTERM)
-    out, err = proc.communicate(timeout=RUN_WAIT_S)
+    out, err = ended(proc)
     assert proc.returncode == 130, err
     assert "INTERRUPTED (SIGTERM)" in out and "SIGHUP" not in out + err
     assert ends_with_the_safe_stop(load_record(record).outbound)
@@ -188,7 +189,7 @@ def test_a_second_ctrl_c_waits_for_the_safe_stop_and_the_summary(
     proc.send_signal(signal.SIGINT)
     time.sleep(gap)  # the second one lands in the unwinding, the stop or the summary
     proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=RUN_WAIT_S)
+    out, err = ended(proc)
     assert proc.returncode == 130, out + err
     assert "outcome      INTERRUPTED (Ctrl-C)" in out
     # a spinning run on the wall clock: drive 0 and motors off went out before the tree's
@@ -220,15 +221,13 @@ def test_success_over_the_pty(sim_port: str, tmp_path: Path) -> None:
         """,
     )
     proc = _start_run(sim_port, mission, record)
-    out, err = proc.communicate(timeout=30)
+    out, err = ended(proc)
     assert proc.returncode == 0, err
     assert "SUCCESS" in out
     outbound = load_record(record).outbound
     assert ends_with_the_safe_stop(outbound)
     # The replay of that record decides the same, byte for byte.
-    replay = subprocess.run(
-        [*CLI, "replay", str(record)], capture_output=True, text=True, timeout=30
-    )
+    replay = finished([*CLI, "replay", str(record)])
     assert replay.returncode == 0, replay.stderr
     assert "the tree wrote the same" in replay.stdout
 
@@ -247,21 +246,19 @@ def test_a_run_whose_watchdog_stopped_the_wheels_over_the_pty_replays_byte_for_b
 
     On a loaded machine the simulator's process may itself be kept from running past the
     watchdog (100 ms): a stall more, which the run rides through and the replay does again
-    as well; so the gap's stall is one of one or more, each ridden through. The waits are
-    :data:`RUN_WAIT_S` (a run's start took over 10 s under load; 30 s bounded it and the
-    replay before)."""
+    as well; so the gap's stall is one of one or more, each ridden through. The run and
+    the replay are waited for until they end (:func:`~.simrun.ended`; a run's start took
+    over 10 s under load, and 30 s bounded it and the replay before)."""
     sim = served_sim(
         "--pty", "--stream-gap-at", "1.5", "--stream-gap-s", "0.5", "--faults-from-stream"
     )
     record = tmp_path / "run.jsonl"
     proc = _start_run(sim.address, write_mission(tmp_path, SPIN), record, "--timeout", "3s")
-    out, err = proc.communicate(timeout=RUN_WAIT_S)
+    out, err = ended(proc)
     assert proc.returncode == 1, err  # its timeout
     stalls = re.search(r"stalls +(\d+) \(watchdog drive 0\), (\d+) ridden through", out)
     assert stalls is not None and int(stalls[1]) >= 1 and stalls[1] == stalls[2], out
-    replay = subprocess.run(
-        [*CLI, "replay", str(record)], capture_output=True, text=True, timeout=RUN_WAIT_S
-    )
+    replay = finished([*CLI, "replay", str(record)])
     assert replay.returncode == 0, replay.stdout + replay.stderr
     assert "the tree wrote the same" in replay.stdout
 
@@ -278,12 +275,10 @@ def test_a_run_that_followed_a_baud_change_over_the_pty_replays_byte_for_byte(
     sim = served_sim("--pty", "--baud-change-at", "1.5", "--faults-from-stream")
     record = tmp_path / "run.jsonl"
     proc = _start_run(sim.address, write_mission(tmp_path, SPIN), record, "--timeout", "5s")
-    out, err = proc.communicate(timeout=30)
+    out, err = ended(proc)
     assert proc.returncode == 8, out + err
     assert "the robot now talks at another baud rate: 19200" in out
-    replay = subprocess.run(
-        [*CLI, "replay", str(record)], capture_output=True, text=True, timeout=30
-    )
+    replay = finished([*CLI, "replay", str(record)])
     assert replay.returncode == 0, replay.stdout + replay.stderr
     assert "the tree wrote the same" in replay.stdout
     # its stop confirmed, or not, as the live run's was (a loaded machine's live run may
@@ -295,19 +290,14 @@ def test_a_run_that_followed_a_baud_change_over_the_pty_replays_byte_for_byte(
 def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
     record = tmp_path / "run.jsonl"
     proc = _start_run(sim_port, write_mission(tmp_path, SPIN), record, "--timeout", "1s")
-    out, err = proc.communicate(timeout=30)
+    out, err = ended(proc)
     assert proc.returncode == 1, err
     assert "TIMEOUT" in out
     assert ends_with_the_safe_stop(load_record(record).outbound)
 
 
 def _run_on(port: str, tmp_path: Path, *options: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [*CLI, "run", str(write_mission(tmp_path, SPIN)), "--port", port, *options],
-        capture_output=True,
-        text=True,
-        timeout=30,
-    )
+    return finished([*CLI, "run", str(write_mission(tmp_path, SPIN)), "--port", port, *options])
 
 
 def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undelivered(
@@ -319,7 +309,7 @@ def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undeliv
     proc, _ = _driving(sim.address, tmp_path)
     sim.proc.kill()
     sim.proc.communicate()  # its pipes closed
-    out, err = proc.communicate(timeout=30)
+    out, err = ended(proc)
     assert proc.returncode == 8, err
     assert "the port is gone" in err
     report = "last seen in Safe spinning left at 100 mm/s; the stop was not delivered"
@@ -350,7 +340,7 @@ def test_a_port_that_comes_back_within_the_grace_gets_the_stop_not_the_mission(
     back = tmp_path / "robot.back"
     back.symlink_to(second.address)
     back.replace(port)  # the adapter back, at the same path
-    out, err = proc.communicate(timeout=30)
+    out, err = ended(proc)
     assert proc.returncode == 8, err
     assert "CONNECTION LOST" in out and "the cable was pulled or the adapter reset" in out
     assert re.search(
@@ -407,7 +397,7 @@ def test_a_bridge_that_drops_the_run_gets_the_stop_through_a_new_connection(
     proxy, sim = bridge
     proc, _ = _driving(proxy.url, tmp_path)
     fault(proxy)
-    out, err = proc.communicate(timeout=30)
+    out, err = ended(proc)
     assert proc.returncode == 8, err
     assert said in out
     assert re.search(
@@ -434,7 +424,7 @@ def test_a_bridge_that_stays_down_past_the_grace_is_said_in_the_network_s_words(
     proxy, sim = bridge
     proc, _ = _driving(proxy.url, tmp_path)
     proxy.reset(down_s=30.0)
-    out, err = proc.communicate(timeout=30)
+    out, err = ended(proc)
     assert proc.returncode == 8, err
     assert "NOT DELIVERED" in out and "the connection did not come back within 2 s" in out
     where = proxy.url.removeprefix("socket://")
@@ -443,9 +433,7 @@ def test_a_bridge_that_stays_down_past_the_grace_is_said_in_the_network_s_words(
         f"roomba-bt doctor --port {proxy.url}"
     ) in out
     assert "cable" not in out
-    doctor = subprocess.run(
-        [*CLI, "doctor", "--port", sim.address], capture_output=True, text=True, timeout=30
-    )
+    doctor = finished([*CLI, "doctor", "--port", sim.address])
     assert re.search(
         r"\[warn\] left +a stream was running when doctor came in Safe, its wheels turning: a "
         r"run's stop did not reach the robot, which drove on; doctor's Start \(128\) has "
@@ -545,13 +533,14 @@ def test_a_terminal_that_stops_reading_does_not_hold_up_the_run(
         stdout=out, stderr=err,
     )  # fmt: skip
     try:
-        deadline = time.monotonic() + 30.0
+        deadline = time.monotonic() + RUN_WAIT_S
         while _frames_read(record) == 0 and time.monotonic() < deadline:
             time.sleep(0.05)
         _fill(write_end)
         filled_at = _frames_read(record)
         assert filled_at > 0, "the run never read a frame"
         frames = filled_at
+        deadline = time.monotonic() + RUN_WAIT_S  # the 200 frames' own: 3 s unloaded
         while frames < filled_at + 200 and time.monotonic() < deadline:
             time.sleep(0.1)
             frames = _frames_read(record)
@@ -583,7 +572,7 @@ def _lines_of(path: Path) -> list[str]:
 def _wait_for_any(watched: dict[Path, str], proc: subprocess.Popen[str], count: int) -> str:
     """The first line of a watched file that matches its pattern ``count`` times (the first
     file's first match is enough), waiting while ``proc`` runs; "" if it ended first."""
-    deadline = time.monotonic() + 30.0
+    deadline = time.monotonic() + RUN_WAIT_S
     while proc.poll() is None and time.monotonic() < deadline:
         for number, (path, pattern) in enumerate(watched.items()):
             hits = [line for line in _lines_of(path) if re.search(pattern, line)]
@@ -627,12 +616,12 @@ def test_ctrl_c_on_a_noisy_line_leaves_the_robot_stopped_in_passive(tmp_path: Pa
         )
         assert seen, "no watchdog trip on the noisy line"
         proc.send_signal(signal.SIGINT)
-        out, _ = proc.communicate(timeout=30)
+        out, _ = ended(proc)
         assert proc.returncode == 130, out + run_log.read_text()
     finally:
         if sim.poll() is None:
             sim.send_signal(signal.SIGINT)
-        sim.communicate(timeout=10)
+        ended(sim)
     said = sim_log.read_text()
     final = said.strip().splitlines()[-1]
     assert "mode Passive, wheels 0/0 mm/s" in final, final

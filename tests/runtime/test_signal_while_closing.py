@@ -25,7 +25,7 @@ from transport.test_serial_transport import in_exclusive_mode  # tests/transport
 from roomba_bt.robot.safety import CLOSING_UNDER_WAY
 from roomba_bt.runtime.recording import load_record
 
-from .simrun import SPIN
+from .simrun import SPIN, ended
 from .test_cli_pty import _wait_for_driving, ends_with_the_safe_stop
 
 pytestmark = pytest.mark.skipif(
@@ -72,9 +72,9 @@ def test_a_second_ctrl_c_while_the_run_closes_leaves_the_port_free_and_the_recor
     try:
         _wait_for_driving(record, proc)
         proc.send_signal(signal.SIGINT)  # the first Ctrl-C: the safe stop
-        out, err = proc.communicate(timeout=30)
+        out, err = ended(proc)
     finally:
-        if proc.poll() is None:
+        if proc.poll() is None:  # _wait_for_driving failed
             proc.kill()
             proc.communicate()
     assert "hook: SIGINT" in err  # the second one was sent, where it was meant to be
