@@ -112,6 +112,10 @@ class SlowTickWatch:
         #: look that found it there, and where that look found it
         self.longest_s = 0.0
         self.where = ""
+        #: how much longer than :attr:`longest_s` that iteration may have run, by the gaps
+        #: between the looks around it: the one before its first look inside, and the one
+        #: after its last (0: not measured; :meth:`culprit` allows three looks at least)
+        self.longest_unseen_s = 0.0
         #: the slowest tick that had ended at a look (the summary's ``max_tick_s`` then), and
         #: its thread's time on a CPU, in how long, and how much of it waiting for a CPU when
         #: the host kept the thread from running (:meth:`_host_busy`), else ""
@@ -119,8 +123,13 @@ class SlowTickWatch:
         self.host_busy = ""
         self._owner = threading.get_ident()  # the thread that ticks: the one that made it
         self._seen = -1  # the tick count at the last look
-        self._last = 0.0  # when that look was
+        self._last = clock()  # when that look was (made: the ticks begin after it)
         self._inside: float | None = None  # since when (a look's time) it is in a behaviour
+        self._gap = 0.0  # seconds from the look before the last to the last
+        self._inside_gap = 0.0  # the gap before that stretch's first look inside
+        #: the gap before the longest iteration's first look inside, while it is the one the
+        #: looks find there (None: the longest has been left, its unseen time measured)
+        self._longest_gap: float | None = None
         #: the last look that found a new tick count, and the thread's times then: the ticks
         #: that end before the next such look ran after it
         self._window: tuple[float, tuple[float, float] | None] | None = None
@@ -138,7 +147,9 @@ class SlowTickWatch:
         self._done.set()
         if self._thread.ident is not None:  # started (a test looks by hand)
             self._thread.join()
-        self._ticks_ended(self.clock())
+        now = self.clock()
+        self._left(now)
+        self._ticks_ended(now)
         if self._schedstat is not None:
             self._schedstat.close()
 
@@ -146,10 +157,17 @@ class SlowTickWatch:
         """Where the slowest tick was, or "" when the watch cannot tell, or the host kept
         the thread from running then (:meth:`host_kept_it`): the longest iteration it found
         inside a behaviour must have run, by its looks, for at least the slowest tick's time
-        less three looks (a look comes up to one late at each end, and a look may itself be
-        late); an iteration that ran that long is the slowest tick, or one as slow."""
+        less what the looks could not see of it: the gaps between the looks at each end (it
+        began after the look before its first look inside, and ended before the look after
+        its last) and a look more (the runtime's own code in the tick); three looks at the
+        least, looks on time. An iteration that ran that long is the slowest tick, or one as
+        slow. The gaps are measured, not taken as a look each: on a loaded host the watch's
+        own thread waits for a CPU, its looks come late, and a fixed three looks of slack
+        could leave a tick blocked for half a second unnamed (what its looks did not see of
+        it was 46-74 ms of the 75 allowed with two busy loops beside the run)."""
         slowest = self.summary.max_tick_s
-        if not self.where or self.longest_s < slowest - 3 * self.look_every_s:
+        unseen = max(3 * self.look_every_s, self.longest_unseen_s + self.look_every_s)
+        if not self.where or self.longest_s < slowest - unseen:
             return ""
         return "" if self.host_kept_it() else self.where
 
@@ -168,17 +186,31 @@ class SlowTickWatch:
         behaviour it is in, "" for none); another, ticks that ended (:meth:`_ticks_ended`)."""
         now = self.clock()
         if ticks != self._seen:  # a new iteration since the last look: a short one, so far
+            self._left(now)
             self._ticks_ended(now)
-            self._seen, self._last, self._inside = ticks, now, None
+            self._seen, self._inside = ticks, None
+            self._gap, self._last = now - self._last, now
             return
         where = where_now()
         if not where:  # the runtime's own code or wait (a poll, a pause): no tick's
+            self._left(now)
             self._inside = None
         else:
-            inside = self._inside = self._last if self._inside is None else self._inside
-            if now - inside > self.longest_s:
-                self.longest_s, self.where = now - inside, where
-        self._last = now
+            if self._inside is None:  # its first look inside: it began after the look before
+                self._inside, self._inside_gap = self._last, self._gap
+            if now - self._inside > self.longest_s:
+                self.longest_s, self.where = now - self._inside, where
+                self._longest_gap = self._inside_gap  # this iteration is the longest
+        self._gap, self._last = now - self._last, now
+
+    def _left(self, now: float) -> None:
+        """The iteration the looks found inside a behaviour is there no longer at ``now``
+        (it ended, or is in the runtime's code): if it is the longest, how long it may have
+        run unseen (:attr:`longest_unseen_s`): the gap before its first look inside and the
+        one after its last."""
+        if self._longest_gap is not None:
+            self.longest_unseen_s = self._longest_gap + (now - self._last)
+            self._longest_gap = None
 
     def _ticks_ended(self, now: float) -> None:
         """Ticks ended since the window began (the last look that found a new tick count):

@@ -4,11 +4,14 @@ ms``, and the plugin's author, who tests there, could not tell which leaf it was
 
 End to end the plugin blocks on a pipe until the watch has seen it blocked for half a second
 (twenty looks), and is let go right after that look: the tick ends a wake-up after the
-watch's last look inside it, and began at most a look before the first, well within the
-watch's three looks of slack on a loaded machine too. A fixed ``time.sleep(0.5)`` flaked
-under load: its tick began before the watch thread's first look, and the run ended two ticks
-after it, before another look, so each end was a look short, and a late look on top of that
-went past the slack ("slowest 5xx ms", no behaviour named)."""
+watch's last look inside it, and began at most a look before the first. A fixed
+``time.sleep(0.5)`` flaked under load: its tick began before the watch thread's first look,
+and the run ended two ticks after it, before another look, so each end was a look short, and
+a late look on top of that went past the slack ("slowest 5xx ms", no behaviour named). The
+slack was three looks (75 ms) however late the looks came, and the pipe's wait left 46-74 ms
+of it used with two busy loops beside the run; it is now what the looks around the tick
+could not see, measured from their own times (the watch's looks come late under load, the
+slack with them)."""
 
 from __future__ import annotations
 
@@ -218,6 +221,39 @@ def test_a_slow_tick_no_look_saw_running_is_judged_by_the_looks_around_it() -> N
     summary.max_tick_s = 0.25
     watch.close()  # the run ended before the next look
     assert watch.host_kept_it() == ""
+
+
+@pytest.mark.parametrize(
+    ("gap_before", "gap_after", "named"),
+    [(0.100, 0.090, True), (0.025, 0.025, False)],
+    ids=["its looks came late: named", "looks on time: a slower tick no look saw"],
+)  # fmt: skip
+def test_what_the_looks_did_not_see_of_a_tick_is_measured_not_a_fixed_three_looks(
+    gap_before: float, gap_after: float, named: bool
+) -> None:
+    """A tick blocked half a second, seen inside its behaviour by twenty looks, the loop's
+    measure of it 670 ms. On a loaded host the watch's own looks came late around it (the one
+    before its first look inside 100 ms after its predecessor, the one after its end 90 ms
+    after its last): it began and ended in those gaps, and is named (three looks of slack,
+    75 ms, left it unnamed). Looks on time could not have missed 170 ms of it: a 670 ms
+    slowest tick was another, and this one is not called that."""
+    thread = FakeThread()
+    summary = RunSummary("m", max_tick_s=0.001)
+    watch = SlowTickWatch(summary, 0.025, clock=lambda: thread.now, times=thread.times)
+    where = "sleepy (Sleepy.update at sleepy.py:21)"
+    thread.run(0.025, 1.0, 0.0)
+    watch.look(1, lambda: where)
+    thread.run(gap_before, 1.0, 0.0)  # short ticks, then the blocked one begins
+    watch.look(2, lambda: where)
+    for _ in range(20):  # blocked (a read): no CPU, no wait for one
+        thread.run(0.025, 0.0, 0.0)
+        watch.look(2, lambda: where)
+    assert watch.longest_s == pytest.approx(0.5)
+    thread.run(gap_after, 0.0, 0.0)
+    summary.max_tick_s = 0.670  # the loop's measure, once it ended
+    watch.look(3, lambda: where)
+    watch.close()
+    assert watch.culprit() == (where if named else "")
 
 
 def test_without_the_thread_s_times_every_slow_tick_is_named_as_before() -> None:
