@@ -731,6 +731,7 @@ def _power_color(value: object) -> int:
 POWER_COLOR = ValueType(
     "power_color",
     _power_color,
+    takes=("int",),
     json_schema=(
         ("anyOf", [{"enum": list(POWER_COLORS)}, *INT.schema()["anyOf"]]),
         ("minimum", _LED_COLOR.minimum),

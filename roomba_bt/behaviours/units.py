@@ -447,6 +447,9 @@ class ValueType:
     choices: tuple[str, ...] = ()
     #: a record's fields (blackboard keys declared with ``fields:``), in order
     fields: tuple[tuple[str, ValueType], ...] = ()
+    #: the other types whose every value this one reads as its own (:func:`compatible`): a
+    #: float an int, a radius a distance, the power LED's colour an int (the spec's byte)
+    takes: tuple[str, ...] = ()
 
     def describe(self) -> str:
         if self.choices:
@@ -627,6 +630,7 @@ INT = ValueType(
 FLOAT = ValueType(
     "float",
     _parse_float,
+    takes=("int",),
     json_schema=(
         ("anyOf", [{"type": "number"}, _yaml11_text(f"(?:{YAML11_INT_TEXT}|{YAML11_FLOAT_TEXT})")]),
     ),
@@ -661,6 +665,7 @@ RADIUS = ValueType(
     _parse_radius,
     "mm",
     (("anyOf", [{"enum": list(RADIUS_WORDS)}, dict(DISTANCE.schema())]),),
+    takes=("distance",),
 )
 
 #: Types a mission parameter or a blackboard key may be declared with.
@@ -699,27 +704,48 @@ def _boolean_word(value: bool, choices: Sequence[str]) -> str:
             f"'{meant[0]}'")  # fmt: skip
 
 
-def compatible(source: ValueType, target: ValueType) -> bool:
+def compatible(source: ValueType, target: ValueType, *, as_stored: bool = False) -> bool:
     """May a value of ``source`` type fill a slot of ``target`` type? Any value fills an
     ``any`` slot (a key whose declaration was refused is typed ``any``: its reader's
     ``${p}`` was "an int, but check.value needs any", an error after the real one). An
-    enum's value is one of its words, a text: it fills a ``str`` slot (a ``str`` key's
-    ``set``, a log line, a subtree's ``str`` parameter), which refused it ("is one of a, b,
-    but set.value needs str")."""
+    enum fills any slot that reads each of its words (:func:`enum_misfits`): a ``str``
+    slot, an enum of more words, the power LED's colour, a radius; one rule for every slot
+    that takes words, where only ``str`` and enums were listed (an enum of exactly the
+    colour words was "one of green, orange, red, but leds.power_color needs power_color").
+    ``as_stored``: the value is a blackboard key's, used as stored (no parsing during a
+    tick), so each word must read as itself. A type that ``takes`` another reads its values
+    as they are (:attr:`ValueType.takes`)."""
     if target.name == "any":
         return True
     if source.name == target.name and source.choices == target.choices:
         return source.fields == target.fields
-    if source.choices and target.choices:  # an enum whose every word the slot accepts
-        return set(source.choices) <= set(target.choices)
-    if source.choices and target.name == "str" and not target.choices:
-        return True
-    return (source.name, target.name) in {("int", "float"), ("distance", "radius")}
+    if source.choices:
+        return not enum_misfits(source, target, as_stored=as_stored)
+    return source.name in target.takes
+
+
+def enum_misfits(
+    source: ValueType, target: ValueType, *, as_stored: bool = False
+) -> list[tuple[str, str]]:
+    """The words of the enum ``source`` that a ``target`` slot does not read, each with why
+    (what the slot's type says of it); ``as_stored``: those it reads as another value too
+    (``red``, the colour byte 255). None: the enum fills the slot."""
+    misfits = []
+    for word in source.choices:
+        try:
+            value = target.parse(word)
+        except ValueError as exc:  # UnitError, or a plugin type's own
+            misfits.append((word, str(exc)))
+            continue
+        if as_stored and value != word:
+            misfits.append((word, f"it is read as {value!r}, and a stored value is used as it is"))
+    return misfits
 
 
 def convert(source: ValueType, target: ValueType, value: Any) -> Any:
-    """``value`` (already of ``source`` type) as ``target`` wants it."""
-    if target.choices:
+    """``value`` (already of ``source`` type) as ``target`` wants it: an enum's word read by
+    the slot's type (``red``: the colour byte 255), an int as a float."""
+    if target.choices or source.choices:
         return target.parse(value)
     return float(value) if target.name == "float" else value
 

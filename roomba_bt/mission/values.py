@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Collection, Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import yaml
@@ -30,6 +30,7 @@ from roomba_bt.behaviours.units import (
     closest,
     compatible,
     convert,
+    enum_misfits,
     shown,
     with_article,
 )
@@ -473,6 +474,8 @@ def resolve(
     if fields is not None and isinstance(node, yaml.MappingNode):
         return _record(ctx, node, loc, fields, env, what)
     raw = plain(node, loc)
+    from_text = False  # the value is a text parameter's, read by this slot's type here
+    passed_on = ""  # where that value was set
     if isinstance(raw, str):
         full = _FULL_SUBSTITUTION.match(raw)
         if full is not None:
@@ -497,14 +500,14 @@ def resolve(
                     )
                 return _check_range(value, loc, what, param, origin)
             if bound.type.name != "str":
-                raise Bad(
-                    loc.at(
-                        f"{what}: parameter ${{{pname}}} is "
-                        f"{with_article(bound.type.describe())}, "
-                        f"but {what} needs {vtype.describe()}"
-                    )
-                )
+                raise Bad(loc.at(f"{what}: {_misfit(pname, bound.type, vtype, what)}"))
             raw = ("-" if negative else "") + str(bound.value)
+            from_text = True
+            # a text parameter's value is read by the slot's type here, not where it was set:
+            # an error it makes names where that was (-p color=blue: "set on the command line")
+            passed_on = said_default(pname, bound, loc)
+            if bound.origin:
+                passed_on = f" (${{{pname}}} is {bound.origin})"
         elif "$" in raw:  # a parameter, a stray "${", or "$$" (one "$")
             warn_escaped(ctx, raw, node, loc, env, what)
             raw = _substitute(raw, loc, env, what)
@@ -512,8 +515,43 @@ def resolve(
                 return UNKNOWN
         if raw.startswith("@") or (port_remapping(raw) and vtype.name not in ("str", "any")):
             return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref))
-    parsed = _parsed(vtype, raw, loc, what, param, node)
-    return _check_range(parsed, loc, what, param, written=raw if isinstance(raw, str) else "")
+    if from_text:
+        raw = _text_read(raw, vtype)
+    try:
+        parsed = _parsed(vtype, raw, loc, what, param, node)
+        return _check_range(parsed, loc, what, param, written=raw if isinstance(raw, str) else "")
+    except Bad as bad:
+        if not passed_on:
+            raise
+        said = bad.diagnostic
+        raise Bad(replace(said, message=said.message + passed_on), bad.more) from None
+
+
+#: a whole number written as a text: what a text parameter may hold for a slot of numbers
+_INTEGER_TEXT = re.compile(r"\s*[-+]?[0-9]+\s*")
+
+
+def _text_read(text: str, vtype: ValueType) -> object:
+    """A text parameter's value as a slot of ``vtype`` reads it: a whole number as the
+    number when the slot takes integers (``-p color=200`` for ``leds.power_color``, whose
+    refusal of the text promised "a number 0..255"), as the number written in the file
+    would be; anything else the text."""
+    takes_integers = vtype.name in ("int", "float") or "int" in vtype.takes
+    return int(text) if takes_integers and _INTEGER_TEXT.fullmatch(text) else text
+
+
+def _misfit(pname: str, source: ValueType, target: ValueType, what: str) -> str:
+    """Why parameter ``pname`` of type ``source`` cannot fill ``what`` (of type ``target``):
+    the types, and for an enum the words the slot does not read, with why the first is not."""
+    said = f"parameter ${{{pname}}} is {with_article(source.describe())}, but {what}"
+    misfits = enum_misfits(source, target) if source.choices else []
+    if not misfits:
+        return f"{said} needs {target.describe()}"
+    words = ", ".join(repr(word) for word, _ in misfits)
+    return (
+        f"{said} does not take {words} ({misfits[0][1]}): an enum fills a slot when each of "
+        "its choices is a value the slot takes"
+    )
 
 
 def number_as_text_problem(node: yaml.Node | None, number: float) -> str | None:
@@ -738,7 +776,8 @@ def _in_range(name: str, bound: Bound, param: Param, negative: str) -> str:
     """``creep=15mm/s``: the end of ``param``'s range nearest the parameter's value, as -p
     takes it (the canonical unit, no space); "" where the use converts or negates it."""
     value = bound.value
-    if negative or bound.type.name != param.type.name or not isinstance(value, int | float):
+    same = bound.type.name == param.type.name or bound.type.name in param.type.takes
+    if negative or not same or not isinstance(value, int | float):
         return ""
     low, high = param.minimum, param.maximum
     nearest = low if low is not None and value < low else high
@@ -805,7 +844,7 @@ def _reference(
                 loc.at(f"{what}: blackboard key {key!r} has no field {fname!r} (fields: {known})")
             )
         ktype = fields[fname]
-    if not compatible(ktype, vtype):
+    if not compatible(ktype, vtype, as_stored=True):
         raise Bad(
             loc.at(
                 f"{what}: blackboard key {str(BlackboardRef(key, fname))[1:]!r} holds "
