@@ -73,6 +73,7 @@ from roomba_bt.mission.shipped import (
     SHIPPED_DIR,
     SHIPPED_PREFIX,
     in_shipped_library,
+    other_package,
     shipped_library_files,
     shipped_name,
 )
@@ -434,6 +435,10 @@ class Loader:
     def _include_entry(self, path: Path, text: str, target: Path, iloc: Loc) -> bool:
         """Read the file one include entry names, unless it may not or cannot be read
         (reported): False then. A cycle or a file read already is no loss: True."""
+        package = other_package(text)
+        if package is not None and not target.is_file():  # a file of that name is one
+            self.ctx.error(iloc.at(_package_include(text, package, self.permissions.wording)))
+            return False
         if self._refused(text, target, iloc, "include", allowed=True):
             return False
         if target in self._include_stack:
@@ -854,6 +859,20 @@ def _outside_message(
         f"{what} {path_written(text)} is outside the mission's folder "
         f"({_shown_path(mission_folder)}), the shipped library and the include folders granted "
         f"({folders}); allow its folder with {allow}{every}"
+    )
+
+
+def _package_include(text: str, package: str, wording: Wording) -> str:
+    """Why ``makerspace-bt:lib/x.yaml`` is no include, and what is: a package's files are
+    reached only in the shipped library; a plugin package ships behaviours (an entry point),
+    and a library of subtrees is a folder the mission is allowed to include from."""
+    allow = wording.include_dir.replace("DIR", "FOLDER")
+    return (
+        f"included file {path_written(text)} names a file of package {package!r}: only the "
+        f"shipped library is included by a package's name ({SHIPPED_PREFIX}PATH, such as "
+        f"{DOCKING_LIBRARY}); a plugin package provides behaviours, not included files: put "
+        f"the library in the mission's folder, or allow the FOLDER that holds it with {allow} "
+        "and include it by its path"
     )
 
 

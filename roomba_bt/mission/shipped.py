@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,6 +37,22 @@ SHIPPED_PREFIX = "roomba-bt:"
 
 #: The shipped docking library's include name (what ``dock`` and ``patrol`` include).
 DOCKING_LIBRARY = f"{SHIPPED_PREFIX}lib/docking.yaml"
+
+
+#: ``makerspace-bt:lib/x.yaml``: a name before a colon, as a package's (two characters at
+#: least: ``C:`` starts a Windows path)
+_PACKAGE_PREFIX = re.compile(r"([A-Za-z0-9][A-Za-z0-9._-]+):")
+
+
+def other_package(text: str) -> str | None:
+    """The package an include ``text`` names a file of, when that is not roomba-bt
+    (``makerspace-bt:lib/x.yaml`` -> ``makerspace-bt``), or None: no package reaches its
+    files through an include but the shipped library, and such a text was looked for as a
+    file of that name in the mission's folder ("not found")."""
+    match = _PACKAGE_PREFIX.match(text)
+    if match is None or text.startswith(SHIPPED_PREFIX):
+        return None
+    return match.group(1)
 
 
 @dataclass(frozen=True)

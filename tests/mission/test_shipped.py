@@ -117,6 +117,33 @@ def test_an_unknown_library_name_says_what_the_library_holds(
     ]
 
 
+def test_another_package_s_file_is_refused_saying_only_the_shipped_library_is_named_so(
+    mission_file: Callable[..., Path],
+) -> None:
+    """Session 35's library report (finding 10): ``makerspace-bt:lib/x.yaml`` was looked for
+    as a file of that name in the mission's folder, "not found", and the docs disagreed on
+    whether a package could provide one."""
+    path = mission_file("include: [makerspace-bt:lib/x.yaml]\ntree: wall\n")
+    _, diagnostics = compile_mission(path)
+    assert [f"{d.line}:{d.column}: {d.message}" for d in diagnostics] == [
+        "1:11: included file 'makerspace-bt:lib/x.yaml' names a file of package "
+        "'makerspace-bt': only the shipped library is included by a package's name "
+        "(roomba-bt:PATH, such as roomba-bt:lib/docking.yaml); a plugin package provides "
+        "behaviours, not included files: put the library in the mission's folder, or allow the "
+        "FOLDER that holds it with permissions=Permissions(include_dirs=(Path('FOLDER'),)) and "
+        "include it by its path"
+    ]
+
+
+def test_a_file_whose_name_has_a_colon_is_still_included(
+    mission_file: Callable[..., Path],
+) -> None:
+    mission_file("subtrees: {hello: {tree: {log: hi}}}\n", "my:lib.yaml")
+    path = mission_file("include: [my:lib.yaml]\ntree: {subtree: {id: hello}}\n")
+    mission, diagnostics = compile_mission(path)
+    assert diagnostics == [] and mission is not None
+
+
 def test_a_missing_relative_include_names_the_library(mission_file: Callable[..., Path]) -> None:
     path = mission_file("include: [lib/docking.yaml]\ntree: wall\n")
     _, diagnostics = compile_mission(path)
