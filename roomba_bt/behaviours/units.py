@@ -429,9 +429,12 @@ def format_quantity(dimension: str, value: float) -> str:
 
 
 def shown(vtype: ValueType, value: Any) -> str:
-    """A value as a mission would write it: ``150 mm/s`` rather than ``150.0``."""
+    """A value as a mission would write it: ``150 mm/s`` rather than ``150.0``; a list's
+    items so, in YAML's brackets (``[1 m, 2 m]``)."""
     if vtype.name in CANONICAL and isinstance(value, int | float):
         return format_quantity(vtype.name, value)
+    if vtype.item is not None and isinstance(value, list | tuple):
+        return "[" + ", ".join(shown(vtype.item, item) for item in value) + "]"
     return str(value)
 
 
@@ -450,10 +453,14 @@ class ValueType:
     #: the other types whose every value this one reads as its own (:func:`compatible`): a
     #: float an int, a radius a distance, the power LED's colour an int (the spec's byte)
     takes: tuple[str, ...] = ()
+    #: a list's item type (a parameter declared ``{type: list, items: distance}``)
+    item: ValueType | None = None
 
     def describe(self) -> str:
         if self.choices:
             return "one of " + ", ".join(self.choices)
+        if self.item is not None:
+            return f"list of {self.item.describe()}"
         return f"{self.name} ({self.unit})" if self.unit else self.name
 
     def schema(self) -> dict[str, Any]:
@@ -690,6 +697,31 @@ def enum(*choices: str) -> ValueType:
     return ValueType("enum", parse, choices=tuple(choices))
 
 
+def list_of(item: ValueType) -> ValueType:
+    """A list of values of ``item`` type, as a tuple: a list parameter's type (``{type:
+    list, items: distance}``, BehaviorTree.CPP's vector port). Every item that does not
+    parse is said (:class:`ItemErrors`: a mission says each at its own place)."""
+
+    def parse(value: object) -> tuple[Any, ...]:
+        if not isinstance(value, list | tuple):
+            raise UnitError(
+                f"expected a list of {item.describe()} written in brackets, [a, b], got "
+                f"{described(value)}"
+            )
+        items, problems = [], []
+        for index, each in enumerate(value):
+            try:
+                items.append(item.parse(each))
+            except UnitError as exc:
+                problems.append((index, str(exc)))
+        if problems:
+            raise ItemErrors("item", len(value), problems)
+        return tuple(items)
+
+    schema = (("type", "array"), ("items", item.schema()))
+    return ValueType("list", parse, json_schema=schema, item=item)
+
+
 #: the words YAML 1.1 reads as a boolean, by the boolean
 _YAML11_BOOLEANS = {True: ("yes", "on", "true"), False: ("no", "off", "false")}
 
@@ -717,6 +749,12 @@ def compatible(source: ValueType, target: ValueType, *, as_stored: bool = False)
     as they are (:attr:`ValueType.takes`)."""
     if target.name == "any":
         return True
+    if source.item is not None or target.item is not None:  # lists: item by item
+        return (
+            source.item is not None
+            and target.item is not None
+            and compatible(source.item, target.item, as_stored=as_stored)
+        )
     if source.name == target.name and source.choices == target.choices:
         return source.fields == target.fields
     if source.choices:
@@ -745,6 +783,8 @@ def enum_misfits(
 def convert(source: ValueType, target: ValueType, value: Any) -> Any:
     """``value`` (already of ``source`` type) as ``target`` wants it: an enum's word read by
     the slot's type (``red``: the colour byte 255), an int as a float."""
+    if source.item is not None and target.item is not None:
+        return tuple(convert(source.item, target.item, each) for each in value)
     if target.choices or source.choices:
         return target.parse(value)
     return float(value) if target.name == "float" else value

@@ -15,6 +15,7 @@ import yaml
 
 from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.language import CHILD_NAMES, KEY_ITEMS, TEXT, WORDS, NodeKind, Shape
+from roomba_bt.behaviours.units import ValueType, list_of
 from roomba_bt.mission.leaves import written_text
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text, sequence
@@ -95,6 +96,41 @@ def _child_names(what: str, names: list[str], loc: Loc) -> list[str]:
                 )
             )
     return [substituted(name, lambda _: None) for name in names]
+
+
+def _given_whole(node: yaml.Node) -> bool:
+    """Whether a list option is written as one value, a ``${parameter}`` or an ``@key``,
+    not as the list itself."""
+    return isinstance(node, yaml.ScalarNode) and str(node.value).strip().startswith(("$", "@"))
+
+
+#: why ``for_each.in`` takes no ``@key``: its items are known when the mission is validated
+_ITEMS_FIXED = (
+    " (for_each.in is known when the mission is validated, each item checked against the "
+    "ranges of the key's readers: write the list, or give a list parameter, "
+    '"${legs}" with legs: {type: list, items: distance})'
+)
+
+
+def _list_parameter(
+    ctx: Context,
+    node: yaml.Node,
+    loc: Loc,
+    item: ValueType,
+    env: Mapping[str, Bound],
+    said: tuple[str, str],
+) -> tuple[list[Any], list[Loc]]:
+    """``for_each.in: "${legs}"``: the items of a list parameter whose items are of the
+    key's type ``item``, each said at the use (where they are written is the parameter's
+    default, or -p); none when its value is unknown. ``said``: the option, and its error
+    when empty."""
+    what, empty = said
+    value = resolve(ctx, node, loc, list_of(item), env, what, no_ref=_ITEMS_FIXED)
+    if value is UNKNOWN:
+        return [], []
+    if not value:
+        raise Bad(loc.at(empty + (said_origin(node, env) or said_defaults([node], env, loc))))
+    return list(value), [loc] * len(value)
 
 
 def _empty_list(kind: NodeKind, param: Param, item: str) -> str:
@@ -401,15 +437,20 @@ def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fi
             continue
         what = f"{kind.word}.{param.name}"
         inode, iloc = fields[param.name]
-        items, locs = [], []
-        entries = sequence(inode, iloc, what)
-        if not entries:
-            raise Bad(iloc.at(_empty_list(kind, param, "item, a value of the key's type")))
-        for item, item_loc in entries:
-            try:
-                items.append(resolve(ctx, item, item_loc, decl.type, env, what))
-                locs.append(item_loc)
-            except Bad as bad:
-                ctx.report(bad)
+        empty = _empty_list(kind, param, "item, a value of the key's type")
+        items: list[Any] = []
+        locs: list[Loc] = []
+        if _given_whole(inode):
+            items, locs = _list_parameter(ctx, inode, iloc, decl.type, env, (what, empty))
+        else:
+            entries = sequence(inode, iloc, what)
+            if not entries:
+                raise Bad(iloc.at(empty))
+            for item, item_loc in entries:
+                try:
+                    items.append(resolve(ctx, item, item_loc, decl.type, env, what))
+                    locs.append(item_loc)
+                except Bad as bad:
+                    ctx.report(bad)
         options["items"] = items
         options["loc:items"] = locs  # where each is written: the range check of its readers

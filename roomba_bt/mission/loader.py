@@ -51,12 +51,12 @@ from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.units import (
     ANY,
     STR,
-    VALUE_TYPES,
     UnitError,
     ValueType,
     closest,
     closest_name,
     enum,
+    list_of,
 )
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.include_path import (
@@ -92,6 +92,9 @@ from roomba_bt.mission.source import (
     written_keys,
 )
 from roomba_bt.mission.values import (
+    LIST_ITEM_TYPES,
+    PARAMETER_TYPE_NAMES,
+    PARAMETER_TYPES,
     UNKNOWN,
     Bound,
     Context,
@@ -118,7 +121,6 @@ from roomba_bt.yamlsource import (
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
              "subtrees", "tree", "literal")  # fmt: skip
 _IDENT = re.compile(r"^[a-z_][a-z0-9_]*$")
-_PARAM_TYPES = [*(n for n in VALUE_TYPES if n != "mark"), "enum"]
 _INCLUDED_KEYS = ("description", "plugins", "include", "blackboard", "subtrees", "literal")
 
 #: Folders every mission may include from, wherever it lives: the shipped missions' folder
@@ -435,23 +437,15 @@ class Loader:
     def _include_entry(self, path: Path, text: str, target: Path, iloc: Loc) -> bool:
         """Read the file one include entry names, unless it may not or cannot be read
         (reported): False then. A cycle or a file read already is no loss: True."""
-        package = other_package(text)
-        if package is not None and not target.is_file():  # a file of that name is one
-            self.ctx.error(iloc.at(_package_include(text, package, self.permissions.wording)))
-            return False
         if self._refused(text, target, iloc, "include", allowed=True):
             return False
         if target in self._include_stack:
             chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
             self.ctx.error(iloc.at(f"include cycle: {' -> '.join([*chain, target.name])}"))
             return True
-        if text.startswith(SHIPPED_PREFIX) and not in_shipped_library(target):
-            self.ctx.error(
-                iloc.at(
-                    f"included file {path_written(text)} is not in the shipped library; "
-                    f"it holds {', '.join(shipped_library_files()) or 'nothing'}"
-                )
-            )
+        misnamed = _package_file_problem(text, target, self.permissions.wording)
+        if misnamed is not None:
+            self.ctx.error(iloc.at(misnamed))
             return False
         unreadable = _unreadable(target)
         if unreadable is not None:
@@ -725,21 +719,14 @@ def param_decl(
     :class:`Bad`."""
     if not _IDENT.match(name):
         raise Bad(name_loc.at(f"parameter name {name!r} must be snake_case{_snake_hint(name)}"))
-    fields = known_fields(node, loc, f"parameter {name!r}", ("type", "default", "doc", "choices"))
+    fields = known_fields(
+        node, loc, f"parameter {name!r}", ("type", "default", "doc", "choices", "items")
+    )
     if "type" not in fields:
-        raise Bad(loc.at(f"parameter {name!r} needs a type (one of {', '.join(_PARAM_TYPES)})"))
-    tnode, _, tloc = fields["type"]
-    if plain(tnode, tloc) == "enum":
-        if "choices" not in fields:
-            raise Bad(tloc.at(f"parameter {name!r} of type enum needs choices: [...]"))
-        vtype = enum(*_choices(*fields["choices"][::2]))
-    else:
-        vtype = parse_type_name(tnode, tloc, also=("enum",))
-        if "choices" in fields:  # read by no other type: it was ignored without a word
-            raise Bad(fields["choices"][2].at(
-                f"parameter {name!r}: choices only goes with type: enum (a closed set of "
-                f"words), not with type: {vtype.name}: drop choices, or write type: enum"
-            ))  # fmt: skip
+        raise Bad(
+            loc.at(f"parameter {name!r} needs a type (one of {', '.join(PARAMETER_TYPE_NAMES)})")
+        )
+    vtype = _declared_type(name, fields)
     doc = ""
     if "doc" in fields:
         doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
@@ -755,6 +742,58 @@ def param_decl(
         ))  # fmt: skip
     default = resolve(ctx, dnode, dloc, vtype, {}, f"parameter {name}")
     return vtype, default, True, doc
+
+
+#: the option a parameter's type is declared with beside ``type:``: the type that reads it,
+#: and what that type is
+_TYPE_OPTIONS = {
+    "choices": ("enum", "a closed set of words"),
+    "items": ("list", "a list of values of one type"),
+}
+
+
+def _declared_type(name: str, fields: Mapping[str, tuple[yaml.Node, Loc, Loc]]) -> ValueType:
+    """The type parameter ``name``'s declaration ``fields`` give: a name
+    (:data:`PARAMETER_TYPES`), ``enum`` with its ``choices:``, or ``list`` with its
+    ``items:`` type (a list parameter: ``for_each.in: "${legs}"``, given ``-p legs=[1m,
+    2m]``). Raises :class:`Bad`."""
+    tnode, _, tloc = fields["type"]
+    written = plain(tnode, tloc)
+    for option, (owner, meaning) in _TYPE_OPTIONS.items():
+        if option in fields and written != owner:  # read by no other type: it was ignored
+            raise Bad(fields[option][2].at(
+                f"parameter {name!r}: {option} only goes with type: {owner} ({meaning}), not "
+                f"with type: {written}: drop {option}, or write type: {owner}"
+            ))  # fmt: skip
+        if written == owner and option not in fields:
+            raise Bad(tloc.at(f"parameter {name!r} of type {owner} needs {option}: "
+                              f"{_OPTION_SAID[option]}"))  # fmt: skip
+    if written == "enum":
+        return enum(*_choices(*fields["choices"][::2]))
+    if written == "list":
+        inode, _, iloc = fields["items"]
+        return list_of(_type_named(inode, iloc, LIST_ITEM_TYPES, "item type"))
+    return _type_named(tnode, tloc, PARAMETER_TYPES, "type", also=("enum", "list"))
+
+
+#: what each option of :data:`_TYPE_OPTIONS` is said to need when it is missing
+_OPTION_SAID = {
+    "choices": "[...], the words it may take",
+    "items": f"TYPE, the type of each item (one of {', '.join(LIST_ITEM_TYPES)})",
+}
+
+
+def _type_named(
+    node: yaml.Node, loc: Loc, types: Mapping[str, ValueType], what: str, also: tuple[str, ...] = ()
+) -> ValueType:
+    """The type of ``types`` that ``node`` names; :class:`Bad` naming the known ones (and
+    ``also``, the names the caller reads itself) when it names none."""
+    text = scalar_text(node, loc, what)
+    if text in types:
+        return types[text]
+    names = [*types, *also]
+    raise Bad(loc.at(f"unknown {what} {text!r}{closest(text, names)}; known types: "
+                     f"{', '.join(names)}"))  # fmt: skip
 
 
 def _choices(node: yaml.Node, loc: Loc) -> list[str]:
@@ -862,10 +901,23 @@ def _outside_message(
     )
 
 
-def _package_include(text: str, package: str, wording: Wording) -> str:
-    """Why ``makerspace-bt:lib/x.yaml`` is no include, and what is: a package's files are
-    reached only in the shipped library; a plugin package ships behaviours (an entry point),
-    and a library of subtrees is a folder the mission is allowed to include from."""
+def _package_file_problem(text: str, target: Path, wording: Wording) -> str | None:
+    """Why an include that names a package's file (``PACKAGE:PATH``) names none, or None:
+    a ``roomba-bt:`` name the shipped library does not hold (naming those it does), or
+    another package's name (``makerspace-bt:lib/x.yaml``, unless a file of the mission's
+    folder is called so): a package's files are reached only in the shipped library; a
+    plugin package ships behaviours (an entry point), and a library of subtrees is a
+    folder the mission is allowed to include from."""
+    if text.startswith(SHIPPED_PREFIX):
+        if in_shipped_library(target):
+            return None
+        return (
+            f"included file {path_written(text)} is not in the shipped library; "
+            f"it holds {', '.join(shipped_library_files()) or 'nothing'}"
+        )
+    package = other_package(text)
+    if package is None or target.is_file():
+        return None
     allow = wording.include_dir.replace("DIR", "FOLDER")
     return (
         f"included file {path_written(text)} names a file of package {package!r}: only the "
@@ -1082,7 +1134,16 @@ def _default_text(vtype: ValueType, declaration: yaml.Node, default: Any) -> str
     for key, value in getattr(declaration, "value", []):
         if getattr(key, "value", None) == "default" and isinstance(value, yaml.ScalarNode):
             return str(value.value)
+        if getattr(key, "value", None) == "default" and isinstance(value, yaml.SequenceNode):
+            return _flow_list(value)
     return str(default)
+
+
+def _flow_list(node: yaml.SequenceNode) -> str:
+    """A list as YAML's flow style writes it, its items as written: ``[1m, 2m]`` (a list
+    parameter's default, as ``-p legs=[1m, 2m]`` gives one)."""
+    items = (str(item.value) if isinstance(item, yaml.ScalarNode) else "..." for item in node.value)
+    return f"[{', '.join(items)}]"
 
 
 def _cli_percent(text: str) -> str:
@@ -1108,6 +1169,17 @@ def _cli_percent(text: str) -> str:
     )
 
 
+def _cli_list(text: str) -> object:
+    """A list given as ``-p legs=[1m, 2m]``: YAML's flow list, each item as the file's
+    would be read (``[C4 200ms, rest 100ms]`` for ``notes``). Anything else is left to the
+    type, which says a list is written in brackets."""
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        problem = getattr(exc, "problem", None) or "not YAML"
+        raise UnitError(f"{text!r} is no list YAML reads ({problem}): write [a, b]") from None
+
+
 def _plain_number(number: Decimal) -> str:
     """``number`` as people write it: ``20``, not ``20.0`` or ``2E+1``; ``12.3456789``."""
     digits = format(number, "f")
@@ -1119,6 +1191,8 @@ def _cli_value(text: str, vtype: ValueType) -> object:
     them, a percent's share as :func:`_cli_percent` reads it, everything else as written."""
     if vtype.name == "percent":
         return _cli_percent(text)
+    if vtype.item is not None or vtype.name == "notes":
+        return _cli_list(text)
     if vtype.name in ("int", "float", "bool"):
         octal_or_base_60 = yaml11_number_problem(text, in_a_file=False)
         if octal_or_base_60 is not None:  # -p c=0200 sent 128: refused as in a file

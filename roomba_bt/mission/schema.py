@@ -22,9 +22,10 @@ from __future__ import annotations
 from typing import Any
 
 from roomba_bt.behaviours.declare import Declaration, Param, range_said
-from roomba_bt.behaviours.language import MODIFIERS, STRUCTURAL, WORDS, NodeKind, Shape
+from roomba_bt.behaviours.language import KEY_ITEMS, MODIFIERS, STRUCTURAL, WORDS, NodeKind, Shape
 from roomba_bt.behaviours.registry import Registry, default_registry
 from roomba_bt.behaviours.units import UNITS, VALUE_TYPES, boolean_schema, quantity_schema
+from roomba_bt.mission.values import LIST_ITEM_TYPES, PARAMETER_TYPE_NAMES
 
 _NODE = {"$ref": "#/$defs/node"}
 _NAME = r"[A-Za-z_][A-Za-z0-9_]*"
@@ -117,7 +118,7 @@ def _option_schema(option: Param) -> dict[str, Any]:
     written; never an ``@key``: options are read when the tree is built), range and
     default."""
     schema, note = _value_schema(option)
-    if option.type not in STRUCTURAL:
+    if option.type not in STRUCTURAL or option.type is KEY_ITEMS:  # for_each.in: a list one
         schema = {"anyOf": [schema, _PARAMETER]}
     if option.default is not None:
         schema["default"] = option.default
@@ -255,10 +256,11 @@ def _declarations() -> tuple[dict[str, Any], dict[str, Any]]:
     parameter = {
         "type": "object",
         "properties": {
-            "type": {"enum": [*type_names, "enum"]},
+            "type": {"enum": list(PARAMETER_TYPE_NAMES)},
             "default": {},
             "doc": {"type": "string"},
             "choices": {"type": "array", "items": {"type": "string"}},
+            "items": {"enum": list(LIST_ITEM_TYPES)},
         },
         "required": ["type"],
         "additionalProperties": False,

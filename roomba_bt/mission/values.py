@@ -16,6 +16,7 @@ from typing import Any
 
 import yaml
 
+from roomba_bt.behaviours.actions import NOTES
 from roomba_bt.behaviours.blackboard import BLACKBOARD_REF, BlackboardRef
 from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.registry import Registry
@@ -417,6 +418,21 @@ def parse_type_name(
     return vtype
 
 
+#: the types a parameter is declared with by a name alone: the value types but ``mark`` (only
+#: the ``mark`` action writes one), and a song's ``notes``
+PARAMETER_TYPES: dict[str, ValueType] = {
+    **{name: vtype for name, vtype in VALUE_TYPES.items() if vtype is not MARK},
+    "notes": NOTES,
+}
+#: every word a parameter's ``type:`` may be: ``enum`` with its ``choices:``, ``list`` with
+#: its ``items:`` (:func:`roomba_bt.mission.loader.param_decl`)
+PARAMETER_TYPE_NAMES: tuple[str, ...] = (*PARAMETER_TYPES, "enum", "list")
+#: what a list parameter's ``items:`` may be: one value each (a song is a list already)
+LIST_ITEM_TYPES: dict[str, ValueType] = {
+    name: vtype for name, vtype in PARAMETER_TYPES.items() if vtype is not NOTES
+}
+
+
 def record_type(fields: dict[str, ValueType]) -> ValueType:
     """A mapping with typed fields: a waypoint ``{distance: 1 m, turn: 90deg}``."""
 
@@ -473,9 +489,10 @@ def resolve(
     fields = record_fields(vtype)
     if fields is not None and isinstance(node, yaml.MappingNode):
         return _record(ctx, node, loc, fields, env, what)
+    if vtype.item is not None and isinstance(node, yaml.SequenceNode):
+        return _items(ctx, node, loc, vtype.item, env, what)
     raw = plain(node, loc)
-    from_text = False  # the value is a text parameter's, read by this slot's type here
-    passed_on = ""  # where that value was set
+    passed_on: str | None = None  # a text parameter's value: where it was set, if said
     if isinstance(raw, str):
         full = _FULL_SUBSTITUTION.match(raw)
         if full is not None:
@@ -487,27 +504,11 @@ def resolve(
             if bound.value is UNKNOWN:
                 return UNKNOWN
             if compatible(bound.type, vtype):
-                value = convert(bound.type, vtype, bound.value)
-                if negative:
-                    try:
-                        value = _negate(value)
-                    except UnitError as exc:
-                        raise Bad(loc.at(f"{what}: {exc}")) from None
-                origin = f" (${{{pname}}} is {bound.origin})" if bound.origin else ""
-                if not origin and param is not None and param.check_range(value) is not None:
-                    origin = said_default(
-                        pname, bound, loc, _in_range(pname, bound, param, negative)
-                    )
-                return _check_range(value, loc, what, param, origin)
-            if bound.type.name != "str":
+                return _filled(pname, bound, negative, vtype, (loc, what, param))
+            if bound.type.name != "str" or vtype.item is not None or vtype is NOTES:
                 raise Bad(loc.at(f"{what}: {_misfit(pname, bound.type, vtype, what)}"))
             raw = ("-" if negative else "") + str(bound.value)
-            from_text = True
-            # a text parameter's value is read by the slot's type here, not where it was set:
-            # an error it makes names where that was (-p color=blue: "set on the command line")
-            passed_on = said_default(pname, bound, loc)
-            if bound.origin:
-                passed_on = f" (${{{pname}}} is {bound.origin})"
+            passed_on = _where_set(pname, bound, loc)
         elif "$" in raw:  # a parameter, a stray "${", or "$$" (one "$")
             warn_escaped(ctx, raw, node, loc, env, what)
             raw = _substitute(raw, loc, env, what)
@@ -515,8 +516,53 @@ def resolve(
                 return UNKNOWN
         if raw.startswith("@") or (port_remapping(raw) and vtype.name not in ("str", "any")):
             return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref))
-    if from_text:
-        raw = _text_read(raw, vtype)
+    if passed_on is not None:
+        return _text_parameter_read(raw, vtype, (loc, what, param, node), passed_on)
+    parsed = _parsed(vtype, raw, loc, what, param, node)
+    return _check_range(parsed, loc, what, param, written=raw if isinstance(raw, str) else "")
+
+
+def _filled(
+    pname: str,
+    bound: Bound,
+    negative: str,
+    vtype: ValueType,
+    at: tuple[Loc, str, Param | None],
+) -> Any:
+    """The value of parameter ``pname`` (``bound``, of a type that fills ``vtype``) at a
+    whole ``${pname}`` (``-${pname}`` when ``negative``) at ``at`` (where, the slot's name
+    and its parameter): converted, negated, its range checked, an error naming where the
+    value was set or its default."""
+    loc, what, param = at
+    value = convert(bound.type, vtype, bound.value)
+    if negative:
+        try:
+            value = _negate(value)
+        except UnitError as exc:
+            raise Bad(loc.at(f"{what}: {exc}")) from None
+    origin = f" (${{{pname}}} is {bound.origin})" if bound.origin else ""
+    if not origin and param is not None and param.check_range(value) is not None:
+        origin = said_default(pname, bound, loc, _in_range(pname, bound, param, negative))
+    return _check_range(value, loc, what, param, origin)
+
+
+def _where_set(pname: str, bound: Bound, loc: Loc) -> str:
+    """Where a text parameter's value was set, said with an error the slot it fills finds
+    in it (read by the slot's type there, not where it was set: ``-p color=blue`` is
+    "(${color} is color=blue, set on the command line)"); "" where that is the use."""
+    if bound.origin:
+        return f" (${{{pname}}} is {bound.origin})"
+    return said_default(pname, bound, loc)
+
+
+def _text_parameter_read(
+    raw: Any, vtype: ValueType, at: tuple[Loc, str, Param | None, yaml.Node], passed_on: str
+) -> Any:
+    """A text parameter's value ``raw`` read by the slot of ``vtype`` at ``at`` (where, its
+    name, its parameter and the node that names the parameter): its error ends with where
+    the value was set (``passed_on``)."""
+    loc, what, param, node = at
+    raw = _text_read(raw, vtype)
     try:
         parsed = _parsed(vtype, raw, loc, what, param, node)
         return _check_range(parsed, loc, what, param, written=raw if isinstance(raw, str) else "")
@@ -540,10 +586,24 @@ def _text_read(text: str, vtype: ValueType) -> object:
     return int(text) if takes_integers and _INTEGER_TEXT.fullmatch(text) else text
 
 
+def _list_declared(target: ValueType) -> str:
+    """How a parameter that fills a list slot of ``target`` type is declared, or why none
+    can (a record's items: write the list there)."""
+    if target is NOTES:
+        return "declare the parameter {type: notes}"
+    item = target.item
+    assert item is not None  # a list's slot, or NOTES
+    if LIST_ITEM_TYPES.get(item.name) is not item:
+        return f"no list parameter holds items of {item.describe()}: write the list here"
+    return f"declare the parameter {{type: list, items: {item.name}}}"
+
+
 def _misfit(pname: str, source: ValueType, target: ValueType, what: str) -> str:
     """Why parameter ``pname`` of type ``source`` cannot fill ``what`` (of type ``target``):
     the types, and for an enum the words the slot does not read, with why the first is not."""
     said = f"parameter ${{{pname}}} is {with_article(source.describe())}, but {what}"
+    if source is STR and (target.item is not None or target is NOTES):
+        return f"{said} takes a list, never read from a text: {_list_declared(target)}"
     misfits = enum_misfits(source, target) if source.choices else []
     if not misfits:
         return f"{said} needs {target.describe()}"
@@ -650,6 +710,27 @@ def _record(
     return {
         k: resolve(ctx, given[k][0], given[k][1], t, env, f"{what}.{k}") for k, t in fields.items()
     }
+
+
+def _items(
+    ctx: Context,
+    node: yaml.SequenceNode,
+    loc: Loc,
+    item: ValueType,
+    env: Mapping[str, Bound],
+    what: str,
+) -> Any:
+    """A list written as a list, for a list parameter: each item resolved with the item
+    type (so an item may be a ``${parameter}``), every bad one said at its own place."""
+    values, bad = [], []
+    for index, each in enumerate(node.value):
+        try:
+            values.append(resolve(ctx, each, loc.child(each, f"[{index}]"), item, env, what))
+        except Bad as problem:
+            bad += [problem.diagnostic, *problem.more]
+    if bad:
+        raise Bad(bad[0], tuple(bad[1:]))
+    return UNKNOWN if any(value is UNKNOWN for value in values) else tuple(values)
 
 
 def _substitute(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) -> Any:
@@ -861,14 +942,21 @@ def as_written(vtype: ValueType, value: Any, node: yaml.Node, env: Mapping[str, 
     tree and the failure. :func:`shown` where the node is no scalar, the value is a text
     (its ``$$`` already one ``$``), or the written text does not read back as ``value``
     (``40`` for an int: YAML's number, which a text is not)."""
-    if vtype is STR or not isinstance(node, yaml.ScalarNode):
-        return shown(vtype, value)
 
     def text_of(name: str) -> str | None:
         bound = env.get(name)
         return None if bound is None or bound.value is UNKNOWN else bound.text
 
+    if isinstance(node, yaml.SequenceNode) and all(
+        isinstance(item, yaml.ScalarNode) for item in node.value
+    ):  # a list argument (a list parameter's, a song's): its items as written
+        items = (substituted(str(item.value), text_of).strip() for item in node.value)
+        return f"[{', '.join(items)}]"
+    if vtype is STR or not isinstance(node, yaml.ScalarNode):
+        return shown(vtype, value)
     text = substituted(str(node.value), text_of).strip()
+    if vtype.item is not None or vtype is NOTES:  # a whole ${list}: the list as given
+        return text
     try:
         reads_back = vtype.parse(text) == value
     except ValueError:  # UnitError: the written text is no value of this type alone

@@ -203,7 +203,33 @@ POWER_COLORS = [
     ("power colour as a quoted byte", _leds("128"), False),
 ]
 
-_CASES = [(name, mission, None) for name, mission in _edge_cases()] + REPORTED + POWER_COLORS
+
+def _parameter(declaration: dict[str, Any], tree: dict[str, Any]) -> dict[str, Any]:
+    return {**_tree(tree), "parameters": {"p": declaration}, "blackboard": {"leg": "distance"}}
+
+
+_EACH_LEG = {"for_each": {"key": "leg", "in": "${p}", "do": _WAIT}}
+#: list and notes parameters (session 35), and the colour as an enum or an int parameter
+PARAMETERS = [
+    ("list parameter in for_each", _parameter(
+        {"type": "list", "items": "distance", "default": ["1m", "2m"]}, _EACH_LEG), True),
+    ("list parameter of marks", _parameter(
+        {"type": "list", "items": "mark", "default": []}, _EACH_LEG), False),
+    ("notes parameter in a song", _parameter({"type": "notes", "default": ["C4 200ms"]}, {
+        "sequence": [{"mode": "safe"}, {"song": {"number": 0, "notes": "${p}"}}]}), True),
+    ("enum parameter as the power colour", _parameter(
+        {"type": "enum", "choices": ["green", "red"], "default": "red"}, _leds("${p}")["tree"]),
+        True),
+    ("int parameter as the power colour", _parameter(
+        {"type": "int", "default": 200}, _leds("${p}")["tree"]), True),
+]  # fmt: skip
+
+_CASES = (
+    [(name, mission, None) for name, mission in _edge_cases()]
+    + REPORTED
+    + POWER_COLORS
+    + PARAMETERS
+)
 
 
 @pytest.mark.parametrize(("name", "mission", "validate_says"), _CASES, ids=[c[0] for c in _CASES])
