@@ -46,6 +46,24 @@ def language_word(name: str) -> str | None:
     return f"{name!r} is {what}, not a behaviour: {doc}{takes}"
 
 
+def word_markdown(name: str) -> str | None:
+    """A word of the mission language as ``behaviours --markdown`` prints it, in a
+    behaviour's entry's shape (:func:`roomba_bt.behaviours.reference.markdown_entry`): what
+    it is and its text, then its options' table. It was said as text on stderr, and stdout,
+    the Markdown a contributor pastes, was empty. None for any other name."""
+    from roomba_bt.behaviours.reference import TABLE_HEAD, param_row
+
+    facts = word_facts(name)
+    if facts is None:
+        return None
+    what, doc, options = facts
+    lines = [f"**`{name}`**: {what}, not a behaviour: {doc}  "]
+    if options:
+        lines += ["", *TABLE_HEAD]
+        lines += ["| " + " | ".join(param_row(p)) + " |" for p in options]
+    return "\n".join(lines) + "\n"
+
+
 def word_facts(name: str) -> tuple[str, str, tuple[Param, ...]] | None:
     """What a word of the mission language is (``a decorator of the mission language``),
     its description and its options: said as text by :func:`language_word`, as data by

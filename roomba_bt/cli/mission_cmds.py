@@ -28,7 +28,13 @@ from roomba_bt.cli.arguments import (
     parse_params,
     permissions,
 )
-from roomba_bt.cli.language_words import EVERY_WORD, every_word, language_word, word_facts
+from roomba_bt.cli.language_words import (
+    EVERY_WORD,
+    every_word,
+    language_word,
+    word_facts,
+    word_markdown,
+)
 from roomba_bt.cli.profile_choice import (
     BadSetting,
     chosen_profile,
@@ -580,12 +586,14 @@ def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -
         return ExitCode.OK
     # a word of the language asked about is answered (its meaning and options), not an error
     words = [word for word in map(language_word, args.names) if word is not None]
-    # --json lists it as data beside the behaviours; beside --markdown the answer goes to
-    # stderr: stdout stays the format's
-    said_to = sys.stderr if args.markdown else sys.stdout
+    # --json lists it as data beside the behaviours, --markdown as an entry: stdout holds
+    # the answer in the format asked for, as it does a behaviour's
     word_entries = [e for e in map(_word_entry, args.names) if e is not None]
-    for word in [] if args.json else words:
-        print(f"{word}\n    ({EVERY_WORD})", file=said_to)
+    word_entries_md = [e for e in map(word_markdown, args.names) if e is not None]
+    if args.markdown and word_entries_md:
+        print("\n".join(word_entries_md))
+    for word in [] if args.json or args.markdown else words:
+        print(f"{word}\n    ({EVERY_WORD})")
     unknown = [n for n in args.names if n not in registry and language_word(n) is None]
     if unknown:
         from roomba_bt.behaviours.units import closest

@@ -475,6 +475,27 @@ def test_behaviours_markdown_prints_the_entry_docs_missions_md_holds(capsys: Cap
     assert "not allowed with argument" in capsys.readouterr().err
 
 
+def test_behaviours_markdown_of_a_word_is_its_entry_on_stdout(capsys: Capsys) -> None:
+    """``behaviours --markdown retry`` said its answer on stderr, stdout empty, exit 0
+    (``--json retry`` and ``--words`` print on stdout): the word is an entry in the
+    behaviours' shape, on stdout, before the behaviours asked for with it."""
+    assert main(["behaviours", "--markdown", "retry", "bump"]) == 0
+    out, err = capsys.readouterr()
+    assert not err
+    retry, bump = out.split("\n\n**`")
+    assert retry.startswith(
+        "**`retry`**: a decorator of the mission language, not a behaviour: re-run the child "
+    )
+    assert "| `times` | int | 1.. | **required** | attempts in all |" in retry
+    assert bump.startswith("bump`**: A bumper is pressed")
+    assert main(["behaviours", "--markdown", "until"]) == 0  # a word without options
+    out, err = capsys.readouterr()
+    assert out.startswith("**`until`**: a modifier of the mission language") and not err
+    assert "| parameter |" not in out
+    assert main(["behaviours", "--markdown", "retry", "no_such_thing"]) == 2
+    assert "unknown behaviour 'no_such_thing'" in capsys.readouterr().err
+
+
 def test_show_prints_what_a_mission_wrote_each_on_its_line(capsys: Capsys, tmp_path: Path) -> None:
     """The mission's name, its description and a parameter's value went raw into show's
     first and last lines: "\\n[ok] fake" started a line of its own. Escaped; the tree's
