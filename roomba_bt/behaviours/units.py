@@ -474,6 +474,17 @@ _ZERO_NUMBER = r"(?:0+(?:\.0*)?|\.0+)(?:[eE][-+]?[0-9]+)?"
 #: a text :func:`parse_quantity` reads as 0 with no unit (``"0"``, ``"-0.0"``): a JSON Schema
 #: pattern (``wait: "0"`` is valid; the schema refused it)
 ZERO_TEXT_PATTERN = rf"^\s*[-+]?{_ZERO_NUMBER}\s*$"
+_ZERO_TEXT = re.compile(ZERO_TEXT_PATTERN)
+
+
+def percent_sign_kept(vtype: ValueType, text: str) -> str:
+    """A value's text as its uses insert and its nodes' names show it, a percent's bare zero
+    (``-p low=0``, ``default: 0``, a subtree's ``below: 0``) as ``0%``: every other percent
+    shows with its sign (``-p low=0.2`` as ``20%``), and ``battery(below=0)`` beside
+    ``battery(below=20%)`` read as a number of another kind. Any other text is as it is."""
+    if vtype.name == "percent" and _ZERO_TEXT.match(text):
+        return "0%"
+    return text
 
 
 def quantity_schema(dimension: str, *, signed: bool = True) -> dict[str, Any]:

@@ -13,7 +13,7 @@ from typing import Any
 import yaml
 
 from roomba_bt.behaviours.declare import Declaration, key_not_read, key_role
-from roomba_bt.behaviours.units import MARK, ValueType
+from roomba_bt.behaviours.units import MARK, ValueType, percent_sign_kept
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, mapping
 from roomba_bt.mission.values import (
@@ -82,7 +82,10 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
             )
             ok = False
     written = {pname: pnode for pname, pnode, _, _ in given}
-    ok = _key_params(ctx, decl, params, key_typed, options, (env, written)) and ok
+    # each value's type, as its text is shown in the leaf's name: a key-typed value's
+    # (check's, set's) is its key's, filled in by _key_params
+    types = {p.name: p.type for p in decl.params}
+    ok = _key_params(ctx, decl, params, (key_typed, types), options, (env, written)) and ok
     known = UNKNOWN not in params.values()
     if ok and decl.constraints is not None and known:
         for problem in decl.constraints(params):
@@ -94,7 +97,7 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     # may depend on it (`mode: "${m}"`), and reading them from it was an internal error.
     if not ok or not known:  # kept in its place, unbuilt: the checks still judge around it
         return Node("unbuilt", key_loc, decl.name, partial=decl)
-    return Node("leaf", key_loc, leaf_name(decl.name, given, env), decl=decl, params=params,
+    return Node("leaf", key_loc, leaf_name(decl.name, given, env, types), decl=decl, params=params,
                 options=options, parameter_in_name=_parameter_in(given))  # fmt: skip
 
 
@@ -130,13 +133,16 @@ def _key_params(
     ctx: Context,
     decl: Declaration,
     params: dict[str, Any],
-    key_typed: dict[str, tuple[yaml.Node, Loc]],
+    typed_by_key: tuple[dict[str, tuple[yaml.Node, Loc]], dict[str, ValueType]],
     options: dict[str, Any],
     scope: tuple[Mapping[str, Bound], Mapping[str, yaml.Node]],
 ) -> bool:
     """Parameters that name blackboard keys must name declared keys; ``any`` values take
-    the type of the key (``set: {key: leg, value: 2 m}``). ``scope``: the parameters in
-    scope and the values as written (a key given as a subtree's ``${out}`` names its use)."""
+    the type of the key (``set: {key: leg, value: 2 m}``), written into the types of
+    ``typed_by_key`` (the values to type, and every parameter's type). ``scope``: the
+    parameters in scope and the values as written (a key given as a subtree's ``${out}``
+    names its use)."""
+    key_typed, types = typed_by_key
     env, written = scope
     ok = True
     key_type: ValueType | None = None
@@ -163,6 +169,7 @@ def _key_params(
         if key_type is None:
             ok = False
             continue
+        types[pname] = key_type
         try:
             params[pname] = resolve(ctx, pnode, pvloc, key_type, env, f"{decl.name}.{pname}")
         except Bad as bad:
@@ -240,15 +247,22 @@ def _key_type(ctx: Context, key: str, where: Loc, *, reads: bool, who: str) -> V
 
 
 def leaf_name(
-    behaviour: str, given: list[tuple[str, yaml.Node, Loc, Loc]], env: Mapping[str, Bound]
+    behaviour: str,
+    given: list[tuple[str, yaml.Node, Loc, Loc]],
+    env: Mapping[str, Bound],
+    types: Mapping[str, ValueType],
 ) -> str:
     """``drive(velocity=100 mm/s, radius=-500 mm)``: what ``show`` prints for a leaf, with
-    ``${parameters}`` shown as their values."""
+    ``${parameters}`` shown as their values; a value of a percent (``types``: each
+    parameter's, a key-typed one's its key's) written as a bare zero is ``0%``, as a
+    parameter's is."""
     if not given:
         return behaviour
     parts = []
     for pname, node, key_loc, value_loc in given:
         text = written_text(node, env)
+        if pname in types:
+            text = percent_sign_kept(types[pname], text)
         if key_loc is value_loc:
             parts.append(text)
         else:  # check's op, "==", was op===: a text holding = or , is quoted, and < or >

@@ -57,6 +57,7 @@ from roomba_bt.behaviours.units import (
     closest_name,
     enum,
     list_of,
+    percent_sign_kept,
 )
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.include_path import (
@@ -674,7 +675,8 @@ def _bind_override(
     # a percent's share as the percent it means (``-p low=0.2``: ``below 20%``); the origin
     # keeps what was typed, so the user finds it on their command line
     written = given if vtype.name == "percent" and isinstance(given, str) else text
-    env[name] = Bound(vtype, value, written, f"{name}={text}, {wording.set_by}")
+    origin = f"{name}={text}, {wording.set_by}"
+    env[name] = Bound(vtype, value, percent_sign_kept(vtype, written), origin)
 
 
 def known_fields(
@@ -1133,7 +1135,7 @@ def _default_text(vtype: ValueType, declaration: yaml.Node, default: Any) -> str
         return str(default)
     for key, value in getattr(declaration, "value", []):
         if getattr(key, "value", None) == "default" and isinstance(value, yaml.ScalarNode):
-            return str(value.value)
+            return percent_sign_kept(vtype, str(value.value))
         if getattr(key, "value", None) == "default" and isinstance(value, yaml.SequenceNode):
             return _flow_list(value)
     return str(default)

@@ -32,6 +32,7 @@ from roomba_bt.behaviours.units import (
     compatible,
     convert,
     enum_misfits,
+    percent_sign_kept,
     shown,
     with_article,
 )
@@ -961,4 +962,4 @@ def as_written(vtype: ValueType, value: Any, node: yaml.Node, env: Mapping[str, 
         reads_back = vtype.parse(text) == value
     except ValueError:  # UnitError: the written text is no value of this type alone
         reads_back = False
-    return text if reads_back else shown(vtype, value)
+    return percent_sign_kept(vtype, text) if reads_back else shown(vtype, value)

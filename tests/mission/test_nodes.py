@@ -572,6 +572,8 @@ PERCENT_PARAMETER = """
         ("2E-1", 20.0, "20%"),
         ("0.125", 12.5, "12.5%"),
         ("20%", 20.0, "20%"),
+        ("0", 0.0, "0%"),  # was battery(below=0) beside battery(below=20%)
+        ("-0.0", 0.0, "0%"),
     ],
 )
 def test_a_percent_parameter_takes_a_share_below_one_as_battery_does(
@@ -586,6 +588,40 @@ def test_a_percent_parameter_takes_a_share_below_one_as_battery_does(
     assert mission.parameters == {"low": percent}
     names = [node.name for node in mission.root.iterate()]
     assert names[1:3] == [f"battery(below={shown})", f"log(below {shown})"], names
+
+
+def test_a_percent_written_as_a_bare_zero_shows_its_sign_everywhere(compile_text: Compile) -> None:
+    """A percent's bare ``0`` (a default, a value written in a leaf, a subtree's argument,
+    a percent key's value in ``check``) showed as ``0`` where every other percent shows
+    as ``20%``: each is ``0%``; a speed's bare ``0`` is as written (no percent)."""
+    mission = compile_text(
+        """
+        parameters:
+          low: {type: percent, default: 0}
+        blackboard:
+          level: {type: percent, initial: 0}
+        subtrees:
+          low_battery:
+            parameters: {under: {type: percent, default: 5%}}
+            tree: {battery: {below: "${under}"}}
+        tree:
+          sequence:
+            - mode: safe
+            - battery: {below: "${low}"}
+            - battery: {below: 0}
+            - subtree: {id: low_battery, under: 0}
+            - check: {key: level, op: ">=", value: 0}
+            - drive: {velocity: 0, duration: 15ms}
+        """
+    )
+    names = [node.name for node in mission.root.iterate()]
+    assert [n for n in names if n.startswith(("battery", "check", "drive"))] == [
+        "battery(below=0%)",
+        "battery(below=0%)",
+        "battery(below=0%)",
+        'check(key=level, op=">=", value=0%)',
+        "drive(velocity=0, duration=15ms)",
+    ], names
 
 
 @pytest.mark.parametrize(("given", "percent"), [("20", "20%"), ("1e1", "10%"), ("1.50", "1.5%")])
