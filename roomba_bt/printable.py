@@ -16,7 +16,7 @@ from __future__ import annotations
 import re
 
 __all__ = [
-    "ANY_CONTROL", "CONTROL", "INVISIBLE", "MAX_LISTED", "NAME_LIMIT", "UNPRINTABLE",
+    "ANY_CONTROL", "CONTROL", "INVISIBLE", "MAX_LISTED", "NAME_LIMIT", "TEXT_LIMIT", "UNPRINTABLE",
     "duration_said", "duration_words", "encodes", "escaped", "listed", "more_listed",
     "name_shown", "shortened",
 ]  # fmt: skip
@@ -60,6 +60,10 @@ def _escape(found: re.Match[str]) -> str:
 #: few words, and a 200 KB ``mission:`` name was printed whole by ``show``, the live tree and
 #: the run's summary (200 KB on the terminal, once each)
 NAME_LIMIT = 80
+#: How much of a text a stranger wrote (a mission's ``description:``, a ``log`` message, a
+#: run's label read from a record) one line shows: a sentence or a short paragraph, six
+#: lines of a terminal at most. A 10 MB description was printed whole by ``show``
+TEXT_LIMIT = 500
 
 
 def shortened(text: str, limit: int = NAME_LIMIT, length: int | None = None) -> str:
@@ -92,10 +96,11 @@ def listed(lines: list[str], limit: int = MAX_LISTED) -> list[str]:
     return [*lines[:limit], more_listed(len(lines) - limit, limit=limit)]
 
 
-def name_shown(name: str) -> str:
-    """A name on one line of the terminal: :func:`shortened`, then :func:`escaped` with
-    :data:`ANY_CONTROL` (cut first, so an escape is never cut in half)."""
-    return escaped(shortened(name), ANY_CONTROL)
+def name_shown(name: str, limit: int = NAME_LIMIT) -> str:
+    """A name (or, with :data:`TEXT_LIMIT`, a text) on one line of the terminal:
+    :func:`shortened`, then :func:`escaped` with :data:`ANY_CONTROL` (cut first, so an
+    escape is never cut in half)."""
+    return escaped(shortened(name, limit), ANY_CONTROL)
 
 
 def path_written(text: str) -> str:

@@ -62,7 +62,7 @@ from roomba_bt.oi.opcodes import (
     opcodes,
 )
 from roomba_bt.oi.packets import PACKETS_BY_NAME
-from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
+from roomba_bt.printable import ANY_CONTROL, TEXT_LIMIT, duration_said, escaped, shortened
 from roomba_bt.robot.hazards import sets_going
 from roomba_bt.yamlsource import quoted
 
@@ -929,9 +929,11 @@ class Log(Action):
 
     def update(self) -> Status:
         level = getattr(logging, str(self.value("level")).upper())
-        log.log(level, "%s", self.value("message"))
+        # a line of the log, not a page: a message given by -p or a default may be 10 MB
+        message = shortened(str(self.value("message")), TEXT_LIMIT)
+        log.log(level, "%s", message)
         # one line: the tree shown at the end puts it on the leaf's own
-        self.feedback_message = escaped(str(self.value("message")), ANY_CONTROL)
+        self.feedback_message = escaped(message, ANY_CONTROL)
         if level >= logging.INFO:  # debug is the author's own tracing, not the run's story
             self.said_at = self.snapshot.time
         return _OK

@@ -44,7 +44,7 @@ from roomba_bt.cli.profile_choice import (
 )
 from roomba_bt.cli.validate_report import FORMATS, Checked
 from roomba_bt.oi.profiles import get_profile
-from roomba_bt.printable import ANY_CONTROL, escaped, shortened
+from roomba_bt.printable import ANY_CONTROL, TEXT_LIMIT, escaped, shortened
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
@@ -353,14 +353,16 @@ def show_command(args: argparse.Namespace) -> int:
         for line in reported(diagnostics):
             print(line)
         return ExitCode.INVALID
-    header = f"{shortened(mission.name)}: {mission.description.strip()}".rstrip(": ")
+    # a name and a description as one line each shows them: a 10 MB description flooded it
+    description = shortened(mission.description.strip(), TEXT_LIMIT)
+    header = f"{shortened(mission.name)}: {description}".rstrip(": ")
     print(escaped(header, ANY_CONTROL))  # one line: "\n[ok] ..." in a text faked one
     reviewed = mission.reviewed()  # a node's name: beside what it is
     # a name or a log message from -p may hold "\e[2J" (each name is one line already)
     print(escaped(py_trees.display.unicode_tree(reviewed)))
     print(f"sensor packets: {list(mission.packets)}")
     if mission.parameters_shown:
-        shown = ", ".join(f"{k}={v}" for k, v in mission.parameters_shown.items())
+        shown = ", ".join(f"{k}={shortened(v)}" for k, v in mission.parameters_shown.items())
         print(escaped(f"parameters: {shown}", ANY_CONTROL))
     for option, fmt in (("dot", "dot"), ("svg", "svg")):
         target = getattr(args, option)

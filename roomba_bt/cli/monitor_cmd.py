@@ -33,6 +33,7 @@ from roomba_bt.cli.arguments import (
 )
 from roomba_bt.monitor import INSTALL_HINT, server_available
 from roomba_bt.monitor.address import DEFAULT_HOST, lan_addresses, parse_address
+from roomba_bt.printable import name_shown
 from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:  # loaded when a world is drawn
@@ -390,8 +391,10 @@ class LiveMonitor:
         chosen = self.options.token
         url = _without_token(server.url) if chosen else server.url
         feed = self.feed
-        which = f"{feed.mission_name} on {feed.robot}" if feed.robot else ""
-        which = ": ".join(filter(None, (feed.label, which)))
+        # each on one line and cut, as the summary says them (a 10 MB mission name)
+        mission, robot, label = (name_shown(t) for t in (feed.mission_name, feed.robot, feed.label))
+        which = f"{mission} on {robot}" if robot else ""
+        which = ": ".join(filter(None, (label, which)))
         which = f" ({which})" if which else ""
         print(f"monitor: {url}{which}{CHOSEN_TOKEN if chosen else ''}", flush=True)
         say_where(host, url, "it listens")

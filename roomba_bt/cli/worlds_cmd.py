@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import add_command
-from roomba_bt.printable import ANY_CONTROL, escaped, listed
+from roomba_bt.printable import ANY_CONTROL, TEXT_LIMIT, escaped, listed, name_shown
 from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:
@@ -79,9 +79,10 @@ def _list_worlds(files: dict[str, Path]) -> int:
         xs = [x for room in world.rooms for x, _ in room]
         ys = [y for room in world.rooms for _, y in room]
         size = f"{(max(xs) - min(xs)) / 1000:g} x {(max(ys) - min(ys)) / 1000:g} m"
-        areas = ", ".join(a.name for a in world.areas) or "none"
+        # a world of your own is a stranger's file: its texts are cut as a line shows them
+        areas = name_shown(", ".join(a.name for a in world.areas), TEXT_LIMIT) or "none"
         dock = "a dock" if world.dock is not None else "no dock"
-        print(f"{escaped(name, ANY_CONTROL)}  {escaped(world.description, ANY_CONTROL)}")
+        print(f"{name_shown(name)}  {name_shown(world.description, TEXT_LIMIT)}")
         print(f"    {size}, {dock}; areas: {areas}")
         if path.parent != WORLDS_DIR:
             print(f"    your own: {escaped(str(path), ANY_CONTROL)}")

@@ -628,10 +628,12 @@ class MonitorServer:
         feed = self.feed
         if given == feed.run_id:
             return None
+        run = run_view(feed)  # its texts cut, as the page shows them
+        label, robot = run["label"], run["robot"]
         now = (
-            f"the run served here now is {f'{feed.label}: ' if feed.label else ''}"
-            f"{feed.mission_name}{f' on {feed.robot}' if feed.robot else ''}, started "
-            f"{run_view(feed)['started']} (id {feed.run_id})"
+            f"the run served here now is {f'{label}: ' if label else ''}"
+            f"{run['mission']}{f' on {robot}' if robot else ''}, started "
+            f"{run['started']} (id {feed.run_id})"
         )
         if given is None or given == "":
             return (

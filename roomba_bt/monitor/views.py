@@ -31,6 +31,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import counts_to_mm, encoder_delta
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.oi.packets import PACKETS
+from roomba_bt.printable import shortened
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.runtime.recording import utc_stamp
 
@@ -356,21 +357,24 @@ def run_view(feed: RunFeed) -> dict[str, str]:
     """Which run this is: its id (a page loaded for another refuses to take it silently, and
     sends it with each control), its mission, its robot, when it started (ISO 8601, UTC;
     empty when unknown: a record made before its header held it) and its label (``run
-    --label``; empty for none)."""
+    --label``; empty for none). The mission's name and the label are cut as a terminal's
+    line cuts them (:func:`~roomba_bt.printable.shortened`): a record's header or a
+    mission's ``mission:`` may hold 10 MB, which became the page's title and header."""
     return {
         "id": feed.run_id,
-        "mission": feed.mission_name,
-        "robot": feed.robot,
+        "mission": shortened(feed.mission_name),
+        "robot": shortened(feed.robot),
         "started": utc_stamp(feed.started) if feed.started is not None else "",
-        "label": feed.label,
+        "label": shortened(feed.label),
     }
 
 
 def header_view(feed: RunFeed, extra: Mapping[str, Any]) -> dict[str, Any]:
     first, last = feed.window()
+    run = run_view(feed)
     return {
-        "run": run_view(feed),
-        "mission": feed.mission_name,
+        "run": run,
+        "mission": run["mission"],
         "source": feed.source,
         "generation": feed.generation,
         "tree": tree_view(feed),

@@ -500,7 +500,7 @@ class RunSummary:
         mode = self.final_mode_text()
         reason = f" ({self.reason})" if self.reason else ""
         lines = [
-            *([f"label        {self.label}"] if self.label else []),
+            *([f"label        {shortened(self.label)}"] if self.label else []),
             f"mission      {shortened(self.mission)}",
             *([f"profile      {self.profile}"] if self.profile else []),
             *([f"robot        {self.robot}"] if self.robot else []),

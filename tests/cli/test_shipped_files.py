@@ -67,6 +67,25 @@ def test_worlds_lists_each_shipped_world_and_prints_one(
     )
 
 
+def test_worlds_cuts_a_long_description_and_list_of_areas_of_ones_own_world(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A world of one's own (``ROOMBA_BT_WORLDS``) is a stranger's file: its description of
+    300,000 characters and its 1,000 areas were printed whole by ``worlds``; each is cut
+    as a line shows a long text, its length said."""
+    room = (WORLDS_DIR / "empty-room.yaml").read_text(encoding="utf-8")
+    assert "areas:" not in room
+    areas = "".join(f"  - {{name: area-{i:03}, rect: [0, 0, 1, 1]}}\n" for i in range(1000))
+    text = re.sub(r"(?m)^description: .*$", f"description: {'D' * 300_000}", room)
+    (tmp_path / "huge.yaml").write_text(f"{text}areas:\n{areas}")
+    monkeypatch.setenv("ROOMBA_BT_WORLDS", str(tmp_path))
+    assert main(["worlds"]) == 0
+    out = capsys.readouterr().out
+    assert f"\nhuge  {'D' * 500}... (300,000 characters)\n" in f"\n{out}"
+    assert "areas: area-000, area-001" in out and "... (9,998 characters)" in out
+    assert len(out) < 5_000, len(out)
+
+
 def test_worlds_of_ones_own_come_before_the_shipped_ones(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -516,6 +516,23 @@ def test_show_prints_what_a_mission_wrote_each_on_its_line(capsys: Capsys, tmp_p
     assert "parameters: word=x\\x0a[ok] word" in out
 
 
+def test_show_cuts_a_long_description_and_parameter_value(capsys: Capsys, tmp_path: Path) -> None:
+    """A description of 300,000 characters (or one a 100,000-character ``-p`` fills in) was
+    printed whole on show's first line, and the parameter's value whole on its last: each
+    is cut, its length said, as a long name is."""
+    path = tmp_path / "long.yaml"
+    path.write_text(
+        f'mission: long\ndescription: "{"D" * 300_000} ${{word}}"\n'
+        "parameters:\n  word: {type: str, default: hi}\ntree: {wait: 1s}\n"
+    )
+    assert main(["show", str(path), "-p", f"word={'W' * 100_000}"]) == 0
+    out = capsys.readouterr().out
+    assert len(out) < 1_000, len(out)
+    first, *_, last = out.splitlines()
+    assert first == f"long: {'D' * 500}... (400,001 characters)"
+    assert last == f"parameters: word={'W' * 80}... (100,000 characters)"
+
+
 def _installed(folder: Path, dist: str, module: str, cls: str) -> None:
     """A distribution ``dist`` on ``folder`` (put on sys.path by the caller) whose entry
     point ``module`` provides a condition ``cls`` named ``wiggle_s27``."""

@@ -234,3 +234,14 @@ def test_the_page_s_world_has_each_dirt_patch_and_its_level() -> None:
     assert [patch["level"] for patch in dirt] == [40, 200]
     xs, ys = zip(*dirt[0]["area"], strict=True)
     assert (min(xs), min(ys), max(xs), max(ys)) == (1500, 1500, 2500, 2500)
+
+
+def test_the_page_cuts_a_long_mission_name_label_and_robot() -> None:
+    """A mission's ``mission:`` of 200,000 characters, or a record's hand-edited label,
+    became the page's title and header whole (and the refusal of another run's control):
+    the run's view cuts each as a terminal's line does, its length said."""
+    feed = RunFeed(mission_name="N" * 200_000, label="L" * 100_000, robot="R" * 90)
+    header = header_view(feed, {})
+    assert header["mission"] == header["run"]["mission"] == f"{'N' * 80}... (200,000 characters)"
+    assert header["run"]["label"] == f"{'L' * 80}... (100,000 characters)"
+    assert header["run"]["robot"] == f"{'R' * 80}... (90 characters)"

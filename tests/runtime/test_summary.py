@@ -159,6 +159,24 @@ def test_the_mission_s_last_log_is_said_under_its_outcome(run_mission: RunMissio
     assert "mission said" not in str(run_mission(DRIVE_TO_WALL).summary)
 
 
+def test_a_long_log_message_and_label_are_cut_on_their_lines(
+    run_mission: RunMission, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A ``log`` message of 200,000 characters (a default, a ``-p``) was written whole to
+    the log, the live tree and the summary's ``mission said``, and a record's hand-edited
+    label whole to a replay's ``label`` line: each is cut, its length said."""
+    long = "M" * 200_000
+    with caplog.at_level("INFO", logger="roomba_bt.mission"):
+        summary = run_mission(f"tree: {{log: {long}}}").summary
+    cut = f"{'M' * 500}... (200,000 characters)"
+    assert summary.said == cut
+    assert [r.getMessage() for r in caplog.records if r.name == "roomba_bt.mission"] == [cut]
+    summary.label = "L" * 100_000
+    lines = summary.lines()
+    assert lines[0] == f"label        {'L' * 80}... (100,000 characters)"
+    assert f"mission said {cut}" in lines
+
+
 def test_a_run_without_falls_has_no_falls_line(run_mission: RunMission) -> None:
     run = run_mission(DRIVE_TO_WALL)
     assert run.summary.outcome is Outcome.SUCCESS
