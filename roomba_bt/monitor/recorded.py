@@ -129,6 +129,8 @@ def recorded_world(
         shown = header_text(name)
         try:
             where = _recorded_world_file(name, record, mission)
+            if not isinstance(where, str):
+                where = _same_world(where, options.get("world_sha256")) or where
             if isinstance(where, str):
                 return f"its world {shown}{where}; the page draws the odometry alone"
             chosen = load_world(where)
@@ -174,6 +176,28 @@ def _recorded_world_file(name: str, record: Record, mission: Path) -> Path | str
     if found is None:
         return f": no such world beside the record, nor a world of that name ({OWN_WORLD})"
     return found
+
+
+def _same_world(found: Path, recorded: object) -> str | None:
+    """Why the world file ``found`` is not the one the run used (a text following ``its
+    world NAME``), or None when it is, or when the record holds no digest to tell (one made
+    before its header held ``world_sha256``). A world found by its name, or where the record
+    says, may be another of that name (a ``ROOMBA_BT_WORLDS`` world that takes a shipped
+    one's name, another machine's) or the file edited since; drawn, the page showed the
+    recorded robot driving through walls that were not there. Not drawn: a
+    ``monitor --world`` given is drawn, the user's own choice."""
+    from roomba_bt.runtime.provenance import file_digest
+
+    if not isinstance(recorded, str):
+        return None
+    now = file_digest(found)
+    if now is None or now == recorded:  # unreadable: load_world says why
+        return None
+    return (
+        f" ({header_text(str(found))}) is not the file the run used: its SHA-256 is "
+        f"{now[:12]}..., the record's {header_text(recorded[:12])}... (edited since, or another "
+        f"world of that name); not drawn ({OWN_WORLD})"
+    )
 
 
 def recorded_start(record: Record) -> datetime | None:

@@ -1118,6 +1118,59 @@ def test_a_world_given_by_name_is_recorded_by_name_and_drawn_from_the_users_worl
         assert "its world" not in err, err
 
 
+def test_a_records_world_of_another_digest_is_said_and_not_drawn(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, served_record: ServedRecord
+) -> None:
+    """The world a record names was found by name (or path) and drawn without its digest
+    looked at: a world of that name in another folder, or the file edited since, was drawn as
+    the one the run used. It is said on stderr, with both digests, and not drawn (the
+    odometry alone); ``--world`` still draws the one the user gives; the same file is."""
+    from roomba_bt.monitor.recorded import recorded_world
+    from roomba_bt.runtime.recording import SIMULATOR, load_record
+    from roomba_bt.sim.world import WORLDS_DIR, load_world
+
+    worlds, elsewhere = tmp_path / "worlds", tmp_path / "elsewhere"
+    worlds.mkdir()
+    elsewhere.mkdir()
+    (worlds / "living.yaml").write_text((WORLDS_DIR / "apartment.yaml").read_text())
+    (elsewhere / "living.yaml").write_text(
+        (WORLDS_DIR / "empty-room.yaml").read_text().replace("empty-room", "living")
+    )
+    mission = tmp_path / "shuttle.yaml"
+    mission.write_text(SHUTTLE.read_text())
+    record = tmp_path / "run.jsonl"
+    monkeypatch.setenv("ROOMBA_BT_WORLDS", str(worlds))
+    _record_the_shuttle(record, "--world", "living", mission=mission)
+    recorded = load_record(record).header[SIMULATOR]["world_sha256"]
+    assert isinstance(recorded_world(load_record(record), mission), tuple)
+
+    monkeypatch.setenv("ROOMBA_BT_WORLDS", str(elsewhere))  # another world of that name
+    problem = recorded_world(load_record(record), mission)
+    assert isinstance(problem, str), problem
+    assert problem.startswith(
+        f"its world living ({elsewhere / 'living.yaml'}) is not the file the run used: its "
+        "SHA-256 is "
+    ), problem
+    assert f"the record's {recorded[:12]}... (edited since, or another world of that name)" in (
+        problem
+    )
+    assert problem.endswith(
+        "not drawn (monitor --world FILE_OR_NAME draws the one you give); the page draws the "
+        "odometry alone"
+    ), problem
+    _, err = served_record(record)
+    assert f"monitor: {record}: its world living (" in err and "not the file the run" in err
+    _, err = served_record(record, "--world", str(elsewhere / "living.yaml"))
+    assert "its world" not in err, err
+
+    monkeypatch.setenv("ROOMBA_BT_WORLDS", str(worlds))  # the same name, the file edited
+    own = worlds / "living.yaml"
+    own.write_text(own.read_text() + "# a chair moved\n")
+    problem = recorded_world(load_record(record), mission)
+    assert isinstance(problem, str) and "is not the file the run used" in problem, problem
+    assert isinstance(recorded_world(load_record(record), mission, load_world(own)), tuple)
+
+
 def test_monitor_world_that_cannot_be_read_is_exit_2_before_the_replay(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
