@@ -34,6 +34,18 @@ def plot_trajectories(
 def plot_variants(world: World, panels: Sequence[Panel], path: str | Path) -> None:
     """Write one figure to ``path``: a panel a variant, side by side, each the world with that
     variant's episodes drawn over it and titled with its ``panels`` title."""
+    plt = pyplot()
+    fig = variants_figure(world, panels)
+    try:
+        # cut to fit what is drawn, the legends below the maps included
+        fig.savefig(str(path), bbox_inches="tight")
+    finally:
+        plt.close(fig)
+
+
+def variants_figure(world: World, panels: Sequence[Panel]) -> Any:
+    """The figure :func:`plot_variants` writes (a matplotlib ``Figure``, for the caller to
+    save and close): a panel a variant, side by side."""
     if not panels:
         raise ValueError("plot_variants: no panel to draw")
     plt = pyplot()
@@ -41,15 +53,12 @@ def plot_variants(world: World, panels: Sequence[Panel], path: str | Path) -> No
         1, len(panels), figsize=(8 if len(panels) == 1 else 6 * len(panels), 7), dpi=110,
         squeeze=False,
     )  # fmt: skip
-    try:
-        for ax, (title, results) in zip(axes[0], panels, strict=True):
-            _draw_trajectories(ax, world, results)
-            ax.set_title(title, fontsize=10 if len(panels) > 1 else None)
-        if len(panels) > 1:
-            fig.tight_layout()
-        fig.savefig(str(path))
-    finally:
-        plt.close(fig)
+    for ax, (title, results) in zip(axes[0], panels, strict=True):
+        _draw_trajectories(ax, world, results)
+        ax.set_title(title, fontsize=10 if len(panels) > 1 else None)
+    if len(panels) > 1:
+        fig.tight_layout()
+    return fig
 
 
 def _draw_trajectories(ax: Any, world: World, results: Sequence[EpisodeResult]) -> None:
@@ -64,7 +73,9 @@ def _draw_trajectories(ax: Any, world: World, results: Sequence[EpisodeResult]) 
         ax.plot(result.start[0], result.start[1], "o", color=colour, ms=2.5)
     ax.plot([], [], color="tab:green", label=f"succeeded ({ok})")
     ax.plot([], [], color="tab:red", label=f"did not ({len(results) - ok})")
-    ax.legend(loc="upper right", fontsize=8)
+    # below the map, not on it: "upper right" hid the world's corner and the paths there
+    # (an apartment's bedroom, its dock), one panel or several; as the simulator's --plot
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2, fontsize=8, frameon=False)
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.set_xlabel("x (m)")
