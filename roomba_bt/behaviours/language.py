@@ -52,6 +52,9 @@ class Shape(enum.Enum):
     CHILD_OR_DO = "child or do"
     #: ``subtree: NAME`` or ``subtree: {id: NAME, parameter: value, ...}``
     SUBTREE = "subtree"
+    #: not a word: ``while: condition`` or ``until: condition`` beside a node (:data:`GUARD`:
+    #: its children are the condition and the node, its meaning its own, read by the checks)
+    MODIFIER = "modifier"
 
 
 def _text(value: object) -> str:
@@ -145,6 +148,59 @@ class Answers:
         """What it answers on a tick its child ended in ``ending`` (SUCCESS or FAILURE)."""
         return self.on_success if ending == SUCCESS else self.on_failure
 
+    @property
+    def inverts(self) -> bool:
+        """Whether it answers the opposite of its child on every tick its child ends, and
+        only then (``inverter``): a branch beside its child fails on a tick they both end."""
+        return (
+            (self.on_success, self.on_failure) == (FAILS, SUCCEEDS)
+            and not self.alone
+            and not self.replays
+            and self.first_tick is None
+        )
+
+
+#: what a composite that ticks every child on every tick needs to succeed: every child's
+#: success, any one's, or the ``selected`` ones' (their places in the option ``selected_at``)
+ALL, ONE, SELECTED = "all", "one", "selected"
+
+
+@dataclass(frozen=True, slots=True)
+class Combines:
+    """How a composite's answer follows its children's: the facts the static checks read
+    (:mod:`roomba_bt.mission.ticks`, :mod:`roomba_bt.mission.checks`,
+    :mod:`roomba_bt.mission.deadends`), so that a new composite is judged by what it
+    declares, never by a list of words.
+
+    Whether it remembers a RUNNING child is its ``memory`` option (every composite declares
+    one; a reactive word defaults it to false and refuses true): read per node, as written."""
+
+    #: the ending of a child after which it ticks the next, in turn: SUCCESS for a sequence
+    #: (it fails at the first failure, and succeeds when every child has succeeded),
+    #: FAILURE for a fallback (it succeeds at the first success); None: it ticks every
+    #: child on every tick (a parallel: any failure fails it; :attr:`needs` says which
+    #: successes it waits for)
+    goes_on: str | None
+    #: (every child on every tick) which successes it waits for (:data:`ALL`, :data:`ONE`,
+    #: :data:`SELECTED`) when the node has no ``policy`` option saying so
+    needs: str = ALL
+
+    @property
+    def stops(self) -> str | None:
+        """The ending of a child that ends the composite in turn (FAILURE for a sequence,
+        SUCCESS for a fallback); None for one that ticks every child on every tick."""
+        if self.goes_on is None:
+            return None
+        return FAILURE if self.goes_on == SUCCESS else SUCCESS
+
+
+#: ``sequence`` and its kin: children in turn, each after the previous one's success
+IN_TURN_ALL = Combines(SUCCESS)
+#: ``fallback`` and its kin: children in turn, each after the previous one's failure
+IN_TURN_FIRST = Combines(FAILURE)
+#: ``parallel``: every child on every tick
+EVERY_TICK = Combines(None)
+
 
 @dataclass(frozen=True, slots=True)
 class NodeKind:
@@ -175,6 +231,9 @@ class NodeKind:
     condition_child: bool = False
     #: a decorator's answers by its child's (:class:`Answers`): required of every decorator
     answers: Answers | None = None
+    #: a composite's answer by its children's (:class:`Combines`): required of every
+    #: composite (a word whose value is its children)
+    combines: Combines | None = None
 
     def __post_init__(self) -> None:
         """A decorator without :class:`Answers` would be judged by no check (or wrongly by
@@ -189,6 +248,17 @@ class NodeKind:
             raise TypeError(
                 f"NodeKind {self.word!r} takes no answers=: only a decorator (one child "
                 "under do:) has them"
+            )
+        composes = self.shape is Shape.CHILDREN
+        if composes and (self.combines is None or self.option("memory") is None):
+            raise TypeError(
+                f"NodeKind {self.word!r} is a composite and needs combines=Combines(...) "
+                "(how its answer follows its children's) and a memory option (whether it "
+                "resumes a RUNNING child)"
+            )
+        if not composes and self.combines is not None:
+            raise TypeError(
+                f"NodeKind {self.word!r} takes no combines=: only a composite (children:) has it"
             )
 
     def option(self, name: str) -> Param | None:
@@ -237,11 +307,13 @@ _NO_MEMORY = (
 )
 
 
-def _composite(word: str, build: Build, memory: bool, doc: str) -> NodeKind:
+def _composite(word: str, build: Build, combines: Combines, memory: bool, doc: str) -> NodeKind:
     remembers = Param("memory", BOOL, default=memory, doc="resume a RUNNING child")
     why = _NO_MEMORY.format(word=word, memory=word.removeprefix("reactive_"))
     refused = () if memory else (("memory", True, why),)
-    return NodeKind(word, Shape.CHILDREN, build, (remembers, _NAME), doc, refused=refused)
+    return NodeKind(
+        word, Shape.CHILDREN, build, (remembers, _NAME), doc, refused=refused, combines=combines
+    )
 
 
 _PARALLEL = NodeKind(
@@ -254,8 +326,8 @@ _PARALLEL = NodeKind(
         _NAME,
         Param(
             "policy",
-            enum_type("all", "one", "selected"),
-            default="all",
+            enum_type(ALL, ONE, SELECTED),
+            default=ALL,
             doc="SUCCESS when all children succeed, any one does, or the selected ones do",
         ),
         Param(
@@ -268,6 +340,7 @@ _PARALLEL = NodeKind(
     only_if=(("selected", "policy", "selected"),),
     refused=(("memory", True, "a parallel ticks every child on every tick: it has no memory "
               "to resume (memory: true was ignored; its children's own memory is theirs)"),),
+    combines=EVERY_TICK,
 )  # fmt: skip
 
 # ----------------------------------------------------------------------------- decorators
@@ -283,14 +356,17 @@ def _oneshot(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Beha
 
 
 _KINDS: tuple[NodeKind, ...] = (
-    _composite("sequence", _sequence, True, "py_trees Sequence: children in order"),
-    _composite("reactive_sequence", _sequence, False,
+    _composite("sequence", _sequence, IN_TURN_ALL, True,
+               "py_trees Sequence: children in order"),
+    _composite("reactive_sequence", _sequence, IN_TURN_ALL, False,
                "py_trees Sequence without memory: re-ticks every child from the first"),
-    _composite("fallback", _selector, True, "py_trees Selector: children until one succeeds"),
-    _composite("selector", _selector, True, "py_trees Selector (same as fallback)"),
-    _composite("reactive_fallback", _selector, False,
+    _composite("fallback", _selector, IN_TURN_FIRST, True,
+               "py_trees Selector: children until one succeeds"),
+    _composite("selector", _selector, IN_TURN_FIRST, True,
+               "py_trees Selector (same as fallback)"),
+    _composite("reactive_fallback", _selector, IN_TURN_FIRST, False,
                "py_trees Selector without memory: a higher child preempts a running one"),
-    _composite("reactive_selector", _selector, False,
+    _composite("reactive_selector", _selector, IN_TURN_FIRST, False,
                "py_trees Selector without memory (same as reactive_fallback)"),
     _PARALLEL,
     NodeKind("inverter", Shape.CHILD_OR_DO, lambda n, k, o: lean.Inverter(n, k[0]),
@@ -355,7 +431,7 @@ WORDS: dict[str, NodeKind] = {kind.word: kind for kind in _KINDS}
 #: The node ``while:`` and ``until:`` become (not a word: written as a modifier).
 GUARD = NodeKind(
     "guard",
-    Shape.CHILDREN,
+    Shape.MODIFIER,
     lambda n, k, o: ours.Guard(n, k[0], k[1], until=bool(o["until"])),
     (Param("until", BOOL, required=True),),
     doc="run the node while (or until) a condition succeeds",

@@ -69,17 +69,20 @@ from typing import Any
 from roomba_bt.behaviours.blackboard import BlackboardRef
 from roomba_bt.behaviours.conditions import comparison_problem
 from roomba_bt.behaviours.declare import Declaration, Param
-from roomba_bt.behaviours.language import FAILURE, SUCCESS, WORDS, Outcomes
+from roomba_bt.behaviours.language import ALL, FAILURE, SELECTED, SUCCESS, WORDS, Outcomes
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.ticks import (
-    SELECTORS,
-    SEQUENCES,
     answers,
     at_once,
+    combines,
+    every_tick,
+    goes_on,
+    needs,
     never_succeeds,
     packet_tests,
+    reactive,
     reads_cliffs,
     runs_again,
     succeeds_at_once,
@@ -173,7 +176,14 @@ class ModeCheck:
         """(modes on SUCCESS, modes on FAILURE) after ``node`` entered in ``entry``."""
         if not entry:
             return _EMPTY, _EMPTY
-        return _MODE_HANDLERS.get(node.kind, ModeCheck._decorator)(self, node, entry)
+        handler = _MODE_HANDLERS.get(node.kind)
+        if handler is None:  # a word: a composite as it combines its children, or a decorator
+            combination = combines(node)
+            if combination is None:
+                handler = ModeCheck._decorator
+            else:
+                handler = _COMPOSITE_HANDLERS[combination.goes_on]
+        return handler(self, node, entry)
 
     def _leaf(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         """A leaf fails in the modes it was entered in; one that starts a built-in cycle
@@ -356,20 +366,25 @@ class ModeCheck:
         return success, failure
 
 
-#: The mode pass's handler of each node kind; every other kind is a decorator. A table, not
-#: ``getattr(self, f"_{kind}")``: that built a new name string per node visited, and the
-#: interpreter's method cache (keyed by the string's address) kept up to thousands of them,
-#: so memory grew over a long run of compiles.
-_MODE_HANDLERS: dict[str, Callable[[ModeCheck, Node, Modes], tuple[Modes, Modes]]] = {
+_ModeHandler = Callable[[ModeCheck, Node, Modes], tuple[Modes, Modes]]
+
+#: The mode pass's handler of the node kinds that are not words; a composite is handled as
+#: its word combines its children (:data:`_COMPOSITE_HANDLERS`), every other kind is a
+#: decorator. Tables, not ``getattr(self, f"_{kind}")``: that built a new name string per
+#: node visited, and the interpreter's method cache (keyed by the string's address) kept up
+#: to thousands of them, so memory grew over a long run of compiles.
+_MODE_HANDLERS: dict[str, _ModeHandler] = {
     "leaf": ModeCheck._leaf,
-    "sequence": ModeCheck._sequence,
-    "reactive_sequence": ModeCheck._sequence,
-    "fallback": ModeCheck._selector,
-    "selector": ModeCheck._selector,
-    "reactive_fallback": ModeCheck._selector,
-    "reactive_selector": ModeCheck._selector,
-    "parallel": ModeCheck._parallel,
     "unbuilt": ModeCheck._unbuilt,
+}
+
+#: A composite's handler by :attr:`Combines.goes_on
+#: <roomba_bt.behaviours.language.Combines.goes_on>`: in turn after a success (a
+#: sequence), after a failure (a fallback), or every child on every tick (a parallel).
+_COMPOSITE_HANDLERS: dict[str | None, _ModeHandler] = {
+    SUCCESS: ModeCheck._sequence,
+    FAILURE: ModeCheck._selector,
+    None: ModeCheck._parallel,
 }
 
 
@@ -415,20 +430,21 @@ class KeyCheck:
                         )
                     )
             return written | frozenset(node.keys_written())
-        if kind in SEQUENCES:
+        order = goes_on(node)
+        if order == SUCCESS:  # a sequence
             current = written
             for child in node.children:
                 current = self.visit(child, current)
             return current
-        if kind in SELECTORS:
+        if order == FAILURE:  # a fallback
             outs = [self.visit(child, written) for child in node.children]
             return frozenset.intersection(*outs) if outs else written
-        if kind == "parallel":
+        if every_tick(node):  # a parallel
             outs, current = [], written
             for child in node.children:  # in order: a set before a reader has written
                 outs.append(self.visit(child, current))
                 current = outs[-1] if succeeds_at_once(child) else current
-            if node.options.get("policy") == "all":
+            if needs(node) == ALL:
                 return frozenset().union(*outs)
             return frozenset.intersection(*outs) if outs else written
         if kind == "guard":
@@ -565,7 +581,7 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
     then, and the limit did end it."""
     errors = []
     for node in root.walk():
-        if node.kind not in SELECTORS or node.options.get("memory", True):
+        if goes_on(node) != FAILURE or not reactive(node):  # not a reactive fallback
             continue
         for index, child in enumerate(node.children[:-1]):
             if not _runs_on_after(node.children[index + 1 :]):
@@ -586,13 +602,13 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
 
 
 #: the parallel policies that wait for more than one success, where ``synchronise`` counts
-_WAITING_POLICIES = frozenset({"all", "selected"})
+_WAITING_POLICIES = frozenset({ALL, SELECTED})
 
 
 def _waited_for(parallel: Node) -> list[int]:
     """The places of the branches whose successes a ``policy: all`` or ``selected``
     parallel waits for: every branch, or the ``selected`` ones (by place: mission.control)."""
-    if parallel.options.get("policy") == "selected":
+    if needs(parallel) == SELECTED:
         return list(parallel.options.get("selected_at", range(len(parallel.children))))
     return list(range(len(parallel.children)))
 
@@ -634,9 +650,9 @@ def restarted_branches(root: Node) -> list[Diagnostic]:
     errors: list[Diagnostic] = []
     for node in root.walk():
         if (
-            node.kind != "parallel"
+            not every_tick(node)
             or node.options.get("synchronise") is not False
-            or node.options.get("policy") not in _WAITING_POLICIES
+            or needs(node) not in _WAITING_POLICIES
         ):
             continue
         for index, branch in enumerate(node.children):
@@ -688,7 +704,7 @@ def restarted_runs(root: Node) -> list[Diagnostic]:
     Said once for a subtree used twice."""
     warnings: list[Diagnostic] = []
     for node in root.walk():
-        if node.kind not in SEQUENCES or node.options.get("memory", True):
+        if goes_on(node) != SUCCESS or not reactive(node):  # not a reactive sequence
             continue
         for index, child in enumerate(node.children[:-1]):
             later = [c for c in node.children[index + 1 :] if not _ends_again_at_once(c)]
@@ -730,7 +746,7 @@ def _claimed_in_two_branches(
     later sets last. Said once per place of ``later`` (a subtree used twice is one place)."""
     seen: set[tuple[str, str, int, int]] = set()
     for node in root.walk():
-        if node.kind != "parallel":
+        if not every_tick(node):
             continue
         first: dict[str, Node] = {}
         for branch in node.children:

@@ -28,9 +28,12 @@ end of a tree (a patrol's ``repeat``) blocks nothing, and is not said.
 from __future__ import annotations
 
 from roomba_bt.behaviours.language import (
+    ALL,
     FAILS,
     FAILURE,
+    ONE,
     RUNNING,
+    SELECTED,
     SUCCEEDS,
     SUCCESS,
     Answers,
@@ -38,7 +41,15 @@ from roomba_bt.behaviours.language import (
 )
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.plan import Node
-from roomba_bt.mission.ticks import SELECTORS, SEQUENCES, answers, at_once
+from roomba_bt.mission.ticks import (
+    answers,
+    at_once,
+    combines,
+    every_tick,
+    goes_on,
+    needs,
+    reactive,
+)
 
 _BOTH: Outcomes = frozenset({SUCCESS, FAILURE})
 
@@ -52,9 +63,10 @@ def outcomes(node: Node, first_tick: bool = False) -> Outcomes:
     if kind == "leaf":
         return _leaf_outcomes(node)
     children = node.children
-    if kind in SEQUENCES or kind in SELECTORS:
-        return _chain_outcomes(node, first_tick)
-    if kind == "parallel":
+    combination = combines(node)
+    if combination is not None and combination.goes_on is not None:
+        return _chain_outcomes(node, combination.goes_on, first_tick)
+    if combination is not None:
         return _parallel_outcomes(node)
     if kind == "guard":
         return _guard_outcomes(node, first_tick)
@@ -95,10 +107,9 @@ def _leaf_outcomes(node: Node) -> Outcomes:
     )
 
 
-def _chain_outcomes(node: Node, first_tick: bool) -> Outcomes:
-    """A sequence goes on after a success, a fallback after a failure: it ends the other
-    way at the first child that can, and its own way if every child can go on."""
-    go_on = SUCCESS if node.kind in SEQUENCES else FAILURE
+def _chain_outcomes(node: Node, go_on: str, first_tick: bool) -> Outcomes:
+    """A sequence goes on after a success, a fallback after a failure (``go_on``): it ends
+    the other way at the first child that can, and its own way if every child can go on."""
     out: set[str] = set()
     for child in node.children:
         results = outcomes(child, first_tick)
@@ -115,11 +126,11 @@ def _parallel_outcomes(node: Node) -> Outcomes:
     if _contradicts(node.children):
         return frozenset({FAILURE})
     failure = {FAILURE} if any(FAILURE in r for r in results) else set()
-    policy = node.options.get("policy")
-    if policy == "one":
+    policy = needs(node)
+    if policy == ONE:
         succeeds = any(SUCCESS in r for r in results)
     else:
-        chosen = node.options.get("selected_at") if policy == "selected" else None
+        chosen = node.options.get("selected_at") if policy == SELECTED else None
         needed = results if chosen is None else [results[i] for i in chosen]
         succeeds = all(SUCCESS in r for r in needed)
     success = {SUCCESS} if succeeds else set()
@@ -127,15 +138,23 @@ def _parallel_outcomes(node: Node) -> Outcomes:
 
 
 def _contradicts(branches: list[Node]) -> bool:
-    """Whether the branches all end on the tick they start and one is the ``inverter`` of
-    another (``[bump: any, inverter: {bump: any}]``): on that tick one of them fails."""
+    """Whether the branches all end on the tick they start and one inverts another
+    (``[bump: any, inverter: {bump: any}]``: a decorator whose :class:`Answers` say it
+    answers the opposite of its child, on that tick): on that tick one of them fails."""
     if not all(at_once(branch) for branch in branches):
         return False
     said = {(branch.kind, branch.name) for branch in branches}
     return any(
-        branch.kind == "inverter" and (branch.children[0].kind, branch.children[0].name) in said
+        _inverts(branch) and (branch.children[0].kind, branch.children[0].name) in said
         for branch in branches
     )
+
+
+def _inverts(node: Node) -> bool:
+    """Whether ``node``'s word answers the opposite of its child, on the tick its child
+    answers (:attr:`Answers.inverts`: ``inverter``)."""
+    decorator = answers(node)
+    return decorator is not None and decorator.inverts
 
 
 def _guard_outcomes(node: Node, first_tick: bool) -> Outcomes:
@@ -215,12 +234,12 @@ def _child_again(node: Node, again: Outcomes, index: int) -> Outcomes:
             if RUNNING in decorator.answer(ending) or decorator.answer(ending) & again
         )
     last = index == len(node.children) - 1
-    if node.kind in SEQUENCES:
+    order = goes_on(node)
+    if order == SUCCESS:  # a sequence
         return (again & FAILS) | (again & SUCCEEDS if last else SUCCEEDS)
-    if node.kind in SELECTORS:
-        reactive = node.options.get("memory", True) is False
-        return (again & SUCCEEDS) | (FAILS if reactive and not last else again & FAILS)
-    if node.kind == "parallel":
+    if order == FAILURE:  # a fallback
+        return (again & SUCCEEDS) | (FAILS if reactive(node) and not last else again & FAILS)
+    if every_tick(node):  # a parallel
         return (again & FAILS) | SUCCEEDS
     if node.kind == "guard" and index == 1:
         return again  # the guarded node's ending is the guard's
@@ -240,9 +259,9 @@ def _failing_first_steps(node: Node, children_again: list[Outcomes]) -> list[Dia
     """A step of a sequence (with memory or reactive) or a branch of a parallel that can
     only fail on the tick it starts (:func:`_fails_first`), and that nothing ticks again
     after that failure (:func:`_child_again`): its failure fails its parent on every run."""
-    if node.kind in SEQUENCES:
+    if goes_on(node) == SUCCESS:  # a sequence
         role = "step"
-    elif node.kind == "parallel":
+    elif every_tick(node):  # a parallel
         role = "branch"
     else:
         return []
@@ -266,9 +285,9 @@ def _failing_first_steps(node: Node, children_again: list[Outcomes]) -> list[Dia
 def _blocked_children(node: Node) -> list[Diagnostic]:
     """The first child of a sequence after a step that never succeeds, of a fallback after
     an alternative that never fails: it can never run."""
-    if node.kind not in SEQUENCES and node.kind not in SELECTORS:
+    go_on = goes_on(node)
+    if go_on is None:  # not a sequence nor a fallback
         return []
-    go_on = SUCCESS if node.kind in SEQUENCES else FAILURE
     for child, after in zip(node.children, node.children[1:], strict=False):
         if _fails_first(child) is not None:
             continue  # said by _failing_first_steps, or ticked again by a loop above
@@ -330,13 +349,11 @@ def _parallel_never_succeeds(node: Node) -> list[Diagnostic]:
     each other (:func:`_contradicts`). Not one with a branch that only fails (``[drive,
     inverter: {cliff: any}]`` drives until the cliff is seen, and fails then, as meant):
     a step after it is said by :func:`_blocked_children`."""
-    if node.kind != "parallel" or node.options.get("policy", "all") != "all":
-        return []
-    if not _contradicts(node.children):
+    if not every_tick(node) or needs(node) != ALL or not _contradicts(node.children):
         return []
     return [
         node.loc.at(
-            "the parallel can never succeed: it waits for every branch (policy: all), its "
+            f"the {node.kind} can never succeed: it waits for every branch (policy: all), its "
             "branches are all read on the tick it starts, and one is the inverter of another, "
             "so one of them fails on that tick; use a fallback to take either answer, or "
             "remove one of them"

@@ -20,8 +20,10 @@ counted). The facts it rests on:
   child fails, and succeeds only once the child has succeeded for a while.
 
 A decorator is judged by the :class:`~roomba_bt.behaviours.language.Answers` its word
-declares (how its answer follows its child's), never by its name: a new decorator word
-gets the answers its declaration implies, not a default.
+declares (how its answer follows its child's), a composite by its
+:class:`~roomba_bt.behaviours.language.Combines` (how its answer follows its children's:
+in turn after each success or each failure, or every child on every tick), never by its
+name: a new word gets the answers its declaration implies, not a default.
 """
 
 from __future__ import annotations
@@ -31,11 +33,13 @@ from roomba_bt.behaviours.declare import Comparison, Declaration
 from roomba_bt.behaviours.language import (
     FAILS,
     FAILURE,
+    ONE,
     RUNNING,
     SUCCEEDS,
     SUCCESS,
     WORDS,
     Answers,
+    Combines,
     Outcomes,
 )
 from roomba_bt.mission.plan import Node
@@ -44,8 +48,6 @@ from roomba_bt.oi.frames import CLIFF_PACKETS
 _NONE: Outcomes = frozenset()
 _BOTH: Outcomes = frozenset({SUCCESS, FAILURE})
 
-SEQUENCES = frozenset({"sequence", "reactive_sequence"})
-SELECTORS = frozenset({"fallback", "selector", "reactive_fallback", "reactive_selector"})
 CLIFFS = frozenset(CLIFF_PACKETS)
 
 
@@ -54,6 +56,45 @@ def answers(node: Node) -> Answers | None:
     composite, a guard (``while:``/``until:``) or a node that could not be built."""
     kind = WORDS.get(node.kind)
     return None if kind is None else kind.answers
+
+
+def combines(node: Node) -> Combines | None:
+    """How ``node``'s word declares its answer follows its children's if it is a
+    composite; None for a leaf, a decorator, a guard or a node that could not be built."""
+    kind = WORDS.get(node.kind)
+    return None if kind is None else kind.combines
+
+
+def goes_on(node: Node) -> str | None:
+    """The ending of a child after which ``node`` ticks its next child, if it ticks them in
+    turn: SUCCESS (a sequence), FAILURE (a fallback); None for anything else."""
+    combination = combines(node)
+    return None if combination is None else combination.goes_on
+
+
+def every_tick(node: Node) -> bool:
+    """Whether ``node`` is a composite that ticks every child on every tick (a parallel)."""
+    combination = combines(node)
+    return combination is not None and combination.goes_on is None
+
+
+def reactive(node: Node) -> bool:
+    """Whether ``node`` ticks its children in turn without memory: from the first, on
+    every tick (``reactive_sequence``, ``reactive_fallback``), as its ``memory`` option
+    says (defaulted by its word)."""
+    kind = WORDS.get(node.kind)
+    if kind is None or kind.combines is None or kind.combines.goes_on is None:
+        return False
+    memory = kind.option("memory")
+    return not node.options.get("memory", memory is None or memory.default)
+
+
+def needs(node: Node) -> str:
+    """Which of its children's successes a composite that ticks every child on every tick
+    waits for (``ALL``, ``ONE``, ``SELECTED``): its ``policy`` option, else its word's."""
+    combination = combines(node)
+    assert combination is not None, f"{node.kind} is not a composite"
+    return str(node.options.get("policy", combination.needs))
 
 
 def at_once(node: Node) -> bool:
@@ -79,10 +120,11 @@ def succeeds_at_once(node: Node) -> bool:
     kind = node.kind
     if kind == "leaf":
         return node.decl is not None and node.decl.at_once
-    if kind in SEQUENCES or kind == "parallel":
-        return all(succeeds_at_once(child) for child in node.children)
-    if kind in SELECTORS:
+    order = goes_on(node)
+    if order == FAILURE:  # a fallback: as its first child
         return succeeds_at_once(node.children[0])
+    if order == SUCCESS or every_tick(node):  # a sequence, a parallel: every child
+        return all(succeeds_at_once(child) for child in node.children)
     decorator = answers(node)
     if decorator is None or decorator.alone or decorator.restarts_on:
         return False  # a guard, an unbuilt node; one that may answer before its child
@@ -102,9 +144,10 @@ def never_succeeds(node: Node) -> bool:
         return (
             decl is not None and decl.may_succeed is not None and not decl.may_succeed(node.params)
         )
-    if kind in SEQUENCES:
+    order = goes_on(node)
+    if order == SUCCESS:  # a sequence
         return any(never_succeeds(child) for child in node.children)
-    if kind in SELECTORS:
+    if order == FAILURE:  # a fallback
         return all(never_succeeds(child) for child in node.children)
     if kind == "guard":
         return not node.options["until"] and never_succeeds(node.children[1])
@@ -202,11 +245,10 @@ def cliff_ends(node: Node) -> Outcomes:
         ends = SUCCESS if node.options["until"] else FAILURE
         by_condition = {ends} if ends in cliff_ends(node.children[0]) else set()
         return frozenset(by_condition) | cliff_ends(node.children[1])
-    if kind in SEQUENCES:
-        return _chain_ends(node, FAILURE)
-    if kind in SELECTORS:
-        return _chain_ends(node, SUCCESS)
-    if kind == "parallel":
+    combination = combines(node)
+    if combination is not None:
+        if combination.stops is not None:
+            return _chain_ends(node, combination.stops)
         return frozenset().union(*(branch_ends(node, child) for child in node.children))
     decorator = answers(node)
     if decorator is None or decorator.alone or decorator.replays:
@@ -237,10 +279,10 @@ def _chain_ends(node: Node, stops: str) -> Outcomes:
     children = node.children
     if len(children) == 1:
         return cliff_ends(children[0])
-    reactive = not node.options.get("memory", True)
+    again = reactive(node)
     for index, child in enumerate(children):
         if stops in cliff_ends(child) and (
-            reactive or all(at_once(later) for later in children[index + 1 :])
+            again or all(at_once(later) for later in children[index + 1 :])
         ):
             return frozenset({stops})
         if not at_once(child):
@@ -253,7 +295,7 @@ def branch_ends(parallel: Node, branch: Node) -> Outcomes:
     every tick the parallel runs: a failure always ends it, a success with ``policy:
     one``. With ``synchronise: true`` (policies ``all`` and ``selected``) a branch that
     succeeded is not ticked again, so it counts only if it never succeeds."""
-    one = parallel.options.get("policy") == "one"
+    one = needs(parallel) == ONE
     ticked = one or not parallel.options.get("synchronise", True) or never_succeeds(branch)
     if not ticked:
         return _NONE
@@ -274,11 +316,11 @@ def watched_children(node: Node, watched: bool) -> list[tuple[Node, bool]]:
     if kind == "guard":  # children: the condition, the guarded node
         stop = SUCCESS if node.options["until"] else FAILURE
         return [(children[0], False), (children[1], stop in cliff_ends(children[0]))]
-    if kind == "parallel":
+    if every_tick(node):
         watch = [bool(branch_ends(node, child)) for child in children]
         return [(c, any(w for j, w in enumerate(watch) if j != i)) for i, c in enumerate(children)]
-    if (kind in SEQUENCES or kind in SELECTORS) and not node.options.get("memory", True):
-        stops = FAILURE if kind in SEQUENCES else SUCCESS
+    if reactive(node):
+        stops = FAILURE if goes_on(node) == SUCCESS else SUCCESS
         out, before = [], False
         for child in children:
             out.append((child, before))
