@@ -15,9 +15,16 @@ Adding a decorator is one :class:`NodeKind` in :data:`WORDS` and one class::
              (Param("for", DURATION, required=True),), doc="RUNNING for a while, then ...",
              answers=Answers(SUCCEEDS, FAILS, alone=RUNS))
 
-A decorator must say how its answer follows its child's (:class:`Answers`): the static
-checks (:mod:`roomba_bt.mission.ticks`, :mod:`roomba_bt.mission.checks`) reason from it
-alone, and a decorator word without it is refused when this module is imported.
+A decorator must say how its answer follows its child's (:class:`Answers`), a composite
+how its answer follows its children's (:class:`Combines`): the static checks
+(:mod:`roomba_bt.mission.ticks`, :mod:`roomba_bt.mission.checks`,
+:mod:`roomba_bt.mission.deadends`) reason from them alone, and a word without them is
+refused when its :class:`NodeKind` is made. Adding a composite is likewise one
+:class:`NodeKind` and one class::
+
+    NodeKind("race", Shape.CHILDREN, lambda name, kids, o: Race(name, kids), (_NAME,),
+             doc="every child on every tick, SUCCESS with the first that succeeds",
+             combines=Combines(None, needs=ONE))
 
 It lives in the behaviours layer because the registry (which may not import the mission
 layer) must know the reserved words, and because it names the node classes.
@@ -172,8 +179,9 @@ class Combines:
     :mod:`roomba_bt.mission.deadends`), so that a new composite is judged by what it
     declares, never by a list of words.
 
-    Whether it remembers a RUNNING child is its ``memory`` option (every composite declares
-    one; a reactive word defaults it to false and refuses true): read per node, as written."""
+    Whether one that ticks its children in turn remembers a RUNNING child is its ``memory``
+    option (each declares one; a reactive word defaults it to false and refuses true): read
+    per node, as written. One that ticks every child on every tick has nothing to resume."""
 
     #: the ending of a child after which it ticks the next, in turn: SUCCESS for a sequence
     #: (it fails at the first failure, and succeeds when every child has succeeded),
@@ -250,11 +258,16 @@ class NodeKind:
                 "under do:) has them"
             )
         composes = self.shape is Shape.CHILDREN
-        if composes and (self.combines is None or self.option("memory") is None):
+        if composes and self.combines is None:
             raise TypeError(
-                f"NodeKind {self.word!r} is a composite and needs combines=Combines(...) "
-                "(how its answer follows its children's) and a memory option (whether it "
-                "resumes a RUNNING child)"
+                f"NodeKind {self.word!r} is a composite and needs combines=Combines(...): "
+                "how its answer follows its children's (see Combines)"
+            )
+        if self.combines is not None and self.combines.goes_on and not self.option("memory"):
+            raise TypeError(
+                f"NodeKind {self.word!r} ticks its children in turn and needs a memory "
+                "option: whether it resumes a RUNNING child (true) or ticks them all from "
+                "the first on every tick (false, a reactive word)"
             )
         if not composes and self.combines is not None:
             raise TypeError(

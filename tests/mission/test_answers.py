@@ -1,7 +1,8 @@
 """A decorator is judged by the :class:`~roomba_bt.behaviours.language.Answers` its word
-declares, never by its name: every check function answers a word as the word whose answers
-it was given, and a made-up decorator (one NodeKind, one class, nothing else) validates,
-shows and runs, a cooldown of a condition under ``held`` among them."""
+declares, a composite by its :class:`~roomba_bt.behaviours.language.Combines`, never by
+its name: every check function answers a word as the word whose answers it was given, and a
+made-up decorator or composite (one NodeKind, one class, nothing else) validates, shows and
+runs: a cooldown of a condition under ``held``, a race of a drive and a wait."""
 
 from __future__ import annotations
 
@@ -15,26 +16,32 @@ import pytest
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from roomba_bt.behaviours import lean
 from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.decorators import _MissionClock
 from roomba_bt.behaviours.language import (
     FAILS,
+    FAILURE,
+    ONE,
     SUCCEEDS,
+    TEXT,
     WORDS,
     Answers,
+    Combines,
     NodeKind,
     Shape,
 )
 from roomba_bt.behaviours.lean import DONE, DecoratorTick
 from roomba_bt.behaviours.registry import builtin_registry
 from roomba_bt.behaviours.units import DURATION
-from roomba_bt.mission import deadends, ticks
+from roomba_bt.mission import checks, deadends, ticks
 from roomba_bt.mission.checks import KeyCheck, ModeCheck
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Loc
 from roomba_bt.oi.modes import OIMode
 
 DECORATORS = sorted(word for word, kind in WORDS.items() if kind.answers is not None)
+COMPOSITES = sorted(word for word, kind in WORDS.items() if kind.combines is not None)
 _HERE = Loc("answers.yaml", 1, 1, "tree")
 
 
@@ -54,7 +61,11 @@ CHILDREN: dict[str, Callable[[], Node]] = {
 
 def _judged(word: str, child: Node) -> tuple[object, ...]:
     """Every answer the static checks give of a ``word`` node over ``child``."""
-    node = Node(word, _HERE, word, [child], options={"key": "k", "items": [1]})
+    return _judgements(Node(word, _HERE, word, [child], options={"key": "k", "items": [1]}))
+
+
+def _judgements(node: Node) -> tuple[object, ...]:
+    """Every answer the static checks give of ``node``."""
     modes = ModeCheck()
     keys = KeyCheck()
     entries = (frozenset({OIMode.PASSIVE}), frozenset({OIMode.SAFE, OIMode.FULL}))
@@ -84,6 +95,19 @@ def test_a_decorator_without_answers_is_refused_when_it_is_declared() -> None:
         NodeKind("cooldown", Shape.DO, lambda n, k, o: k[0])
 
 
+def test_every_word_declares_how_it_combines_exactly_when_it_is_a_composite() -> None:
+    for word, kind in WORDS.items():
+        assert (kind.combines is not None) == (kind.shape is Shape.CHILDREN), word
+
+
+def test_a_composite_without_combines_or_memory_is_refused_when_it_is_declared() -> None:
+    """Without them, which children it ticks, when, and what it answers would be a guess."""
+    with pytest.raises(TypeError, match=r"'race' is a composite and needs combines="):
+        NodeKind("race", Shape.CHILDREN, lambda n, k, o: k[0])
+    with pytest.raises(TypeError, match=r"'chain' ticks its children in turn .* memory"):
+        NodeKind("chain", Shape.CHILDREN, lambda n, k, o: k[0], combines=Combines(FAILURE))
+
+
 def test_a_first_tick_answer_without_its_why_is_refused_when_it_is_declared() -> None:
     """validate's error says why a step can only fail on its first tick: not said, it
     would read ``held is FAILURE on the tick it starts ()``."""
@@ -104,6 +128,26 @@ def test_each_answer_comes_from_the_declared_answers_not_the_word(
             patch.setitem(WORDS, word, replace(WORDS[word], answers=WORDS[other].answers))
             got = {name: _judged(word, make()) for name, make in CHILDREN.items()}
         assert got == expected, f"{word} given {other}'s answers"
+
+
+def test_a_condition_beside_what_inverts_it_is_found_by_the_answers_not_the_word(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``parallel: [bump, inverter: {bump}]`` never succeeds: said of any word with the
+    inverter's answers, and not of ``inverter`` given another's."""
+
+    def warned(word: str) -> int:
+        inverted = Node(word, _HERE, word, [_leaf("bump", side="any")])
+        branches = [_leaf("bump", side="any"), inverted]
+        parallel = Node("parallel", _HERE, "parallel", branches, options={"policy": "all"})
+        return len(deadends.dead_ends(parallel)[1])
+
+    assert warned("inverter") == 1
+    monkeypatch.setitem(WORDS, "negate", replace(WORDS["inverter"], word="negate"))
+    assert warned("negate") == 1
+    force_success = WORDS["force_success"].answers
+    monkeypatch.setitem(WORDS, "inverter", replace(WORDS["inverter"], answers=force_success))
+    assert warned("inverter") == 0
 
 
 # ------------------------------------------------------------- a decorator from a test
@@ -165,6 +209,101 @@ def test_a_made_up_decorator_validates_shows_and_runs(
     assert main(["validate", str(path)]) == 0, capsys.readouterr()
     assert main(["show", str(path)]) == 0
     assert "cooldown" in capsys.readouterr().out
+    code = main(["run", str(path), "--fast", "--display", "none", "--timeout", "1min"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "outcome      SUCCESS" in out and "distance     0.20 m" in out, out
+
+
+# ------------------------------------------------------------ composites by their Combines
+
+#: children in orders that tell the combinations apart: a cliff check first or last, a drive
+#: that never succeeds before or after one that ends, a condition beside its inverter
+ORDERS: dict[str, Callable[[], list[Node]]] = {
+    "as listed": lambda: [make() for make in CHILDREN.values()],
+    "reversed": lambda: [make() for make in reversed(CHILDREN.values())],
+    "a bump and its inverter": lambda: [
+        _leaf("bump", side="any"),
+        Node("inverter", _HERE, "inverter", [_leaf("bump", side="any")]),
+    ],
+}
+
+
+def _combined(word: str, options: Mapping[str, Any], children: list[Node]) -> tuple[object, ...]:
+    """Every answer the static checks give of a ``word`` composite over ``children``, and
+    of what it says of them (cliff watches, dead ends, restarts, wheel branches)."""
+    node = Node(word, _HERE, word, children, options=dict(options))
+    root = Node("sequence", _HERE, "sequence", [node], options={"memory": True})
+    return (
+        *_judgements(node),
+        [watched for _, watched in ticks.watched_children(node, False)],
+        [len(found) for found in deadends.dead_ends(root)],
+        len(checks.restarted_runs(root)),
+        len(checks.restarted_limits(root)),
+        len(checks.restarted_branches(root)),
+        len(checks.parallel_wheels(root)),
+    )
+
+
+@pytest.mark.parametrize("word", COMPOSITES)
+def test_each_answer_comes_from_the_declared_combination_not_the_word(
+    word: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Given another composite's Combines (and its options: its memory, its policy),
+    ``word`` is judged as that word, by every function."""
+    for other in COMPOSITES:
+        options = {**WORDS[other].defaults, "synchronise": False}
+        expected = {name: _combined(other, options, make()) for name, make in ORDERS.items()}
+        with monkeypatch.context() as patch:
+            patch.setitem(WORDS, word, replace(WORDS[word], combines=WORDS[other].combines))
+            got = {name: _combined(word, options, make()) for name, make in ORDERS.items()}
+        assert got == expected, f"{word} given {other}'s combination"
+
+
+# ------------------------------------------------------------- a composite from a test
+
+
+class Race(lean.Parallel):
+    """Every child on every tick; SUCCESS with the first that succeeds, FAILURE with the
+    first that fails."""
+
+    def __init__(self, name: str, children: Sequence[Behaviour]) -> None:
+        super().__init__(name, py_trees.common.ParallelPolicy.SuccessOnOne(), list(children))
+
+
+RACE = NodeKind(
+    "race",
+    Shape.CHILDREN,
+    lambda name, kids, o: Race(name, kids),
+    (Param("name", TEXT, doc="the node's name"),),
+    doc="every child on every tick, SUCCESS with the first that succeeds",
+    combines=Combines(None, needs=ONE),
+)
+
+#: a drive raced against a long wait: the drive's success ends the race
+DRIVE_RACE = """\
+tree:
+  sequence:
+    - mode: safe
+    - race:
+        - drive: {velocity: 100 mm/s, distance: 20cm}
+        - wait: 30s
+"""
+
+
+def test_a_made_up_composite_validates_shows_and_runs(
+    monkeypatch: pytest.MonkeyPatch,
+    mission_file: Callable[..., Path],
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from roomba_bt.cli import main
+
+    monkeypatch.setitem(WORDS, "race", RACE)
+    path = mission_file(DRIVE_RACE)
+    assert main(["validate", str(path)]) == 0
+    assert "warning" not in capsys.readouterr().out
+    assert main(["show", str(path)]) == 0
+    assert "race" in capsys.readouterr().out
     code = main(["run", str(path), "--fast", "--display", "none", "--timeout", "1min"])
     out = capsys.readouterr().out
     assert code == 0, out
