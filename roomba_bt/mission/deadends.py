@@ -12,7 +12,8 @@ warnings (errors under ``--strict``): the mission runs, and does not do what it 
 
 One is an error: a decorator whose :class:`Answers` say it can only fail on the tick it
 starts (``first_tick``: ``held``, whose hold has lasted 0 s then) as a step of a sequence
-(with memory or reactive) or a branch of a parallel, where nothing ticks it again after
+(with memory or reactive) or a branch of a parallel, or under decorators there that pass
+its FAILURE up (``timeout: {do: {held: ...}}``), where nothing ticks it again after
 that failure (a ``retry`` above it, a guard's condition, an earlier alternative of a
 reactive fallback would; a ``repeat`` stops at it). It fails its parent on every run,
 which is never meant.
@@ -26,6 +27,8 @@ end of a tree (a patrol's ``repeat``) blocks nothing, and is not said.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 from roomba_bt.behaviours.language import (
     ALL,
@@ -246,19 +249,42 @@ def _child_again(node: Node, again: Outcomes, index: int) -> Outcomes:
     return _BOTH  # a guard's condition; a node not known
 
 
-def _fails_first(node: Node) -> Answers | None:
-    """The answers of ``node``'s word where they say it can only fail on the tick it
-    starts (``held``), else None."""
-    decorator = answers(node)
-    if decorator is None or decorator.first_tick != FAILS:
-        return None
-    return decorator
+@dataclass(frozen=True, slots=True)
+class _FirstFailure:
+    """A node that can only fail on the tick it starts (:func:`_fails_first`)."""
+
+    #: the node whose word says so (``held``)
+    node: Node
+    #: its word's answers (their ``first_tick_why`` is said)
+    answers: Answers
+    #: the decorators between the step and it that pass that failure up, the step first
+    through: tuple[Node, ...]
+
+
+def _fails_first(node: Node) -> _FirstFailure | None:
+    """Whether ``node`` can only fail on the tick it starts: its word's answers say so
+    (``held``: :attr:`Answers.first_tick`), or it is a decorator that passes such a
+    child's failure up on that tick (``timeout: {do: {held: ...}}``): one that ticks its
+    child on its first tick (nothing answered ``alone``) and answers a failure with FAILURE
+    alone (``timeout``, ``repeat``, ``oneshot``; not ``retry``, which starts its child
+    again, nor ``inverter`` or ``force_success``, which answer otherwise)."""
+    through: list[Node] = []
+    while (decorator := answers(node)) is not None and node.children:
+        if decorator.first_tick == FAILS:
+            return _FirstFailure(node, decorator, tuple(through))
+        passes_failure_up = decorator.on_failure == FAILS and decorator.first_tick is None
+        if decorator.alone or not passes_failure_up:
+            return None
+        through.append(node)
+        node = node.children[0]
+    return None
 
 
 def _failing_first_steps(node: Node, children_again: list[Outcomes]) -> list[Diagnostic]:
     """A step of a sequence (with memory or reactive) or a branch of a parallel that can
     only fail on the tick it starts (:func:`_fails_first`), and that nothing ticks again
-    after that failure (:func:`_child_again`): its failure fails its parent on every run."""
+    after that failure (:func:`_child_again`): its failure fails its parent on every run.
+    Said at the node whose word fails (``held``), naming the decorators that pass it up."""
     if goes_on(node) == SUCCESS:  # a sequence
         role = "step"
     elif every_tick(node):  # a parallel
@@ -267,19 +293,30 @@ def _failing_first_steps(node: Node, children_again: list[Outcomes]) -> list[Dia
         return []
     errors: list[Diagnostic] = []
     for child, again in zip(node.children, children_again, strict=True):
-        decorator = _fails_first(child)
-        if decorator is None or FAILURE in again:
+        found = _fails_first(child)
+        if found is None or FAILURE in again:
             continue
+        failing, why = found.node, found.answers.first_tick_why
         errors.append(
-            child.loc.at(
-                f"{child.kind} is FAILURE on the tick it starts ({decorator.first_tick_why}), "
-                f"and as a {role} of this {node.kind} ({node.loc.line}:{node.loc.column}) it "
-                f"is ticked once: the {node.kind} fails here on every run; use it where it "
-                f"is ticked on every tick: until: {{{child.kind}: ...}} around a node, or "
-                "the first child of a reactive_fallback"
+            failing.loc.at(
+                f"{failing.kind} is FAILURE on the tick it starts ({why})"
+                f"{_passed_up(found.through)}, and as a {role} of this "
+                f"{node.kind} ({node.loc.line}:{node.loc.column}) it is ticked once: the "
+                f"{node.kind} fails here on every run; use it where it is ticked on every "
+                f"tick: until: {{{failing.kind}: ...}} around a node, or the first child of "
+                "a reactive_fallback"
             )
         )
     return errors
+
+
+def _passed_up(through: tuple[Node, ...]) -> str:
+    """``, passed up by repeat (4:17) and oneshot (4:7)``: the decorators between a step
+    and the node whose first failure it is, from the inside out; "" when there are none."""
+    if not through:
+        return ""
+    said = [f"{outer.kind} ({outer.loc.line}:{outer.loc.column})" for outer in reversed(through)]
+    return ", passed up by " + " and ".join(said)
 
 
 def _blocked_children(node: Node) -> list[Diagnostic]:

@@ -94,6 +94,11 @@ def test_a_dead_end_is_warned_of(
          " {wait: 1s}]"],
         ["retry: {times: 9, do: {inverter: {inverter: {sequence: [{held: {for: 45ms, do:"
          " wall}}]}}}}"],
+        # a decorator that answers held's first FAILURE otherwise, or ticks it again
+        ["inverter: {held: {for: 45ms, do: wall}}", "log: after"],
+        ["force_success: {timeout: {after: 5s, do: {held: {for: 45ms, do: wall}}}}"],
+        ["retry: {times: 50, do: {timeout: {after: 5s, do: {held: {for: 45ms, do: wall}}}}}"],
+        ["delay: {for: 1s, do: {held: {for: 45ms, do: wall}}}"],
         ["reactive_fallback: [{sequence: [{held: {for: 45ms, do: wall}}, {log: held}]},"
          " {wait: 1s}]"],
     ],
@@ -129,6 +134,15 @@ def test_held_as_a_step_ticked_once_is_an_error(errors_of: Callable[..., list[st
         (["parallel: {policy: one, children: [{wait: 3s}, {held: {for: 2s, do: wall}}]}"],
          "4:55: held is FAILURE on the tick it starts (its hold has lasted 0 s), and as a branch "
          "of this parallel (4:7) it is ticked once: the parallel fails here"),
+        # a decorator that passes its child's FAILURE up (timeout, repeat, oneshot): as the
+        # held directly in the sequence
+        (["timeout: {after: 5s, do: {held: {for: 45ms, do: wall}}}", "log: after"],
+         "4:33: held is FAILURE on the tick it starts (its hold has lasted 0 s), passed up by "
+         "timeout (4:7), and as a step of this sequence (2:3) it is ticked once"),
+        (["oneshot: {repeat: {times: 2, do: {held: {for: 45ms, do: wall}}}}", "log: after"],
+         "4:41: held is FAILURE on the tick it starts (its hold has lasted 0 s), passed up by "
+         "repeat (4:17) and oneshot (4:7), and as a step of this sequence (2:3) it is ticked "
+         "once"),
         # the node a guard runs ends the guard as it ends: not ticked again
         (["sequence: [{held: {for: 45ms, do: wall}}, {log: held}]\n      until: {bump: any}"],
          "4:19: held is FAILURE on the tick it starts (its hold has lasted 0 s), and as a step "
