@@ -235,6 +235,7 @@ def error_as_json(
         "yaml_path": "",
         "included_from": [],
         "began_at": None,
+        "used_in": [],
     }
 
 
@@ -261,7 +262,9 @@ def summary(checked: list[Checked], *, strict: bool, quiet: bool) -> str | None:
 
 def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
     """A diagnostic's fields by their names, the include chain innermost first; ``began_at``,
-    ``{line, column}`` of where a YAML syntax error's structure began, else null."""
+    ``{line, column}`` of where a YAML syntax error's structure began, else null;
+    ``used_in``, each use of a subtree it was found at, a list of ``{subtree, file, line,
+    column}`` innermost first (the use, then the use of the subtree it is in)."""
     return {
         "file": d.file,
         "line": d.line,
@@ -273,6 +276,10 @@ def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
             {"file": s.file, "line": s.line, "column": s.column} for s in d.included_from
         ],
         "began_at": {"line": d.began_at[0], "column": d.began_at[1]} if d.began_at else None,
+        "used_in": [
+            [{"subtree": u.name, "file": u.file, "line": u.line, "column": u.column} for u in chain]
+            for chain in d.used_in
+        ],
     }
 
 
@@ -292,7 +299,8 @@ def print_github(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
             print(f"{escaped(one.file, ANY_CONTROL)}: {one.verdict(strict)}")
             continue
         for d in _unseen(one.diagnostics[:MAX_REPORTED], seen):
-            where = f"{d.message} [{d.yaml_path}]" if d.yaml_path else d.message
+            message = d.message + d.uses_said()
+            where = f"{message} [{d.yaml_path}]" if d.yaml_path else message
             severity = d.severity
             if strict and severity == "warning":  # it fails the job: marked as what fails it
                 severity, where = "error", f"warning (an error under --strict): {where}"

@@ -43,7 +43,7 @@ from roomba_bt.mission.checks import (
     undefined_songs,
 )
 from roomba_bt.mission.deadends import dead_ends
-from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError
+from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError, merged_uses
 from roomba_bt.mission.loader import NO_PERMISSIONS, Loader, Permissions
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import find_mission, shipped_name
@@ -197,7 +197,7 @@ def _checked(
         assert parsed.tree_loc is not None
         diagnostics.append(parsed.tree_loc.at(problem))
     if diagnostics:
-        return None, sorted(set(diagnostics))
+        return None, sorted(merged_uses(diagnostics))
     try:
         root = build(tree)
     except BuildError as failed:
@@ -220,7 +220,11 @@ def _checked(
         # in the order of the file, as the errors are (by check, a warning on line 8 came
         # before one on line 5)
         warnings=tuple(
-            sorted((*ctx.warnings, *_tree_warnings(tree, modes, profile, ignored), *dead_warnings))
+            sorted(
+                merged_uses(
+                    (*ctx.warnings, *_tree_warnings(tree, modes, profile, ignored), *dead_warnings)
+                )
+            )
         ),
     )
     return mission, []

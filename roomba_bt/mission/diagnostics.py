@@ -35,6 +35,26 @@ class IncludeSite:
 
 
 @dataclass(frozen=True, slots=True, order=True)
+class SubtreeUse:
+    """Where a ``subtree:`` was used (the subtree's name; file, 1-based line and column of
+    its ``subtree`` key): a diagnostic about a node of its body says the use beside the
+    definition's line, which alone did not say which use of the subtree it meant."""
+
+    name: str
+    file: str
+    line: int
+    column: int
+
+    def __str__(self) -> str:
+        return f"{escaped(self.file, ANY_CONTROL)}:{self.line}:{self.column}"
+
+
+#: the uses of subtrees that expanded a node: one use of its own subtree, then the use of
+#: the subtree that use is in, and so on out to the tree (innermost first)
+UseChain = tuple[SubtreeUse, ...]
+
+
+@dataclass(frozen=True, slots=True, order=True)
 class Diagnostic:
     """One error (or, ``severity="warning"``, something that compiles but is likely a
     mistake): file, 1-based line and column, the message, and the YAML path.
@@ -47,7 +67,11 @@ class Diagnostic:
 
     ``began_at``: of a YAML syntax error, the 1-based line and column where the structure it
     broke began (the ``{`` left open, the block a line falls out of), said in the message too;
-    empty otherwise."""
+    empty otherwise.
+
+    ``used_in``: of a diagnostic about a node of a subtree's body (said at its definition),
+    each use of the subtree it was found at (:data:`UseChain`); one found the same at
+    several uses is said once, naming them all (:func:`merged_uses`). Empty otherwise."""
 
     file: str
     line: int
@@ -57,6 +81,7 @@ class Diagnostic:
     severity: str = "error"
     included_from: tuple[IncludeSite, ...] = ()
     began_at: tuple[int, ...] = ()
+    used_in: tuple[UseChain, ...] = ()
 
     def __str__(self) -> str:
         where = (
@@ -66,7 +91,21 @@ class Diagnostic:
         # the file's name on one line: a newline in it faked a line of ``validate *.yaml``
         file = escaped(self.file, ANY_CONTROL)
         text = f"{self.line}:{self.column}: {kind}{self.message}"
-        return f"{file}:{escaped(text, UNPRINTABLE)}{where}{self.chain_said()}"
+        return f"{file}:{escaped(text, UNPRINTABLE)}{self.uses_said()}{where}{self.chain_said()}"
+
+    def uses_said(self) -> str:
+        """``used_in`` as the line says it: `` (in subtree turn, used at m.yaml:12:5 and at
+        m.yaml:20:5)``; a use within another subtree names that one's use too (`` (in
+        subtree turn, used at m.yaml:4:9 in subtree square at m.yaml:12:5)``); "" for a
+        diagnostic outside subtrees. At most :data:`USES_SAID` uses, then how many more."""
+        if not self.used_in:
+            return ""
+        said = [_chain_said(chain) for chain in self.used_in[:USES_SAID]]
+        more = len(self.used_in) - USES_SAID
+        if more > 0:
+            said.append(f"{more:,} more")
+        name = escaped(self.used_in[0][0].name, UNPRINTABLE)
+        return f" (in subtree {name}, used at " + " and at ".join(said) + ")"
 
     def chain_said(self) -> str:
         """``included_from`` as the line says it: `` (included from a.yaml:3:11, from
@@ -88,6 +127,30 @@ class Diagnostic:
 
     def as_warning(self) -> Diagnostic:
         return replace(self, severity="warning")
+
+
+#: the uses of a subtree a diagnostic names (:meth:`Diagnostic.uses_said`): a subtree used
+#: in a loop of a generated file is not listed a hundred times on one line
+USES_SAID = 5
+
+
+def _chain_said(chain: UseChain) -> str:
+    """``m.yaml:4:9 in subtree square at m.yaml:12:5``: one use of a subtree, with the uses
+    of the subtrees it is in."""
+    outer = "".join(f" in subtree {escaped(use.name, UNPRINTABLE)} at {use}" for use in chain[1:])
+    return f"{chain[0]}{outer}"
+
+
+def merged_uses(diagnostics: Iterable[Diagnostic]) -> list[Diagnostic]:
+    """``diagnostics`` with those that differ only by the subtree use they were found at
+    made one, naming every use (in the order found): a subtree used twice gave the same
+    warning twice at its definition's line. One whose message differs with the use (a
+    parameter's value said) stays one a use."""
+    uses: dict[Diagnostic, list[UseChain]] = {}
+    for diagnostic in diagnostics:
+        found = uses.setdefault(replace(diagnostic, used_in=()), [])
+        found.extend(chain for chain in diagnostic.used_in if chain not in found)
+    return [replace(d, used_in=tuple(chains)) if chains else d for d, chains in uses.items()]
 
 
 #: a YAML path longer than this is shown by its ends (:func:`shortened_path`)

@@ -15,7 +15,7 @@ import yaml
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
 from roomba_bt.behaviours.units import STR, closest
 from roomba_bt.mission.control import parse_composite, parse_decorator
-from roomba_bt.mission.diagnostics import Diagnostic
+from roomba_bt.mission.diagnostics import Diagnostic, SubtreeUse
 from roomba_bt.mission.foreign import foreign_hint, suggestion
 from roomba_bt.mission.leaves import parse_leaf
 from roomba_bt.mission.plan import Node
@@ -85,6 +85,17 @@ def _misplaced(
     else:
         fix = f"write {them} in its mapping, `{word}: {{...}}`"
     return misplaced[0][2].at(f"{listed} {are} {word}'s, written at the node's level: {fix}")
+
+
+def _mark_used(body: Node, use: SubtreeUse) -> None:
+    """Give each node of a subtree's body, expanded at ``use``, that use in its place (and
+    in the places of its parameters, where a key is read): the checks' diagnostics about it
+    say the use beside the definition's line (:attr:`Diagnostic.used_in`)."""
+    for node in body.walk():
+        node.loc = node.loc.used_at(use)
+        for option, value in node.options.items():
+            if isinstance(value, Loc):  # "loc:PARAMETER", the place Node.keys_read says
+                node.options[option] = value.used_at(use)
 
 
 class NodeParser:
@@ -393,8 +404,11 @@ class NodeParser:
         finally:
             self._use_stack.pop()
             self._uses.pop()
-        if body is not None and body.name == body.kind and body.kind != "leaf":
+        if body is None:
+            return None
+        if body.name == body.kind and body.kind != "leaf":
             body.name = name
+        _mark_used(body, SubtreeUse(name, key_loc.file, key_loc.line, key_loc.column))
         return body
 
     def _subtree_env(

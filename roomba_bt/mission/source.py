@@ -9,14 +9,14 @@ custom tag is an error, never executed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
 from roomba_bt import yamlsource
-from roomba_bt.mission.diagnostics import Diagnostic
+from roomba_bt.mission.diagnostics import Diagnostic, SubtreeUse, UseChain
 from roomba_bt.printable import path_written
 
 _CORE = yamlsource.CORE
@@ -34,9 +34,19 @@ class Loc:
     line: int
     column: int
     path: str
+    #: of a place in a subtree's body, as the tree uses it: the use that expanded it (and
+    #: the uses of the subtrees that one is in), said by its diagnostics; not compared: it
+    #: is the same place in the file
+    used_in: UseChain = field(default=(), compare=False)
 
     def at(self, message: str) -> Diagnostic:
-        return Diagnostic(self.file, self.line, self.column, message, self.path)
+        used_in = (self.used_in,) if self.used_in else ()
+        return Diagnostic(self.file, self.line, self.column, message, self.path, used_in=used_in)
+
+    def used_at(self, use: SubtreeUse) -> Loc:
+        """This place as the subtree use ``use`` expands it (``use`` outside the ones it
+        has: those of a subtree used within the subtree ``use`` names)."""
+        return Loc(self.file, self.line, self.column, self.path, (*self.used_in, use))
 
     def child(self, node: yaml.Node, segment: str) -> Loc:
         return loc_of(node, self.file, join(self.path, segment))

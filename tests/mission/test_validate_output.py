@@ -183,6 +183,7 @@ def test_json_lists_every_diagnostic_with_its_chain_and_each_file_verdict(
         "yaml_path": "",
         "included_from": [],
         "began_at": None,
+        "used_in": [],
         "checked_file": "missing.yaml",
     }
     assert missing["message"].startswith("no such mission file")
@@ -199,6 +200,7 @@ def test_json_lists_every_diagnostic_with_its_chain_and_each_file_verdict(
             {"file": "missions/delivery/to-kitchen.yaml", "line": 2, "column": 11},
         ],
         "began_at": None,
+        "used_in": [],
         "checked_file": "missions/delivery/to-kitchen.yaml",
     }
     said = (warning["severity"], warning["checked_file"], warning["line"])
