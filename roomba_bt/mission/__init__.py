@@ -19,7 +19,13 @@ from roomba_bt.mission.compiler import (
     validate_file,
     validate_files,
 )
-from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError, reported
+from roomba_bt.mission.diagnostics import (
+    Diagnostic,
+    IncludeSite,
+    MissionError,
+    SubtreeUse,
+    reported,
+)
 from roomba_bt.mission.loader import NO_PERMISSIONS, SHIPPED_LIBRARY, Permissions
 
 __all__ = [
@@ -31,6 +37,7 @@ __all__ = [
     "MissionError",
     "Permissions",
     "SHIPPED_LIBRARY",
+    "SubtreeUse",
     "compile_mission",
     "load_mission",
     "load_mission_text",

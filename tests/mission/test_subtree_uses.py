@@ -12,8 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.mission import CompiledMission, compile_mission
-from roomba_bt.mission.diagnostics import Diagnostic, SubtreeUse
+from roomba_bt.mission import CompiledMission, Diagnostic, SubtreeUse, compile_mission
 
 #: a subtree whose second step can never run: its drive has no end
 NUDGE = """\
