@@ -320,7 +320,14 @@ _NO_MEMORY = (
 )
 
 
-def _composite(word: str, build: Build, combines: Combines, memory: bool, doc: str) -> NodeKind:
+#: a sequence's build and meaning, a fallback's: one pair, so that no word of the table
+#: builds one and is judged as the other
+_SEQUENCE: tuple[Build, Combines] = (_sequence, IN_TURN_ALL)
+_SELECTOR: tuple[Build, Combines] = (_selector, IN_TURN_FIRST)
+
+
+def _composite(word: str, chain: tuple[Build, Combines], memory: bool, doc: str) -> NodeKind:
+    build, combines = chain
     remembers = Param("memory", BOOL, default=memory, doc="resume a RUNNING child")
     why = _NO_MEMORY.format(word=word, memory=word.removeprefix("reactive_"))
     refused = () if memory else (("memory", True, why),)
@@ -369,17 +376,14 @@ def _oneshot(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Beha
 
 
 _KINDS: tuple[NodeKind, ...] = (
-    _composite("sequence", _sequence, IN_TURN_ALL, True,
-               "py_trees Sequence: children in order"),
-    _composite("reactive_sequence", _sequence, IN_TURN_ALL, False,
+    _composite("sequence", _SEQUENCE, True, "py_trees Sequence: children in order"),
+    _composite("reactive_sequence", _SEQUENCE, False,
                "py_trees Sequence without memory: re-ticks every child from the first"),
-    _composite("fallback", _selector, IN_TURN_FIRST, True,
-               "py_trees Selector: children until one succeeds"),
-    _composite("selector", _selector, IN_TURN_FIRST, True,
-               "py_trees Selector (same as fallback)"),
-    _composite("reactive_fallback", _selector, IN_TURN_FIRST, False,
+    _composite("fallback", _SELECTOR, True, "py_trees Selector: children until one succeeds"),
+    _composite("selector", _SELECTOR, True, "py_trees Selector (same as fallback)"),
+    _composite("reactive_fallback", _SELECTOR, False,
                "py_trees Selector without memory: a higher child preempts a running one"),
-    _composite("reactive_selector", _selector, IN_TURN_FIRST, False,
+    _composite("reactive_selector", _SELECTOR, False,
                "py_trees Selector without memory (same as reactive_fallback)"),
     _PARALLEL,
     NodeKind("inverter", Shape.CHILD_OR_DO, lambda n, k, o: lean.Inverter(n, k[0]),

@@ -18,6 +18,7 @@ The pipeline, each stage in its own module::
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -197,7 +198,7 @@ def _checked(
         assert parsed.tree_loc is not None
         diagnostics.append(parsed.tree_loc.at(problem))
     if diagnostics:
-        return None, sorted(merged_uses(diagnostics))
+        return None, list(_said(diagnostics))
     try:
         root = build(tree)
     except BuildError as failed:
@@ -217,17 +218,16 @@ def _checked(
         blackboard_keys={k: d.type for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
-        # in the order of the file, as the errors are (by check, a warning on line 8 came
-        # before one on line 5)
-        warnings=tuple(
-            sorted(
-                merged_uses(
-                    (*ctx.warnings, *_tree_warnings(tree, modes, profile, ignored), *dead_warnings)
-                )
-            )
-        ),
+        warnings=_said(ctx.warnings, _tree_warnings(tree, modes, profile, ignored), dead_warnings),
     )
     return mission, []
+
+
+def _said(*found: Iterable[Diagnostic]) -> tuple[Diagnostic, ...]:
+    """Diagnostics as ``validate`` says them: in the order of the file (by check, a warning
+    on line 8 came before one on line 5), a finding at several uses of a subtree once,
+    naming each (:func:`merged_uses`)."""
+    return tuple(sorted(merged_uses(itertools.chain.from_iterable(found))))
 
 
 def _tree_warnings(

@@ -47,7 +47,6 @@ from roomba_bt.mission.plan import Node
 from roomba_bt.mission.ticks import (
     answers,
     at_once,
-    combines,
     every_tick,
     goes_on,
     needs,
@@ -66,10 +65,10 @@ def outcomes(node: Node, first_tick: bool = False) -> Outcomes:
     if kind == "leaf":
         return _leaf_outcomes(node)
     children = node.children
-    combination = combines(node)
-    if combination is not None and combination.goes_on is not None:
-        return _chain_outcomes(node, combination.goes_on, first_tick)
-    if combination is not None:
+    order = goes_on(node)
+    if order is not None:  # a sequence, a fallback
+        return _chain_outcomes(node, order, first_tick)
+    if every_tick(node):  # a parallel
         return _parallel_outcomes(node)
     if kind == "guard":
         return _guard_outcomes(node, first_tick)

@@ -22,9 +22,9 @@ from roomba_bt.printable import ANY_CONTROL, MAX_LISTED, UNPRINTABLE, escaped, m
 
 
 @dataclass(frozen=True, slots=True, order=True)
-class IncludeSite:
-    """Where an ``include:`` entry named a file: the including file, 1-based line and column
-    of the entry."""
+class Place:
+    """A place in a mission file a diagnostic names beside its own: file, 1-based line and
+    column, said ``file:line:column``."""
 
     file: str
     line: int
@@ -35,18 +35,18 @@ class IncludeSite:
 
 
 @dataclass(frozen=True, slots=True, order=True)
-class SubtreeUse:
-    """Where a ``subtree:`` was used (the subtree's name; file, 1-based line and column of
-    its ``subtree`` key): a diagnostic about a node of its body says the use beside the
-    definition's line, which alone did not say which use of the subtree it meant."""
+class IncludeSite(Place):
+    """Where an ``include:`` entry named a file: the including file, 1-based line and column
+    of the entry."""
+
+
+@dataclass(frozen=True, slots=True, order=True)
+class SubtreeUse(Place):
+    """Where a ``subtree:`` was used (its ``subtree`` key), and the subtree's name: a
+    diagnostic about a node of its body says the use beside the definition's line, which
+    alone did not say which use of the subtree it meant."""
 
     name: str
-    file: str
-    line: int
-    column: int
-
-    def __str__(self) -> str:
-        return f"{escaped(self.file, ANY_CONTROL)}:{self.line}:{self.column}"
 
 
 #: the uses of subtrees that expanded a node: one use of its own subtree, then the use of

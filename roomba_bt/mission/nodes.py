@@ -408,7 +408,7 @@ class NodeParser:
             return None
         if body.name == body.kind and body.kind != "leaf":
             body.name = name
-        _mark_used(body, SubtreeUse(name, key_loc.file, key_loc.line, key_loc.column))
+        _mark_used(body, SubtreeUse(key_loc.file, key_loc.line, key_loc.column, name))
         return body
 
     def _subtree_env(

@@ -197,24 +197,6 @@ tree:
 """
 
 
-def test_a_made_up_decorator_validates_shows_and_runs(
-    monkeypatch: pytest.MonkeyPatch,
-    mission_file: Callable[..., Path],
-    capsys: pytest.CaptureFixture[str],
-) -> None:
-    from roomba_bt.cli import main
-
-    monkeypatch.setitem(WORDS, "cooldown", COOLDOWN)
-    path = mission_file(HELD_COOLDOWN)
-    assert main(["validate", str(path)]) == 0, capsys.readouterr()
-    assert main(["show", str(path)]) == 0
-    assert "cooldown" in capsys.readouterr().out
-    code = main(["run", str(path), "--fast", "--display", "none", "--timeout", "1min"])
-    out = capsys.readouterr().out
-    assert code == 0, out
-    assert "outcome      SUCCESS" in out and "distance     0.20 m" in out, out
-
-
 # ------------------------------------------------------------ composites by their Combines
 
 #: children in orders that tell the combinations apart: a cliff check first or last, a drive
@@ -291,19 +273,25 @@ tree:
 """
 
 
-def test_a_made_up_composite_validates_shows_and_runs(
+@pytest.mark.parametrize(
+    ("kind", "mission"), [(COOLDOWN, HELD_COOLDOWN), (RACE, DRIVE_RACE)], ids=["cooldown", "race"]
+)
+def test_a_made_up_word_validates_shows_and_runs(
+    kind: NodeKind,
+    mission: str,
     monkeypatch: pytest.MonkeyPatch,
     mission_file: Callable[..., Path],
     capsys: pytest.CaptureFixture[str],
 ) -> None:
+    """A decorator, a composite: one NodeKind and one class, and nothing else, each."""
     from roomba_bt.cli import main
 
-    monkeypatch.setitem(WORDS, "race", RACE)
-    path = mission_file(DRIVE_RACE)
+    monkeypatch.setitem(WORDS, kind.word, kind)
+    path = mission_file(mission)
     assert main(["validate", str(path)]) == 0
     assert "warning" not in capsys.readouterr().out
     assert main(["show", str(path)]) == 0
-    assert "race" in capsys.readouterr().out
+    assert kind.word in capsys.readouterr().out
     code = main(["run", str(path), "--fast", "--display", "none", "--timeout", "1min"])
     out = capsys.readouterr().out
     assert code == 0, out

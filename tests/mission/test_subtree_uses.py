@@ -41,7 +41,7 @@ def test_a_warning_in_a_subtree_names_its_use(
     [warning] = _blocked(mission)
     assert (warning.line, warning.column) == (8, 11)  # the definition's line, as before
     path = warning.file
-    assert warning.used_in == ((SubtreeUse("nudge", path, 12, 19),),)
+    assert warning.used_in == ((SubtreeUse(path, 12, 19, "nudge"),),)
     assert str(warning).endswith(
         f"(in subtree nudge, used at {path}:12:19) [subtrees.nudge.tree.sequence[1].log]"
     )
@@ -97,7 +97,7 @@ def test_an_error_in_a_subtree_names_its_use(mission_file: Callable[..., Path]) 
     _, [error] = compile_mission(path)
     assert (error.line, error.column) == (4, 7)
     assert error.message.startswith("drive sends Drive (137)"), error
-    assert error.used_in == ((SubtreeUse("go", str(path), 10, 7),),)
+    assert error.used_in == ((SubtreeUse(str(path), 10, 7, "go"),),)
 
 
 def test_validate_says_the_use_on_the_line_and_in_json(
