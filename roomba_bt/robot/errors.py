@@ -57,6 +57,7 @@ CAUSE_PHRASES = {
     "wheel drop": "a wheel drop",
     "cliff": "a cliff",
     "charger": "a powered charger",
+    "internal charger": "the wall charger plugged in (the internal charger)",
     "unknown": "an unknown cause",
 }
 

@@ -215,7 +215,7 @@ class ModeChange:
         return (
             self.previous is OIMode.SAFE
             and self.current is OIMode.PASSIVE
-            and "charger" in self.cause
+            and "charger" in self.cause.split(" and ")  # the dock's, not a plug's
             and self.entered is not None
             and self.time - self.entered <= CHARGER_REFUSAL_S
         )

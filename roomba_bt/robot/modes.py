@@ -67,6 +67,9 @@ from roomba_bt.robot.interface import UNKNOWN_CAUSE, ModeChange
 
 log = logging.getLogger(__name__)
 
+#: Packet 34's bit of the home base (the dock's contacts); bit 0 is the internal charger.
+HOME_BASE_BIT = 0b10
+
 #: The mode machine's name: ``transitions`` puts ``"<name>: "`` first in each of its log
 #: records, which is how :data:`QUIET_MACHINE` knows this library's records from others'.
 MACHINE_NAME = "roomba-bt OI modes"
@@ -275,8 +278,13 @@ def infer_cause(frame: SensorFrame, *earlier: SensorFrame | None) -> str:
             causes.append("wheel drop")
         if any(candidate.get(pid) for pid in CLIFF_PACKETS):
             causes.append("cliff")
-        if any(candidate.get(pid) for pid in CHARGING_SOURCES_PACKETS):
-            causes.append("charger")
+        sources = 0
+        for pid in CHARGING_SOURCES_PACKETS:
+            sources |= candidate.get(pid) or 0
+        if sources:
+            # packet 34: bit 1 the home base (a dock run's end), bit 0 alone the wall
+            # charger's plug in the robot's socket, which the spec names the internal charger
+            causes.append("charger" if sources & HOME_BASE_BIT else "internal charger")
         if causes:
             return " and ".join(causes)
     return UNKNOWN_CAUSE

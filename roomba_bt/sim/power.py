@@ -2,9 +2,10 @@
 
 When not charging, the battery gives 150 mA for the robot itself, 0.6 mA per mm/s of each
 wheel and 1.6 mA per PWM step of each brush and the vacuum (a stalled wheel's own current,
-packets 54 and 55, is 600 mA higher). On a powered dock in Passive or Off it charges at
-1500 mA, at 150 mA once 98 % full. Reported in packets 21 (charging state), 22 (voltage),
-23 (current), 25 (charge), 26 (capacity), 34 (charging sources: home base), 54-57 (motor
+packets 54 and 55, is 600 mA higher). On a powered dock, or with the wall charger plugged
+in (a world's ``plug`` event), in Passive or Off it charges at 1500 mA, at 150 mA once 98 %
+full. Reported in packets 21 (charging state), 22 (voltage), 23 (current), 25 (charge), 26
+(capacity), 34 (charging sources: home base, internal charger), 54-57 (motor
 currents) and 14 (overcurrents).
 
 A layer of the simulator (see state.py). The charge integrates on every step, and the
@@ -149,11 +150,13 @@ class Power(Motion):
         return (
             self.left_speed, self.right_speed, self.brush_pwm, self.docked, self.dock_powered,
             self.mode, self.blocked, self._stall_steps > 30, self._event_overcurrents,
+            self.plugged_in,
         )  # fmt: skip
 
     def _power_changed(self) -> None:
         v = self.values
-        charging = self.docked and self.dock_powered and self.mode in (OIMode.PASSIVE, OIMode.OFF)
+        on_dock = self.docked and self.dock_powered
+        charging = (on_dock or self.plugged_in) and self.mode in (OIMode.PASSIVE, OIMode.OFF)
         if charging:
             full = self._charge >= BATTERY_CAPACITY_MAH * 0.98
             current = 150.0 if full else 1500.0
@@ -164,7 +167,7 @@ class Power(Motion):
             current = -(150.0 + 0.6 * wheels + 1.6 * brushes)
             v[21] = 0
         self._current = current
-        v[34] = 2 if self.docked and self.dock_powered else 0
+        v[34] = (2 if on_dock else 0) | (1 if self.plugged_in else 0)  # home base, internal
         stall = 600 if self.blocked else 0
         left, right = self.left_speed, self.right_speed
         v[54] = trunc(0.6 * left) + (stall if left > 0 else -stall if left < 0 else 0)

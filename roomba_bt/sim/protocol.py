@@ -261,8 +261,8 @@ class OIProtocol(StreamOutput):
         self.values[35] = int(mode) + (1 if self.profile.reports_mode_plus_one else 0)
 
     def _safety(self) -> None:
-        """Safe mode's own rules, checked when a wheel drop, cliff or dock shows: stop the
-        motors and drop to Passive (the event says which cause)."""
+        """Safe mode's own rules, checked when a wheel drop, cliff, dock or the wall charger's
+        plug shows: stop the motors and drop to Passive (the event says which cause)."""
         v = self.values
         cause = ""
         if v[7] & WHEEL_DROP_BITS:
@@ -271,6 +271,8 @@ class OIProtocol(StreamOutput):
             cause = self._cliff_cause(self.left_speed, self.right_speed)
         if not cause and self.docked and self.dock_powered:
             cause = "powered charger"
+        if not cause and self.plugged_in:
+            cause = "internal charger plugged in"
         if cause:
             self._stop_wheels()
             self.left_speed = self.right_speed = 0.0

@@ -136,8 +136,8 @@ class Simulator(OIProtocol):
         if timeline is not None:
             self._world_events(timeline)
         if self.asleep:
-            if self.docked and self.dock_powered:
-                self._battery(dt)  # asleep on the dock, the battery still charges
+            if (self.docked and self.dock_powered) or self.plugged_in:
+                self._battery(dt)  # asleep on a charger, the battery still charges
             return
         if now >= self._held_until:  # a song's end or the buttons' release (protocol.py)
             self._release_held(now)
@@ -324,10 +324,17 @@ class Simulator(OIProtocol):
         for button in timeline.pressed:
             self.press_button(button)
         effects = timeline.effects()
-        held = (self._event_bump, self.lifted, self.dock_powered, self._event_overcurrents)
+        held = (
+            self._event_bump, self.lifted, self.dock_powered, self._event_overcurrents,
+            self.plugged_in,
+        )  # fmt: skip
         if effects != held:
-            self._event_bump, self.lifted, self.dock_powered, self._event_overcurrents = effects
+            (
+                self._event_bump, self.lifted, self.dock_powered, self._event_overcurrents,
+                self.plugged_in,
+            ) = effects  # fmt: skip
             self._power_due = True  # the charger may have come on or gone off
+            self._check_safety()  # a plug put in is one of Safe mode's stops
             self._body_changed()
             self._geometry_dirty = True
             self._ir_stale = True

@@ -618,9 +618,13 @@ class Sensing(RobotState):
         self._check_safety()
 
     def _check_safety(self) -> None:
-        """A wheel drop, a cliff or the dock's contacts changed (packet 7, 9-12, 34)."""
+        """A wheel drop, a cliff, the dock's contacts or the wall charger's plug changed
+        (packet 7, 9-12, 34)."""
         self._safety_due = bool(
-            self._prev_bumps & WHEEL_DROP_BITS or self._prev_cliffs or self.docked
+            self._prev_bumps & WHEEL_DROP_BITS
+            or self._prev_cliffs
+            or self.docked
+            or self.plugged_in
         )
 
     def _cliffs_over_drops(self, x: float, y: float, theta: float) -> int:

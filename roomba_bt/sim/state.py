@@ -132,8 +132,8 @@ class RobotState:
     __slots__ = (
         "_event_bump", "_event_overcurrents", "_fault_rng", "_power_due", "_time_ns", "asleep",
         "disconnected", "dock_powered", "docked", "events", "fallen", "faults", "lifted", "mode",
-        "odometry_error", "old_firmware_angle", "profile", "seed", "theta", "ticks", "time",
-        "trace", "values", "violations", "world", "x", "y",
+        "odometry_error", "old_firmware_angle", "plugged_in", "profile", "seed", "theta",
+        "ticks", "time", "trace", "values", "violations", "world", "x", "y",
     )  # fmt: skip
 
     #: whether ``trace`` grows (the Simulator's ``trace`` argument)
@@ -166,13 +166,14 @@ class RobotState:
         self.time = 0.0
         self._time_ns = 0.0  # the clock in whole nanoseconds: no drift (robot.py's step)
         #: the timeline's effects on the body (timeline.py): held down, lifted, charger off,
-        #: a motor's overcurrent (packet 14's bits)
+        #: a motor's overcurrent (packet 14's bits), the wall charger's plug in its socket
         self._event_bump = 0
         self._event_overcurrents = 0
         self.lifted = False
         self.fallen = False
         self.docked = False
         self.dock_powered = True
+        self.plugged_in = False
         #: something the battery's currents depend on may have changed (power.py): set by
         #: every layer that changes one of them
         self._power_due = True

@@ -1,7 +1,9 @@
 """The world's timeline: what happens to the robot at set times (a world file's ``events``).
 
 ``bump`` holds the bumper pressed on one side or both, ``lift`` picks the robot up (both wheel
-drops, every cliff, no traction), ``charger_step`` takes the dock's power away,
+drops, every cliff, no traction), ``charger_step`` takes the dock's power away, ``plug`` puts
+the wall charger's plug in the robot's socket (the internal charger: packet 34 bit 0, and in
+Safe mode the spec's "charger plugged in and powered" drops the robot to Passive),
 ``overcurrent`` sets a motor's bit of packet 14 (a tangled brush); each for its
 ``duration`` seconds; ``press`` presses a button for the spec's 1/6 s (the simulator presses
 it as Buttons 165 does: :meth:`~roomba_bt.sim.protocol.OIProtocol.press_button`). Every
@@ -46,6 +48,8 @@ class Timeline:
                 marks.append((event.kind, f"{event.button} start"))
             elif event.kind == "overcurrent":
                 marks.append((event.kind, f"{event.motor} start"))
+            elif event.kind == "plug":
+                marks.append((event.kind, "plugged in"))
             else:
                 marks.append((event.kind, f"{event.side} start"))
         still = []
@@ -53,17 +57,18 @@ class Timeline:
             if now < event.time + event.duration:
                 still.append(event)
             else:
-                marks.append((event.kind, "end"))
+                marks.append((event.kind, "unplugged" if event.kind == "plug" else "end"))
         self.active = still
         return marks
 
-    def effects(self) -> tuple[int, bool, bool, int]:
+    def effects(self) -> tuple[int, bool, bool, int, bool]:
         """What the events under way do: (bumper bits held, lifted, dock powered, packet
-        14's overcurrent bits held)."""
+        14's overcurrent bits held, the wall charger plugged in)."""
         bump = 0
         lifted = False
         powered = True
         overcurrents = 0
+        plugged = False
         for event in self.active:
             if event.kind == "bump":
                 bump |= BUMP_SIDE_BITS[event.side]
@@ -73,4 +78,6 @@ class Timeline:
                 powered = False
             elif event.kind == "overcurrent":
                 overcurrents |= OVERCURRENT_BITS[event.motor]
-        return bump, lifted, powered, overcurrents
+            elif event.kind == "plug":
+                plugged = True
+        return bump, lifted, powered, overcurrents, plugged

@@ -72,7 +72,7 @@ WORLDS_DIR = pathlib.Path(__file__).resolve().parent / "worlds"
 #: finds before the shipped ones (:func:`world_folders`).
 WORLDS_VARIABLE = "ROOMBA_BT_WORLDS"
 
-EVENT_KINDS = ("bump", "lift", "charger_step", "press", "overcurrent")
+EVENT_KINDS = ("bump", "lift", "charger_step", "press", "overcurrent", "plug")
 SIDES = ("left", "right", "both")
 DOCK_FAMILIES = ("drive-on", "discovery")
 
@@ -205,8 +205,10 @@ class TimelineEvent:
 
     ``bump``: the bumper is pressed (``side``); ``lift``: the robot is picked up (both wheel
     drops, cliffs, no traction); ``charger_step``: someone steps on the charger, which loses
-    power for the duration; ``press``: a finger presses ``button`` (packet 18's name) for the
-    spec's 1/6 s, which in Passive starts the robot's own cycle for Clean, Spot or Dock;
+    power for the duration; ``plug``: the wall charger's plug is put in the robot's socket
+    (the internal charger, packet 34 bit 0) and pulled out after the duration; ``press``: a
+    finger presses ``button`` (packet 18's name) for the spec's 1/6 s, which in Passive
+    starts the robot's own cycle for Clean, Spot or Dock;
     ``overcurrent``: ``motor`` (packet 14's name: a brush wound with hair, a wheel jammed)
     shows an overcurrent for the duration."""
 

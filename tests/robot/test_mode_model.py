@@ -174,7 +174,8 @@ def test_fall_back_with_wheel_drop_is_a_transition_with_cause_and_message() -> N
         ({9: 1}, "cliff"),
         ({12: 1}, "cliff"),
         ({34: 0b10}, "charger"),
-        ({34: 0b01}, "charger"),
+        ({34: 0b01}, "internal charger"),  # the wall plug: no dock to undock from
+        ({34: 0b11}, "charger"),  # plugged in on the dock: the dock's
         ({7: 0b0011}, "unknown"),  # bumps are no reason to leave Safe
         ({}, "unknown"),
         ({7: 0b0100, 11: 1}, "wheel drop and cliff"),

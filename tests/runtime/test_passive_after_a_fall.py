@@ -14,6 +14,7 @@ import pytest
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import motor_bits
+from roomba_bt.oi.modes import OIMode
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.summary import Outcome
 
@@ -181,3 +182,35 @@ tree:
     after_start = written[written.index(oi.motors_off().data + oi.start().data) :]
     assert oi.halt().data not in after_start[2:]
     assert oi.motors_off().data not in after_start[2:]
+
+
+#: the wall charger's plug put in the robot's socket at 1 s (packet 34 bit 0)
+PLUGGED_IN = """\
+name: plugged in
+rooms: [{rect: [0, 0, 4, 4]}]
+robot: {start: {at: [1, 2], heading: 0}}
+events: [{at: 1, kind: plug, duration: 30}]
+"""
+
+
+def test_the_wall_charger_plugged_in_mid_drive_is_followed_and_named(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """Safe mode's third stop (both specs: "Charger plugged in and powered"): the robot
+    drops to Passive by itself, the mode machine follows it there, and the run's ending
+    words name the plug, not the dock (no word of undocking)."""
+    (tmp_path / "plugged.yaml").write_text(PLUGGED_IN)
+    mission = """\
+mission: drive while someone plugs the charger in
+tree:
+  sequence: [{mode: safe}, {drive: {velocity: 100 mm/s, distance: 1 m}}]
+"""
+    run = run_mission(mission, world=str(tmp_path / "plugged.yaml"), timeout=30.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.FAILURE
+    assert summary.falls == {"internal charger": 1}
+    assert "(internal charger)" in summary.reason and "undock" not in summary.reason
+    assert summary.final_mode is OIMode.PASSIVE
+    assert "the robot fell to Passive by itself once (internal charger)" in "\n".join(
+        summary.lines()
+    )

@@ -15,11 +15,11 @@ from .helpers import BOX, make
 def test_events_start_and_end_as_the_clock_passes_them() -> None:
     timeline = Timeline((TimelineEvent(1.0, "bump", 0.5, "left"), TimelineEvent(1.2, "lift", 1.0)))
     assert timeline.advance(0.9) == []
-    assert timeline.effects() == (0, False, True, 0)
+    assert timeline.effects() == (0, False, True, 0, False)
     assert timeline.advance(1.2) == [("bump", "left start"), ("lift", "both start")]
-    assert timeline.effects() == (2, True, True, 0)
+    assert timeline.effects() == (2, True, True, 0, False)
     assert timeline.advance(1.5) == [("bump", "end")]
-    assert timeline.effects() == (0, True, True, 0)
+    assert timeline.effects() == (0, True, True, 0, False)
     assert not timeline.over
     assert timeline.advance(2.2) == [("lift", "end")]
     assert timeline.over
@@ -34,7 +34,7 @@ def test_a_charger_step_takes_the_docks_power_and_bumps_add_up() -> None:
         )
     )
     timeline.advance(0.0)
-    assert timeline.effects() == (3, False, False, 0)
+    assert timeline.effects() == (3, False, False, 0, False)
 
 
 def test_the_simulator_marks_every_start_and_end_and_then_drops_the_timeline() -> None:
@@ -103,4 +103,46 @@ def test_overcurrents_of_two_motors_add_up_as_the_packet_s_bits() -> None:
         )
     )
     timeline.advance(0.0)
-    assert timeline.effects() == (0, False, True, 0b10001)
+    assert timeline.effects() == (0, False, True, 0b10001, False)
+
+
+PLUGGED = BOX + "events: [{at: 0.3, kind: plug, duration: 1.0}]\n"
+
+
+def test_the_wall_charger_plugged_in_drops_safe_to_passive_as_the_spec_says() -> None:
+    """Both specs' Safe mode: "Charger plugged in and powered" stops the motors and reverts
+    to Passive; packet 34 bit 0 is the internal charger (the wall plug), bit 1 the dock."""
+    host = make(PLUGGED)
+    host.send(C.drive_direct(100, 100))
+    host.run(0.5)
+    assert host.sim.mode is OIMode.PASSIVE
+    assert host.sim.left_speed == host.sim.right_speed == 0.0
+    assert host.sim.values[34] == 0b01
+    assert host.sim.values[21] == 2  # charging in Passive, as on the dock
+    marks = [(e.kind, e.detail) for e in host.sim.events if e.kind in ("plug", "mode")]
+    assert marks[-2:] == [
+        ("plug", "plugged in"),
+        ("mode", "Safe->Passive (safety: internal charger plugged in)"),
+    ]
+    host.run(1.0)
+    assert host.sim.values[34] == 0 and host.sim.values[21] == 0
+    assert ("plug", "unplugged") in [(e.kind, e.detail) for e in host.sim.events]
+
+
+def test_full_mode_keeps_driving_with_the_wall_charger_plugged_in() -> None:
+    """Full "shuts off the cliff, wheel-drop and internal charger safety features"; the
+    battery does not charge there (as on the dock in Full)."""
+    host = make(PLUGGED, mode="full")
+    host.send(C.drive_direct(100, 100))
+    host.run(0.5)
+    assert host.sim.mode is OIMode.FULL and host.sim.left_speed > 0.0
+    assert host.sim.values[34] == 0b01 and host.sim.values[21] == 0
+
+
+def test_safe_entered_while_plugged_in_falls_back_to_passive() -> None:
+    host = make(BOX + "events: [{at: 0.0, kind: plug, duration: 5.0}]\n", mode="passive")
+    host.run(0.3)
+    assert host.sim.values[34] == 0b01 and host.sim.values[21] == 2
+    host.send(C.safe())
+    host.run(0.05)
+    assert host.sim.mode is OIMode.PASSIVE
