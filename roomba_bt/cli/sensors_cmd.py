@@ -23,13 +23,22 @@ from roomba_bt.oi.stream import stream_budget
 from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
+    from roomba_bt.oi.frames import SensorFrame
+    from roomba_bt.robot.connection import Connection
     from roomba_bt.transport import Transport
 
 #: The groups tried, most packets first: the first whose stream frame fits the baud rate's
-#: 15 ms budget is shown. Group 100 (every packet, 80 data bytes, an 84-byte frame) fits at
-#: 57600 and 115200; group 6 (7-42) at 38400; group 1 (7-16: bumps, cliffs, walls, buttons,
-#: a 14-byte frame) down to 9600. Below that no stream fits.
+#: 15 ms budget is the one a stream could carry. Group 100 (every packet, 80 data bytes, an
+#: 84-byte frame) fits at 57600 and 115200; group 6 (7-42) at 38400; group 1 (7-16: bumps,
+#: cliffs, walls, buttons, a 14-byte frame) down to 9600. Below that no stream fits.
 GROUPS = (100, 6, 1)
+#: Every packet (7-58): what the table shows at every rate. Where its stream does not fit
+#: (below 57600) each table is one Query List (149) of it instead: at 19200 a stream would
+#: carry group 1 alone, with no battery, mode or encoders, which is what one looks for; the
+#: 80-byte reply takes 42 ms at 19200, 84 ms at 9600, so a few tables a second still come.
+ALL_SENSORS = 100
+#: Query Lists in a row left unanswered (1 s each) before the table gives up (exit 3).
+QUERY_MISSES = 3
 
 
 def group_for(baud: int) -> int | None:
@@ -47,8 +56,9 @@ def register(sub: Any) -> None:
         sensors_command,
         f"""show every decoded sensor, live
 
-        Stream the largest sensor group the baud rate carries and show every packet decoded,
-        with its unit, a few times a second; the robot stays in Passive and is left there.
+        Stream every sensor packet (7-58) and show each decoded, with its unit, a few times
+        a second; at a rate too slow for that stream (19200, 38400) each table is one Query
+        List (149) of them instead. The robot stays in Passive and is left there.
         Without --port, the built-in simulator. Exit codes: 0 done (--count reached), 2
         invalid option, 3 connection or stream failure, {INTERNAL_ERROR_SAID}, 130 interrupted.
         """,
@@ -147,7 +157,7 @@ def sensors_command(args: argparse.Namespace) -> int:
                 print(world_error_text(exc), file=sys.stderr)
                 return ExitCode.INVALID
         link = far_end(args.port, args.baud, simulator, opened=opened)
-        _show_live(link, profile, args, group)
+        _show_live(link, profile, args, group == ALL_SENSORS)
     except (ConnectionFailed, LinkDown) as exc:
         print(f"roomba-bt: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
@@ -157,44 +167,85 @@ def sensors_command(args: argparse.Namespace) -> int:
 
 
 def _show_live(
-    link: Transport, profile: RobotProfile, args: argparse.Namespace, group: int
+    link: Transport, profile: RobotProfile, args: argparse.Namespace, streamed: bool
 ) -> None:
-    """The table of the newest frame, ``args.rate`` times a second, ``args.count`` times (0:
-    until interrupted); the robot is left in Passive."""
+    """The table of every packet, ``args.rate`` times a second, ``args.count`` times (0:
+    until interrupted), from the stream (``streamed``) or else a Query List each; the robot
+    is left in Passive."""
     from roomba_bt.cli.profile_choice import profile_setting
     from roomba_bt.robot.connection import Connection
-    from roomba_bt.robot.errors import StreamStalled
     from roomba_bt.robot.safety import sigterm_raises
 
     connection = Connection(link, profile, baud=args.baud)
     connection.profile_setting = profile_setting(args)  # a wrong profile's fix
-    interactive = sys.stdout.isatty()
+    with sigterm_raises(), connection:
+        if streamed:
+            connection.start("passive", (ALL_SENSORS,))
+            _show_streamed(connection, profile, args)
+        else:
+            connection.start("passive")  # no stream: a reply has no header to tell it apart
+            _show_queried(connection, profile, args)
+
+
+def _print_table(connection: Connection, profile: RobotProfile, frame: SensorFrame) -> None:
+    """One table, over the last on a terminal."""
+    prefix = "\x1b[H\x1b[J" if sys.stdout.isatty() else ""
+    print(f"{prefix}{connection.name}  ({profile.title})\n{format_table(frame)}\n", flush=True)
+
+
+def _show_queried(connection: Connection, profile: RobotProfile, args: argparse.Namespace) -> None:
+    """A Query List (149) of every packet when a table is due. One unanswered (a byte lost
+    on the line) is said and asked again; :data:`QUERY_MISSES` in a row end the command as
+    a lost connection (exit 3), as a stream that stays silent does."""
+    from roomba_bt.robot.errors import ConnectionFailed
+
+    shown = misses = 0
+    due = time.monotonic()  # the first table at once
+    while args.count == 0 or shown < args.count:
+        time.sleep(max(0.0, due - time.monotonic()))
+        frame = connection.query((ALL_SENSORS,))
+        if frame is None:
+            misses += 1
+            if misses >= QUERY_MISSES:
+                raise ConnectionFailed(
+                    connection.name, f"no reply to {misses} Query Lists (149) in a row"
+                )
+            print("roomba-bt: no reply to a Query List (149) within 1 s; asking again",
+                  file=sys.stderr)  # fmt: skip
+            continue
+        misses = 0
+        due = time.monotonic() + 1.0 / args.rate
+        _print_table(connection, profile, frame)
+        shown += 1
+
+
+def _show_streamed(connection: Connection, profile: RobotProfile, args: argparse.Namespace) -> None:
+    """The newest frame of the stream when a table is due; a watchdog trip is ridden through
+    as ``run`` does."""
+    from roomba_bt.robot.errors import StreamStalled
+
     shown = 0
     #: a watchdog trip being ridden through, as ``run`` does: (bytes read then, drive 0 sent)
     stall: tuple[int, bool] | None = None
-    with sigterm_raises(), connection:
-        connection.start("passive", (group,))
-        last = -math.inf  # the first frame is shown at once
-        while args.count == 0 or shown < args.count:
-            try:
-                frames = connection.poll(0.1)
-            except StreamStalled as stalled:  # a flaky line is what one looks at it for
-                if stalled.mismatch is not None:  # another model's frames: certain now
-                    raise
-                stall = (connection.link.bytes_read, stalled.halted)
-                print(f"roomba-bt: {stalled}; waiting up to {DEFAULT_GRACE:g} s for valid "
-                      "frames", file=sys.stderr)  # fmt: skip
-                frames = []
-            if stall is not None:
-                if not frames:  # the cause, once known or the grace is over (exit 3)
-                    connection.check_stall(stall[0], DEFAULT_GRACE, stall[1])
-                    continue
-                stall = None
-                print("roomba-bt: valid frames are back", file=sys.stderr)
-            if not frames or time.monotonic() - last < 1.0 / args.rate:
+    last = -math.inf  # the first frame is shown at once
+    while args.count == 0 or shown < args.count:
+        try:
+            frames = connection.poll(0.1)
+        except StreamStalled as stalled:  # a flaky line is what one looks at it for
+            if stalled.mismatch is not None:  # another model's frames: certain now
+                raise
+            stall = (connection.link.bytes_read, stalled.halted)
+            print(f"roomba-bt: {stalled}; waiting up to {DEFAULT_GRACE:g} s for valid "
+                  "frames", file=sys.stderr)  # fmt: skip
+            frames = []
+        if stall is not None:
+            if not frames:  # the cause, once known or the grace is over (exit 3)
+                connection.check_stall(stall[0], DEFAULT_GRACE, stall[1])
                 continue
-            last = time.monotonic()
-            table = format_table(frames[-1].frame)
-            prefix = "\x1b[H\x1b[J" if interactive else ""
-            print(f"{prefix}{connection.name}  ({profile.title})\n{table}\n", flush=True)
-            shown += 1
+            stall = None
+            print("roomba-bt: valid frames are back", file=sys.stderr)
+        if not frames or time.monotonic() - last < 1.0 / args.rate:
+            continue
+        last = time.monotonic()
+        _print_table(connection, profile, frames[-1].frame)
+        shown += 1

@@ -349,9 +349,10 @@ def test_sensors_baud_auto_finds_19200_and_shows_a_table(served_sim: Callable[..
     done = _cli("sensors", "--port", sim.address, "--baud", "auto", "--count", "1")
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith(f"{sim.address}  (iRobot Create 2)")
-    # group 1 (packets 7-16): the largest that fits the 28 bytes of a 15 ms slot at 19200
+    # every packet: a Query List (149) of group 100 for the table, as the 28 bytes of a
+    # 15 ms slot at 19200 stream group 1 alone (7-16: it showed no mode, battery or encoders)
     assert "bumps_wheel_drops" in done.stdout and "unused_16" in done.stdout
-    assert "oi_mode" not in done.stdout
+    assert "1 passive" in done.stdout and "left_encoder_counts" in done.stdout
 
 
 def test_baud_auto_with_nothing_behind_the_port_is_a_connection_failure(silent_port: str) -> None:

@@ -22,15 +22,41 @@ def test_the_group_chosen_fits_the_rate(rate: int) -> None:
     assert group_for(115200) == 100 and group_for(38400) == 6 and group_for(19200) == 1
 
 
-@pytest.mark.parametrize(("rate", "last"), [(115200, 58), (38400, 42), (19200, 16)])
-def test_sensors_shows_a_table_at_each_rate(
-    rate: int, last: int, capsys: pytest.CaptureFixture[str]
+def table_rows(out: str) -> dict[str, str]:
+    """Packet id -> its row, of the last table ``sensors`` printed."""
+    table = out.strip().split("\n\n")[-1].splitlines()[1:]
+    return {line.split()[0]: line for line in table}
+
+
+@pytest.mark.parametrize("rate", [115200, 57600, 38400, 19200, 9600])
+def test_sensors_shows_every_packet_at_each_rate(
+    rate: int, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """At 19200 baud group 6 (a 56-byte frame) does not fit the 28 bytes of a slot: this
-    used to end in a BandwidthError traceback."""
-    assert main(["sensors", "--baud", str(rate), "--count", "1"]) == 0
-    rows = [line.split()[0] for line in capsys.readouterr().out.splitlines()[1:] if line]
-    assert rows[0] == "7" and rows[-1] == str(last)
+    used to end in a BandwidthError traceback; then the table showed group 1 alone (7-16),
+    no battery, mode or encoders (audit finding 14). Below 57600 each table is now a Query
+    List (149) of group 100: every packet, 7-58, at every rate."""
+    assert main(["sensors", "--baud", str(rate), "--count", "2", "--rate", "66"]) == 0
+    rows = table_rows(capsys.readouterr().out)
+    assert list(rows) == [str(pid) for pid in range(7, 59)]
+    assert "passive" in rows["35"] and "battery_charge" in rows["25"]
+    assert "left_encoder_counts" in rows["43"]
+
+
+def test_sensors_at_19200_over_a_pty_queries_every_packet(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The same through a serial line: the simulator on a pty, the robot's port at 19200
+    (as after Clean held at power-off), no stream asked for."""
+    from roomba_bt.oi.profiles import CREATE2
+
+    with sim_pty_server(CREATE2, "--baud", "19200") as port:
+        code = main(["sensors", "--port", port, "--baud", "19200", "--count", "2"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    rows = table_rows(captured.out)
+    assert list(rows) == [str(pid) for pid in range(7, 59)]
+    assert "passive" in rows["35"]
 
 
 def test_a_rate_too_slow_for_any_stream_is_a_clear_error(
