@@ -68,7 +68,7 @@ DOCK_WAKE = (
 #: the start of every fix for a silent robot that could not be pulsed
 ASLEEP = (
     "a robot asleep (5 minutes in Passive) answers nothing until a BRC pulse or its Clean "
-    "button: press Clean and run doctor again"
+    "button, as does one a host powered down (Power, 133): press Clean and run doctor again"
 )
 
 
@@ -414,7 +414,9 @@ def _examine(
             raise _Failed(ExitCode.NO_ANSWER)
         report.ok("wake", f"silent at every rate: {pulse.how}")
         found = _after_pulse(transport, rates, searched, report)
-        report.ok("wake", "it answered after the pulse: the robot was asleep")
+        report.ok(
+            "wake", "it answered after the pulse: the robot was asleep (or powered down by Power)"
+        )
     else:
         report.skip("wake", "not needed: the robot answered")
     baud = found.baud

@@ -132,3 +132,17 @@ def test_the_stands_still_note_is_said_only_where_the_minimum_is_the_floor(
 def test_a_wheel_speed_parameter_that_would_stand_still_is_a_declaration_error() -> None:
     with pytest.raises(ValueError, match="does not move a wheel"):
         wheel_speed_param("slow", "60 mm/s", minimum=10)
+
+
+#: The fastest wheel speed a Create 2 was measured standing still at (mm/s, either sign:
+#: ktibow.github.io/blog/roombamotors, "anything from -10 to 10 mm/s will result in no
+#: movement"); docs/protocol.md, "wheel speed steps".
+MEASURED_STANDING_STILL_MM_S = 10
+
+
+def test_every_speed_the_language_accepts_moves_the_measured_robot() -> None:
+    """validate's error for a slower speed is no guess: the measured robot stands still
+    there too, so a mission refused would have hung on it; the minimum is not lowered
+    to the measured 11, which the simulator's nearest step stands still at."""
+    assert SLOWEST_MOVING_SPEED_MM_S > MEASURED_STANDING_STILL_MM_S
+    assert speed_steps(MEASURED_STANDING_STILL_MM_S + 1) == 0  # why the minimum stays 15

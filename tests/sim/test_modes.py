@@ -270,6 +270,25 @@ def test_power_puts_the_robot_to_sleep() -> None:
     assert host.sim.read() == b""
 
 
+@pytest.mark.parametrize("wake", ["start", "brc"])
+def test_a_robot_powered_down_by_power_wakes_by_start_or_a_brc_pulse(wake: str) -> None:
+    """Decided (docs/protocol.md, "Power (133)"): neither spec says what wakes a robot that
+    Power powered down. The simulator takes Start as the five-minute sleep does not (the
+    golden recordings' script wakes it so) and a BRC pulse, the wake a Create 2 owner
+    reports; the robot layer never sends Power, and a robot deaf to Start is what doctor
+    wakes by BRC (`sim --asleep`)."""
+    host = make()
+    host.send(C.power())
+    assert host.sim.asleep and not host.sim.deaf
+    if wake == "start":
+        host.send(C.start())
+    else:
+        host.sim.set_brc(True)
+        host.sim.set_brc(False)
+    assert not host.sim.asleep
+    assert mode_of(host) == OIMode.PASSIVE
+
+
 def test_the_same_drive_again_is_still_refused_in_passive() -> None:
     """A client re-sends its Drive every frame; the simulator's shortcut for an unchanged
     Drive must not hide the violation when the robot has fallen to Passive meanwhile."""
