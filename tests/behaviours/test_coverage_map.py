@@ -9,10 +9,12 @@ import math
 from collections.abc import Callable
 
 import py_trees
+import pytest
 from py_trees.common import Status
 
 from roomba_bt.behaviours import coverage_map, driving
 from roomba_bt.behaviours.coverage_map import BLOCKED, CELL_MM, SWEPT, VISITED, Cover, FloorMap
+from roomba_bt.behaviours.drops import DROP
 from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
 from roomba_bt.evaluate.wheels import count_reversals
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
@@ -56,6 +58,28 @@ def test_a_blocked_cell_keeps_the_centre_out_of_its_neighbours() -> None:
     assert not fmap.line_free(start, end)
     above = fmap.cell(1500.0, 400.0)
     assert above is not None and fmap.line_free(start, above)
+
+
+def test_a_next_pass_forgets_the_sweep_and_the_walls_and_keeps_drops_beams_and_its_way() -> None:
+    """The second pass maps the walls afresh (the first map's drifted ghosts closed it early)
+    but never meets a known drop again for a map's sake, and the way home still leads over
+    the cells it has been on to where it saw the dock."""
+    fmap = FloorMap()
+    for k in range(11):
+        fmap.sweep(k * 100.0, 0.0, 0.0)
+    fmap.block(1500.0, 0.0)
+    fmap.drops.mark(0.0, 800.0, 0.0, 0.0)
+    way, wall, drop = fmap.cell(500.0, 0.0), fmap.cell(1500.0, 0.0), fmap.cell(0.0, 800.0)
+    assert way is not None and wall is not None and drop is not None
+    fmap.beams[way] = 1000.0
+    fmap.next_pass()
+    assert fmap.passes == 2 and fmap.swept == 0 and not fmap.avoid
+    assert fmap.cells[way] == VISITED and fmap.open_floor(way + 1)
+    assert not fmap.cells[wall] and fmap.free(wall)
+    assert fmap.cells[drop] & (DROP | BLOCKED) == DROP | BLOCKED and not fmap.free(drop + 1)
+    assert fmap.beams == {way: 1000.0}
+    assert sum(1 for n in fmap.near if n) == 9  # the drop's 3 x 3 alone
+    assert fmap.floor_done() == "floor done: 0.0 m² swept by its own map (the last of 2 passes)"
 
 
 def test_the_frontier_is_the_nearest_known_cell_beside_open_floor() -> None:
@@ -152,6 +176,26 @@ def test_cover_respects_a_drop_and_a_virtual_wall(sweep: Sweep) -> None:
     assert not result.fell
     assert result.coverage is not None and result.coverage.overall >= 0.85
     assert min(x for x, _ in result.trajectory) > 0.8  # never past the beam
+
+
+@pytest.mark.parametrize("odometry_error", [0.0, 0.02])
+def test_cover_makes_a_second_pass_when_asked_and_sweeps_no_less(
+    sweep: Sweep, odometry_error: float
+) -> None:
+    """``passes: 2``: when its map says the floor is done it sweeps again on a map drawn
+    afresh, then ends; the floor it swept is the first pass's and more. In this room (seed
+    3) one pass swept 97.3 % in 165 s (97.0 % in 207 s with 2 % encoder error), two 98.1 %
+    in 323 s (98.6 % in 379 s)."""
+    once = sweep("cover: {}", MIDDLE, seed=3, timeout_s=900.0, odometry_error=odometry_error)
+    twice = sweep(
+        "cover: {passes: 2}", MIDDLE, seed=3, timeout_s=900.0, odometry_error=odometry_error
+    )
+    assert once.outcome == twice.outcome == "success", (once.reason, twice.reason)
+    assert once.coverage is not None and twice.coverage is not None
+    assert twice.coverage.overall >= once.coverage.overall
+    assert twice.coverage.cleaning_s > 1.5 * once.coverage.cleaning_s  # it swept again
+    assert twice.coverage.longest_idle_s < 60.0
+    assert twice.violations == 0 and not twice.fell
 
 
 def test_the_edge_does_not_chatter_its_wheels(sweep_spec: SweepSpec) -> None:

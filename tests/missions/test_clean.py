@@ -324,28 +324,38 @@ def test_clean_goes_home_by_its_map_before_searching_for_the_beams(
     assert home_s < (30.0 if odometry_error == 0.0 else 150.0), home_s
 
 
-def test_clean_stops_a_jammed_brush_and_goes_home_saying_so(
-    tmp_path: Path, caplog: pytest.LogCaptureFixture
+@pytest.mark.parametrize("brush", ["main_brush", "side_brush"])
+def test_clean_stops_a_jammed_brush_goes_home_and_fails_naming_it(
+    brush: str, tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
-    """A main brush overcurrent (packet 14: hair, a phone cable) was ignored for the whole run,
-    the brush driven for 20 minutes: cleaning stops at once, the brushes and vacuum off, the
-    reason said (the summary's ``mission said`` line), and the robot goes home with them off."""
+    """A brush overcurrent (packet 14: hair, a phone cable) was ignored for the whole run, the
+    brush driven for 20 minutes: cleaning stops at once, the brushes and vacuum off, the
+    reason said (the summary's ``mission said`` line), and the robot goes home with them off.
+    Docked, the run FAILS naming the brush (exit 1): it ended SUCCESS until session 35, and an
+    unattended run's owner (cron, a scheduler reading the exit code) took the floor for done
+    and the brush for free."""
     caplog.set_level(logging.INFO, logger="roomba_bt.mission")
     tangled = tmp_path / "tangled.yaml"
     tangled.write_text(
         "rooms: [[[0, 0], [3, 0], [3, 2.5], [0, 2.5]]]\n"
         "dock: {at: [1.5, 0], facing: 90}\n"
         "robot: {start: {at: [1.5, 1.2], heading: 0}}\n"
-        "events: [{at: 20, kind: overcurrent, motor: main_brush, duration: 3}]\n"
+        f"events: [{{at: 20, kind: overcurrent, motor: {brush}, duration: 3}}]\n"
     )
     sim, summary, _ = _clean_on_the_simulator(str(tangled), None, {}, 600.0)
     assert _stopped(caplog.messages) == [
         "cleaning stopped: a brush is jammed (its overcurrent, packet 14): free it before the "
         "next run"
     ]
-    assert summary.outcome.value == "success", summary.reason
+    named = brush.replace("_", " ")
+    assert summary.outcome.value == "failure"
+    assert summary.exit_code == 1
+    assert summary.reason == (
+        "cleaning cut short by a jammed brush: brushes is "
+        f"'the {named} jammed (its overcurrent, packet 14)', not == 'free'"
+    )
     assert summary.said is not None and "a brush is jammed" in summary.said
-    assert sim.docked
+    assert sim.docked and sim.mode is OIMode.PASSIVE
     assert sim.swept is not None and sim.swept.cleaning_time < 24.0  # stopped at 20 s
 
 
