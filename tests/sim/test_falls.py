@@ -12,9 +12,10 @@ from roomba_bt.oi import commands as C
 from roomba_bt.oi.bits import WHEEL_DROP_BITS
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.sim import Pose, SimEvent
+from roomba_bt.sim import Pose, SimEvent, Simulator, load_world
+from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
-from .helpers import box_with_a_drop, make, pose
+from .helpers import Host, box_with_a_drop, make, pose
 
 #: the floor a drop east of x = 2 m (stairs), as in the protocol engineer's cliffworld
 STAIRS_AT_2_M = box_with_a_drop(2.0, start=(1, 2))
@@ -105,3 +106,48 @@ def test_turning_tighter_than_the_robot_at_an_edge_in_safe_mode_drops_to_passive
     assert _mode_causes(host.sim.events)[-1] == (
         "Safe->Passive (safety: cliff while turning tighter than the robot's radius)"
     )
+
+
+#: :data:`STAIRS_AT_2_M` with a start region across the stairs' edge: drawn by the centre
+#: alone, a third of its starts stood with a wheel or a cliff sensor over the drop
+STAIRS_EDGE_REGION = (
+    "rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]\n"
+    "drops: [{rect: [2.0, 0, 4, 4]}]\n"
+    "robot: {start: {at: [1, 2], heading: 0}, "
+    "start_region: {rect: [1.4, 0.5, 2.3, 3.5], heading: any}}\n"
+)
+
+
+def test_drawn_starts_keep_the_whole_body_off_a_drop() -> None:
+    """A drawn start is refused while any part of the body (with its 20 mm to spare) is over
+    a drop, not only its centre: its wheels and cliff sensors are on the floor, so it stands
+    there without falling and reads no cliff on its first frame."""
+    robot_reach_mm = ROBOT_RADIUS_MM + 20.0
+    nearest_mm = []
+    for seed in range(60):
+        host = make(STAIRS_EDGE_REGION, start=None, mode="full", seed=seed, random_start=True)
+        sim = host.sim
+        nearest_mm.append(2000.0 - sim.x)
+        assert sim.world.body_clear_of_drops(Pose(sim.x, sim.y, sim.theta), robot_reach_mm)
+        host.run(1.0)
+        assert not sim.fallen
+        cliffs = host.query([9, 10, 11, 12])
+        assert [cliffs[packet] for packet in (9, 10, 11, 12)] == [0, 0, 0, 0]
+    assert min(nearest_mm) >= robot_reach_mm
+    assert min(nearest_mm) < robot_reach_mm + 60.0  # the region up to the edge is still used
+
+
+#: apartment seeds whose start, drawn by the centre alone, put the body over the stairs (an
+#: eval sweep's seed 1203 fell at 0.1 s, 8 mm from their edge; 173, 315, 456 and 482 too)
+OVER_THE_STAIRS_SEEDS = (143, 173, 315, 456, 482, 1203)
+
+
+@pytest.mark.parametrize("seed", OVER_THE_STAIRS_SEEDS)
+def test_apartment_starts_that_overhung_the_stairs_are_drawn_again(seed: int) -> None:
+    world = load_world("apartment")
+    sim = Simulator(world, seed=seed, random_start=True)
+    start = Pose(sim.x, sim.y, sim.theta)
+    assert start == world.sample_start(seed)
+    assert world.body_clear_of_drops(start, ROBOT_RADIUS_MM)
+    Host(sim).run(1.0)
+    assert not sim.fallen
