@@ -78,7 +78,7 @@ if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts fas
     from roomba_bt.evaluate.parallel import Engine, Evaluation, Interruption, Progress
     from roomba_bt.evaluate.records import PartialResults
     from roomba_bt.evaluate.stats import Comparison, Summary
-    from roomba_bt.mission import Diagnostic
+    from roomba_bt.mission import Diagnostic, Permissions
     from roomba_bt.sim.world import World
 
 
@@ -285,12 +285,20 @@ def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
 class Variant:
     """One thing evaluated: a mission with its parameters, labelled for the report."""
 
+    #: the mission and every parameter that applied once: ``-p``'s that it does not
+    #: override, then its own (``dock -p search_speed=250mm/s -p turn_speed=90mm/s``): a
+    #: label of its own values alone read as if the ``-p`` base had not applied
     label: str
     #: how the results, the summary and the records name the mission (:func:`results_name`)
     mission: str
     params: tuple[tuple[str, str], ...]
     #: the file read: where the project file and the include folders are looked for
     path: str
+    #: its own parameters, on top of ``-p`` (``--sweep``'s value, ``--variant``'s set)
+    own: tuple[tuple[str, str], ...] = ()
+    #: how the command line gave them (``--variant 'speed=fast'``), which a message about
+    #: one of them names; "" for a mission's own variant
+    given_as: str = ""
 
 
 @dataclass(frozen=True)
@@ -309,7 +317,29 @@ class Evaluated:
 
 def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] | str:
     """The missions x (sweep values or variant sets); a message on error."""
-    sets: list[dict[str, str]] = [{}]
+    sets = _variant_sets(args, params)
+    if isinstance(sets, str):
+        return sets
+    out = []
+    for mission in args.missions:
+        for extra, given_as in sets:
+            merged = {**params, **extra}
+            kept = [f"-p {k}={v}" for k, v in params.items() if k not in extra]
+            label = " ".join([mission, *kept, *(f"-p {k}={v}" for k, v in extra.items())])
+            path = getattr(args, "mission_paths", {}).get(mission, mission)
+            name = results_name(mission, path)
+            out.append(Variant(label, name, tuple(sorted(merged.items())), path,
+                               tuple(extra.items()), given_as))  # fmt: skip
+    if len({v.label for v in out}) < len(out):
+        return "the same variant twice: give each mission or value once"
+    return out
+
+
+def _variant_sets(
+    args: argparse.Namespace, params: dict[str, str]
+) -> list[tuple[dict[str, str], str]] | str:
+    """Each variant's own parameters and how the command line gave them (``--sweep``'s
+    values, ``--variant``'s sets; one empty set without either); a message on error."""
     if args.sweep and args.variant:
         return "--sweep and --variant: give one or the other"
     if args.sweep:
@@ -318,26 +348,14 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
             return f"--sweep {args.sweep!r}: expected NAME=V1,V2,..., e.g. speed=150mm/s,200mm/s"
         if name.strip() in params:  # the sweep's values would win, and -p's never run
             return f"-p {name.strip()} and --sweep {name.strip()}: give its values in --sweep alone"
-        sets = [{name.strip(): v.strip()} for v in values.split(",") if v.strip()]
-    elif args.variant:
-        sets = []
-        for item in args.variant:
-            parsed = parse_params([p for p in item.split(";") if p.strip()])
-            if isinstance(parsed, str):
-                return parsed.replace("-p", "--variant", 1)
-            sets.append(parsed)
-    out = []
-    for mission in args.missions:
-        for extra in sets:
-            merged = {**params, **extra}
-            text = " ".join(f"-p {k}={v}" for k, v in extra.items())
-            label = f"{mission} {text}".strip()
-            path = getattr(args, "mission_paths", {}).get(mission, mission)
-            name = results_name(mission, path)
-            out.append(Variant(label, name, tuple(sorted(merged.items())), path))
-    if len({v.label for v in out}) < len(out):
-        return "the same variant twice: give each mission or value once"
-    return out
+        return [({name.strip(): v.strip()}, "--sweep") for v in values.split(",") if v.strip()]
+    sets: list[tuple[dict[str, str], str]] = []
+    for item in args.variant:
+        parsed = parse_params([p for p in item.split(";") if p.strip()])
+        if isinstance(parsed, str):
+            return parsed.replace("-p", "--variant", 1)
+        sets.append((parsed, f"--variant {shlex.quote(item)}"))
+    return sets or [({}, "")]
 
 
 def results_name(given: str, found: str) -> str:
@@ -482,10 +500,12 @@ def _statistics(
 
 def rerun_command(args: argparse.Namespace, result: Any) -> str:
     """The ``roomba-bt run`` line that runs episode ``result`` again, alone, with its
-    traceback: its seed and seeded start, world, parameters, profile, charge and what the
-    evaluation was allowed to load; for a HUNG one, its ``--wall-limit``, which then names
-    where it is stuck as the evaluation did. ``run`` has no --within, --start-area, --dock nor
-    --odometry-error: with any of those the line says its start or world may differ."""
+    traceback: every option that shaped the episode, its seed and seeded start, world,
+    parameters, profile, charge, mission time limit (``run --fast``'s own is 2 h, eval's
+    15 min: a late error ran alone under another limit), encoders' error, faults and what
+    the evaluation was allowed to load; for a HUNG one, its ``--wall-limit``, which then
+    names where it is stuck as the evaluation did. ``run`` has no --within, --start-area nor
+    --dock: with any of those the line says its start or world may differ."""
     from roomba_bt.evaluate.episode import HUNG
 
     words = ["roomba-bt", "-v", "run", result.mission, "--fast", "--random-start", "--seed",
@@ -498,6 +518,11 @@ def rerun_command(args: argparse.Namespace, result: Any) -> str:
         words += ["--profile", args.profile]
     if args.battery is not None:
         words += ["--battery", f"{args.battery:g}"]
+    timeout = parse_timeout(args.timeout)  # checked before any episode: seconds
+    if isinstance(timeout, float):
+        words += ["--timeout", f"{timeout:g}"]
+    if args.odometry_error:  # each episode's draw is its seed's, as run's
+        words += ["--odometry-error", f"{args.odometry_error:g}"]
     if getattr(args, "allow_plugin_files", False):
         words.append("--allow-plugin-files")
     limit = wall_limit(args)
@@ -511,7 +536,7 @@ def rerun_command(args: argparse.Namespace, result: Any) -> str:
     unmatched = [
         option for option, given in (
             ("--within", args.within is not None), ("--start-area", args.start_area is not None),
-            ("--dock", bool(args.dock)), ("--odometry-error", bool(args.odometry_error)),
+            ("--dock", bool(args.dock)),
         ) if given
     ]  # fmt: skip
     if unmatched:
@@ -704,6 +729,9 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
     missions = _compiled(args, chosen)
     if isinstance(missions, int):
         return missions
+    same = _same_variant_twice(chosen, missions)
+    if same is not None:
+        return _error(same, args)
     try:
         world = build_world(batches[0][0])
         start_pose(world, batches[0][0])
@@ -734,7 +762,8 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
         if v.mission in invalid:
             continue
         loaded = load(v.path, dict(v.params), get_profile(args.profile),
-                      granted=permissions(args, v.path), failed=failed)  # fmt: skip
+                      granted=_naming_the_variant(permissions(args, v.path), v),
+                      failed=failed)  # fmt: skip
         if isinstance(loaded, int):
             invalid.append(v.mission)
         missions.append(loaded)
@@ -758,6 +787,28 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
         fails = "; ".join(failed_strict(v.label, m.warnings) for v, m in warned)
         _refusal_as_json(f"{fails}; no episode runs", [w for _, m in warned for w in m.warnings])
     return ExitCode.STRICT
+
+
+def _same_variant_twice(chosen: list[Variant], missions: list[Any]) -> str | None:
+    """Two variants of a mission whose compiled parameters are equal, the same value in two
+    spellings (``--sweep speed=300mm/s,0.3m/s``), said as the same variant given twice is:
+    they ran twice and were "compared" with no word."""
+    first: dict[tuple[str, str], Variant] = {}
+    for v, mission in zip(chosen, missions, strict=True):
+        values = (v.mission, repr(sorted(mission.parameters.items())))
+        earlier = first.setdefault(values, v)
+        if earlier is not v:
+            return (f"{earlier.label} and {v.label}: the same variant twice (the mission reads "
+                    "the same values): give each value once")  # fmt: skip
+    return None
+
+
+def _naming_the_variant(granted: Permissions, variant: Variant) -> Permissions:
+    """``granted``, its messages naming the ``--variant`` or ``--sweep`` value each of the
+    variant's own parameters came from (of ten variants, "from the command line" left the
+    user to find the bad one)."""
+    origins = tuple((name, variant.given_as) for name, _ in variant.own)
+    return replace(granted, wording=replace(granted.wording, origins=origins))
 
 
 def _refusal_as_json(
@@ -958,7 +1009,7 @@ def _report(args: argparse.Namespace, engine: str, evaluated: Evaluated) -> None
         return
     chosen, done = evaluated.chosen, evaluated.done
     for v, s, e in zip(chosen, evaluated.summaries, done, strict=True):
-        if len(chosen) > 1:
+        if len(chosen) > 1 or v.params:  # one variant's -p: said nowhere else in the text
             print(f"variant      {v.label}")
         print(s)
         coverage = summarize_coverage(e.results)
@@ -989,7 +1040,7 @@ def _json_report(args: argparse.Namespace, engine: str, evaluated: Evaluated) ->
 
     from roomba_bt.evaluate.coverage import summarize_coverage
     from roomba_bt.evaluate.keys import summarize_keys
-    from roomba_bt.evaluate.stats import tidy
+    from roomba_bt.evaluate.stats import METHODS, tidy
 
     made = getattr(args, "made_by", {})
     plugins: dict[str, Any] = {}
@@ -1008,7 +1059,8 @@ def _json_report(args: argparse.Namespace, engine: str, evaluated: Evaluated) ->
         "interruption": interruption.said if interruption else None,
         "passed": None if args.min_rate is None else all(passed),
         "plugins": dict(sorted(plugins.items())),
-        "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict(),
+        "variants": [{"label": v.label, "params": dict(v.params), "own_params": dict(v.own),
+                      **s.to_dict(),
                       "passed": ok, "sources": made.get(v.mission, {}).get("sources"),
                       "coverage": c.to_dict() if c is not None else None,
                       "keys": {k.name: k.to_dict()
@@ -1017,6 +1069,7 @@ def _json_report(args: argparse.Namespace, engine: str, evaluated: Evaluated) ->
                                                [summarize_coverage(e.results) for e in done],
                                                passed, done, strict=True)],
         "comparisons": [c.to_dict() for c in evaluated.comparisons if not isinstance(c, str)],
+        "methods": METHODS,
     }), indent=2))  # fmt: skip
 
 
@@ -1039,6 +1092,7 @@ def run_conditions(args: argparse.Namespace) -> dict[str, Any]:
     return {
         "timeout": parse_timeout(args.timeout),
         "wall_limit": wall_limit(args),
+        "params": parse_params(args.param),  # -p's, under every variant's own
         "seed": args.seed,
         "runs": args.runs,
         "world": args.world,
@@ -1068,8 +1122,8 @@ def _plot(out: str, world: World, evaluated: Evaluated) -> int | None:
 
     chosen, summaries, done = evaluated.chosen, evaluated.summaries, evaluated.done
     if len(chosen) == 1:
-        titles = [f"{Path(chosen[0].path).stem} in {world.name}: "
-                  f"{summaries[0].successes}/{summaries[0].runs}"]  # fmt: skip
+        said = " ".join([Path(chosen[0].path).stem, *(f"-p {k}={v}" for k, v in chosen[0].params)])
+        titles = [f"{said} in {world.name}: {summaries[0].successes}/{summaries[0].runs}"]
     else:
         titles = [
             f"{v.label}: {s.successes}/{s.runs}" for v, s in zip(chosen, summaries, strict=True)

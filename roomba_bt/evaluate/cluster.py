@@ -548,9 +548,13 @@ def run_on_client(
         except KeyboardInterrupt as exc:
             interrupt = exc
             client.cancel([f for f in futures.values() if not f.done()])
-    retried = gathered.retried + _count_and_release(
+    gathered.rerun += _release_noting_reruns(
         client, [*gathered.futures, *futures.values()], gathered.asks_scheduler
     )
+    retried = len(gathered.rerun)
+    if retried:  # said whatever --reproducible leaves out of stdout, as the local pool says it
+        print(f"roomba-bt eval: {retried} episode(s) ran again after a Dask worker holding them "
+              f"was lost: seeds {_seeds_of(specs, gathered.rerun)}", file=sys.stderr)  # fmt: skip
     if watch.expired:
         raise NoWorkersError(watch.expired, results, retried)
     unfinished = sum(r is None for r in results)
@@ -577,12 +581,13 @@ def _submitted(
 @dataclass
 class _Gathered:
     """The futures gathered and not released yet, the episodes retried among those released
-    (:func:`_count_and_release`), and why the scheduler cancelled an episode when it did
+    (:func:`_release_noting_reruns`), and why the scheduler cancelled an episode when it did
     (Dask's reason: :data:`CONNECTION_LOST` when the scheduler was lost; "" when none was
     cancelled, or only by the evaluation's own :class:`WorkerWatch`, which gives none)."""
 
     futures: list[Any] = field(default_factory=list)
-    retried: int = 0
+    #: the keys of the released futures a dead worker held (their episodes ran again)
+    rerun: list[str] = field(default_factory=list)
     cancelled_because: str = ""
 
     def cancelled(self, error: BaseException) -> None:
@@ -625,8 +630,8 @@ def _gather(
         status = future.status  # before the release below, which marks it cancelled
         gathered.futures.append(futures.pop(future.key))
         if len(gathered.futures) >= RELEASE_EVERY:
-            gathered.retried += _count_and_release(client, gathered.futures,
-                                                   gathered.asks_scheduler)  # fmt: skip
+            gathered.rerun += _release_noting_reruns(client, gathered.futures,
+                                                     gathered.asks_scheduler)  # fmt: skip
         i = index[future.key]
         if status == "error":  # (type, exception, traceback)
             given_up[i] = _killed_worker(specs[i], result[1])
@@ -697,18 +702,26 @@ def died_on_workers(spec: EpisodeSpec, first: BaseException, again: BaseExceptio
     return died_result(spec, how, worker=last)
 
 
-def _count_and_release(client: Any, futures: list[Any], ask: bool = True) -> int:
-    """How many of ``futures`` a dead worker held (read from the scheduler; 0 unless
+def _release_noting_reruns(client: Any, futures: list[Any], ask: bool = True) -> list[str]:
+    """The keys of ``futures`` a dead worker held (read from the scheduler; none unless
     ``ask``: a scheduler known lost is not asked), then each released (``futures``
     emptied): the scheduler forgets them."""
-    retried = 0
+    rerun: list[str] = []
     with contextlib.suppress(Exception):  # the count is a report, never a reason to fail
         if ask:
-            retried = int(client.run_on_scheduler(_retried, keys=[f.key for f in futures]))
+            rerun = list(client.run_on_scheduler(_retried, keys=[f.key for f in futures]))
     for future in futures:
         future.release()
     futures.clear()
-    return retried
+    return rerun
+
+
+def _seeds_of(specs: Sequence[EpisodeSpec], keys: list[str], shown: int = 10) -> str:
+    """The seeds of the episodes keyed ``episode-BATCH-i`` (or ``...-i-alone``), the first
+    ``shown`` of them, in order."""
+    seeds = sorted({specs[int(key.split("-")[2])].seed for key in keys})
+    more = f" and {len(seeds) - shown} more" if len(seeds) > shown else ""
+    return ", ".join(str(seed) for seed in seeds[:shown]) + more
 
 
 def warm_up(client: Any) -> None:
@@ -722,7 +735,7 @@ def _import_episode_modules() -> None:
     import roomba_bt.mission  # noqa: F401
 
 
-def _retried(dask_scheduler: Any, keys: list[str]) -> int:
-    """Runs on the scheduler: how many of ``keys`` were held by a worker that died."""
+def _retried(dask_scheduler: Any, keys: list[str]) -> list[str]:
+    """Runs on the scheduler: those of ``keys`` held by a worker that died."""
     tasks = dask_scheduler.tasks
-    return sum(1 for k in keys if k in tasks and tasks[k].suspicious > 0)
+    return [k for k in keys if k in tasks and tasks[k].suspicious > 0]

@@ -21,6 +21,26 @@ from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import falls_in_order, falls_said, hazard_falls
 
 Z95 = 1.959963984540054
+#: How each figure of a summary and a comparison is computed, at what level: ``eval --json``
+#: says it (``methods``) beside the figures, so that an archived summary or a paper's table
+#: needs no knowledge of this module (docs/evaluation.md, "What the figures are").
+METHODS = {
+    "confidence_level": 0.95,
+    "interval": "Wilson score interval of the success rate, z = 1.959963984540054",
+    "median_time": "over the successful episodes: the 50th percentile, as p90_time",
+    "p90_time": "over the successful episodes: linear interpolation between the closest "
+    "ranks, at rank (n - 1) * q / 100 (numpy's default, 'linear')",
+    "mcnemar_p": "exact McNemar test, two-sided: the binomial test of only_a out of "
+    "only_a + only_b at 1/2, in integers; 1 with no discordant pair",
+    "time_difference_interval": "distribution-free interval for the median of the paired "
+    "differences B - A (order statistics at binomial ranks: coverage at least 0.95, not "
+    "exactly; null under 6 pairs), over the pairs both succeeded: conditional on success",
+    "coverage_difference_interval": "as time_difference_interval, over the pairs both ran "
+    "their brushes in, succeeded or not",
+    "multiple_comparisons": "not corrected: each variant is compared with A alone, each "
+    "p-value and interval at its own level; for k comparisons together, read each p against "
+    "0.05 / k (Bonferroni)",
+}
 #: an episode that spends this long (s) off the dock without progress (no new floor, no move
 #: of TRAPPED_RADIUS_MM: :attr:`EpisodeResult.longest_trapped_s`) was trapped
 TRAPPED_S = 60.0
@@ -127,7 +147,6 @@ class Summary:
         lo, hi = self.interval
         med = "n/a" if self.median_time_s is None else f"{self.median_time_s:.1f} s"
         p90 = "n/a" if self.p90_time_s is None else f"{self.p90_time_s:.1f} s"
-        speed = self.simulated_s / self.cpu_s if self.cpu_s > 0 else 0.0
         out = [
             *head,
             f"success      {self.successes}/{self.runs} = {100 * self.rate:.1f} % "
@@ -142,8 +161,8 @@ class Summary:
             *([f"charger      {self.charger_text()}"] if self.charger_arrivals else []),
             f"simulated    {self.simulated_s:.0f} s of mission time"
             + (
-                f" in {self.cpu_s:.1f} s of CPU time ({speed:.0f}x real time per CPU second); "
-                f"{self.wall_s:.1f} s of wall-clock time summed over the episodes"
+                f"{self._cpu_said()}; {self.wall_s:.1f} s of wall-clock time summed over the "
+                "episodes"
                 if self.timings
                 else ""
             ),
@@ -156,6 +175,14 @@ class Summary:
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
+
+    def _cpu_said(self) -> str:
+        """The CPU time and the speed it gives; none measured when every episode HUNG or
+        DIED (they record no CPU time: "0x real time" said the simulator stood still)."""
+        if self.cpu_s <= 0:
+            return ", CPU time not measured (HUNG and DIED episodes record none)"
+        speed = self.simulated_s / self.cpu_s
+        return f" in {self.cpu_s:.1f} s of CPU time ({speed:.0f}x real time per CPU second)"
 
     def undeclared_said(self) -> list[str]:
         """The undeclared keys written, each as ``run`` warns of it, and in how many of the

@@ -657,7 +657,7 @@ def _bind_override(
     if name not in declared:
         ctx.error(
             root.at(
-                f"unknown parameter {name!r} {wording.set_by}"
+                f"unknown parameter {name!r} {wording.set_by_for(name)}"
                 f"{closest(name, list(declared))}; "
                 f"the mission declares: {', '.join(declared) or 'none'}"
             )
@@ -668,14 +668,14 @@ def _bind_override(
         given = _cli_value(text, vtype)
         value = vtype.parse(given)
     except UnitError as exc:
-        where = f"parameter {name}={text} ({wording.set_from})"
+        where = f"parameter {name}={text} ({wording.set_from_for(name)})"
         ctx.error(key_loc.at(f"{where}: {exc}"))
         env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
         return
     # a percent's share as the percent it means (``-p low=0.2``: ``below 20%``); the origin
     # keeps what was typed, so the user finds it on their command line
     written = given if vtype.name == "percent" and isinstance(given, str) else text
-    origin = f"{name}={text}, {wording.set_by}"
+    origin = f"{name}={text}, {wording.set_by_for(name)}"
     env[name] = Bound(vtype, value, percent_sign_kept(vtype, written), origin)
 
 

@@ -43,9 +43,24 @@ class Wording:
     lists_missions: str
     #: how the caller leaves the robot in Off (Stop, 173) at the end of a mission
     end_in_stop: str
+    #: the parameters the caller gave somewhere more particular than :attr:`set_by` says,
+    #: each with where: ``eval --variant`` (``("speed", "--variant 'speed=fast'")``), so
+    #: that of ten variants the message names the one with the bad value
+    origins: tuple[tuple[str, str], ...] = ()
 
     def __repr__(self) -> str:
         return f"roomba_bt.mission.wording.{self.name}"
+
+    def set_by_for(self, name: str) -> str:
+        """:attr:`set_by` for parameter ``name``: ``set by --variant 'speed=fast'`` when
+        :attr:`origins` names where it came from."""
+        origin = dict(self.origins).get(name)
+        return self.set_by if origin is None else f"set by {origin}"
+
+    def set_from_for(self, name: str) -> str:
+        """:attr:`set_from` for parameter ``name``: ``from --variant 'speed=fast'``."""
+        origin = dict(self.origins).get(name)
+        return self.set_from if origin is None else f"from {origin}"
 
     def give(self, assignment: str) -> str:
         """``"creep=VALUE"`` as the caller gives it: ``-p creep=VALUE``,

@@ -53,20 +53,20 @@ def test_results_released_as_they_come_are_all_kept(
     """A result is released in batches of ``RELEASE_EVERY`` as it is gathered; one read
     after its own release read as cancelled, and its episode was lost (``make bench``'s 48
     episodes: 16 a batch). Released after each result here, every result is kept."""
-    release = cluster._count_and_release
+    release = cluster._release_noting_reruns
 
-    def released_and_forgotten(client: Any, futures: list[Any], ask: bool = True) -> int:
+    def released_and_forgotten(client: Any, futures: list[Any], ask: bool = True) -> list[str]:
         """Released, then waited for until the client has marked them so (its event loop
         does it a moment later: the race ``make bench`` lost now and then)."""
         held = list(futures)
-        retried = release(client, futures, ask)
+        rerun = release(client, futures, ask)
         deadline = time.monotonic() + 10
         while any(f.status != "cancelled" for f in held) and time.monotonic() < deadline:
             time.sleep(0.005)
-        return retried
+        return rerun
 
     monkeypatch.setattr(cluster, "RELEASE_EVERY", 1)
-    monkeypatch.setattr(cluster, "_count_and_release", released_and_forgotten)
+    monkeypatch.setattr(cluster, "_release_noting_reruns", released_and_forgotten)
     (done,) = evaluate([SPECS], Engine("dask", jobs=2))
     assert not done.interrupted
     assert _episodes(done.results) == one_job
@@ -125,6 +125,7 @@ def _connect_when_ready(address: str) -> object:
 def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_dies(
     one_job: list[EpisodeResult],
     scheduler: Separate,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
     address, workers, _ = scheduler
     client = _connect_when_ready(address)
@@ -149,6 +150,20 @@ def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_
     assert all(r is not None for r in results)
     assert _episodes([r for r in results if r is not None]) == one_job
     assert retried >= 1, "the killed worker's episode ran again elsewhere"
+    # which ones, on stderr whatever --reproducible leaves out of stdout (it said nothing)
+    said = f"roomba-bt eval: {retried} episode(s) ran again after a Dask worker holding them"
+    assert said in capsys.readouterr().err
+
+
+def test_the_seeds_run_again_are_named_from_their_keys() -> None:
+    """The scheduler names the futures a dead worker held by key; the seeds are their
+    episodes', each once, in order, the first ten said."""
+    specs = [dataclasses.replace(SPECS[0], seed=seed) for seed in range(100, 112)]
+    keys = [f"episode-0a1b2c-{i}" for i in (3, 1, 11, 0, 2, 4, 5, 6, 7, 8, 9, 10)]
+    assert cluster._seeds_of(specs, [*keys[:2], "episode-0a1b2c-3-alone"]) == "101, 103"
+    assert cluster._seeds_of(specs, keys) == (
+        "100, 101, 102, 103, 104, 105, 106, 107, 108, 109 and 2 more"
+    )
 
 
 #: ``roomba-bt`` whose Dask client gives a lost scheduler 5 s to come back, not the user's

@@ -286,10 +286,12 @@ def test_the_json_summary_records_how_the_episodes_were_made(
         "comparisons",
         "passed",
         "plugins",
+        "methods",  # session 35: how each figure is computed
     }  # fmt: skip (session 29's two)
     assert report["conditions"] == {
         "timeout": 120.0,
         "wall_limit": 72.0,  # by default a minute and a tenth of --timeout
+        "params": {"duration": "1s"},  # -p's, under every variant's own (session 35)
         "seed": 7,
         "runs": 2,
         "world": "empty-room",
@@ -311,6 +313,91 @@ def test_the_json_summary_records_how_the_episodes_were_made(
     assert conditions["within"] is None and conditions["battery"] is None
     assert conditions["dock"] == {} and conditions["timeout"] == 900.0
     assert conditions["wall_limit"] == 150.0
+
+
+def test_the_json_summary_names_each_figure_s_method_and_level(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``interval``, ``p90_time``, ``mcnemar_p`` and ``time_difference_interval`` came with
+    no method nor level: a paper had to read the docs to say what they were."""
+    import json
+
+    from roomba_bt.evaluate.stats import METHODS
+
+    assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--sweep", "speed=200mm/s,"
+                 "300mm/s", "--no-progress", "--json"]) == 0  # fmt: skip
+    methods = json.loads(capsys.readouterr().out)["methods"]
+    assert methods == METHODS and methods["confidence_level"] == 0.95
+    assert "Wilson" in methods["interval"] and "linear interpolation" in methods["p90_time"]
+    assert "exact McNemar" in methods["mcnemar_p"]
+    assert "at least 0.95" in methods["time_difference_interval"]
+    assert "conditional on success" in methods["time_difference_interval"]
+    assert "Bonferroni" in methods["multiple_comparisons"]
+
+
+def test_a_variant_s_label_has_the_p_base_it_ran_with(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``-p speed=250mm/s`` under ``--variant``s: B was labelled "-p duration=2s" alone,
+    though it ran at 250 mm/s and A (which overrode the speed) did not; the text, the JSON's
+    labels and comparisons now say every value each ran with, the JSON the base and each
+    variant's own apart. One variant's ``-p`` were said nowhere in the text."""
+    import json
+
+    argv = ["eval", BUMP, "--runs", "2", "-p", "speed=250mm/s", "-p", "duration=1s",
+            "--variant", "speed=300mm/s", "--variant", "duration=2s", "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    a = f"{BUMP} -p duration=1s -p speed=300mm/s"
+    b = f"{BUMP} -p speed=250mm/s -p duration=2s"
+    assert f"A = {a}\n             B = {b}\n" in out
+    assert main([*argv, "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["conditions"]["params"] == {"speed": "250mm/s", "duration": "1s"}
+    assert [(v["label"], v["own_params"]) for v in report["variants"]] == [
+        (a, {"speed": "300mm/s"}), (b, {"duration": "2s"})
+    ]  # fmt: skip
+    assert (report["comparisons"][0]["a"], report["comparisons"][0]["b"]) == (a, b)
+    assert main(["eval", BUMP, "--runs", "1", "-p", "duration=1s", "--no-progress"]) == 0
+    assert f"variant      {BUMP} -p duration=1s\nmission " in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("variants", "said"),
+    [
+        (["--variant", "speed=200mm/s", "--variant", "speed=fast"],
+         "parameter speed=fast (from --variant speed=fast): expected a speed"),
+        (["--variant", "speed=200mm/s", "--variant", "duration=1s;sped=1"],
+         "unknown parameter 'sped' set by --variant 'duration=1s;sped=1' (did you mean "),
+        (["--sweep", "speed=200mm/s,fast"], "parameter speed=fast (from --sweep): expected a "),
+        (["-p", "speed=fast", "--variant", "duration=1s"],
+         "parameter speed=fast (from the command line): expected a speed"),
+    ],
+    ids=["variant-value", "variant-name", "sweep-value", "p-base"],
+)  # fmt: skip
+def test_a_bad_value_names_the_variant_it_came_from(
+    variants: list[str], said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Of ten ``--variant``s, "(from the command line)" left the user to find the bad one."""
+    assert main(["eval", BUMP, "--runs", "1", *variants, "--no-progress"]) == 2
+    assert said in capsys.readouterr().err
+
+
+def test_the_same_value_in_two_spellings_is_the_same_variant_twice(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``--sweep speed=300mm/s,0.3m/s`` ran both and "compared" them, median +0.0 s, with
+    no word; refused before any episode runs, as the same spelling twice is."""
+    argv = ["eval", BUMP, "--runs", "1", "-p", "duration=1s", "--no-progress"]
+    assert main([*argv, "--sweep", "speed=300mm/s,0.3m/s"]) == 2
+    said = capsys.readouterr().err
+    assert (f"{BUMP} -p duration=1s -p speed=300mm/s and {BUMP} -p duration=1s -p speed=0.3m/s: "
+            "the same variant twice (the mission reads the same values)") in said  # fmt: skip
+    assert (
+        main([*argv, "--variant", "speed=200mm/s", "--variant", "speed=200 mm/s;duration=1s"]) == 2
+    )
+    assert "the same variant twice" in capsys.readouterr().err
+    assert main([*argv, "--sweep", "speed=300mm/s,0.31m/s"]) == 0
 
 
 def test_two_missions_are_compared_and_the_text_report_says_so(
@@ -786,12 +873,16 @@ def test_the_line_an_error_says_to_run_runs_that_episode_again_with_its_tracebac
         "    - drive: {velocity: '${speed}', distance: 40 cm}\n      until: odd\n"
     )
     code = main(["eval", str(mission), "--runs", "4", "--seed", "5", "--world", "corridor",
-                 "-p", "speed=250mm/s", "--allow-plugin-files", "--no-progress"])  # fmt: skip
+                 "-p", "speed=250mm/s", "--allow-plugin-files", "--timeout", "2min",
+                 "--odometry-error", "0.01", "--no-progress"])  # fmt: skip
     err = capsys.readouterr().err
     assert code == 4
     reason = err.split(": seed ", 1)[1].split(": ", 1)[1].split("; see its traceback with: ")[0]
     line = err.rsplit("see its traceback with: ", 1)[1].strip()
     assert "--world corridor" in line and "-p speed=250mm/s" in line
+    # the limit and the encoders' error too (session 35: run's own limit applied, and the
+    # line said run had no --odometry-error, which it has)
+    assert "--timeout 120 --odometry-error 0.01" in line and "may differ" not in line
     words = shlex.split(line)
     assert words[:2] == ["roomba-bt", "-v"]
     assert main(words[1:]) == 4

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -215,8 +216,6 @@ def test_cpu_time_is_cpu_time_and_wall_time_is_said_to_be_wall_clock(
     """ "N s of CPU time" summed the episodes' wall-clock times: 500 jobs on 2 cores said
     18846.9 s of CPU time. An episode's CPU time is its thread's (``time.thread_time``), the
     summary says both, each by its name, and the record has a ``cpu_time`` column."""
-    from dataclasses import replace
-
     import roomba_bt.evaluate.episode as episode
     from roomba_bt.evaluate import EpisodeSpec
     from roomba_bt.evaluate.records import from_record, to_record
@@ -237,6 +236,15 @@ def test_cpu_time_is_cpu_time_and_wall_time_is_said_to_be_wall_clock(
     assert "20 s of mission time in 4.0 s of CPU time (5x real time per CPU second); " in text
     assert "10.0 s of wall-clock time summed over the episodes" in text
     assert summarize("m", "w", waited).to_dict()["cpu_time"] == 4.0
+
+
+def test_no_speed_is_said_when_no_episode_measured_its_cpu_time() -> None:
+    """Every episode HUNG (none records CPU time): the line said "0x real time per CPU
+    second", a simulator that stood still; it says the time was not measured."""
+    hung = [replace(result(s, "hung", time_s=70.0), wall_s=0.3) for s in range(2)]
+    text = str(summarize("m", "w", hung))
+    assert "140 s of mission time, CPU time not measured (HUNG and DIED episodes record " in text
+    assert "0x" not in text and "0.6 s of wall-clock time summed over the episodes" in text
 
 
 def test_a_timeout_decorator_and_the_episode_s_timeout_group_apart(tmp_path: Path) -> None:

@@ -126,6 +126,7 @@ def test_eval_reports_hung_episodes_and_exits_4(
     advice = err.split("run it alone with: ", 1)[1].splitlines()[0]
     words = shlex.split(advice)
     assert words[:3] == ["roomba-bt", "-v", "run"] and "--wall-limit" in words
+    assert words[words.index("--timeout") + 1] == "5"  # eval's limit, not run's 2 h
     assert main(words[1:]) == 4
     # the same outcome and words as the episode's (it said ERROR, as if the tree had raised)
     stuck = "--wall-limit 1 s of wall-clock time ran out in behaviour sequence / stuck (at "
