@@ -551,10 +551,7 @@ def run_on_client(
     gathered.rerun += _release_noting_reruns(
         client, [*gathered.futures, *futures.values()], gathered.asks_scheduler
     )
-    retried = len(gathered.rerun)
-    if retried:  # said whatever --reproducible leaves out of stdout, as the local pool says it
-        print(f"roomba-bt eval: {retried} episode(s) ran again after a Dask worker holding them "
-              f"was lost: seeds {_seeds_of(specs, gathered.rerun)}", file=sys.stderr)  # fmt: skip
+    retried = _say_reruns(specs, gathered.rerun)
     if watch.expired:
         raise NoWorkersError(watch.expired, results, retried)
     unfinished = sum(r is None for r in results)
@@ -714,6 +711,16 @@ def _release_noting_reruns(client: Any, futures: list[Any], ask: bool = True) ->
         future.release()
     futures.clear()
     return rerun
+
+
+def _say_reruns(specs: Sequence[EpisodeSpec], keys: list[str]) -> int:
+    """How many episodes (keyed ``keys``) ran again after a worker holding them was lost,
+    their seeds said on stderr, as the local pool says its own: whatever ``--reproducible``
+    leaves out of stdout, a lost worker leaves this trace."""
+    if keys:
+        print(f"roomba-bt eval: {len(keys)} episode(s) ran again after a Dask worker holding "
+              f"them was lost: seeds {_seeds_of(specs, keys)}", file=sys.stderr)  # fmt: skip
+    return len(keys)
 
 
 def _seeds_of(specs: Sequence[EpisodeSpec], keys: list[str], shown: int = 10) -> str:

@@ -419,9 +419,9 @@ def test_two_missions_are_compared_and_the_text_report_says_so(
         (["--sweep", "speed"], "expected NAME=V1,V2"),
         (["--sweep", "speed=1,2", "--variant", "speed=3"], "one or the other"),
         (["--variant", "speed"], "--variant 'speed': expected NAME=VALUE"),
-        # the loader names no one option: the name may come from -p, --sweep or --variant
-        (["--sweep", "sped=1mm/s,2mm/s"], "unknown parameter 'sped' set on the command line"),
-        (["--variant", "speed=fast"], "parameter speed=fast (from the command line)"),
+        # the loader names the option the name or value came from (session 35)
+        (["--sweep", "sped=1mm/s,2mm/s"], "unknown parameter 'sped' set by --sweep"),
+        (["--variant", "speed=fast"], "parameter speed=fast (from --variant speed=fast)"),
     ],
 )
 def test_bad_comparison_and_output_options_exit_2(
@@ -847,7 +847,8 @@ def test_a_behaviour_that_raises_in_an_episode_exits_4(
     assert code == 4
     assert "2 episode(s) ended with a behaviour's exception" in err
     assert "seed 3: " in err and "kaboom" in err and "boom.py:9" in err
-    assert f"roomba-bt -v run {mission} --fast --random-start --seed 3 --allow-plugin-files" in err
+    assert (f"roomba-bt -v run {mission} --fast --random-start --seed 3 --timeout 900 "
+            "--allow-plugin-files") in err  # fmt: skip
 
 
 def test_the_line_an_error_says_to_run_runs_that_episode_again_with_its_traceback(
