@@ -93,8 +93,8 @@ def _explain(root: Behaviour) -> tuple[str, Behaviour | None, bool]:
         flip = isinstance(child, _FLIPS)
         why = _succeeded_because(child) if flip else f"{child.name} succeeded"
         said = f"{node.name}: {why} (success is failure)"
-        held = _held_before(path)
-        return (said if held is None else f"{held} held, then {said}"), None, True
+        cause = _cause_before(path)
+        return (said if cause is None else f"{cause}, then {said}"), None, True
     message = "" if isinstance(best, _FLIPS) else best.feedback_message
     return (f"{best.name}: {message}" if message else best.name), None, bool(message)
 
@@ -199,16 +199,27 @@ def _failed_because(node: Behaviour) -> str:
     return _failed_because(failed[-1]) if failed else f"{node.name} failed"
 
 
-def _held_before(path: list[Behaviour]) -> str | None:
-    """The condition that ended the step before the failure, where the failure's path left a
-    sequence: in ``[drive until cliff, fallback[inverter(cliff), force_failure(back off)]]``
-    the cliff (the leaf that succeeded last under the step just before); None when that
-    leaf is an action (a ``log`` before the ``force_failure`` is no reason for it)."""
+def _cause_before(path: list[Behaviour]) -> str | None:
+    """Why the forced failure at the end of ``path`` ran, as a clause, or None:
+
+    * where the path left a fallback just after a ``while`` guard that failed
+      (``fallback[drive while not bump, force_failure(recover)]``, a library's bump
+      recovery), the guard's own message: the condition that stopped the drive ("stopped: a
+      bumper is pressed, while 'drive(...)' ran (bump(any) held)"); the reason said only
+      "force_failure: recover succeeded", never that the bumper stopped the drive;
+    * where it left a sequence, the condition that ended the step before: in ``[drive until
+      cliff, fallback[inverter(cliff), force_failure(back off)]]`` "cliff(any) held" (the
+      leaf that succeeded last under the step just before); None when that leaf is an
+      action (a ``log`` before the ``force_failure`` is no reason for it)."""
     success = py_trees.common.Status.SUCCESS
     for parent, child in zip(reversed(path[:-1]), reversed(path[1:]), strict=True):
+        index = parent.children.index(child)
+        if isinstance(parent, py_trees.composites.Selector) and index > 0:
+            tried = parent.children[index - 1]  # failed: a fallback goes on only then
+            if isinstance(tried, SaysWhy) and tried.feedback_message:
+                return tried.feedback_message  # escaped with the rest by the callers
         if not isinstance(parent, py_trees.composites.Sequence):
             continue
-        index = parent.children.index(child)
         if index == 0:
             return None
         node = parent.children[index - 1]
@@ -218,7 +229,7 @@ def _held_before(path: list[Behaviour]) -> str | None:
                 break
             node = held[-1]
         condition = node.status == success and not node.children and not _is_action(node)
-        return node.name if condition else None
+        return f"{node.name} held" if condition else None
     return None
 
 

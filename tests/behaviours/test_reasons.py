@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import py_trees
 
+from roomba_bt.behaviours.decorators import Guard
 from roomba_bt.behaviours.lean import Retry
 from roomba_bt.behaviours.reasons import failure_reason, running_in, while_stopped
 
@@ -144,4 +145,30 @@ def test_a_condition_named_otherwise_still_no_longer_holds() -> None:
     condition = _guard_of(py_trees.behaviours.Failure(name="no cliff ahead"))
     assert while_stopped(condition, "clean") == (
         "stopped: no cliff ahead no longer holds while 'clean' ran"
+    )
+
+
+def test_a_forced_failure_after_a_while_guard_names_what_stopped_the_guarded_node() -> None:
+    """A library's bump recovery: ``fallback[drive while not bump, force_failure(recover)]``
+    in a ``retry``. Giving up said only "force_failure: bump_recovery succeeded (success is
+    failure)", never that the bumper stopped the drive: the guard's reason comes first."""
+    bump = py_trees.behaviours.StatusQueue(
+        name="bump(any)", queue=[FAILURE], eventually=py_trees.common.Status.SUCCESS
+    )
+    drive = py_trees.behaviours.Running(name="drive(1m)")
+    guard = Guard(
+        "drive(1m)", py_trees.decorators.Inverter("inverter", child=bump), drive, until=False
+    )
+    recover = py_trees.decorators.SuccessIsFailure(
+        "force_failure", child=py_trees.behaviours.Success(name="bump_recovery")
+    )
+    attempt = py_trees.composites.Selector("fallback", memory=True, children=[guard, recover])
+    retry = Retry("retry", child=attempt, num_failures=1)
+    root = py_trees.composites.Sequence("patrol", memory=True, children=[retry])
+    root.tick_once()  # the drive runs: nothing bumped yet
+    root.tick_once()  # the bumper: the guard stops the drive, the recovery fails the try
+    assert root.status == FAILURE
+    assert failure_reason(root) == (
+        "retry: gave up after 1 failed attempt; the last: stopped: bump(any) held while "
+        "'drive(1m)' ran (stage drive was running), then force_failure: bump_recovery succeeded (success is failure)"
     )
