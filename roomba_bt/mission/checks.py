@@ -406,9 +406,12 @@ class KeyCheck:
         self._reported: set[tuple[int, str]] = set()
 
     def run(self, root: Node, initial: frozenset[str]) -> None:
-        """Unless a node that could not be built may have written a key (a ``set`` or
-        ``for_each`` not parsed, a behaviour that writes one): its readers are judged in the
-        pass after it is fixed, not said unwritten because of it."""
+        """Unless a node that could not be built may have written a key it does not name (a
+        ``for_each`` not parsed, a behaviour whose key did not resolve): its readers are
+        judged in the pass after it is fixed, not said unwritten because of it. One that
+        names its key (a ``set`` whose value alone is wrong) is taken to write it there, as
+        it will once fixed: the other keys' readers are judged now (a read-before-write
+        error showed only after the type errors beside it were fixed)."""
         if any(_may_write(node) for node in root.walk()):
             return
         self.visit(root, initial)
@@ -416,8 +419,8 @@ class KeyCheck:
     def visit(self, node: Node, written: frozenset[str]) -> frozenset[str]:
         """Keys certainly written after ``node`` succeeds."""
         kind = node.kind
-        if kind == "unbuilt":  # none that writes a key (run): it reads none either
-            return written
+        if kind == "unbuilt":  # writes only the keys it names (run); its reads are not known
+            return written | frozenset(node.params.values())
         if kind == "leaf":
             for key, loc in node.keys_read():
                 if key not in written and (id(node), key) not in self._reported:
@@ -468,8 +471,11 @@ class KeyCheck:
 
 
 def _may_write(node: Node) -> bool:
-    """Whether ``node`` could not be built and may have written a blackboard key."""
-    return node.kind == "unbuilt" and (node.partial is None or bool(node.partial.writes_keys))
+    """Whether ``node`` could not be built and may have written a blackboard key it does
+    not name (its key parameters that resolved are its ``params``)."""
+    if node.kind != "unbuilt":
+        return False
+    return node.partial is None or len(node.params) < len(node.partial.writes_keys)
 
 
 #: a parameter reading a key as ``@key``: the behaviour's name, the parameter, the reference,

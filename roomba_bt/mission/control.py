@@ -330,9 +330,16 @@ def parse_decorator(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
             else (f"drop the list: {word}: NODE" if child_loc is loc else "drop the list: do: NODE")
         )
         raise Bad(child_loc.at(f"{word} takes exactly one child, got a list of {count} ({fix})"))
-    options = _decorator_options(parser.ctx, kind, fields, key_loc, env)
-    if kind.writes_key is not None:
-        _key_items(parser.ctx, kind, options, fields, env)
+    try:
+        options = _decorator_options(parser.ctx, kind, fields, key_loc, env)
+        if kind.writes_key is not None:
+            _key_items(parser.ctx, kind, options, fields, env)
+    except Bad:
+        # a bad option (``repeat.times: 0``) does not hide the child's own errors, said in
+        # the same pass (they showed only once the option was fixed); the option's error
+        # then makes the decorator unbuilt
+        parser.node(child_node, child_loc, env)
+        raise
     child = parser.node(child_node, child_loc, env)
     if child is None:
         return None

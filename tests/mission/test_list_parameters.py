@@ -120,11 +120,11 @@ parameters:
 blackboard: {leg: distance, n: int}
 tree:
   sequence:
-    - for_each: {key: leg, in: "${fast}", do: wait}
-    - for_each: {key: leg, in: "@leg", do: wait}
-    - for_each: {key: n, in: "${legs}", do: wait}
+    - for_each: {key: leg, in: "${fast}", do: {log: leg}}
+    - for_each: {key: leg, in: "@leg", do: {log: leg}}
+    - for_each: {key: n, in: "${legs}", do: {log: leg}}
     - song: {number: 1, notes: "${legs}"}
-    - for_each: {key: leg, in: "${none}", do: wait}
+    - for_each: {key: leg, in: "${none}", do: {log: leg}}
 """
 
 
