@@ -50,6 +50,7 @@ from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 if TYPE_CHECKING:
     from roomba_bt.behaviours.declare import Declaration, Param
     from roomba_bt.behaviours.registry import Registry
+    from roomba_bt.mission.compiler import MissionText
 
 
 def register(sub: Any) -> None:
@@ -96,7 +97,12 @@ def register(sub: Any) -> None:
         Print the compiled tree of FILE.
         """,
     )
-    show.add_argument("file", metavar="FILE", help="a mission file, or a shipped mission's name")
+    show.add_argument("file", metavar="FILE",
+                      help="a mission file, a shipped mission's name, or a library file (its "
+                      "subtrees listed with their parameters and doc)")  # fmt: skip
+    show.add_argument("--subtree", metavar="NAME",
+                      help="draw this subtree of the library FILE, -p giving its arguments "
+                      "(-p dist=1m)")  # fmt: skip
     _common(show)
     show.add_argument("--dot", metavar="OUT.dot", type=output_with_suffix(".dot", ".gv"),
                       help="also write the tree as Graphviz dot")  # fmt: skip
@@ -342,12 +348,16 @@ def show_command(args: argparse.Namespace) -> int:
     if missing is not None:  # said before the tree is printed, not after
         print(f"roomba-bt show: {missing}", file=sys.stderr)
         return ExitCode.INVALID
+    drawn = _library_drawn(args, found, params)  # a library: listed, or a subtree drawn
+    if isinstance(drawn, int):
+        return drawn
     mission, diagnostics = compile_mission(
-        found,
-        params,
+        found if drawn is None else drawn.path,
+        params if drawn is None else {},  # a subtree's: its arguments in the text
         profile=get_profile(args.profile),
         baud=args.baud,
         permissions=permissions(args, found),
+        text=drawn,
     )
     if mission is None:
         for line in reported(diagnostics):
@@ -375,9 +385,51 @@ def show_command(args: argparse.Namespace) -> int:
     return ExitCode.OK
 
 
+def _library_drawn(
+    args: argparse.Namespace, found: str, params: dict[str, str]
+) -> MissionText | int | None:
+    """``show`` of a library file: its subtrees listed (the exit code), or with ``--subtree
+    NAME`` a mission of one use of it to draw; None for a mission file (drawn as it is). The
+    library is compiled first: its errors are said as ``validate`` says them (exit 2)."""
+    from roomba_bt.cli.library_show import library_listed, refused, subtree_mission
+    from roomba_bt.mission import compile_mission, reported
+    from roomba_bt.mission.compiler import is_library
+    from roomba_bt.mission.shipped import describe_library
+    from roomba_bt.yamlsource import read_text
+
+    if not is_library(Path(found)):
+        if args.subtree is None:
+            return None
+        return refused(
+            f"--subtree draws a subtree of a library file (subtrees:, no tree:); {args.file} "
+            "is a mission: its tree is drawn without --subtree"
+        )
+    _, diagnostics = compile_mission(
+        found,
+        profile=get_profile(args.profile),
+        require_tree=False,
+        permissions=permissions(args, found),
+    )
+    if diagnostics:
+        for line in reported(diagnostics):
+            print(line)
+        return ExitCode.INVALID
+    # it compiled: readable, and small enough
+    description, subtrees = describe_library(read_text(Path(found)))
+    if args.subtree is None:
+        if params:
+            return refused("-p sets a subtree's arguments: give --subtree NAME with it")
+        return library_listed(args.file, subtrees, description)
+    drawn = subtree_mission(args.file, Path(found), subtrees, args.subtree, params)
+    return refused(drawn) if isinstance(drawn, str) else drawn
+
+
 def missions_command(args: argparse.Namespace) -> int:
+    from roomba_bt.cli.library_show import print_subtrees
     from roomba_bt.mission.shipped import (
+        describe_library,
         describe_shipped,
+        parameter_line,
         shipped_file,
         shipped_library_files,
         shipped_missions,
@@ -402,10 +454,14 @@ def missions_command(args: argparse.Namespace) -> int:
     for entry in describe_shipped():
         print(f"{entry.name}  {entry.description}")
         for param in entry.parameters:
-            doc = f"  {param.doc}" if param.doc else ""
-            print(f"    {param.name}: {param.type}, default {param.default}{doc}")
+            print(f"    {parameter_line(param)}")
         print()
     print("library (include by name): " + ", ".join(shipped_library_files()))
+    for name in shipped_library_files():  # each subtree with its doc: what to use, and how
+        library = shipped_file(name)
+        assert library is not None  # listed from the folder itself
+        print(f"\n{name}")
+        print_subtrees(describe_library(library.read_text(encoding="utf-8"))[1], indent="    ")
     return ExitCode.OK
 
 

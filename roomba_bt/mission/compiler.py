@@ -415,6 +415,12 @@ def validate_files(
     ]
 
 
+def is_library(path: Path) -> bool:
+    """Whether the file at ``path`` is a library of subtrees (``subtrees:``, no ``tree:``):
+    ``show`` lists its subtrees, or draws one, instead of a tree."""
+    return not _has_tree(path)
+
+
 def _has_tree(path: Path) -> bool:
     """A library file (no top-level ``tree:`` and some ``subtrees:``) needs no tree. Read as
     the compiler reads it, the size checked first: a 4 GB file took 8 GB of memory here

@@ -226,16 +226,53 @@ def describe_shipped() -> list[ShippedMission]:
     out = []
     for name, path in shipped_missions().items():
         data: Any = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
-        declared = data.get("parameters") or {}
-        params = tuple(
-            ShippedParameter(
-                pname,
-                str(decl.get("type", "")),
-                _default_written(decl.get("default")),
-                str(decl.get("doc", "")),
-            )
-            for pname, decl in declared.items()
-        )
+        params = _declared(data.get("parameters") or {})
         description = _with_defaults(str(data.get("description", "")), params)
         out.append(ShippedMission(name, path, description, params))
     return out
+
+
+@dataclass(frozen=True)
+class LibrarySubtree:
+    """What ``roomba-bt missions`` and ``roomba-bt show LIB.yaml`` print of a library's
+    subtree: the ``doc:`` its writer gave it appeared nowhere a user looks."""
+
+    name: str
+    doc: str
+    parameters: tuple[ShippedParameter, ...]
+
+
+def describe_library(text: str) -> tuple[str, list[LibrarySubtree]]:
+    """A library file's ``description:`` and each subtree its YAML ``text`` defines (not
+    those it includes), in the file's order, read as plain data: the caller has compiled
+    the file first (its errors said, never a traceback here)."""
+    data: Any = yaml.safe_load(text) or {}
+    return str(data.get("description") or ""), [
+        LibrarySubtree(name, str(body.get("doc", "")), _declared(body.get("parameters") or {}))
+        for name, body in (data.get("subtrees") or {}).items()
+    ]
+
+
+def _declared(declared: dict[str, Any]) -> tuple[ShippedParameter, ...]:
+    """A ``parameters:`` section's declarations as listed: a list parameter's type is said
+    with its items' (``list of distance``); one with no default is ``required``."""
+    return tuple(
+        ShippedParameter(
+            pname,
+            str(decl.get("type", "")) + (f" of {decl['items']}" if "items" in decl else ""),
+            _default_written(decl["default"]) if "default" in decl else REQUIRED,
+            str(decl.get("doc", "")),
+        )
+        for pname, decl in declared.items()
+    )
+
+
+#: a parameter's ``default`` when it has none: given at every use (or with ``-p``)
+REQUIRED = "required"
+
+
+def parameter_line(param: ShippedParameter) -> str:
+    """One parameter as ``missions`` and ``show`` list it: ``laps: int, default 2  doc``."""
+    default = param.default if param.default == REQUIRED else f"default {param.default}"
+    doc = f"  {param.doc}" if param.doc else ""
+    return f"{param.name}: {param.type}, {default}{doc}"

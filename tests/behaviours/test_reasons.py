@@ -170,5 +170,6 @@ def test_a_forced_failure_after_a_while_guard_names_what_stopped_the_guarded_nod
     assert root.status == FAILURE
     assert failure_reason(root) == (
         "retry: gave up after 1 failed attempt; the last: stopped: bump(any) held while "
-        "'drive(1m)' ran (stage drive was running), then force_failure: bump_recovery succeeded (success is failure)"
+        "'drive(1m)' ran (stage drive was running), then force_failure: bump_recovery "
+        "succeeded (success is failure)"
     )

@@ -158,9 +158,15 @@ def test_missions_lists_each_with_description_and_parameters(capsys: Capsys) -> 
     assert "dock  Dock on the home base from its beams within 10min; succeed when charging." in out
     assert "    laps: int, default 2" in out
     assert "    time_limit: duration, default 10min  give up after this long" in out
-    assert out.rstrip().endswith(
-        "library (include by name): roomba-bt:lib/docking.yaml, roomba-bt:lib/undock.yaml"
+    assert (
+        "\nlibrary (include by name): roomba-bt:lib/docking.yaml, roomba-bt:lib/undock.yaml\n"
+        in out
     )
+    # then each library file's subtrees, with their doc: and parameters
+    library = out.split("library (include by name): ", 1)[1]
+    assert "\nroomba-bt:lib/docking.yaml\n    dock  Dock from the beams (no Seek Dock)" in library
+    assert "\n        time_limit: duration, default 10min  give up after this long\n" in library
+    assert "\nroomba-bt:lib/undock.yaml\n    undock  On a powered dock:" in library
 
 
 def test_describe_shipped_matches_the_compiled_missions() -> None:

@@ -1,0 +1,112 @@
+"""``roomba-bt show LIB.yaml`` lists a library's subtrees with their parameters and ``doc:``
+(it refused the file: "a library ... not run"), and ``--subtree NAME`` draws one of them
+(library report finding 9)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+
+Capsys = pytest.CaptureFixture[str]
+
+LIBRARY = """
+description: Bump recovery, shared by three missions.
+subtrees:
+  bump_recovery:
+    doc: Back off and turn away from the bumped side.
+    parameters:
+      back: {type: distance, default: 10cm, doc: how far to back up}
+    tree: {drive: {velocity: -150 mm/s, distance: "${back}"}}
+  drive_leg:
+    doc: Drive one leg, recovering from bumps.
+    parameters:
+      dist: {type: distance}
+      tries: {type: int, default: 3}
+    tree:
+      retry:
+        times: "${tries}"
+        do:
+          fallback:
+            - {drive: {velocity: 200 mm/s, distance: "${dist}"}, while: {inverter: {bump: any}}}
+            - force_failure: {subtree: bump_recovery}
+"""
+
+
+@pytest.fixture
+def library(mission_file: Callable[..., Path], monkeypatch: pytest.MonkeyPatch) -> str:
+    path = mission_file(LIBRARY, "lib/recovery.yaml")
+    monkeypatch.chdir(path.parent.parent)
+    return "lib/recovery.yaml"
+
+
+def test_a_library_is_listed_with_each_subtree_s_doc_and_parameters(
+    library: str, capsys: Capsys
+) -> None:
+    assert main(["show", library]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == "lib/recovery.yaml: Bump recovery, shared by three missions."
+    assert "roomba-bt show lib/recovery.yaml --subtree NAME" in out[1]
+    assert out[3:] == [
+        "bump_recovery  Back off and turn away from the bumped side.",
+        "    back: distance, default 10cm  how far to back up",
+        "drive_leg  Drive one leg, recovering from bumps.",
+        "    dist: distance, required",
+        "    tries: int, default 3",
+    ]
+
+
+def test_one_subtree_is_drawn_with_its_arguments(library: str, capsys: Capsys) -> None:
+    assert main(["show", library, "--subtree", "drive_leg", "-p", "dist=1m", "-p", "tries=2"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("drive_leg: Drive one leg, recovering from bumps.\n")
+    assert "retry(times=2) named 'drive_leg'" in out
+    assert "drive(velocity=200 mm/s, distance=1m)" in out
+    assert "drive(velocity=-150 mm/s, distance=10cm)" in out  # the default, in the use below
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (
+            ["--subtree", "drive_leg"],
+            "subtree 'drive_leg' needs a value for dist (distance) (no default): "
+            "give -p dist=VALUE",
+        ),
+        (
+            ["--subtree", "drive_leg", "-p", "dist=1m", "-p", "trie=2"],
+            "subtree 'drive_leg' has no parameter 'trie' (did you mean 'tries'?)",
+        ),
+        (
+            ["--subtree", "bump_recoveri"],
+            "defines no subtree 'bump_recoveri' (did you mean 'bump_recovery'?); it defines: "
+            "bump_recovery, drive_leg",
+        ),
+        (["-p", "dist=1m"], "-p sets a subtree's arguments: give --subtree NAME with it"),
+    ],
+)
+def test_what_cannot_be_drawn_is_said(
+    library: str, capsys: Capsys, argv: list[str], said: str
+) -> None:
+    assert main(["show", library, *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("roomba-bt show: ") and said in err, err
+
+
+def test_subtree_is_refused_for_a_mission(
+    mission_file: Callable[..., Path], capsys: Capsys
+) -> None:
+    path = mission_file("tree: wall\n")
+    assert main(["show", str(path), "--subtree", "x"]) == 2
+    assert "is a mission: its tree is drawn without --subtree" in capsys.readouterr().err
+
+
+def test_a_broken_library_says_its_errors_as_validate_does(
+    mission_file: Callable[..., Path], capsys: Capsys
+) -> None:
+    path = mission_file("subtrees: {leg: {tree: {drive: {velocity: 900 mm/s}}}}\n")
+    assert main(["show", str(path)]) == 2
+    assert "velocity 900 mm/s is out of range" in capsys.readouterr().out
