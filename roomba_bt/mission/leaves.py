@@ -96,16 +96,21 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     # resolve: reported there) is unbuilt too: what the leaf sends and the mode it leads to
     # may depend on it (`mode: "${m}"`), and reading them from it was an internal error.
     if not ok or not known:  # kept in its place, unbuilt: the checks still judge around it
-        # the keys it writes, where they name a declared key (a ``set`` whose value alone is
-        # wrong): the read-before-write check judges the other keys' readers in this pass
-        writes = {
-            p: params[p]
-            for p in decl.writes_keys
-            if isinstance(params.get(p), str) and params[p] in ctx.keys
-        }
-        return Node("unbuilt", key_loc, decl.name, params=writes, partial=decl)
+        return _unbuilt(ctx, decl, key_loc, params)
     return Node("leaf", key_loc, leaf_name(decl.name, given, env, types), decl=decl, params=params,
                 options=options, parameter_in_name=_parameter_in(given))  # fmt: skip
+
+
+def _unbuilt(ctx: Context, decl: Declaration, key_loc: Loc, params: dict[str, Any]) -> Node:
+    """A leaf whose parameters were wrong, kept in its place with the keys it writes where
+    they name a declared key (a ``set`` whose value alone is wrong): the read-before-write
+    check judges the other keys' readers in the same pass."""
+    writes = {
+        p: params[p]
+        for p in decl.writes_keys
+        if isinstance(params.get(p), str) and params[p] in ctx.keys
+    }
+    return Node("unbuilt", key_loc, decl.name, params=writes, partial=decl)
 
 
 def _parameter_in(given: list[tuple[str, yaml.Node, Loc, Loc]]) -> Loc | None:
