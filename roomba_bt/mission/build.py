@@ -205,6 +205,31 @@ def _differs(initial: Mapping[str, Any], other: Mapping[str, Any], key: str) -> 
     return (key in initial) != (key in other) or initial.get(key) != other.get(key)
 
 
+def _use_said(node: Node, what: str) -> str:
+    """The body of a subtree use as ``show`` draws it: the use with the arguments it wrote,
+    then what the body's root is when it says more than its symbol does (a decorator's
+    options, a leaf, a name the library gave it). A use was drawn as the subtree's name
+    alone (``{-} bump_recovery``), or as ``retry(times=3) named 'drive_leg'`` where the
+    root is a decorator: two looks, neither with the arguments."""
+    said = f"subtree {shortened(node.use)}"
+    if node.options_written or node.kind in ("leaf", GUARD.word):
+        said = f"{said}: {what}"
+    # a name the library or the use gave it (a leaf's own name and a guard's are what)
+    named = (node.kind == "leaf" and bool(node.label)) or node.kind not in ("leaf", GUARD.word)
+    if named and node.name not in (node.kind, node.use.split("(", 1)[0]):
+        said = f"{said} named {shortened(node.name)!r}"
+    return said
+
+
+def _condition_said(condition: Node) -> str:
+    """What a guard's condition tests, as ``show`` names the guard: an ``inverter`` the
+    mission did not name as ``not`` what it inverts (``while not bump(any)``; it drew
+    ``while inverter``, what it tests only in the rows under it)."""
+    if condition.kind == "inverter" and condition.name == "inverter" and condition.children:
+        return f"not {_condition_said(condition.children[0])}"
+    return shortened(condition.name)
+
+
 def _as_reviewed(node: Node) -> Node:
     """``node`` and its children, each renamed by ``name:`` named by what it is first (a long
     name cut, :func:`shortened`)."""
@@ -216,9 +241,13 @@ def _as_reviewed(node: Node) -> Node:
         name = f"{what} named {named!r}" if renamed else what
     else:
         name = f"{what} named {named!r}" if node.label else named
+    if node.use:  # one look for every use: ``subtree drive_leg(dist=1m): retry(times=3)``
+        name = _use_said(node, what)
     name = escaped(name, ANY_CONTROL)  # one line of show's tree: a -p text may hold "\n"
     children = [_as_reviewed(child) for child in node.children]
     if node.kind == GUARD.word:  # drawn as the composite it ticks as (Guard.drawn_as)
         word = "reactive_fallback" if node.options["until"] else "reactive_sequence"
+        tests = _condition_said(node.children[0])  # "while not bump(any)", not "while inverter"
+        name = escaped(f"{'until' if node.options['until'] else 'while'} {tests}", ANY_CONTROL)
         return replace(node, kind=word, name=name, children=children, options={"memory": False})
     return replace(node, name=name, children=children)

@@ -29,6 +29,7 @@ from roomba_bt.mission.values import (
     substituted,
     unknown,
 )
+from roomba_bt.printable import shortened
 
 
 def _unknown_parameter(decl: Declaration, pname: str) -> str:
@@ -298,9 +299,22 @@ def written_text(node: yaml.Node, env: Mapping[str, Bound], *, lists: bool = Fal
 
     if isinstance(node, yaml.ScalarNode):
         return substituted(str(node.value), value_of)
-    scalars = isinstance(node, yaml.SequenceNode) and all(
-        isinstance(item, yaml.ScalarNode) for item in node.value
-    )
-    if lists and scalars:
-        return f"[{', '.join(written_text(item, env) for item in node.value)}]"
+    if lists and isinstance(node, yaml.SequenceNode):  # each item, records too: the waypoints
+        items = [shortened(_item_text(item, env)) for item in node.value[:LISTED_ITEMS]]
+        more = len(node.value) - LISTED_ITEMS
+        return f"[{', '.join([*items, *([f'... and {more} more'] if more > 0 else [])])}]"
     return "..."
+
+
+#: how many items of a list ``show`` writes out (``for_each(key=wp, in=[...])``): a
+#: reviewer reads the route, and a generated list of thousands stays one line
+LISTED_ITEMS = 8
+
+
+def _item_text(node: yaml.Node, env: Mapping[str, Bound]) -> str:
+    """A list item as the file writes it: a scalar, or a record's fields (``{distance:
+    80cm, turn: 90deg}``: a ``for_each`` over waypoints showed ``in=...``)."""
+    if isinstance(node, yaml.MappingNode):
+        fields = (f"{key.value}: {written_text(value, env)}" for key, value in node.value)
+        return "{" + ", ".join(fields) + "}"
+    return written_text(node, env)

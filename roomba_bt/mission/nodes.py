@@ -17,7 +17,7 @@ from roomba_bt.behaviours.units import STR, closest
 from roomba_bt.mission.control import parse_composite, parse_decorator
 from roomba_bt.mission.diagnostics import Diagnostic, SubtreeUse
 from roomba_bt.mission.foreign import foreign_hint, suggestion
-from roomba_bt.mission.leaves import parse_leaf
+from roomba_bt.mission.leaves import parse_leaf, written_text
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import library_defining
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text
@@ -409,6 +409,9 @@ class NodeParser:
         if body.name == body.kind and body.kind != "leaf":
             body.name = name
         _mark_used(body, SubtreeUse(key_loc.file, key_loc.line, key_loc.column, name))
+        # show draws the use with what it was given, whatever the body
+        given = ", ".join(f"{p}={written_text(n, env, lists=True)}" for p, n, _, _ in args)
+        body.use = f"{name}({given})" if given else name
         return body
 
     def _subtree_env(

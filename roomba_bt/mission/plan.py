@@ -26,8 +26,9 @@ class Node:
     A node that could not be built (its errors reported) stays in its place as an
     ``unbuilt`` node, so that the checks of the whole tree judge what was written around it
     in the same pass (a limit under a reactive fallback is still not its last child when a
-    sibling after it is misspelt). It has no ``decl`` and no parameters: the checks that
-    read a behaviour's parameters pass it by. ``partial`` is the behaviour it names when
+    sibling after it is misspelt). It has no ``decl``, and of its parameters only the
+    declared keys it writes (a ``set`` whose value alone was wrong): the checks that read a
+    behaviour's parameters pass it by. ``partial`` is the behaviour it names when
     only its parameters were wrong: what it sends is known, so where it is reached is still
     judged (:mod:`roomba_bt.mission.checks`)."""
 
@@ -49,6 +50,9 @@ class Node:
     #: ${side}"``, a leaf's ``bump(${side})``, a guard's condition's): the name changes with
     #: the value, so ``selected:`` cannot pick the node by it; None: the name is fixed
     parameter_in_name: Loc | None = None
+    #: the subtree use this node is the body of, with the arguments the use writes
+    #: (``bump_recovery(angle=45deg)``), for ``show`` to draw every use one way; "" otherwise
+    use: str = ""
 
     @property
     def declared(self) -> Declaration | None:

@@ -334,22 +334,20 @@ def test_a_terminal_escape_in_a_mission_never_reaches_the_screen(
     assert "\x07" not in out + err
 
 
-def test_show_a_library_says_it_is_one_to_be_included(
+def test_show_a_library_lists_its_subtrees(
     mission_file: Callable[..., Path], capsys: Capsys
 ) -> None:
     """``show roomba-bt:lib/docking.yaml`` said "a mission needs a tree", as if the shipped
-    library were broken."""
-    assert main(["show", "roomba-bt:lib/docking.yaml"]) == 2
+    library were broken; then that it is a library, not run (exit 2): it lists the library's
+    subtrees, each with its doc: and parameters (library report finding 9)."""
+    assert main(["show", "roomba-bt:lib/docking.yaml"]) == 0
     out = capsys.readouterr().out
-    assert (
-        "this file is a library of subtrees (subtrees:, no tree:), to be included, not run: "
-        "include it in a mission (include: [roomba-bt:lib/docking.yaml]) and use them there "
-        "with subtree: NAME (validate checks a library on its own)"
-    ) in out
+    assert "\ndock  Dock from the beams (no Seek Dock)" in out
+    assert "    time_limit: duration, default 10min  give up after this long\n" in out
     assert "needs a tree" not in out
     library = mission_file("subtrees:\n  pause: {tree: {wait: 1s}}\n", "lib.yaml")
-    assert main(["show", str(library)]) == 2
-    assert f"(include: [{library}])" in capsys.readouterr().out
+    assert main(["show", str(library)]) == 0
+    assert capsys.readouterr().out.endswith("\npause\n")
     assert main(["validate", str(library)]) == 0
 
 

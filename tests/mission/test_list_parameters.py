@@ -75,9 +75,13 @@ def test_a_list_given_with_p_is_read_as_yaml_s_flow_list(compile_text: Compile) 
 
 def test_show_says_the_list_as_written(compile_text: Compile) -> None:
     names = [node.name for node in compile_text(ROUTE).reviewed().iterate()]
-    assert "for_each(key=leg, in=[1m, 2m]) named 'route'" in names
-    assert "for_each(key=leg, in=[30cm, 20cm]) named 'route'" in names
-    assert 'song(number=0, notes="[C4 200ms, E4 100ms]")' in names
+    # each use with the list it gave, then the body's root with the list it reads
+    assert "subtree route(legs=[1m, 2m]): for_each(key=leg, in=[1m, 2m])" in names
+    assert "subtree route(legs=[30cm, 20cm]): for_each(key=leg, in=[30cm, 20cm])" in names
+    assert (
+        'subtree sing(tune=[C4 200ms, E4 100ms]): song(number=0, notes="[C4 200ms, E4 100ms]")'
+        in names
+    )
 
 
 @pytest.mark.parametrize(

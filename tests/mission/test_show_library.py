@@ -63,9 +63,31 @@ def test_one_subtree_is_drawn_with_its_arguments(library: str, capsys: Capsys) -
     assert main(["show", library, "--subtree", "drive_leg", "-p", "dist=1m", "-p", "tries=2"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("drive_leg: Drive one leg, recovering from bumps.\n")
-    assert "retry(times=2) named 'drive_leg'" in out
+    # every use one look, with the arguments it wrote: a decorator's body was "retry(times=2)
+    # named 'drive_leg'", a sequence's "bump_recovery", neither with its arguments
+    assert "-^- subtree drive_leg(dist=1m, tries=2): retry(times=2)\n" in out
+    assert "--> subtree bump_recovery: drive(velocity=-150 mm/s, distance=10cm)\n" in out
+    assert "[-] while not bump(any)\n" in out  # what the guard tests, not "while inverter"
     assert "drive(velocity=200 mm/s, distance=1m)" in out
-    assert "drive(velocity=-150 mm/s, distance=10cm)" in out  # the default, in the use below
+
+
+def test_a_use_s_arguments_are_drawn_at_the_use(
+    library: str, mission_file: Callable[..., Path], capsys: Capsys
+) -> None:
+    mission_file(
+        """
+        include: [lib/recovery.yaml]
+        tree:
+          sequence:
+            - mode: safe
+            - subtree: {id: bump_recovery, back: 20cm}
+            - subtree: {id: drive_leg, dist: 2m}
+        """
+    )
+    assert main(["show", "m.yaml"]) == 0
+    out = capsys.readouterr().out
+    assert "--> subtree bump_recovery(back=20cm): drive(velocity=-150 mm/s, distance=20cm)" in out
+    assert "-^- subtree drive_leg(dist=2m): retry(times=3)" in out
 
 
 @pytest.mark.parametrize(

@@ -9,7 +9,7 @@ from pathlib import Path
 import py_trees
 import pytest
 
-from roomba_bt.mission import load_mission
+from roomba_bt.mission import load_mission, load_mission_text
 from roomba_bt.runtime.display import node_kind
 
 
@@ -107,7 +107,22 @@ def test_show_draws_a_guard_as_the_composite_it_ticks_as(tmp_path: Path) -> None
     path.write_text(GUARDED)
     lines = py_trees.display.ascii_tree(load_mission(path).reviewed()).splitlines()
     assert lines[1:3] == ["    [o] until bump(any)", "        --> bump(any)"], lines
-    assert lines[4] == "    [-] while inverter", lines
+    # what it tests: "while inverter" said it only in the rows under it (library report 9)
+    assert lines[4] == "    [-] while not bump(any)", lines
+
+
+def test_show_writes_out_a_for_each_s_records() -> None:
+    """``for_each(key=wp, in=...)`` hid the waypoints a reviewer reads; a long list stays
+    one line of show's tree, its first items written and the rest counted."""
+    route = [{"distance": f"{i}0cm", "turn": "90deg"} for i in range(1, 11)]
+    text = (
+        "blackboard: {wp: {fields: {distance: distance, turn: angle}}}\n"
+        f"tree: {{sequence: [{{mode: safe}}, {{for_each: {{key: wp, in: {route!r}, "
+        'do: {drive: {velocity: 200 mm/s, distance: "@wp.distance"}}}}]}\n'
+    ).replace("'", "")
+    drawn = py_trees.display.ascii_tree(load_mission_text(text).reviewed())
+    shown = ", ".join(f"{{distance: {i}0cm, turn: 90deg}}" for i in range(1, 9))
+    assert f"for_each(key=wp, in=[{shown}, ... and 2 more])" in drawn, drawn
 
 
 def test_the_run_display_draws_a_guard_as_a_composite(tmp_path: Path) -> None:
