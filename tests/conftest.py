@@ -267,6 +267,30 @@ def child() -> Iterator[Callable[[Sequence[str]], subprocess.Popen[str]]]:
         proc.communicate()
 
 
+#: ``roomba-bt ARGS`` started as a shell script's ``roomba-bt ARGS &`` starts it: a shell
+#: without job control starts its background jobs with SIGINT and SIGQUIT ignored, and a
+#: started program keeps them so (``exec`` keeps an ignored signal ignored)
+_AS_A_SCRIPTS_JOB = (
+    "import os, signal, sys\n"
+    "for s in (signal.SIGINT, signal.SIGQUIT): signal.signal(s, signal.SIG_IGN)\n"
+    "os.execv(sys.executable, [sys.executable, '-m', 'roomba_bt', *sys.argv[1:]])\n"
+)
+
+
+@pytest.fixture
+def script_job(
+    child: Callable[[Sequence[str]], subprocess.Popen[str]],
+) -> Callable[[Sequence[str]], subprocess.Popen[str]]:
+    """``script_job(["run", ...])`` starts ``roomba-bt run ...`` as a script's background
+    job (Ctrl-C ignored at start: a script's ``kill -INT $!`` is its only way to ask a
+    stop), as :func:`child` starts a process."""
+
+    def start(args: Sequence[str]) -> subprocess.Popen[str]:
+        return child([sys.executable, "-c", _AS_A_SCRIPTS_JOB, *args])
+
+    return start
+
+
 #: a child that holds a file as ``run --record`` holds its record (``ClaimedFile``'s flock)
 _HOLD = (
     "import sys, time\n"

@@ -143,24 +143,46 @@ def main(argv: Sequence[str] | None = None) -> int:
     """The command: ``argv`` None is the process itself (``roomba-bt``), whose streams and
     signals are its own to set (:func:`_as_the_process`); a list is a program's call."""
     process = argv is None
-    if process:
-        _as_the_process()
     try:
+        if process:  # inside: a signal may come while it imports, its handlers set
+            _as_the_process()
         with spoken(_command_line_wording()):  # the connections' messages name the flags
             return _command(argv)
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP before a run took them
-        if process:
-            _signals_end_the_process()  # only the last words are left
-        print(f"roomba-bt: interrupted{_by_signal(exc)}", file=sys.stderr)
-        from roomba_bt.runtime.summary import ExitCode
-
-        return ExitCode.INTERRUPTED
+        return _interrupted(exc, process)
+    except RuntimeError as exc:
+        interrupt = _signal_interrupt(exc)
+        if interrupt is None:
+            raise
+        return _interrupted(interrupt, process)
     finally:
         if process:
             _signals_end_the_process()  # the command's answer is out
             problem = stdout_problem()
             if problem is not None:
                 print(f"roomba-bt: {problem}", file=sys.stderr)
+
+
+def _interrupted(exc: KeyboardInterrupt, process: bool) -> int:
+    """A signal's interrupt that ended the command outside a run's own handling (before it
+    took the signal, or a command without one): said in one line, exit 130
+    (:attr:`ExitCode.INTERRUPTED`). A robot's connection the command had opened was closed
+    on the way, with its stop; a run says its own ending."""
+    if process:
+        _signals_end_the_process()  # only the last words are left
+    print(f"roomba-bt: interrupted{_by_signal(exc)}", file=sys.stderr)
+    from roomba_bt.runtime.summary import ExitCode
+
+    return ExitCode.INTERRUPTED
+
+
+def _signal_interrupt(exc: BaseException) -> KeyboardInterrupt | None:
+    """The signal's interrupt ``exc`` stands for (Python wraps one raised in a class body's
+    ``__set_name__`` in a RuntimeError: :func:`~roomba_bt.robot.safety.signal_interrupt`),
+    or None."""
+    from roomba_bt.robot.safety import signal_interrupt
+
+    return signal_interrupt(exc)
 
 
 def _command(argv: Sequence[str] | None) -> int:
@@ -184,6 +206,8 @@ def _command(argv: Sequence[str] | None) -> int:
     except ImportError as exc:  # the subcommands import the tree and the robot lazily
         return _cannot_run(exc, args.verbose)
     except Exception as exc:  # each command has closed what it held (a run: its port)
+        if _signal_interrupt(exc) is not None:
+            raise  # a signal's, not a bug: main() says it, exit 130
         return _internal_error(exc, args.verbose)
 
 
@@ -218,11 +242,20 @@ def _as_the_process() -> None:
       before a run installs its handlers they ended the process with 143 (129), not the
       130 the exit-code table says. One the process was started with ignored (``nohup``'s
       SIGHUP) stays ignored;
+    * SIGINT, when the process was started with it ignored (a script's ``roomba-bt run ...
+      &``: a shell without job control starts its background jobs so), raises
+      :class:`KeyboardInterrupt` from here on, as a terminal's Ctrl-C does. The run's
+      handlers take it all the same, but Python keeps an ignored SIGINT ignored until
+      then: a script's ``kill -INT $!`` in the seconds of start-up, the port's opening and
+      the handshake (on a loaded machine) was lost, and the whole mission ran, exit 0;
     * a 0.1.0 plugin's call of the encoder's module shown on stderr, at the plugin's line
       (:data:`~roomba_bt.oi.encode.ENCODE_MODULE_CALLED`): Python hides a DeprecationWarning
       outside ``__main__``, and this one's reader is whoever runs the plugin. Not when
       ``-W`` or ``PYTHONWARNINGS`` chose what to show (``error`` makes the call fail)."""
     guard_std_streams()
+    with contextlib.suppress(ValueError):  # not the main thread
+        if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
     from roomba_bt.robot.safety import IGNORED_AT_START, raise_terminated
 
     for name in ("SIGTERM", "SIGHUP"):

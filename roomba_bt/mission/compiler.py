@@ -52,6 +52,7 @@ from roomba_bt.mission.source import Loc
 from roomba_bt.mission.values import Context
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
+from roomba_bt.robot.safety import signal_interrupt
 
 __all__ = [
     "FileValidation",
@@ -139,6 +140,8 @@ def _compile(
         mission.warnings = tuple(chains.of(d) for d in mission.warnings)
         return mission, diagnostics, loader
     except Exception as exc:  # a compiler bug must still not be a traceback at a user
+        if signal_interrupt(exc) is not None:
+            raise  # a SIGTERM Python wrapped as a plugin's class was made: the CLI's 130
         message = f"internal error while compiling ({type(exc).__name__}: {exc}); please report it"
         return None, [Diagnostic(display(path), 1, 1, message)], None
 

@@ -128,14 +128,80 @@ def signal_reason(signum: int, *, terminal: bool | None = None) -> str:
 def raise_terminated(signum: int, frame: FrameType | None) -> None:
     """A signal handler: the signal raises :class:`Terminated` in the main thread (the CLI
     installs it for SIGTERM and SIGHUP as the process starts, before a run has its own),
-    marked as a signal's (:func:`signal_delivered`)."""
-    raise delivered(Terminated(signum), signum)
+    marked as a signal's (:func:`signal_delivered`), at a safe point
+    (:data:`interrupts_deferred`)."""
+    raised_when_safe(delivered(Terminated(signum), signum))
 
 
 def raise_interrupt(signum: int, frame: FrameType | None) -> None:
     """A signal handler for SIGINT: Python's own (a :class:`KeyboardInterrupt`), marked as a
-    signal's (:func:`signal_delivered`); :func:`interrupts_told_apart` installs it."""
-    raise delivered(KeyboardInterrupt(), signum)
+    signal's (:func:`signal_delivered`), at a safe point (:data:`interrupts_deferred`);
+    :func:`interrupts_told_apart` installs it."""
+    raised_when_safe(delivered(KeyboardInterrupt(), signum))
+
+
+class InterruptsDeferred:
+    """A block of the main thread that an interrupt of ours never lands inside: one a
+    signal brings meanwhile is raised where the block ends (its safe point), or at once
+    outside one. For a write whose steps must all be done or none: ``GzipFile.write``
+    writes the compressed text to the file, then adds its length and CRC-32 to what the
+    gzip trailer says; a SIGTERM that raised between the two (a ``--fast`` run writes its
+    compressed record all the time) left a trailer that did not match the text, and
+    ``gzip -t`` and replay refused the whole record (3 of 17 signalled ``--fast`` ``.gz``
+    records, session 35). A flag the handlers read, not the signals held in the thread's
+    mask (:func:`~roomba_bt.robot.ending.signals_deferred`): that is two system calls, and
+    a compressed record writes a line each frame. Only our handlers wait for it (those of
+    this module); Python's own SIGINT handler, outside a run and
+    :func:`interrupts_told_apart`, raises as ever. Blocks nest; another thread's count
+    nothing (a signal's handler runs in the main thread, and raises there)."""
+
+    #: the main thread's blocks now open
+    depth: ClassVar[int] = 0
+    #: the first interrupt a signal brought inside them, raised when the last one ends
+    pending: ClassVar[KeyboardInterrupt | None] = None
+
+    def __enter__(self) -> None:
+        if threading.get_ident() == _MAIN_THREAD:
+            InterruptsDeferred.depth += 1
+
+    def __exit__(self, *exc_info: object) -> None:
+        if threading.get_ident() != _MAIN_THREAD:
+            return
+        InterruptsDeferred.depth -= 1
+        pending = InterruptsDeferred.pending
+        if pending is not None and not InterruptsDeferred.depth:
+            InterruptsDeferred.pending = None
+            raise pending
+
+
+_MAIN_THREAD = threading.main_thread().ident
+
+#: ``with interrupts_deferred:`` a block no interrupt of ours lands inside
+#: (:class:`InterruptsDeferred`)
+interrupts_deferred = InterruptsDeferred()
+
+
+def raised_when_safe(interrupt: KeyboardInterrupt) -> None:
+    """Raise ``interrupt`` (a signal handler's) now, or keep it for the end of the
+    :data:`interrupts_deferred` block the main thread is in (the first one kept)."""
+    if not InterruptsDeferred.depth:
+        raise interrupt
+    if InterruptsDeferred.pending is None:
+        InterruptsDeferred.pending = interrupt
+
+
+def signal_interrupt(exc: BaseException) -> KeyboardInterrupt | None:
+    """The interrupt a signal delivered (:func:`signal_delivered`) that ``exc`` is, or that
+    Python wrapped it in: a signal whose handler raised inside a class body's
+    ``__set_name__`` (a dataclass's fields, as a module is imported) comes out as
+    ``RuntimeError: Error calling __set_name__ ...`` before Python 3.12, its ``__cause__``
+    the interrupt. A SIGTERM in the first second of ``roomba-bt run`` landed there (in
+    ``runtime/summary.py``): a traceback and exit 1, not exit 130. None: no signal's."""
+    if isinstance(exc, RuntimeError) and isinstance(exc.__cause__, KeyboardInterrupt):
+        exc = exc.__cause__
+    if isinstance(exc, KeyboardInterrupt) and signal_delivered(exc):
+        return exc
+    return None
 
 
 #: the attribute a signal's interrupt carries (its signal's number), which one a plugin's
@@ -194,12 +260,13 @@ def code_failure(exc: BaseException) -> bool:
     ``__init__``, a method), is that code's failure, to be said as such with its file:line:
     any exception, ``sys.exit()`` (SystemExit), ``GeneratorExit``, a ``BaseException`` of its
     own, a ``KeyboardInterrupt`` it raised itself; all but an interrupt a signal delivered
-    (:func:`signal_delivered`: the operator's) and :class:`RunAborted` (from outside the
-    run), which go on as they came. Before, only ``Exception`` (and SystemExit) was caught:
-    a plugin's ``sys.exit(0)`` in ``shutdown()`` exited 0 after a failed mission, its
-    ``raise KeyboardInterrupt`` read ``INTERRUPTED (Ctrl-C)``, its ``BaseException`` was a
-    traceback and exit 1."""
-    return not isinstance(exc, RunAborted) and not signal_delivered(exc)
+    (:func:`signal_delivered`: the operator's; or the ``RuntimeError`` Python wrapped one
+    in, :func:`signal_interrupt`, for the CLI to say as the signal's) and
+    :class:`RunAborted` (from outside the run), which go on as they came. Before, only
+    ``Exception`` (and SystemExit) was caught: a plugin's ``sys.exit(0)`` in ``shutdown()``
+    exited 0 after a failed mission, its ``raise KeyboardInterrupt`` read ``INTERRUPTED
+    (Ctrl-C)``, its ``BaseException`` was a traceback and exit 1."""
+    return not isinstance(exc, RunAborted) and signal_interrupt(exc) is None
 
 
 def failure_said(exc: BaseException) -> str:
@@ -413,9 +480,8 @@ class InterruptGuard:
                 say_if_room(2, self._waiting)
             return
         self.stop_begun = self.raised = True  # the run now unwinds into its safe stop
-        if signum == signal.SIGINT:
-            raise delivered(KeyboardInterrupt(), signum)
-        raise delivered(Terminated(signum), signum)
+        interrupt = KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+        raised_when_safe(delivered(interrupt, signum))
 
     def late_interrupt(self) -> KeyboardInterrupt | None:
         """The interrupt a signal that came during the stop stands for (:attr:`late`), or

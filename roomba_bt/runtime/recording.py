@@ -126,6 +126,7 @@ from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot import wording
+from roomba_bt.robot.safety import interrupts_deferred
 from roomba_bt.runtime.claimed import ClaimedFile, held_by_a_writer
 from roomba_bt.transport.base import Transport
 
@@ -212,9 +213,20 @@ class _CompressedLines(io.TextIOWrapper):
         self._flushed: deque[tuple[int, int, int]] = deque(maxlen=FLUSHES_KEPT)
         super().__init__(self._gzip, encoding="utf-8")
 
+    def write(self, text: str) -> int:
+        """Whole or not at all, whatever signal comes: ``GzipFile.write`` (called when the
+        text buffered here fills its chunk, or at a flush) writes the compressed text out
+        and only then counts it into the trailer's CRC-32 and length; an interrupt raised
+        between the two left a record whose trailer did not match it
+        (:data:`~roomba_bt.robot.safety.interrupts_deferred`: the interrupt is raised once
+        the line is in)."""
+        with interrupts_deferred:
+            return super().write(text)
+
     def flush(self) -> None:
-        super().flush()
-        self._flushed.append((self._raw.tell(), self._gzip.crc, self._gzip.tell()))
+        with interrupts_deferred:  # a sync flush's bytes are all written, or none made
+            super().flush()
+            self._flushed.append((self._raw.tell(), self._gzip.crc, self._gzip.tell()))
 
     def end_with(self, line: bytes, within: int | None = None) -> bool:
         """End the file, whose write just failed, with ``line`` (the recording's stop note)
@@ -248,7 +260,8 @@ class _CompressedLines(io.TextIOWrapper):
 
     def close(self) -> None:
         try:
-            super().close()  # the last block and gzip's trailer
+            with interrupts_deferred:
+                super().close()  # the last block and gzip's trailer
         finally:
             self._raw.close()
 

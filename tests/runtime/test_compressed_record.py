@@ -11,6 +11,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 from collections.abc import Callable, Sequence
@@ -20,6 +21,7 @@ from typing import IO
 import pytest
 
 from roomba_bt.cli import main
+from roomba_bt.robot.safety import InterruptGuard
 from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.recording import (
     FLUSH_EVERY_S,
@@ -215,6 +217,66 @@ class _ClaimedOnAFullDisk(ClaimedFile):
 
     def open_text(self, newline: str | None = None) -> IO[str]:
         return io.TextIOWrapper(self.open_binary(), encoding="utf-8", newline=newline)  # type: ignore[arg-type]
+
+
+class _SignalledAsItWrites(_FillsUp):
+    """A file whose next write once :attr:`armed` brings ``signum`` to this process as the
+    write returns: its handler's interrupt comes inside ``GzipFile.write``, after the
+    compressed text reached the file and before it was counted into gzip's trailer."""
+
+    def __init__(self, file: io.RawIOBase, signum: int) -> None:
+        super().__init__(file, room=1 << 40)
+        self.signum = signum
+        self.armed = False
+
+    def write(self, data: bytes | bytearray | memoryview) -> int:  # type: ignore[override]
+        taken = super().write(data)
+        if self.armed:
+            self.armed = False
+            signal.raise_signal(self.signum)
+        return taken
+
+
+class _ClaimedSignalled(ClaimedFile):
+    """``run --record``'s claim of a file that brings a signal as it is written
+    (:class:`_SignalledAsItWrites`, unbuffered: gzip writes to it straight)."""
+
+    def __init__(self, path: Path, signum: int) -> None:
+        super().__init__(path)
+        self.signum = signum
+        self.raw: _SignalledAsItWrites | None = None
+
+    def open_binary(self) -> IO[bytes]:
+        raw = super().open_binary().detach()  # type: ignore[attr-defined]
+        self.raw = _SignalledAsItWrites(raw, self.signum)
+        return self.raw  # type: ignore[return-value]
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_a_signal_while_gzip_writes_leaves_a_whole_compressed_record(
+    tmp_path: Path, signum: int
+) -> None:
+    """The run's handler raised wherever the main thread was: inside ``GzipFile.write``,
+    between its write of the compressed text and its count of it, the record's trailer no
+    longer matched its text (``gzip -t``: crc error, length error) and replay refused the
+    whole file, exit 2: 3 of 17 SIGTERM'd ``--fast`` records (session 35). The interrupt
+    now comes once the line is written; the record ends with its end line, a whole gzip
+    file."""
+    path = tmp_path / "run.jsonl.gz"
+    claimed = _ClaimedSignalled(path, signum)
+    recording = RecordingTransport(_Link(), path, HEADER, claimed)  # type: ignore[arg-type]
+    assert claimed.raw is not None
+    with pytest.raises(KeyboardInterrupt), InterruptGuard(wall_clock=False):
+        claimed.raw.armed = True
+        for _ in range(1000):  # 15 s of frames: the signal comes in the first second
+            recording.read(0.015)
+            recording.write(bytes([137, 0, 200, 128, 0]))
+    assert not claimed.raw.armed
+    recording.close()
+    text = gzip.decompress(path.read_bytes()).decode("utf-8")  # CRC check failed, before
+    lines = [json.loads(line) for line in text.splitlines()]
+    assert lines[-1]["d"] == "end"
+    assert load_record(path).ended
 
 
 @pytest.mark.parametrize("name", ["run.jsonl", "run.jsonl.gz"])
