@@ -116,7 +116,7 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, Protocol
 
 from roomba_bt import __version__
 from roomba_bt.errors import RoombaBtError
@@ -194,38 +194,87 @@ def compressed_name(path: str | Path) -> bool:
     return str(path).lower().endswith(COMPRESSED_SUFFIX)
 
 
-class _CompressedLines(io.TextIOWrapper):
+class LineFile(Protocol):
+    """What a record's lines are written to: a text file (a plain record), or
+    :class:`_CompressedLines`."""
+
+    @property
+    def closed(self) -> bool: ...
+
+    def write(self, text: str, /) -> int: ...
+
+    def flush(self) -> None: ...
+
+    def fileno(self) -> int: ...
+
+    def close(self) -> None: ...
+
+
+#: how many lines a compressed record gathers before it compresses them (some 5 KB of text,
+#: as a text file's 8 KB buffer: a line alone would cost zlib a call each)
+LINES_PER_COMPRESS = 64
+
+
+class _CompressedLines:
     """A compressed record's lines, written through gzip into ``raw``, which closing closes
     (a :class:`gzip.GzipFile` handed a file leaves it open, and with it the record's lock).
     Its ``flush`` is the gzip file's, a zlib ``Z_SYNC_FLUSH`` written out to the file: what
     was written before it decompresses from the file as it stands, so a run killed outright
     leaves a readable record up to its last flush, as a plain one does. No file name and a
-    zero time in the gzip header: ``run --reproducible`` writes the same bytes again."""
+    zero time in the gzip header: ``run --reproducible`` writes the same bytes again.
+
+    Whole whatever signal comes: ``GzipFile.write`` writes the compressed text to the file
+    and only then counts it into the CRC-32 and length of gzip's trailer, and a run's
+    signal handler raised wherever the main thread was: between the two, it left a
+    trailer that did not match the text (``gzip -t``: crc error; replay refused the whole
+    record: 3 of 17 SIGTERM'd ``--fast`` records, session 35). So gzip is called only
+    within :data:`~roomba_bt.robot.safety.interrupts_deferred`, where the interrupt waits
+    for the call to end; and the lines are gathered here, not in a ``TextIOWrapper``, which
+    drops what it had gathered when the write it hands them to raises (an interrupt at
+    that write's first line), and whose every line a deferral around it would have cost
+    as much again."""
 
     def __init__(self, raw: IO[bytes]) -> None:
         self._raw = raw
         self._gzip = gzip.GzipFile(
             filename="", mode="wb", fileobj=raw, compresslevel=COMPRESS_LEVEL, mtime=0
         )
+        #: the lines written since the last compress
+        self._lines: list[str] = []
         #: after each flush that reached the file, the latest last: the file's size then
         #: (a sync flush ends on a byte, after a whole line), and the CRC-32 and length of
         #: the text up to there, which gzip's trailer holds (:meth:`end_with`)
         self._flushed: deque[tuple[int, int, int]] = deque(maxlen=FLUSHES_KEPT)
-        super().__init__(self._gzip, encoding="utf-8")
+
+    @property
+    def closed(self) -> bool:
+        return self._raw.closed
+
+    def fileno(self) -> int:
+        return self._raw.fileno()
 
     def write(self, text: str) -> int:
-        """Whole or not at all, whatever signal comes: ``GzipFile.write`` (called when the
-        text buffered here fills its chunk, or at a flush) writes the compressed text out
-        and only then counts it into the trailer's CRC-32 and length; an interrupt raised
-        between the two left a record whose trailer did not match it
-        (:data:`~roomba_bt.robot.safety.interrupts_deferred`: the interrupt is raised once
-        the line is in)."""
+        """Gather ``text`` (whole lines), compressed with the next :data:`LINES_PER_COMPRESS`
+        or at the next flush. An interrupt here is raised with it gathered, or not."""
+        if self._raw.closed:
+            raise ValueError("write to a closed record")
+        lines = self._lines
+        lines.append(text)
+        if len(lines) >= LINES_PER_COMPRESS:
+            self._compress()
+        return len(text)
+
+    def _compress(self) -> None:
+        """The gathered lines into gzip, whole (the interrupt of a signal meanwhile waits)."""
         with interrupts_deferred:
-            return super().write(text)
+            text = "".join(self._lines).encode("utf-8")
+            self._lines.clear()  # before the write: a full disk's lines are lost, not repeated
+            self._gzip.write(text)
 
     def flush(self) -> None:
         with interrupts_deferred:  # a sync flush's bytes are all written, or none made
-            super().flush()
+            self._compress()
+            self._gzip.flush()
             self._flushed.append((self._raw.tell(), self._gzip.crc, self._gzip.tell()))
 
     def end_with(self, line: bytes, within: int | None = None) -> bool:
@@ -261,7 +310,9 @@ class _CompressedLines(io.TextIOWrapper):
     def close(self) -> None:
         try:
             with interrupts_deferred:
-                super().close()  # the last block and gzip's trailer
+                if not self._gzip.closed:
+                    self._compress()
+                    self._gzip.close()  # the last block and gzip's trailer
         finally:
             self._raw.close()
 
@@ -281,7 +332,7 @@ def _gzip_ending(line: bytes, crc: int, length: int) -> bytes:
     return block + trailer
 
 
-def _open_for_writing(claimed: ClaimedFile, path: str) -> IO[str]:
+def _open_for_writing(claimed: ClaimedFile, path: str) -> LineFile:
     """The record's file, emptied, for its lines: gzip-compressed when named ``.gz``."""
     if compressed_name(path):
         return _CompressedLines(claimed.open_binary())
@@ -323,7 +374,7 @@ class RecordingTransport:
         self.path = str(path)
         #: written gzip-compressed (the path ends in ``.gz``)
         self.compressed = compressed_name(path)
-        self._file: IO[str] = _open_for_writing(claimed or ClaimedFile(path), self.path)
+        self._file: LineFile = _open_for_writing(claimed or ClaimedFile(path), self.path)
         self._t0: float | None = None
         #: why and when the recording stopped before the run's end (None: it did not)
         self.stopped: str | None = None
@@ -488,7 +539,7 @@ RECORD_STOPPED = "record_stopped"
 _TAIL_BYTES = 1 << 16
 
 
-def _mark_stopped(file: IO[str], path: str, t: float, why: str, within: int | None = None) -> bool:
+def _mark_stopped(file: LineFile, path: str, t: float, why: str, within: int | None = None) -> bool:
     """End the record at ``path`` (written through ``file``, whose write just failed) with a
     :data:`RECORD_STOPPED` note, so that its replay says the recording stopped, not "the run
     was killed?" (a full disk or ``ulimit -f`` read as a ``kill -9``). A write failed: the
@@ -556,7 +607,7 @@ def size_text(size: int) -> str:
     return f"{size // per} {unit}"
 
 
-def _write_nowhere(file: IO[str]) -> None:
+def _write_nowhere(file: LineFile) -> None:
     """Point ``file``'s descriptor at the null device: what it still buffers (and a
     compressed record's trailer) goes nowhere when it is closed, not past the file's end."""
     with contextlib.suppress(OSError, ValueError):
