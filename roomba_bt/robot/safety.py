@@ -149,8 +149,9 @@ class InterruptsDeferred:
     compressed record all the time) left a trailer that did not match the text, and
     ``gzip -t`` and replay refused the whole record (3 of 17 signalled ``--fast`` ``.gz``
     records, session 35). A flag the handlers read, not the signals held in the thread's
-    mask (:func:`~roomba_bt.robot.ending.signals_deferred`): that is two system calls, and
-    a compressed record writes a line each frame. Only our handlers wait for it (those of
+    mask (:func:`~roomba_bt.robot.ending.signals_deferred`): that is two system calls a
+    block, and a signal already caught whose handler runs as the mask is set raises before
+    the block that would give the mask back begins. Only our handlers wait for it (those of
     this module); Python's own SIGINT handler, outside a run and
     :func:`interrupts_told_apart`, raises as ever. Blocks nest; another thread's count
     nothing (a signal's handler runs in the main thread, and raises there)."""
