@@ -1266,7 +1266,7 @@ class ReplayTransport:
     wall_clock = False
     #: whether the recorded run's stop was listened after (:data:`STOP_LISTENED`): then the
     #: replay's is too, on the recorded bytes, as a line that loses bytes to the robot's is
-    loses_bytes = False
+    _listened = False
 
     def __init__(
         self,
@@ -1283,7 +1283,7 @@ class ReplayTransport:
         #: its end, its time), for :meth:`write`'s clock
         self._out_times: deque[tuple[int, float]] = deque()
         self._recorded = record.out_bytes
-        self.loses_bytes = bool(record.header.get(STOP_LISTENED, False))
+        self._listened = bool(record.header.get(STOP_LISTENED, False))
         self._ended = record.ended
         self._progress = progress
         self._last_t = record.last_chunk_t  # a replay's last read or write is its 100 %
@@ -1510,6 +1510,16 @@ class ReplayTransport:
             yield
         finally:
             self._as_recorded = False
+
+    @property
+    def loses_bytes(self) -> bool:
+        """Whether the replay's stop is listened after (``robot.ending.listened_after``): where
+        the recorded run's was (:data:`STOP_LISTENED`), unless the record stopped short of its
+        run's end and is used up. Past such a record's end there is nothing to hear: the
+        replay's stop was called NOT DELIVERED, CONNECTION LOST, logged as an ERROR, in the
+        replay of a run that ended well in Passive and whose record a full disk or
+        ``--record-max`` cut (the record of a pulled cable has its end line: judged as ever)."""
+        return self._listened and (self._ended or not self.exhausted)
 
     @property
     def exhausted(self) -> bool:

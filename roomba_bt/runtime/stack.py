@@ -651,6 +651,15 @@ def _window_end(until: float | None) -> str:
     return f"the end of the window, mission time {until:g} s ({wording.current.replay_until})"
 
 
+def _cut_short(record: Record) -> str:
+    """Where and why a record without its run's end ends, as a replay's outcome says it:
+    what follows it (the replay's own stop, past the record) is not the recorded run's, and
+    its verdict is none (``ReplayTransport.loses_bytes``)."""
+    stopped = record.recording_stopped
+    why = "its run's end is not in it" if stopped is None else f"the recording stopped ({stopped})"
+    return f"it ends at {record.last_t:.3f} s, before its run's end: {why}"
+
+
 def follow_the_recorded_link(stack: RunStack, record: Record) -> None:
     """A replay's link trips its watchdog where the record's did (on the record's silence
     where the record notes no trips: made before they were noted), and asks for a silent
@@ -693,7 +702,9 @@ def replay_record(
             return "first difference from the record"
         if transport.ended_early:
             return _window_end(until)
-        return "end of the record" if transport.exhausted else None
+        if not transport.exhausted:
+            return None
+        return "end of the record" if record.ended else f"end of the record: {_cut_short(record)}"
 
     stack = RunStack(
         mission,

@@ -19,7 +19,7 @@ from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.wording import COMMAND_LINE, spoken
-from roomba_bt.runtime.recording import RecordingTransport, load_record
+from roomba_bt.runtime.recording import RecordingTransport, ReplayTransport, load_record
 from roomba_bt.runtime.stack import Recording, RunStack, replay_record
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.runtime.tick_guard import stop_first
@@ -163,6 +163,57 @@ def test_a_killed_runs_record_still_shows_a_difference_before_its_end(
     out = capsys.readouterr().out
     assert "without the run's end: the run was killed, or writing its record failed" in out
     assert "replay: first difference at mission time" in out and "expected nothing, sent" in out
+
+
+def _listened_after(lines: list[str]) -> list[str]:
+    """``lines`` with the header of a record made on the wall clock (a robot's, a pty's),
+    whose run listened after its stop (``stop_listened``), as its replay then does."""
+    return [json.dumps({**json.loads(lines[0]), "stop_listened": True}) + "\n", *lines[1:]]
+
+
+def test_the_replay_of_a_record_a_full_disk_cut_says_where_it_ends_not_a_lost_robot(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A wall-clock run's record stopped by a full disk (or ``--record-max``): the run went
+    on and ended SUCCESS in Passive. Its replay listened after its own stop past the cut,
+    heard nothing there, and said CONNECTION LOST, NOT DELIVERED, and an ERROR line. It now
+    says where the record ends and why, and judges no stop it holds nothing of."""
+    lines = _listened_after(_killed_at(_recorded_run(tmp_path, capsys), 1.2))
+    cut = tmp_path / "cut.jsonl"
+    note = {"t": 1.2, "d": "note", "note": {"record_stopped": "No space left on device"}}
+    cut.write_text("".join(lines) + json.dumps(note) + "\n", encoding="utf-8")
+    with caplog.at_level(logging.WARNING):
+        assert main(["replay", str(cut)]) == 0
+    out = capsys.readouterr().out
+    assert (
+        "outcome      INPUT ENDED (end of the record: it ends at 1.200 s, before its run's "
+        "end: the recording stopped (No space left on device))" in out
+    )
+    assert "NOT DELIVERED" not in out and "CONNECTION LOST" not in out
+    assert "ERROR" not in caplog.text
+    assert "the tree wrote the same" in out and "up to there" in out
+
+
+@pytest.mark.parametrize(("ended", "listened"), [(True, True), (False, False)])
+def test_a_replay_listens_after_its_stop_past_the_record_only_where_the_record_goes_on(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], ended: bool, listened: bool
+) -> None:
+    """Used up, a record with its end line holds what the robot sent after the stop (a
+    pulled cable's: nothing), and its replay's stop is judged on it as the run's was; one
+    cut short holds nothing of the run's end, and its replay's stop is not listened after."""
+    lines = _listened_after(_recorded_run(tmp_path, capsys))
+    record = tmp_path / "listened.jsonl"
+    record.write_text("".join(lines if ended else lines[:-1]), encoding="utf-8")
+    loaded = load_record(_left_a_minute(record))
+    transport = ReplayTransport(loaded)
+    assert transport.loses_bytes  # the chunks still to give: listened, as the run did
+    for _, side, data in loaded.chunks():  # the recorded run's reads and writes, in order
+        if side == "out":
+            transport.write(data)
+        else:
+            assert transport.read(3600.0) == data
+    assert transport.exhausted and transport.difference is None
+    assert transport.loses_bytes is listened
 
 
 def test_a_record_made_before_the_end_line_is_compared_up_to_where_it_ends(
