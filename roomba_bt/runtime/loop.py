@@ -437,7 +437,8 @@ class MissionRunner(BaseHandle):
                     setup_tree(self.mission.root, lambda: self.mission.setup(self))
                     check_alone(board, root)  # a py_trees client's keys: the process's
                     virtual = not getattr(self.connection.transport, "wall_clock", True)
-                    if virtual or not self.on_wall_clock:  # py_trees' Timeout would never fire
+                    summary.virtual_clock = virtual or not self.on_wall_clock
+                    if summary.virtual_clock:  # py_trees' Timeout would never fire
                         warn_of_wall_clock_timeouts(root)
                     if tick_guard is not None:
                         tick_guard.start()
