@@ -158,6 +158,12 @@ def _add_limit_options(run: argparse.ArgumentParser) -> None:
         f"none; with --fast and no --monitor/--watch {FAST_TIMEOUT_S / 3600:g}h, else a mission "
         "that never ends would run until the simulated battery is flat, or for ever on the dock)",
     )
+    run.add_argument(
+        "--duration",
+        help="a planned shift: stop after this much mission time (8h) and call it SUCCESS, "
+        "exit 0, where --timeout calls it TIMEOUT, exit 1 (not both; the tree ending sooner "
+        "ends the run as it says)",
+    )
     add_wall_limit_option(
         run, "for the run",
         "after the safe stop, HUNG, exit 4; the way to end a --fast run stuck where --timeout's "
@@ -505,6 +511,9 @@ def _stack(
     summary = stack.runner.summary  # the runtime says its settings as things; here, as flags
     if _fast_limit(args):  # no user gave it: its reason says whose it is
         summary.time_limit = f"--fast's own limit of {duration_said(FAST_TIMEOUT_S)}"
+    elif timeout is not None and getattr(args, "duration", None) is not None:
+        summary.time_limit = f"--duration {duration_said(timeout)}"
+        summary.planned_end = True
     elif timeout is not None:
         summary.time_limit = f"--timeout {duration_said(timeout)}"
     summary.strict_named = "--strict"
@@ -530,7 +539,7 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
     params = parse_params(args.param)
     if isinstance(params, str):
         return _error(params)
-    timeout = parse_timeout(args.timeout)
+    timeout = _time_limit(args)
     if isinstance(timeout, str):
         return _error(timeout)
     if _fast_limit(args):
@@ -574,12 +583,28 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
     return params, timeout
 
 
+def _time_limit(args: argparse.Namespace) -> float | str | None:
+    """The run's mission-time limit: ``--timeout`` (a guard: TIMEOUT, exit 1) or
+    ``--duration`` (a planned shift's length: SUCCESS, exit 0), never both (one would never
+    act); a message when they are both given or one is not a duration."""
+    duration = getattr(args, "duration", None)
+    if duration is None:
+        return parse_timeout(args.timeout)
+    if args.timeout is not None:
+        return (
+            f"--duration {duration} and --timeout {args.timeout}: give one (--duration: a "
+            "planned end, SUCCESS; --timeout: a limit that ends the run as TIMEOUT)"
+        )
+    return parse_timeout(duration, "--duration")
+
+
 def _fast_limit(args: argparse.Namespace) -> bool:
     """Whether the run takes ``--fast``'s own limit (:data:`FAST_TIMEOUT_S`): on the virtual
     clock with no ``--timeout``, and nobody watching (``--monitor``, ``--watch``: the page
     stops it, and a paused run's clock goes on)."""
     watched = args.monitor is not None or args.watch
-    return bool(args.fast) and args.timeout is None and not watched
+    planned = getattr(args, "duration", None) is not None
+    return bool(args.fast) and args.timeout is None and not planned and not watched
 
 
 def end_in_problem(end_in: str, profile: RobotProfile) -> str | None:

@@ -128,6 +128,7 @@ from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot import wording
 from roomba_bt.robot.safety import interrupts_deferred
 from roomba_bt.runtime.claimed import ClaimedFile, held_by_a_writer
+from roomba_bt.runtime.summary import PLANNED_END
 from roomba_bt.transport.base import Transport
 
 log = logging.getLogger(__name__)
@@ -725,6 +726,9 @@ def tree_ended(note: Mapping[str, Any]) -> str:
     timed-out run's stop unconfirmed was replayed as a link lost, the replay's tree went on
     past the time limit, starved, and its own stop was not compared."""
     outcome, reason = str(note.get(ENDED)), str(note.get("reason") or "")
+    planned = reason.endswith(f"({PLANNED_END})") and "of mission time reached" in reason
+    if outcome == "success" and planned:
+        return "timeout"  # ``run --duration``: ended from outside its tree, as a time limit
     if not reason.startswith(UNDELIVERED_STOP):
         return outcome
     had = reason[len(UNDELIVERED_STOP) :]

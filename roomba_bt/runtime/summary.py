@@ -88,6 +88,11 @@ def profile_shown(profile: RobotProfile) -> str:
     return "" if profile.name == DEFAULT_PROFILE.name else f"{profile.name} ({profile.title})"
 
 
+#: what a SUCCESS at the run's planned length says (``run --duration``): a record's replay
+#: ends there as at a time limit (``recording.tree_ended``)
+PLANNED_END = "the planned end"
+
+
 class Outcome(Enum):
     SUCCESS = "success"
     FAILURE = "failure"
@@ -379,6 +384,9 @@ class RunSummary:
     #: flag (``--timeout 90 s``), or says whose limit it was when no user gave one (``run
     #: --fast``'s own: ``--fast's own limit of 7200 s``)
     time_limit: str = ""
+    #: the time limit is the run's planned length (``run --duration``, a shift), not a
+    #: guard: reaching it is SUCCESS (:meth:`timed_out`)
+    planned_end: bool = False
     #: how the summary and :class:`RunFailed` name the strict check (``RunStack(...,
     #: strict=True)``); the command line names its flag, ``--strict``
     strict_named: str = "the strict check"
@@ -468,9 +476,15 @@ class RunSummary:
     def timed_out(self, limit_s: float, where: str) -> None:
         """The run's time limit of ``limit_s`` s ran out (``where``: `` in drive``, the leaf
         running). The reason keeps its end, ``... of mission time ran out in drive``, which
-        :func:`~roomba_bt.evaluate.episode.failure_stage` reads."""
-        self.outcome = Outcome.TIMEOUT
+        :func:`~roomba_bt.evaluate.episode.failure_stage` reads. A planned end
+        (:attr:`planned_end`: ``run --duration``) is SUCCESS, its reason saying so
+        (:data:`PLANNED_END`)."""
         limit = self.time_limit or f"the run's {duration_said(limit_s)}"
+        if self.planned_end:
+            self.outcome = Outcome.SUCCESS
+            self.reason = f"{limit} of mission time reached{where} ({PLANNED_END})"
+            return
+        self.outcome = Outcome.TIMEOUT
         self.reason = f"{limit} of mission time ran out{where}"
 
     @property

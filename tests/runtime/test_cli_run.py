@@ -144,6 +144,33 @@ def test_timeout_is_exit_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert "TIMEOUT" in capsys.readouterr().out
 
 
+def test_a_planned_shift_ends_at_its_duration_as_success_and_replays_there(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A nightly shift of 8 h ended by --timeout was TIMEOUT, exit 1 ("a person looks"),
+    every night. ``--duration`` is its planned length: SUCCESS, exit 0, said so; its record
+    replays up to that end and stops there, as at a time limit."""
+    record = tmp_path / "shift.jsonl"
+    argv = ["--display", "none", "--duration", "2s", "--record", str(record)]
+    assert _run_file(tmp_path, "spin.yaml", SPIN, *argv) == 0
+    assert (
+        "outcome      SUCCESS (--duration 2 s of mission time reached in drive (the planned "
+        "end))" in capsys.readouterr().out
+    )
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    assert "the recorded run ended in success at t=2.0" in out
+    assert "the tree wrote the same" in out and "as the recorded run" in out
+
+
+def test_a_duration_and_a_timeout_together_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["--duration", "8h", "--timeout", "9h"]
+    assert _run_file(tmp_path, "spin.yaml", SPIN, *argv) == 2
+    assert "--duration 8h and --timeout 9h: give one" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("name", ["dock.yaml", "bump-and-turn.yaml"])
 def test_a_run_recorded_on_the_virtual_clock_replays_byte_for_byte(
     name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
