@@ -144,6 +144,11 @@ def _add_run_parser(sub: Any) -> None:
     _add_strict_option(run)
     _add_session_options(run)
     add_display_option(run, live=True)
+    run.add_argument(
+        "--heartbeat", metavar="DURATION", default="10min",
+        help="with --display log: a line of battery, distance, mode and ticks every this "
+        "much mission time (--fast too); none: no such line (default 10min)",
+    )  # fmt: skip
     _add_label_option(run)
     add_monitor_arguments(run)
 
@@ -378,7 +383,9 @@ def _claimed_run(
         if monitor is not None:
             monitor.finish(None)
         return _not_started(args, exc, "nothing sent: the port was not opened")
-    observer = observer_for(args.display, sys.stdout, label=args.label or "")
+    observer = observer_for(
+        args.display, sys.stdout, label=args.label or "", heartbeat_s=args.heartbeat_s
+    )
     try:
         stack = _stack(args, mission, link, packets, params, timeout, observer, claimed)
     except BaseException as exc:  # the port let go of (its exclusive mode): it was left open
@@ -548,6 +555,10 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
     if isinstance(limit, str):
         return _error(limit)
     args.wall_limit_s = limit
+    heartbeat = limit_seconds(args.heartbeat, "--heartbeat")
+    if isinstance(heartbeat, str):
+        return _error(heartbeat)
+    args.heartbeat_s = heartbeat
     simulated = (args.world, args.plot, args.fast, args.battery is not None, args.odometry_error)
     if args.port and any(simulated):
         return _error(

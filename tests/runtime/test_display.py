@@ -444,3 +444,32 @@ def test_an_ascii_terminal_gets_ascii_marks(run_mission: RunMission) -> None:
     assert display.writer.wait_written(5.0) and not display.writer.gone
     out.flush()
     assert b"sequence [ok]" in out.buffer.getvalue()  # type: ignore[attr-defined]
+
+
+WAIT = """
+tree:
+  sequence:
+    - mode: safe
+    - wait: 10min
+"""
+
+
+@pytest.mark.parametrize(("heartbeat", "beats"), [("1min", [60, 120]), ("none", [])])
+def test_the_log_says_how_the_run_goes_every_heartbeat_of_mission_time(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, heartbeat: str, beats: list[int]
+) -> None:
+    """A patrol's ``--display log`` printed nothing for 3.5 hours between its first tick and
+    its docking: "fine" and "hung" read the same in the journal. A line every heartbeat of
+    mission time (``--fast`` too) says the battery, the distance, the mode and the ticks."""
+    from roomba_bt.cli import main
+
+    mission = tmp_path / "wait.yaml"
+    mission.write_text(WAIT, encoding="utf-8")
+    argv = ["run", str(mission), "--fast", "--display", "log", "--duration", "150s"]
+    caplog.set_level(logging.INFO, logger="roomba_bt.run")
+    assert main([*argv, "--heartbeat", heartbeat]) == 0
+    said = [(r.mission_time, r.getMessage()) for r in caplog.records if "still" in r.getMessage()]
+    assert said == [
+        (t, f"still running: battery 60 %, 0.00 m driven, Safe, tick {t * 1000 // 15}")
+        for t in beats
+    ]
