@@ -189,6 +189,11 @@ def _add_record_options(run: argparse.ArgumentParser) -> None:
         help="stop the --record file at this size on disk (500MB, 2GB); the run goes on, and "
         "its summary says the mission time of the cut (default: no limit)",
     )  # fmt: skip
+    run.add_argument(
+        "--require-record", action="store_true",
+        help="refuse to start (exit 2, nothing sent) when the --record file's header cannot be "
+        "written (a full disk); default: the run goes on without its record, said so",
+    )  # fmt: skip
 
 
 def _add_label_option(run: argparse.ArgumentParser) -> None:
@@ -396,9 +401,29 @@ def _claimed_run(
         if isinstance(exc, OSError):  # the record cannot be written
             return _error(f"--record {args.record}: {exc.strerror or exc}")
         raise  # a bug (main() says it, exit 70), or Ctrl-C
+    unrecorded = _record_refused(args, stack)
+    if unrecorded is not None:
+        with contextlib.suppress(Exception):
+            link.close()  # nothing was written to it: the robot's start is the run's
+        if monitor is not None:
+            monitor.finish(None)
+        return _error(unrecorded)
     if monitor is not None:
         monitor.start()  # the port is open: its URL now, not one a busy port never serves
     return _run_and_report(args, stack, observer, simulator, monitor)
+
+
+def _record_refused(args: argparse.Namespace, stack: RunStack) -> str | None:
+    """Why the run does not start: ``--require-record`` and a record whose header could not
+    be written (a full disk: the file left empty); None to go on. A lab that needs a record
+    of every run got a 0-byte file and a summary line ``stopped at 0.000 s``, easy to miss."""
+    stopped = getattr(stack.transport, "stopped", None)
+    if not getattr(args, "require_record", False) or not stopped:
+        return None
+    return (
+        f"--record {args.record}: the record's header could not be written ({stopped}); "
+        "--require-record: not started, nothing sent"
+    )
 
 
 def _mission_at_its_rate(

@@ -687,3 +687,20 @@ def test_a_control_character_never_reaches_the_run(
     out, err = capsys.readouterr()
     assert "\x1b" not in out + err
     assert "control character U+001B" in err and "faking.yaml:3:" in err
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (a full disk)")
+def test_a_run_that_must_be_recorded_refuses_to_start_when_its_header_cannot_be_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A lab that needs a record of every run: with the disk full the run started anyway and
+    left a 0-byte file. ``--require-record`` refuses, exit 2, nothing sent; without it the
+    run goes on as before, its summary saying where the record stopped."""
+    argv = ["--display", "none", "--timeout", "1s", "--record", "/dev/full"]
+    assert _run_file(tmp_path, "spin.yaml", SPIN, *argv, "--require-record") == 2
+    out, err = capsys.readouterr()
+    assert "--record /dev/full: the record's header could not be written" in err
+    assert "--require-record: not started, nothing sent" in err
+    assert "outcome" not in out  # no run, no summary
+    assert _run_file(tmp_path, "spin.yaml", SPIN, *argv) == 1  # the timeout's, as before
+    assert "record       stopped at 0.000 s: No space left on device" in capsys.readouterr().out
