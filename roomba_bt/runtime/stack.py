@@ -651,13 +651,15 @@ def _window_end(until: float | None) -> str:
     return f"the end of the window, mission time {until:g} s ({wording.current.replay_until})"
 
 
-def _cut_short(record: Record) -> str:
-    """Where and why a record without its run's end ends, as a replay's outcome says it:
-    what follows it (the replay's own stop, past the record) is not the recorded run's, and
-    its verdict is none (``ReplayTransport.loses_bytes``)."""
+def _end_of(record: Record) -> str:
+    """A replay's reason at the end of ``record``; for one without its run's end, where and
+    why it ends: what follows it (the replay's own stop, past the record) is not the
+    recorded run's, and its verdict is none (``ReplayTransport.loses_bytes``)."""
+    if record.ended:
+        return "end of the record"
     stopped = record.recording_stopped
     why = "its run's end is not in it" if stopped is None else f"the recording stopped ({stopped})"
-    return f"it ends at {record.last_t:.3f} s, before its run's end: {why}"
+    return f"end of the record: it ends at {record.last_t:.3f} s, before its run's end: {why}"
 
 
 def follow_the_recorded_link(stack: RunStack, record: Record) -> None:
@@ -702,9 +704,7 @@ def replay_record(
             return "first difference from the record"
         if transport.ended_early:
             return _window_end(until)
-        if not transport.exhausted:
-            return None
-        return "end of the record" if record.ended else f"end of the record: {_cut_short(record)}"
+        return _end_of(record) if transport.exhausted else None
 
     stack = RunStack(
         mission,
