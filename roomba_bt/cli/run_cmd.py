@@ -818,6 +818,27 @@ def _report(
             print(plotted, file=sys.stderr)
 
 
+#: A stderr line longer than this is said a clause a line (:func:`_journal_lines`).
+JOURNAL_LINE = 200
+
+
+def _journal_lines(said: str) -> list[str]:
+    """A lost link's stderr line, 400 characters and more (the cause, the watchdog, the
+    grace, the queries, the stream asked for again, in one sentence), as a journal reads
+    it: the cause first, then each of its clauses (its ``; ``, outside brackets) on a line
+    of its own, indented; every word kept. A short one stays one line."""
+    if len(said) <= JOURNAL_LINE:
+        return [said]
+    clauses, depth, start = [], 0, 0
+    for at, char in enumerate(said):
+        depth += (char == "(") - (char == ")")
+        if depth == 0 and said.startswith("; ", at):
+            clauses.append(said[start:at])
+            start = at + 2
+    clauses.append(said[start:])
+    return [clauses[0], *(f"  {clause}" for clause in clauses[1:])]
+
+
 def _outcome_said(summary: RunSummary) -> str:
     """The summary's outcome, final mode and safe stop in one line (``outcome SUCCESS;
     final mode Passive; safe stop sent drive, ...``), for stderr when stdout failed."""
@@ -864,7 +885,9 @@ def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSum
         # the summary above it saying it whole
         reason = escaped(summary.headline or summary.reason, ANY_CONTROL)
         pointer = " (the summary's outcome says what was seen)" if summary.headline else ""
-        print(f"roomba-bt: {summary.outcome.value}: {reason}{pointer}", file=sys.stderr)
+        said = f"{summary.outcome.value}: {reason}{pointer}"
+        for line in _journal_lines(said) if summary.outcome is Outcome.CONNECTION_LOST else [said]:
+            print(f"roomba-bt: {line}", file=sys.stderr)
     if summary.failed_strict:  # the outcome reads SUCCESS: say why the exit code is not 0
         findings = escaped("; ".join(summary.strict_findings()), ANY_CONTROL)
         print(f"roomba-bt: --strict: {findings}", file=sys.stderr)

@@ -704,3 +704,26 @@ def test_a_run_that_must_be_recorded_refuses_to_start_when_its_header_cannot_be_
     assert "outcome" not in out  # no run, no summary
     assert _run_file(tmp_path, "spin.yaml", SPIN, *argv) == 1  # the timeout's, as before
     assert "record       stopped at 0.000 s: No space left on device" in capsys.readouterr().out
+
+
+def test_a_long_lost_link_line_is_said_a_clause_a_line_for_the_journal() -> None:
+    """A sleeping robot's stderr line was 457 characters: the cause, the watchdog, the
+    grace, the queries and the stream asked for again in one sentence. The cause stays the
+    first line, each clause follows on its own, every word kept; brackets hold theirs."""
+    said = (
+        "connection lost: /dev/pts/1: the sensor stream stopped: nothing arrived for 2.0 s (the "
+        "robot switched off or stopped streaming, or the cable); the watchdog sent drive 0 "
+        "after 100 ms, then the run waited the 2 s grace; it answered no query, asked twice 1 s "
+        "apart, and it was in Safe, which never sleeps: switched off, a flat battery, or the "
+        "cable; the stream was asked for again 2 times within the grace (zeros; then the "
+        "request), and nothing came"
+    )
+    lines = run_cmd._journal_lines(said)
+    assert lines[0].endswith("nothing arrived for 2.0 s (the robot switched off or stopped "
+                             "streaming, or the cable)")  # fmt: skip
+    assert (
+        lines[3]
+        == "  the stream was asked for again 2 times within the grace (zeros; then the request), and nothing came"
+    )  # noqa: E501
+    assert "; ".join(line.strip() for line in lines) == said
+    assert run_cmd._journal_lines("connection lost: a; b") == ["connection lost: a; b"]
