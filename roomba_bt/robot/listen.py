@@ -85,6 +85,17 @@ def _settle(link: StreamLink, seconds: float) -> None:
         link.read(remaining)
 
 
+def _by_the_deadline(link: StreamLink) -> bytes:
+    """A listen's last read, its deadline passed: what the port holds. A replay gives there
+    what its recorded run read before it switched the rate again or wrote
+    (``ReplayTransport.recorded_reads``): reads stamped past their waits are the listen's."""
+    recorded = getattr(link.transport, "recorded_reads", None)
+    if recorded is None:
+        return link.read(0.0)
+    with recorded(up_to_the_switch=True):
+        return link.read(0.0)
+
+
 def heard(link: StreamLink, parser: StreamParser, deadline: float, enough: int) -> bool:
     """Whether, reading into ``parser`` until ``deadline``, the last ``enough`` or more
     frames came one after the other with nothing invalid after them. The whole window is
@@ -101,7 +112,7 @@ def heard(link: StreamLink, parser: StreamParser, deadline: float, enough: int) 
     run = 0
     while True:
         remaining = deadline - clock()
-        data = link.read(max(0.0, remaining))
+        data = link.read(remaining) if remaining > 0 else _by_the_deadline(link)
         if data:
             run += len(parser.feed(data, clock()))
             now_invalid = counters.checksum_failures + counters.skipped_bytes + counters.implausible

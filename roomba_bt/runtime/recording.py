@@ -1468,6 +1468,8 @@ class ReplayTransport:
     def read(self, timeout: float) -> bytes:
         if self.difference is not None or self.exhausted:  # a difference ends the replay
             return self._nothing_for(timeout)
+        if self._up_to_the_switch:
+            return self._read_before_the_switch()
         t, data, written_before = self._inbound[0]
         late = (
             t - STAMP_SLACK > self._now + timeout
@@ -1497,7 +1499,7 @@ class ReplayTransport:
         return b""
 
     @contextlib.contextmanager
-    def recorded_reads(self) -> Iterator[None]:
+    def recorded_reads(self, up_to_the_switch: bool = False) -> Iterator[None]:
         """Meanwhile a read gives each of the robot's chunks that the recorded run read before
         the bytes the tree has still to write, at its recorded time, whatever the replay's
         clock says; the chunks recorded after those bytes wait for them as ever. The safe
@@ -1508,12 +1510,44 @@ class ReplayTransport:
         stop, written before those frames, was its first difference (``expected Drive (137)
         89 00 00 00 00, sent Drive (137) 89 00 00 00 00 0.00 s early: the recorded run read 1
         more of the robot's chunks before writing it``, exit 1, a pty run's record under
-        load). A record made on a virtual clock has none there: nothing is read."""
+        load). A record made on a virtual clock has none there: nothing is read.
+
+        ``up_to_the_switch``: a read gives, in one, every chunk the recorded run read before
+        its next write and its next change of the port's rate: the last read of a listen at
+        another rate (``robot/listen.heard``), which takes what came by the listen's end
+        even where the wait overran it. The live run's reads there were stamped past their
+        waits (the simulator's 15 ms slot on the virtual clock; a loaded host on a pty),
+        and the replay, which gives a chunk only to a read whose wait reaches its stamp,
+        left them out of the listen: its drive 0 at the new rate came chunks early, and
+        past that difference it read nothing more, so its stop, confirmed live, was NOT
+        DELIVERED (``run --fast --baud-change-at 1.5`` every time; the pty's replay under
+        load, tests/runtime/test_cli_pty.py)."""
         self._as_recorded = True
+        self._up_to_the_switch = up_to_the_switch
         try:
             yield
         finally:
             self._as_recorded = False
+            self._up_to_the_switch = False
+
+    #: inside :meth:`recorded_reads` with ``up_to_the_switch``: a read gives at once what
+    #: the recorded run read before its next change of rate or its next write
+    _up_to_the_switch = False
+
+    def _read_before_the_switch(self) -> bytes:
+        """The robot's chunks the recorded run read before the tree's next write and the
+        port's next change of rate (its next :data:`BAUD_NOTE`), joined, the clock at the
+        last one's time; nothing if there are none."""
+        switch_at = self._rate_changes[0][0] if self._rate_changes else math.inf
+        given = bytearray()
+        while not self.exhausted:
+            t, data, written_before = self._inbound[0]
+            if self.written < written_before or t > switch_at:
+                break
+            self._inbound.popleft()
+            given += data
+            self._now = max(self._now, t)
+        return bytes(given)
 
     @property
     def loses_bytes(self) -> bool:

@@ -721,9 +721,9 @@ def test_a_long_lost_link_line_is_said_a_clause_a_line_for_the_journal() -> None
     lines = run_cmd._journal_lines(said)
     assert lines[0].endswith("nothing arrived for 2.0 s (the robot switched off or stopped "
                              "streaming, or the cable)")  # fmt: skip
-    assert (
-        lines[3]
-        == "  the stream was asked for again 2 times within the grace (zeros; then the request), and nothing came"
-    )  # noqa: E501
+    assert lines[3] == (
+        "  the stream was asked for again 2 times within the grace (zeros; then the request), "
+        "and nothing came"
+    )
     assert "; ".join(line.strip() for line in lines) == said
     assert run_cmd._journal_lines("connection lost: a; b") == ["connection lost: a; b"]

@@ -56,7 +56,9 @@ def test_a_wait_under_the_clocks_last_bit_at_the_record_s_end_still_moves_it(
         (Faults(disconnect_at=1.0), CREATE2, "lost its link at mission time"),  # cable pulled
         (Faults(reset_at=1.0), CREATE2, "lost its link at mission time"),
         (Faults(sleep_at=1.0), CREATE2, "lost its link at mission time"),  # woken by BRC
-        (Faults(baud_change_at=1.0), CREATE2, "lost its link at mission time"),
+        # the listen at the new rate replayed whole (its reads stamped past their waits
+        # too): the same bytes to the end, the stop's own
+        (Faults(baud_change_at=1.0), CREATE2, "the same 51 bytes as the recorded run"),
         # the wrong profile: its run ends at the watchdog's trip (certain there), the stop as
         # the replay's own: no difference at all (it went on querying through the grace)
         (Faults(), ROOMBA500, "the tree wrote the same 28 bytes as the recorded run"),
@@ -82,6 +84,28 @@ def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and
     assert verdict in out, out
     assert "first difference" not in out
     assert "replay: the recorded run ended in connection lost" in out
+
+
+def test_a_followed_baud_change_replays_its_listen_and_its_stop_as_the_run_did(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The listen at the new rate read frames stamped past its deadline (on the virtual
+    clock a read takes the simulator's next 15 ms slot; on a loaded pty the read returns
+    late), and its replay, which gives a chunk only to a read whose wait reaches it, left
+    them out: its drive 0 came two chunks early, it read nothing more past that
+    difference, and the stop the live run had confirmed was NOT DELIVERED (the pty test's
+    failure under load). The replay's last read of the listen gives what the run read
+    there before it switched again or wrote."""
+    mission = write_mission(tmp_path, SPIN)
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(mission), "--fast", "--baud-change-at", "1.5", "--timeout", "5s"]
+    assert main([*argv, "--display", "none", "--record", str(record)]) == 8
+    stop = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("safe stop"))
+    assert stop == "safe stop    sent drive, motors, pause_resume_stream, start"
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    assert stop in out
+    assert "the tree wrote the same 51 bytes as the recorded run" in out
 
 
 def test_the_replay_of_a_stopped_stream_asked_for_again_writes_the_same_bytes(
