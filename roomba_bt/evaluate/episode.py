@@ -255,6 +255,10 @@ class EpisodeResult:
     #: and where (:func:`~roomba_bt.behaviours.blackboard.undeclared_writes`): the warning a
     #: run says, which an episode's silenced log does not; the summary says it once
     undeclared: tuple[tuple[str, str], ...] = ()
+    #: the mission's last words (the run summary's ``mission said`` line, "" for none): which
+    #: way it ended, so a patrol's "laps done" and its "docked on a low battery", both a
+    #: SUCCESS, are told apart in a sweep's records and report
+    said: str = ""
 
     @property
     def succeeded(self) -> bool:
@@ -697,6 +701,7 @@ def _measured(
         undeclared=tuple(
             (key, _named_as_given(spec, where)) for key, where in undeclared_writes(board)
         ),
+        said=summary.said,
     )
 
 

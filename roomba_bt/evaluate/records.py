@@ -20,7 +20,10 @@ rename or drop one. ``falls`` counts the robot's own falls to Passive (the run s
 them (``{"cliff": 4}``; ``cliff=4;wheel drop=1`` in CSV); ``hazard_falls`` counts those of
 them that were no docking (every cause but ``charger``: a dock mission that docks in Safe falls
 to Passive on the charger in every episode, which ``falls > 0`` read as a hazard); a file
-written before they were recorded reads back as episodes without a fall.
+written before they were recorded reads back as episodes without a fall. ``mission_said`` is
+the mission's last words (``run``'s ``mission said`` line; empty when it said nothing, and in
+files written before it was recorded): which way it ended, e.g. a patrol's ``patrol done (laps:
+1)`` or its docking on a low battery, both a ``SUCCESS``.
 
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
@@ -88,6 +91,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "falls": ("falls", "falls total"),
     "falls_by_cause": ("falls", "falls by cause"),
     "hazard_falls": ("falls", "hazard falls"),
+    "mission_said": ("said", "str?"),
 }
 
 #: the coverage columns (empty when the episode did not clean): name -> Coverage field
@@ -214,6 +218,9 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
         if kind == "float?":  # a column later versions added: absent from older files
             raw = record.get(column)
             values[name] = 0.0 if raw is None or raw == "" else float(raw)
+            continue
+        if kind == "str?":  # the same, a text
+            values[name] = str(record.get(column) or "")
             continue
         if kind in ("falls total", "hazard falls"):  # sums of falls_by_cause, read instead
             continue

@@ -129,6 +129,10 @@ class Summary:
     #: off (:attr:`EpisodeResult.longest_trapped_s`), and how many spent TRAPPED_S or more
     longest_trapped_s: float = 0.0
     trapped: int = 0
+    #: how the successful episodes ended in the mission's own words (:attr:`EpisodeResult.said`),
+    #: the commonest first: a patrol's "laps done" and "docked on a low battery" are both a
+    #: success, and the rate alone mixed them
+    endings: tuple[tuple[str, int], ...] = ()
 
     @property
     def rate(self) -> float:
@@ -168,6 +172,9 @@ class Summary:
             ),
         ]
         out += [f"warning      {said}" for said in self.undeclared_said()]
+        if self.endings:
+            out.append("successes    by what the mission said last")
+            out += [f"  {count:4d}  {said or '(nothing said)'}" for said, count in self.endings]
         if self.failures:
             out.append("failures")
             out += [f"  {count:4d}  {reason}" for reason, count in self.failures]
@@ -252,6 +259,7 @@ class Summary:
             "trapped": self.trapped,
             "longest_trapped": self.longest_trapped_s,
             "failures": {reason: count for reason, count in self.failures},
+            "success_endings": {said: count for said, count in self.endings},
             "falls": dict(self.falls),
             "episodes_with_falls": self.episodes_with_falls,
             "episodes_with_falls_by_cause": dict(self.episodes_with_falls_by_cause),
@@ -324,7 +332,17 @@ def summarize(
         undeclared=tuple((key, where, n) for key, (where, n) in undeclared.items()),
         longest_trapped_s=max((r.longest_trapped_s for r in results), default=0.0),
         trapped=sum(1 for r in results if r.longest_trapped_s >= TRAPPED_S),
+        endings=success_endings(ok),
     )
+
+
+def success_endings(successes: Sequence[EpisodeResult]) -> tuple[tuple[str, int], ...]:
+    """What the successful episodes' missions said last, counted, the commonest first; none
+    when no mission said anything (a mission without a ``log`` leaf: nothing to tell apart)."""
+    said = Counter(r.said for r in successes)
+    if not any(said):
+        return ()
+    return tuple(sorted(said.items(), key=lambda kv: (-kv[1], kv[0])))
 
 
 def mcnemar_exact(only_a: int, only_b: int) -> float:

@@ -154,3 +154,19 @@ def test_records_carry_no_binary_noise(tmp_path: Path) -> None:
             if isinstance(value, float):
                 assert len(repr(abs(value)).replace(".", "").lstrip("0")) <= 10, (column, value)
     assert [to_record(r) for r in read_results(path)] == [to_record(r) for r in ran]
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_how_the_mission_ended_is_in_the_records(tmp_path: Path, suffix: str) -> None:
+    """``mission_said``: the mission's last words (a patrol's laps done or its docking), read
+    back as they were; a file written before the column reads back as nothing said."""
+    specs = episode_specs(str(MISSIONS / "patrol.yaml"), world="empty-room", runs=1, seed=1,
+                          params=(("laps", "1"),), timeout_s=300.0)  # fmt: skip
+    ran = run_episodes(specs)
+    assert ran[0].said.startswith("patrol done")
+    path = tmp_path / f"results{suffix}"
+    write_results(path, ran)
+    assert read_results(path)[0].said == ran[0].said
+    older = to_record(ran[0])
+    del older["mission_said"]
+    assert from_record(older).said == ""

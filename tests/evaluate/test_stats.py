@@ -286,3 +286,25 @@ def test_a_report_fakes_no_line_with_what_a_mission_wrote() -> None:
     assert summary.to_dict()["failures"] == {reason: 1}
     unfinished = summarize("m\n[ok] fake.yaml", "room", [])
     assert unfinished.lines()[0] == "mission      m\\x0a[ok] fake.yaml in room"
+
+
+def test_the_successes_are_counted_by_what_the_mission_said_last() -> None:
+    """A patrol's laps done and its docking on a low battery are both a success: the report
+    tells them apart by the mission's last words (``run``'s ``mission said`` line)."""
+    from dataclasses import replace
+
+    laps = [replace(result(i), said="patrol done (laps: 1)") for i in range(3)]
+    docked = replace(result(3), said="docked on a low battery")
+    failed = replace(result(4, "failure", reason="x: lost"), said="lost")
+    summary = summarize("patrol.yaml", "apartment", [*laps, docked, failed])
+    assert summary.endings == (("patrol done (laps: 1)", 3), ("docked on a low battery", 1))
+    assert summary.to_dict()["success_endings"] == {
+        "patrol done (laps: 1)": 3, "docked on a low battery": 1,
+    }  # fmt: skip
+    lines = summary.lines()
+    at = lines.index("successes    by what the mission said last")
+    assert lines[at + 1 : at + 3] == [
+        "     3  patrol done (laps: 1)", "     1  docked on a low battery",
+    ]  # fmt: skip
+    silent = summarize("dock.yaml", "room", [result(1), result(2)])  # no log leaf: no line
+    assert silent.endings == () and "successes" not in str(silent)
