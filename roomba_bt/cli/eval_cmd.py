@@ -65,6 +65,7 @@ from roomba_bt.cli.arguments import (
     plot_file,
     results_file,
 )
+from roomba_bt.cli.eval_resume import add_resume_options
 from roomba_bt.cli.record_header import add_reproducible_option
 from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
@@ -72,6 +73,7 @@ from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
     from collections.abc import Sequence
 
+    from roomba_bt.cli.eval_resume import Resumed
     from roomba_bt.cli.validate_report import Checked
     from roomba_bt.evaluate import EvaluationError
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, MissionNotCompiled
@@ -112,6 +114,7 @@ def register(sub: Any) -> None:
     _add_episode_options(ev)
     _add_output_options(ev)
     _add_start_options(ev)
+    add_resume_options(ev)
     add_permission_options(ev)
 
 
@@ -380,9 +383,13 @@ def eval_command(args: argparse.Namespace) -> int:
     plan = _plan(args)
     if isinstance(plan, int):
         return plan
-    chosen, batches, world = plan
+    chosen, planned, world = plan
+    resumed = _resumed(args, chosen, planned, world)
+    if isinstance(resumed, int):
+        return resumed
+    batches = resumed.todo
     # no more workers than episodes: a local Dask cluster would start each one's process
-    jobs = min(args.jobs, sum(len(batch) for batch in batches))
+    jobs = max(1, min(args.jobs, sum(len(batch) for batch in batches)))
     limit, wait = wall_limit(args), worker_wait(args)  # checked: each a number or None
     engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", jobs,
                     args.scheduler, limit if isinstance(limit, float) else None,
@@ -392,11 +399,14 @@ def eval_command(args: argparse.Namespace) -> int:
     partial = _partial(args)
     if isinstance(partial, int):
         return partial
+    if partial is not None:
+        resumed.record_into(partial)
     done = _run(args, chosen, batches, engine, partial)
     if isinstance(done, int):
         if partial is not None:
-            partial.done()
+            partial.done(keep=resumed.reused > 0)  # the episodes read back are kept there
         return done
+    done = resumed.merged(done)
     # the records first: a summary that fails (a bug in the statistics) loses no episode
     unwritten = _save(args, done, partial)
     try:
@@ -424,6 +434,32 @@ def eval_command(args: argparse.Namespace) -> int:
         if plotted is not None:
             return plotted
     return _verdict(args, evaluated.summaries, done)
+
+
+def _resumed(
+    args: argparse.Namespace, chosen: list[Variant], planned: list[list[EpisodeSpec]], world: World
+) -> Resumed | int:
+    """The episodes ``--out`` holds that ``--resume`` keeps, and those left to run
+    (:mod:`roomba_bt.cli.eval_resume`); exit 2 when ``--out`` holds episodes and neither
+    ``--resume`` nor ``--force`` was given, or they were not made as this evaluation makes
+    them (what differs said)."""
+    from roomba_bt.cli.eval_resume import ResumeError, refused_over, resume
+
+    problem = refused_over(args)
+    if problem is not None:
+        return _error(problem, args)
+    try:
+        resumed = resume(args, chosen, planned, world)
+    except ResumeError as exc:
+        return _error(f"--resume: {exc}", args)
+    if args.resume:
+        left = sum(len(batch) for batch in resumed.todo)
+        print(f"roomba-bt eval: --resume: {resumed.reused} episode(s) read back from "
+              f"{args.out}, {left} to run", file=sys.stderr)  # fmt: skip
+        if args.plot and resumed.reused:
+            print("roomba-bt eval: --plot draws the episodes run now: a results file keeps "
+                  "no trajectory", file=sys.stderr)  # fmt: skip
+    return resumed
 
 
 def _count(done: list[Evaluation]) -> int:

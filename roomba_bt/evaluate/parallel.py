@@ -39,9 +39,8 @@ from roomba_bt.evaluate.episode import (
     hung_result,
     run_episode,
 )
-
-Progress = Callable[[int, int, EpisodeResult], None]
-
+from roomba_bt.evaluate.interleave import Interleaved
+from roomba_bt.evaluate.interleave import Progress as Progress  # re-exported: callers name it here
 
 #: How many times a local evaluation starts its workers again after one died with no episode
 #: to blame (each episode it was running ran alone without a death: ended from outside, by
@@ -578,51 +577,64 @@ def evaluate(
     engine: Engine = Engine(),
     progress: Sequence[Progress | None] | None = None,
 ) -> list[Evaluation]:
-    """Run each batch on ``engine`` (one Dask client for all of them); ``progress[i]`` for
-    batch ``i``. A Ctrl-C or a signal stops the batch running and skips the rest (each
-    ``interrupted``, with its :class:`Interruption`), as do local workers that keep dying
-    (:class:`WorkersLostError`) and a Dask cluster lost (no worker, no scheduler)."""
-    bars: Sequence[Progress | None] = progress or [None] * len(batches)
-    out: list[Evaluation] = []
-    if engine.kind == "local":
-        for specs, bar in zip(batches, bars, strict=True):
-            if out and out[-1].interrupted:
-                out.append(Evaluation([], 0, True, "local", out[-1].interruption))
-                continue
-            run = LocalRun()
-            try:
-                run_episodes(specs, engine.jobs, bar, run, engine.wall_limit_s)
-            except KeyboardInterrupt as exc:
-                out.append(Evaluation(run.in_order(), run.retried, True, "local",
-                                      interruption_by(exc)))  # fmt: skip
-                continue
-            except WorkersLostError as exc:
-                out.append(Evaluation(run.in_order(), run.retried, True, "local",
-                                      Interruption(WORKERS_LOST, str(exc))))  # fmt: skip
-                continue
-            out.append(Evaluation(run.in_order(), run.retried, False, "local"))
-        return out
+    """Run each batch on ``engine``, the batches' episodes taken by seed (A1 B1 A2 B2 ...:
+    :class:`~roomba_bt.evaluate.interleave.Interleaved`, so that an interrupted A/B still
+    holds pairs), on one pool or one Dask client; ``progress[i]`` for batch ``i``, with its
+    own count. An :class:`Evaluation` per batch, its results in its spec order. A Ctrl-C or
+    a signal stops the run (each batch ``interrupted``, with its :class:`Interruption` and
+    what finished), as do local workers that keep dying (:class:`WorkersLostError`) and a
+    Dask cluster lost (no worker, no scheduler). The episodes run again after a worker was
+    lost are counted once, on the first batch's: they ran in one pool."""
+    work = Interleaved.of(batches)
+    bar = work.progress(progress or [None] * len(batches))
+    results: dict[int, EpisodeResult] = {}
+    retried, interruption = 0, None
+    if work.specs:  # none: every episode was there already (eval --resume), no pool started
+        run = _on_dask if engine.kind == "dask" else _on_local_processes
+        results, retried, interruption = run(work.specs, engine, bar)
+    stopped = interruption is not None
+    return [
+        Evaluation(finished, retried if b == 0 else 0, stopped, engine.kind, interruption)
+        for b, finished in enumerate(work.split(results))
+    ]
+
+
+#: What a run of episodes gave: the results that finished by spec index, the episodes run
+#: again after a worker was lost, and why it stopped before its end (None: it did not)
+_Ran = tuple[dict[int, EpisodeResult], int, "Interruption | None"]
+
+
+def _on_local_processes(specs: list[EpisodeSpec], engine: Engine, bar: Progress | None) -> _Ran:
+    """:func:`run_episodes` on ``engine.jobs`` processes; what finished when a Ctrl-C, a
+    signal or workers that keep dying stopped it."""
+    run = LocalRun()
+    interruption = None
+    try:
+        run_episodes(specs, engine.jobs, bar, run, engine.wall_limit_s)
+    except KeyboardInterrupt as exc:
+        interruption = interruption_by(exc)
+    except WorkersLostError as exc:
+        interruption = Interruption(WORKERS_LOST, str(exc))
+    return run.results, run.retried, interruption
+
+
+def _on_dask(specs: list[EpisodeSpec], engine: Engine, bar: Progress | None) -> _Ran:
+    """The episodes on a Dask cluster (:func:`~roomba_bt.evaluate.cluster.run_on_client`);
+    what finished when a Ctrl-C, a signal or the cluster's loss stopped it."""
     from roomba_bt.evaluate.cluster import ClusterLostError, dask_client, run_on_client
 
+    interruption = None
     with dask_client(engine.scheduler, engine.jobs, engine.worker_wait_s) as client:
-        for specs, bar in zip(batches, bars, strict=True):
-            if out and out[-1].interrupted:
-                out.append(Evaluation([], 0, True, "dask", out[-1].interruption))
-                continue
-            interruption = None
-            try:
-                results, retried, interrupt = run_on_client(
-                    client, specs, bar, engine.wall_limit_s, engine.worker_wait_s
-                )
-                if interrupt is not None:
-                    interruption = interruption_by(interrupt)
-            except ClusterLostError as exc:
-                results, retried = exc.results, exc.retried
-                interruption = Interruption(exc.cause, exc.why)
-            finished = [r for r in results if r is not None]
-            out.append(Evaluation(finished, retried, interruption is not None, "dask",
-                                  interruption))  # fmt: skip
-    return out
+        try:
+            flat, retried, interrupt = run_on_client(
+                client, specs, bar, engine.wall_limit_s, engine.worker_wait_s
+            )
+            if interrupt is not None:
+                interruption = interruption_by(interrupt)
+        except ClusterLostError as exc:
+            flat, retried = exc.results, exc.retried
+            interruption = Interruption(exc.cause, exc.why)
+    return {i: r for i, r in enumerate(flat) if r is not None}, retried, interruption
 
 
 class ProgressBar:

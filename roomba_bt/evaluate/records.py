@@ -411,6 +411,13 @@ def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
 
 def read_results(path: str | Path) -> list[EpisodeResult]:
     """Read a file :func:`write_results` wrote; ResultsFileError naming file:line otherwise."""
+    return [result for _, _, result in read_rows(path)]
+
+
+def read_rows(path: str | Path) -> list[tuple[int, dict[str, Any], EpisodeResult]]:
+    """Each record of a file :func:`write_results` wrote, as (line, the row as written, the
+    episode): the row keeps what :func:`from_record` leaves out (the provenance columns,
+    which ``eval --resume`` checks); ResultsFileError naming file:line otherwise."""
     fmt = results_format(path)
     rows: list[tuple[int, dict[str, Any]]] = []
     try:
@@ -436,7 +443,7 @@ def read_results(path: str | Path) -> list[EpisodeResult]:
     out = []
     for line, row in rows:
         try:
-            out.append(from_record(row))
+            out.append((line, row, from_record(row)))
         except KeyError as exc:
             raise ResultsFileError(f"{path}:{line}: missing column {exc.args[0]!r}") from None
         except (TypeError, ValueError) as exc:

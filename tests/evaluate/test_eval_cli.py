@@ -452,14 +452,23 @@ def test_an_out_file_that_cannot_be_written_is_refused_before_any_episode(
 
 
 @pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
-def test_earlier_results_are_written_over(
+def test_earlier_results_are_written_over_only_when_forced(
     suffix: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    """Running again "to continue" wrote over a sweep's episodes without a word. Now a file
+    that holds episodes is refused (exit 2, the file and the options named, no episode run)
+    unless ``--force`` (or ``--resume``: tests/evaluate/test_resume.py)."""
     out = tmp_path / f"r{suffix}"
     argv = ["eval", BUMP, "-p", "duration=1s", "--no-progress", "--out", str(out)]
     assert main([*argv, "--runs", "2"]) == 0
-    assert main([*argv, "--runs", "3"]) == 0
-    assert capsys.readouterr().err.count("results written to") == 2
+    before = out.read_text()
+    assert main([*argv, "--runs", "3"]) == 2
+    err = capsys.readouterr().err
+    assert f"--out {out}: {out} already hold(s) episodes of an earlier evaluation" in err
+    assert "give --resume" in err and "--force to write over it" in err
+    assert out.read_text() == before
+    assert main([*argv, "--runs", "3", "--force"]) == 0
+    assert capsys.readouterr().err.count("results written to") == 1
     lines = out.read_text().splitlines()
     assert len(lines) == (3 if suffix == ".jsonl" else 4)  # the second run's (CSV: a header)
 

@@ -1,0 +1,241 @@
+"""``eval --out FILE`` run again: refused over earlier results, or resumed.
+
+A sweep's ``--out`` holds hours of episodes. Running ``eval`` again with the same ``--out``
+(to continue an interrupted sweep, or by a slip) wrote over them without a word. Now a
+results file that holds episodes, or the ``FILE.partial.jsonl`` a killed sweep left, is
+refused before any episode runs (exit 2), unless ``--force`` (replace it) or ``--resume``:
+its episodes are read back, checked against this evaluation (the missions and parameters,
+the seeds, what made them: the release, the world's and each mission file's SHA-256, the
+plugins, each start pose, the ``--key`` columns), and only the (variant, seed) pairs it lacks
+run. The file written at the end holds every episode in the plan's order, as one
+uninterrupted run writes it, and the summary and comparisons count them all.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
+    from roomba_bt.evaluate.parallel import Evaluation
+    from roomba_bt.evaluate.records import PartialResults
+    from roomba_bt.sim.world import World
+
+#: How far a record's start pose (m, degrees) may be from the one this evaluation draws for
+#: its seed: the records keep ten significant digits
+START_TOLERANCE = 1e-6
+
+
+def add_resume_options(ev: argparse.ArgumentParser) -> None:
+    """``--resume`` and ``--force``: what to do with an ``--out`` that holds episodes."""
+    ev.add_argument(
+        "--resume",
+        action="store_true",
+        help="--out holds episodes of an interrupted evaluation (or its .partial.jsonl "
+        "does): check they were made alike, run only the missing (variant, seed) pairs, "
+        "and write every episode to --out",
+    )
+    ev.add_argument(
+        "--force",
+        action="store_true",
+        help="write over an --out that holds episodes (without it, such a file is refused)",
+    )
+
+
+class ResumeError(ValueError):
+    """Why ``--out``'s episodes cannot be resumed or written over; the message names the
+    file (and line) and what differs."""
+
+
+@dataclass
+class Resumed:
+    """The episodes ``--out`` already holds, per variant, and those left to run."""
+
+    #: per variant, the episodes read back, in the plan's order
+    earlier: list[list[EpisodeResult]]
+    #: per variant, the specs of the episodes not in the file, in the plan's order
+    todo: list[list[EpisodeSpec]]
+    #: per variant, each seed's place in the plan
+    places: list[dict[int, int]]
+
+    @property
+    def reused(self) -> int:
+        return sum(len(results) for results in self.earlier)
+
+    def record_into(self, partial: PartialResults) -> None:
+        """The episodes read back written into the new partial file first: it is emptied
+        when this evaluation claims it, and a second interruption would lose them."""
+        for results in self.earlier:
+            for result in results:
+                partial.add(result)
+
+    def merged(self, done: list[Evaluation]) -> list[Evaluation]:
+        """Each variant's episodes, those read back and those run now, in the plan's order
+        (the order an uninterrupted run writes them in)."""
+        return [
+            replace(e, results=sorted([*earlier, *e.results], key=lambda r: places[r.seed]))
+            for e, earlier, places in zip(done, self.earlier, self.places, strict=True)
+        ]
+
+
+def partial_path(out: str) -> Path:
+    """The file :class:`~roomba_bt.evaluate.records.PartialResults` writes beside ``out``."""
+    return Path(f"{out}.partial.jsonl")
+
+
+def earlier_files(out: str) -> list[Path]:
+    """``--out`` and its partial file, those that exist and hold a record."""
+    return [path for path in (Path(out), partial_path(out)) if _holds_records(path)]
+
+
+def _holds_records(path: Path) -> bool:
+    """Whether ``path`` holds a line after a CSV's header (or any JSON line): an episode,
+    or something that is not one, which is not written over either."""
+    try:
+        with path.open(encoding="utf-8", errors="replace") as text:
+            lines = [line for line in text if line.strip()]
+    except (FileNotFoundError, IsADirectoryError):
+        return False
+    header = 1 if path.suffix.lower() == ".csv" else 0
+    return len(lines) > header
+
+
+def refused_over(args: argparse.Namespace) -> str | None:
+    """The problem with ``--out``, before any episode runs: a file holding episodes,
+    without ``--resume`` or ``--force``; ``--resume`` and ``--force`` together, or
+    ``--resume`` without ``--out``."""
+    if args.resume and args.force:
+        return (
+            "--resume and --force: give one (--resume keeps --out's episodes, --force drops them)"
+        )
+    if args.out is None:
+        return "--resume: give --out FILE, the results to resume" if args.resume else None
+    if args.resume or args.force:
+        return None
+    held = earlier_files(args.out)
+    if not held:
+        return None
+    said = " and ".join(str(path) for path in held)
+    return (
+        f"--out {args.out}: {said} already hold(s) episodes of an earlier evaluation; give "
+        "--resume to run only the episodes missing from it (the same missions, parameters and "
+        "options), --force to write over it, or another --out"
+    )
+
+
+def resume(
+    args: argparse.Namespace,
+    chosen: list[Any],
+    batches: list[list[EpisodeSpec]],
+    world: World,
+) -> Resumed:
+    """``--out``'s episodes (and its partial file's) that this evaluation would run, checked
+    against it, and the specs left to run; with neither ``--resume`` nor a file, every spec.
+    ResumeError naming the file, line and what differs when a record was made otherwise."""
+    places = [{spec.seed: i for i, spec in enumerate(batch)} for batch in batches]
+    found: list[dict[int, EpisodeResult]] = [{} for _ in batches]
+    if args.resume:
+        variant_of = {(v.mission, v.params): i for i, v in enumerate(chosen)}
+        made_by: dict[str, dict[str, Any]] = getattr(args, "made_by", {})
+        for path in earlier_files(args.out):
+            for line, row, result in _rows(path):
+                where = f"{path}:{line}"
+                index = variant_of.get((result.mission, tuple(sorted(result.params))))
+                if index is None:
+                    raise ResumeError(f"{where}: {_named(result)} is no variant of this "
+                                      "evaluation (its missions, -p, --sweep or --variant "
+                                      "differ)")  # fmt: skip
+                spec_at = places[index].get(result.seed)
+                if spec_at is None:
+                    raise ResumeError(f"{where}: seed {result.seed} of {_named(result)} is not "
+                                      "among this evaluation's seeds (--seed, --runs or "
+                                      "--seeds differ)")  # fmt: skip
+                spec = batches[index][spec_at]
+                _check_alike(where, row, result, spec, made_by.get(result.mission, {}), world)
+                found[index].setdefault(result.seed, result)  # --out's first, then the partial
+    pairs = list(zip(found, places, strict=True))
+    earlier = [sorted(held.values(), key=lambda r: place[r.seed]) for held, place in pairs]
+    todo = [
+        [s for s in batch if s.seed not in held]
+        for batch, (held, _) in zip(batches, pairs, strict=True)
+    ]
+    return Resumed(earlier, todo, places)
+
+
+def _rows(path: Path) -> list[tuple[int, dict[str, Any], EpisodeResult]]:
+    from roomba_bt.evaluate.records import ResultsFileError, read_rows
+
+    try:
+        return read_rows(path)
+    except ResultsFileError as exc:
+        raise ResumeError(f"{exc}; --resume reads it back (--force: write over it)") from None
+
+
+def _named(result: EpisodeResult) -> str:
+    params = " ".join(f"-p {name}={value}" for name, value in result.params)
+    return f"{result.mission} {params}".strip()
+
+
+def _check_alike(
+    where: str,
+    row: dict[str, Any],
+    result: EpisodeResult,
+    spec: EpisodeSpec,
+    made_by: dict[str, Any],
+    world: World,
+) -> None:
+    """ResumeError when the record at ``where`` was not made as this evaluation makes
+    ``spec``'s episode: another world, release, mission file or plugin (the provenance
+    columns), another start pose for its seed (``--within``, ``--start-area``, the world's
+    start region), or other ``--key`` columns."""
+    if result.world != world.name:
+        raise ResumeError(f"{where}: the episode ran in world {result.world!r}, this "
+                          f"evaluation's is {world.name!r}")  # fmt: skip
+    for column, now in made_by.items():
+        then = _provenance(column, row.get(column))
+        if then != now:
+            raise ResumeError(f"{where}: {column} differs from this evaluation's ({_said(then)} "
+                              f"in the file, {_said(now)} now): the episodes were made by "
+                              "another release, world, mission file or plugin; --force writes "
+                              "over them")  # fmt: skip
+    from roomba_bt.evaluate.episode import start_pose
+
+    pose = start_pose(world, spec)
+    drawn = (pose.x / 1000.0, pose.y / 1000.0, math.degrees(pose.theta))
+    if any(abs(a - b) > START_TOLERANCE for a, b in zip(result.start, drawn, strict=True)):
+        raise ResumeError(f"{where}: seed {result.seed} started at ({result.start[0]:.3f}, "
+                          f"{result.start[1]:.3f}) m, where this evaluation starts it at "
+                          f"({drawn[0]:.3f}, {drawn[1]:.3f}) m: --within, --start-area or "
+                          "the world's start region differ")  # fmt: skip
+    keys = tuple(name for name, _ in result.keys)
+    if keys != spec.keys:
+        raise ResumeError(f"{where}: the record reports the keys {list(keys)}, this evaluation "
+                          f"--key {list(spec.keys)}")  # fmt: skip
+
+
+def _provenance(column: str, value: Any) -> Any:
+    """A provenance cell as :func:`~roomba_bt.cli.eval_cmd.made_by` has it: a CSV cell
+    (``name=SHA-256;...``, ``name=version:SHA-256;...``; empty: none) read back; a column
+    absent (a file written before it) or an empty cell is None."""
+    if not isinstance(value, str) or column not in ("sources", "plugins"):
+        return value if value != "" else None
+    pairs = [item.partition("=")[::2] for item in value.split(";") if item]
+    if column == "sources":
+        return dict(pairs)
+    return {
+        name: dict(zip(("version", "sha256"), about.rsplit(":", 1), strict=False))
+        for name, about in pairs
+    }
+
+
+def _said(value: Any) -> str:
+    """A provenance value, shortened for a message (a digest's first 12 hex digits)."""
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}: {_said(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, str) and len(value) == 64:
+        return value[:12] + "..."
+    return "none" if value is None else str(value)

@@ -1,0 +1,153 @@
+"""``eval --out FILE`` again: refused over earlier episodes, ``--force``d, or ``--resume``d
+(the episodes FILE lacks run, and FILE ends as an uninterrupted run writes it)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+BUMP = str(MISSIONS / "bump-and-turn.yaml")
+#: an A/B of two variants, byte-stable (``--reproducible``)
+SWEEP = ["eval", BUMP, "--sweep", "duration=1s,2s", "--no-progress", "--reproducible"]
+
+
+def _sweep(out: Path, runs: int, *options: str, values: str = "1s,2s") -> int:
+    """The A/B of ``duration`` ``values``, ``runs`` seeds each, written to ``out``."""
+    argv = ["eval", BUMP, "--sweep", f"duration={values}", "--no-progress", "--reproducible"]
+    return main([*argv, "--runs", str(runs), "--out", str(out), *options])
+
+
+@pytest.fixture
+def uninterrupted(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> dict[str, str]:
+    """What a run of 4 seeds per variant writes, as JSON Lines and CSV, and its report."""
+    written = {}
+    for suffix in (".jsonl", ".csv"):
+        assert _sweep(tmp_path / f"full{suffix}", 4) == 0
+        written[suffix] = (tmp_path / f"full{suffix}").read_text()
+        written[f"{suffix} report"] = capsys.readouterr().out
+    return written
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_a_resumed_sweep_writes_what_an_uninterrupted_one_writes(
+    suffix: str,
+    tmp_path: Path,
+    uninterrupted: dict[str, str],
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The seeds ``--out`` holds are read back, only the others run, and the file and the
+    report (every episode summarised and compared) are those of one run of them all."""
+    out = tmp_path / f"r{suffix}"
+    assert _sweep(out, 2) == 0
+    capsys.readouterr()
+    assert _sweep(out, 4, "--resume") == 0
+    report, err = capsys.readouterr()
+    assert f"--resume: 4 episode(s) read back from {out}, 4 to run" in err
+    assert out.read_text() == uninterrupted[suffix]
+    assert report == uninterrupted[f"{suffix} report"]
+    assert "paired       4 episodes" in report
+
+
+def test_a_resume_reads_the_partial_file_a_killed_sweep_left(
+    tmp_path: Path, uninterrupted: dict[str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A ``kill -9`` leaves ``OUT.partial.jsonl`` (rows as ``OUT``'s, in the order they
+    finished) and no ``OUT``: ``--resume`` reads it, and it is gone once ``OUT`` is written."""
+    out = tmp_path / "r.jsonl"
+    rows = uninterrupted[".jsonl"].splitlines(keepends=True)
+    (tmp_path / "r.jsonl.partial.jsonl").write_text("".join([rows[5], rows[0], rows[1]]))
+    assert _sweep(out, 4) == 2  # refused: the partial file holds episodes
+    assert "r.jsonl.partial.jsonl already hold(s) episodes" in capsys.readouterr().err
+    assert _sweep(out, 4, "--resume") == 0
+    assert "3 episode(s) read back" in capsys.readouterr().err
+    assert out.read_text() == uninterrupted[".jsonl"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["full.csv", "full.jsonl", "r.jsonl"]
+
+
+def _second_row_changed(out: Path, **columns: object) -> None:
+    rows = [json.loads(line) for line in out.read_text().splitlines()]
+    rows[1].update(columns)
+    out.write_text("".join(json.dumps(row) + "\n" for row in rows))
+
+
+def _other_sources(out: Path) -> None:
+    """The mission file was another when the second episode ran."""
+    _second_row_changed(out, sources={BUMP: "0" * 64})
+
+
+def _another_key(out: Path) -> None:
+    """The second episode was run with ``--key found``."""
+    _second_row_changed(out, **{"key:found": 3})
+
+
+@pytest.mark.parametrize(
+    ("options", "change", "said"),
+    [
+        (["--values", "1s,3s"], None,
+         ":3: " + f"{BUMP} -p duration=2s is no variant of this evaluation"),
+        (["--runs", "1"], None, ":2: seed 1 of"),
+        (["--seed", "1"], None, ":1: seed 0 of"),
+        (["--within", "1.0"], None, ":1: seed 0 started at"),
+        ([], _another_key, ":2: the record reports the keys ['found'], this evaluation --key []"),
+        ([], _other_sources, ":2: sources differs from this evaluation's ({"),
+    ],
+)  # fmt: skip
+def test_a_resume_refuses_episodes_made_otherwise(
+    options: list[str],
+    change: object,
+    said: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Each record is checked against this evaluation (its variant, its seed, the files that
+    made it, its start pose, its keys): one made otherwise is named by file:line with what
+    differs, exit 2, no episode runs and the file is left as it was."""
+    out = tmp_path / "r.jsonl"
+    assert _sweep(out, 2) == 0
+    if callable(change):
+        change(out)
+    before = out.read_text()
+    capsys.readouterr()
+    if options[:1] == ["--values"]:
+        assert _sweep(out, 2, "--resume", values=options[1]) == 2
+    elif options[:1] == ["--runs"]:
+        assert _sweep(out, int(options[1]), "--resume") == 2
+    else:
+        assert _sweep(out, 2, "--resume", *options) == 2
+    err = capsys.readouterr().err
+    assert f"roomba-bt eval: --resume: {out}{said}" in err, err
+    assert out.read_text() == before
+
+
+@pytest.mark.parametrize(
+    ("options", "said"),
+    [
+        (["--resume", "--force"], "--resume and --force: give one"),
+        (["--resume"], "--resume: give --out FILE, the results to resume"),
+    ],
+)
+def test_resume_and_force_are_checked_before_any_episode(
+    options: list[str], said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = [*SWEEP, "--runs", "2", *options]
+    out = [] if options == ["--resume"] else ["--out", "never-made.jsonl"]
+    assert main([*argv, *out]) == 2
+    assert f"roomba-bt eval: {said}" in capsys.readouterr().err
+    assert not Path("never-made.jsonl").exists()
+
+
+def test_a_resume_with_nothing_left_runs_no_episode(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "r.jsonl"
+    assert _sweep(out, 2) == 0
+    before = out.read_text()
+    capsys.readouterr()
+    assert _sweep(out, 2, "--resume") == 0
+    assert "4 episode(s) read back" in capsys.readouterr().err
+    assert out.read_text() == before
