@@ -353,6 +353,31 @@ def fraction(text: str) -> float:
     return _number_or_quantity(text, "percent", 100.0, 0.0, 1.0, allowed)
 
 
+#: The most seeds ``eval --seeds`` lists (its ``--runs`` limit: each spec is made up front).
+MAX_SEEDS = 1_000_000
+
+
+def seed_list(text: str) -> list[int]:
+    """``eval --seeds``: seeds and ranges, ``1-40,42,43`` (each range's ends included),
+    in increasing order, each once: the seeds a sweep is to run (those an interrupted one
+    did not finish, or a few to look at again)."""
+    allowed = "allowed: seeds 0 or more and ranges, comma-separated: 1-40,42,43"
+    seeds: set[int] = set()
+    for item in text.split(","):
+        first, dash, last = item.strip().partition("-")
+        try:
+            lo = int(first)
+            hi = int(last) if dash else lo
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"found {item.strip()!r}; {allowed}") from None
+        if lo < 0 or hi < lo:
+            raise argparse.ArgumentTypeError(f"found {item.strip()!r}; {allowed}")
+        if len(seeds) + hi - lo + 1 > MAX_SEEDS:
+            raise argparse.ArgumentTypeError(f"found {text!r}: more than {MAX_SEEDS:,} seeds")
+        seeds.update(range(lo, hi + 1))
+    return sorted(seeds)
+
+
 def battery_charge(text: str) -> float:
     """The simulator's initial charge: a :func:`fraction` above 0. An empty battery switches
     the simulated robot off (docs/simulator.md), so nothing answers: ``--battery 0`` ended

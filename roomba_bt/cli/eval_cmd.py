@@ -64,7 +64,9 @@ from roomba_bt.cli.arguments import (
     permissions,
     plot_file,
     results_file,
+    seed_list,
 )
+from roomba_bt.cli.eval_from import add_from_option, report_from_files
 from roomba_bt.cli.eval_resume import add_resume_options
 from roomba_bt.cli.record_header import add_reproducible_option
 from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
@@ -106,11 +108,12 @@ def register(sub: Any) -> None:
     )
     ev.add_argument(
         "missions",
-        nargs="+",
+        nargs="*",
         metavar="MISSION",
         help="mission YAML file or a shipped mission's name (dock); two or more: compare them "
         "(A/B) on the same seeds",
     )
+    add_from_option(ev)
     _add_episode_options(ev)
     _add_output_options(ev)
     _add_start_options(ev)
@@ -121,8 +124,12 @@ def register(sub: Any) -> None:
 def _add_episode_options(ev: argparse.ArgumentParser) -> None:
     """The world, how many episodes from which seed, and where they run."""
     ev.add_argument("--world", default="empty-room", help="a shipped world name or a YAML path")
-    ev.add_argument("--runs", type=int, default=20, help="number of episodes (default 20)")
-    ev.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
+    ev.add_argument("--runs", type=int, help="number of episodes (default 20)")
+    ev.add_argument("--seed", type=int, help="first seed (default 0)")
+    ev.add_argument(
+        "--seeds", type=seed_list, metavar="LIST",
+        help="run these seeds instead of --seed and --runs: 1-40,42,43 (each variant)",
+    )  # fmt: skip
     ev.add_argument(
         "--jobs",
         type=int,
@@ -377,6 +384,10 @@ def results_name(given: str, found: str) -> str:
 def eval_command(args: argparse.Namespace) -> int:
     from roomba_bt.evaluate.parallel import Engine
 
+    if args.from_files is not None:  # the report of episodes run before: none runs
+        return report_from_files(args)
+    if not args.missions:
+        return _error("give a MISSION to evaluate (or --from FILE... to report on results)")
     problem = _check_arguments(args)
     if problem is not None:
         return _error(problem, args)
@@ -646,6 +657,9 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     problem = _profile_of_the_missions(args)
     if problem is not None:
         return problem
+    problem = _seeds_chosen(args)
+    if problem is not None:
+        return problem
     if not 1 <= args.runs <= MAX_RUNS:
         # each episode's spec is made before the first runs: 10^11 ran the memory out
         return f"--runs {args.runs}: expected 1..{MAX_RUNS:,} (more: several evaluations)"
@@ -667,6 +681,25 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
             results_format(args.out)
         except ValueError as exc:
             return f"--out {exc}"
+    return None
+
+
+def _seeds_chosen(args: argparse.Namespace) -> str | None:
+    """``args.seeds`` each episode's seed, ``args.seed`` and ``args.runs`` the first and how
+    many: ``--seeds`` (a list), else ``--seed`` (0) and ``--runs`` (20) in a row; the
+    problem when both ways are given."""
+    if args.seeds is None:
+        args.seed = 0 if args.seed is None else args.seed
+        args.runs = 20 if args.runs is None else args.runs
+        return None
+    given = [
+        option
+        for option, value in (("--seed", args.seed), ("--runs", args.runs))
+        if value is not None
+    ]
+    if given:
+        return f"--seeds and {' and '.join(given)}: give the seeds one way"
+    args.seed, args.runs = args.seeds[0], len(args.seeds)
     return None
 
 
@@ -762,6 +795,9 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         )
         for v in chosen
     ]
+    if args.seeds is not None:  # --seeds: the same specs, each on its seed of the list
+        batches = [[replace(s, seed=one) for s, one in zip(b, args.seeds, strict=True)]
+                   for b in batches]  # fmt: skip
     missions = _compiled(args, chosen)
     if isinstance(missions, int):
         return missions
@@ -1061,7 +1097,7 @@ def _report(args: argparse.Namespace, engine: str, evaluated: Evaluated) -> None
     if interruption is not None:
         print(escaped(f"interrupted  {interruption.said}; {_finished(done, evaluated)}",
                       ANY_CONTROL))  # fmt: skip
-    if not args.reproducible:  # which processes ran them, and what was lost: not the results
+    if not args.reproducible and engine:  # which ran them, and what was lost: not the results
         retried = sum(e.retried for e in done)
         print(f"engine       {engine}; {retried} episode(s) run again after a worker was lost")
 
@@ -1087,8 +1123,9 @@ def _json_report(args: argparse.Namespace, engine: str, evaluated: Evaluated) ->
     measured = not args.reproducible
     interruption = interruption_of(done)
     print(json.dumps(tidy({
-        "conditions": run_conditions(args),
-        "engine": engine if measured else None,
+        # --from: the records do not say every condition (none: the report's own defaults)
+        "conditions": None if args.from_files else run_conditions(args),
+        "engine": (engine or None) if measured else None,
         "retried": sum(e.retried for e in done) if measured else None,
         "interrupted": interruption is not None,
         "interrupted_by": interruption.cause if interruption else None,
@@ -1131,6 +1168,7 @@ def run_conditions(args: argparse.Namespace) -> dict[str, Any]:
         "params": parse_params(args.param),  # -p's, under every variant's own
         "seed": args.seed,
         "runs": args.runs,
+        "seeds": args.seeds,  # --seeds' list; null: --seed and --runs in a row
         "world": args.world,
         "within": args.within,
         "start_area": args.start_area,

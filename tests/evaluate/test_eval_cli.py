@@ -294,6 +294,7 @@ def test_the_json_summary_records_how_the_episodes_were_made(
         "params": {"duration": "1s"},  # -p's, under every variant's own (session 35)
         "seed": 7,
         "runs": 2,
+        "seeds": None,  # --seeds' list (session 35)
         "world": "empty-room",
         "within": 1.5,
         "start_area": None,

@@ -1,0 +1,118 @@
+"""``roomba-bt eval --from FILE...``: the report of episodes already run, read from results.
+
+Several machines' sweeps, or an interrupted one's pieces, merged by a script: the statistics
+(``summarize``, and the McNemar and median machinery of ``compare``) were reachable only from
+Python. ``--from`` reads the records (JSON Lines or CSV, as ``--out`` writes them), groups
+them by variant (the mission and its parameters, in the order first met) and prints the
+report ``eval`` prints after running them: each variant's summary, and each later variant
+compared with the first over the seeds both have; ``--json`` as ``eval --json``, with
+``conditions`` null (the records do not say them all) and ``from`` the files read. No
+episode runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from roomba_bt.evaluate.episode import EpisodeResult
+    from roomba_bt.evaluate.parallel import Evaluation
+
+
+def add_from_option(ev: argparse.ArgumentParser) -> None:
+    """``--from FILE...``: report on these results instead of running episodes."""
+    ev.add_argument(
+        "--from", dest="from_files", nargs="+", metavar="FILE",
+        help="run nothing: summarise and compare the episodes in these results files (.jsonl "
+        "or .csv, as --out writes them; several are merged), by variant; with --json as JSON",
+    )  # fmt: skip
+
+
+class FromFilesError(ValueError):
+    """Results that cannot be reported on: the message names the file (and line)."""
+
+
+def read_variants(
+    files: list[str],
+) -> list[tuple[str, tuple[tuple[str, str], ...], list[EpisodeResult]]]:
+    """Each variant's episodes in ``files``: (mission, parameters, results in seed order), in
+    the order first met. A (variant, seed) met again must be the same episode (as written
+    by another run with ``--reproducible``, its wall-clock columns aside): it counts once;
+    another one is refused, naming both places."""
+    from roomba_bt.evaluate.records import ResultsFileError, read_rows, written_record
+
+    found: dict[tuple[str, tuple[tuple[str, str], ...]], dict[int, tuple[str, EpisodeResult]]] = {}
+    for path in files:
+        try:
+            rows = read_rows(path)
+        except (ResultsFileError, ValueError) as exc:
+            raise FromFilesError(str(exc)) from None
+        for line, _, result in rows:
+            episodes = found.setdefault((result.mission, tuple(sorted(result.params))), {})
+            where = f"{path}:{line}"
+            first = episodes.setdefault(result.seed, (where, result))
+            same = written_record(first[1], reproducible=True) == written_record(
+                result, reproducible=True
+            )
+            if not same:
+                raise FromFilesError(f"{where}: seed {result.seed} of {result.mission} is at "
+                                     f"{first[0]} too, with other results: two runs made "
+                                     "otherwise (count each file alone)")  # fmt: skip
+    if not found:
+        raise FromFilesError(f"{', '.join(files)}: no episode to report on")
+    return [
+        (mission, params, [result for _, (_, result) in sorted(episodes.items())])
+        for (mission, params), episodes in found.items()
+    ]
+
+
+def report_from_files(args: argparse.Namespace) -> int:
+    """The report of ``args.from_files``' episodes (:func:`read_variants`) as ``eval``
+    prints it after running them; exit 2 when a file cannot be read, or a mission was also
+    given (``--from`` runs nothing), else 0 (or 1 under ``--min-rate``, 4 when an episode
+    was a bug's: :func:`~roomba_bt.cli.eval_cmd._verdict`)."""
+    from roomba_bt.cli import eval_cmd
+    from roomba_bt.evaluate.parallel import Evaluation
+
+    if args.missions:
+        return eval_cmd._error(f"--from and {args.missions[0]}: --from runs no mission: "
+                               "give one or the other", args)  # fmt: skip
+    try:
+        variants = read_variants(args.from_files)
+    except FromFilesError as exc:
+        return eval_cmd._error(f"--from {exc}", args)
+    chosen = [
+        eval_cmd.Variant(_label(mission, params), mission, params, mission)
+        for mission, params, _ in variants
+    ]
+    done = [Evaluation(results) for _, _, results in variants]
+    first = variants[0][2][0]
+    _as_read(args, first, done)
+    evaluated = eval_cmd._statistics(args, chosen, done, first.world)
+    eval_cmd._report(args, "", evaluated)
+    print(f"roomba-bt eval: {eval_cmd._count(done)} episode(s) of {len(chosen)} variant(s) "
+          f"read from {', '.join(args.from_files)}; none run", file=sys.stderr)  # fmt: skip
+    return eval_cmd._verdict(args, evaluated.summaries, done)
+
+
+def _label(mission: str, params: tuple[tuple[str, str], ...]) -> str:
+    return " ".join([mission, *(f"-p {name}={value}" for name, value in params)])
+
+
+def _as_read(args: argparse.Namespace, first: EpisodeResult, done: list[Evaluation]) -> None:
+    """``args`` as the report reads them, from the records: the ``key:`` columns they have
+    (their units are the missions', which the records do not keep), the most episodes of a
+    variant, the first record's world (the line to run an episode again names it), the
+    default profile's summary (the records do not name theirs), no provenance of this run,
+    and no times measured when the records have none."""
+    results = [r for e in done for r in e.results]
+    args.key = list(dict.fromkeys(name for r in results for name, _ in r.keys))
+    args.key_units = dict.fromkeys(args.key, "")
+    args.runs = max(len(e.results) for e in done)
+    args.world = first.world
+    args.profile = args.profile or "create2"
+    args.made_by = {}
+    # records written with --reproducible have no wall-clock columns: said as that run did
+    args.reproducible = args.reproducible or not any(r.wall_s or r.cpu_s for r in results)

@@ -1,0 +1,111 @@
+"""``eval --seeds 1-40,42,43`` (a list of seeds) and ``eval --from FILE...`` (the report of
+episodes already run, read from their records; none runs)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+BUMP = str(MISSIONS / "bump-and-turn.yaml")
+#: an A/B of two variants, byte-stable (``--reproducible``)
+AB = ["eval", BUMP, "--sweep", "duration=1s,2s", "--no-progress", "--reproducible"]
+
+
+def test_seeds_runs_the_seeds_listed(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "r.jsonl"
+    assert main([*AB, "--seeds", "3,5-6,5", "--out", str(out), "--json"]) == 0
+    conditions = json.loads(capsys.readouterr().out)["conditions"]
+    assert (conditions["seeds"], conditions["seed"], conditions["runs"]) == ([3, 5, 6], 3, 3)
+    seeds = [json.loads(line)["seed"] for line in out.read_text().splitlines()]
+    assert seeds == [3, 5, 6, 3, 5, 6]  # each variant's, in order
+
+
+@pytest.mark.parametrize(
+    ("options", "said"),
+    [
+        (["--seeds", "5-3"], "argument --seeds: found '5-3'; allowed: seeds 0 or more"),
+        (["--seeds", "1,x"], "argument --seeds: found 'x'"),
+        (["--seeds", "-1"], "argument --seeds: found '-1'"),
+        (["--seeds", "1-3", "--runs", "3"], "--seeds and --runs: give the seeds one way"),
+        (["--seeds", "1-3", "--seed", "1"], "--seeds and --seed: give the seeds one way"),
+    ],
+)
+def test_a_bad_seed_list_exits_2_before_any_episode(
+    options: list[str], said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    try:
+        code = main([*AB, *options])
+    except SystemExit as exc:  # argparse's own: its usage, then the problem
+        code = int(exc.code or 0)
+    assert code == 2
+    assert said in capsys.readouterr().err
+
+
+@pytest.fixture
+def ran(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> tuple[Path, str]:
+    """An A/B of 3 seeds written to a file, and the report it printed."""
+    out = tmp_path / "ab.jsonl"
+    assert main([*AB, "--runs", "3", "--out", str(out)]) == 0
+    return out, capsys.readouterr().out
+
+
+def test_from_reports_the_records_as_the_run_did(
+    ran: tuple[Path, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    out, report = ran
+    assert main(["eval", "--from", str(out)]) == 0
+    again, err = capsys.readouterr()
+    assert again == report
+    assert f"6 episode(s) of 2 variant(s) read from {out}; none run" in err
+
+
+def test_from_merges_files_each_episode_once(
+    ran: tuple[Path, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Pieces of one sweep (an interrupted run and its rest, another machine's share) read
+    together: an episode in two of them counts once, and the report is the whole sweep's."""
+    out, report = ran
+    lines = out.read_text().splitlines(keepends=True)
+    first, rest = tmp_path / "first.jsonl", tmp_path / "rest.jsonl"
+    first.write_text("".join(lines[:4]))
+    rest.write_text("".join(lines[3:]))
+    assert main(["eval", "--from", str(first), str(rest), "--json"]) == 0
+    merged = json.loads(capsys.readouterr().out)
+    assert merged["conditions"] is None  # the records do not say them all
+    assert [v["runs"] for v in merged["variants"]] == [3, 3]
+    assert merged["comparisons"][0]["pairs"] == 3
+    assert main(["eval", "--from", str(first), str(rest)]) == 0
+    assert capsys.readouterr().out == report
+
+
+def test_from_refuses_one_episode_with_two_results(
+    ran: tuple[Path, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out, _ = ran
+    row = json.loads(out.read_text().splitlines()[1])
+    row["outcome"] = "FAILURE"
+    other = tmp_path / "other.jsonl"
+    other.write_text(json.dumps(row) + "\n")
+    assert main(["eval", "--from", str(out), str(other)]) == 2
+    err = capsys.readouterr().err
+    assert f"--from {other}:1: seed 1 of {BUMP} is at {out}:2 too, with other results" in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["eval", BUMP, "--from", "x.jsonl"], f"--from and {BUMP}: --from runs no mission"),
+        (["eval", "--from", "missing.jsonl"], "--from missing.jsonl: No such file"),
+        (["eval"], "give a MISSION to evaluate (or --from FILE... to report on results)"),
+    ],
+)
+def test_from_without_records_or_with_a_mission_exits_2(
+    argv: list[str], said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(argv) == 2
+    assert f"roomba-bt eval: {said}" in capsys.readouterr().err
