@@ -16,7 +16,12 @@ Dask cluster of ``--jobs`` workers; ``--scheduler``: an existing one). With two 
 ``--sweep`` or ``--variant`` sets, every variant runs on the same seeds and start poses and
 each is compared with the first (A): paired successes, the exact McNemar p-value, the median
 time difference with its interval. ``--out`` writes one record per episode (JSON Lines or
-CSV), ``--json`` prints the summary as JSON. For a mission that runs the brushes, the
+CSV; one that already holds episodes is refused unless ``--force``, or ``--resume``: only the
+(variant, seed) pairs it lacks run, :mod:`roomba_bt.cli.eval_resume`), ``--json`` prints the
+summary as JSON; ``--seeds 1-40,42`` runs a list of seeds, ``--from FILE...`` reports on
+results already written (:mod:`roomba_bt.cli.eval_from`). Variants run interleaved by seed
+(A1 B1 A2 B2 ...), so an interrupted A/B is a smaller paired one. For a mission that runs the
+brushes, the
 floor covered at 5, 10 and 20 minutes and at the end (mean, sd, min..max; of ``--start-area``
 if given; per area at the end) and how many episodes went a minute of brush time without
 new floor. An episode still running after ``--wall-limit`` of wall-clock time (stuck in a
