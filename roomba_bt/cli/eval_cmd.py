@@ -387,12 +387,8 @@ def results_name(given: str, found: str) -> str:
 
 
 def eval_command(args: argparse.Namespace) -> int:
-    from roomba_bt.evaluate.parallel import Engine
-
     if args.from_files is not None:  # the report of episodes run before: none runs
         return report_from_files(args)
-    if not args.missions:
-        return _error("give a MISSION to evaluate (or --from FILE... to report on results)")
     problem = _check_arguments(args)
     if problem is not None:
         return _error(problem, args)
@@ -404,14 +400,7 @@ def eval_command(args: argparse.Namespace) -> int:
     if isinstance(resumed, int):
         return resumed
     batches = resumed.todo
-    # no more workers than episodes: a local Dask cluster would start each one's process
-    jobs = max(1, min(args.jobs, sum(len(batch) for batch in batches)))
-    limit, wait = wall_limit(args), worker_wait(args)  # checked: each a number or None
-    engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", jobs,
-                    args.scheduler, limit if isinstance(limit, float) else None,
-                    wait if isinstance(wait, float) else None)  # fmt: skip
-    if engine.scheduler is None:
-        _warn_if_more_jobs_than_cores(jobs)
+    engine = _engine(args, batches)
     partial = _partial(args)
     if isinstance(partial, int):
         return partial
@@ -450,6 +439,22 @@ def eval_command(args: argparse.Namespace) -> int:
         if plotted is not None:
             return plotted
     return _verdict(args, evaluated.summaries, done)
+
+
+def _engine(args: argparse.Namespace, batches: list[list[EpisodeSpec]]) -> Engine:
+    """Where the episodes run, as the options say (checked before: each limit a number or
+    None), with no more workers than episodes (a local Dask cluster would start each one's
+    process); more local processes than cores warned about."""
+    from roomba_bt.evaluate.parallel import Engine
+
+    jobs = max(1, min(args.jobs, sum(len(batch) for batch in batches)))
+    limit, wait = wall_limit(args), worker_wait(args)
+    engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", jobs,
+                    args.scheduler, limit if isinstance(limit, float) else None,
+                    wait if isinstance(wait, float) else None)  # fmt: skip
+    if engine.scheduler is None:
+        _warn_if_more_jobs_than_cores(jobs)
+    return engine
 
 
 def _resumed(
@@ -642,6 +647,8 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     :func:`given_once`; those not found in ``args.not_found``, said with the missions that
     do not compile, :func:`_compiled`) and every number in its range; the first problem's
     message."""
+    if not args.missions:
+        return "give a MISSION to evaluate (or --from FILE... to report on results)"
     args.key = list(dict.fromkeys(args.key))  # a key named twice is reported once
     from roomba_bt.cli.validate_report import Checked
 
