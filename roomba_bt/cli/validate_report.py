@@ -236,6 +236,7 @@ def error_as_json(
         "included_from": [],
         "began_at": None,
         "used_in": [],
+        "in_subtree": [],
     }
 
 
@@ -264,7 +265,9 @@ def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
     """A diagnostic's fields by their names, the include chain innermost first; ``began_at``,
     ``{line, column}`` of where a YAML syntax error's structure began, else null;
     ``used_in``, each use of a subtree it was found at, a list of ``{subtree, file, line,
-    column}`` innermost first (the use, then the use of the subtree it is in)."""
+    column}`` innermost first (the use, then the use of the subtree it is in); ``in_subtree``,
+    of one said at the use in a mission that caused it, where in the library's subtree it was
+    found: ``{subtree, file, line, column}``, the body's place first, then the uses between."""
     return {
         "file": d.file,
         "line": d.line,
@@ -279,6 +282,10 @@ def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
         "used_in": [
             [{"subtree": u.name, "file": u.file, "line": u.line, "column": u.column} for u in chain]
             for chain in d.used_in
+        ],
+        "in_subtree": [
+            {"subtree": u.name, "file": u.file, "line": u.line, "column": u.column}
+            for u in d.in_subtree
         ],
     }
 

@@ -44,7 +44,13 @@ from roomba_bt.mission.checks import (
     undefined_songs,
 )
 from roomba_bt.mission.deadends import dead_ends
-from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError, merged_uses
+from roomba_bt.mission.diagnostics import (
+    Diagnostic,
+    IncludeSite,
+    MissionError,
+    merged_uses,
+    said_at_use,
+)
 from roomba_bt.mission.loader import NO_PERMISSIONS, Loader, Permissions
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import find_mission, shipped_name
@@ -183,7 +189,7 @@ def _checked(
     order."""
     parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree, text=text)
     if parsed is None or parsed.tree is None:
-        return None, sorted(ctx.diagnostics)
+        return None, list(_said(ctx.diagnostics))
     tree = parsed.tree
     modes = ModeCheck(ctx.wording)
     modes.run(tree)
@@ -228,9 +234,11 @@ def _checked(
 
 def _said(*found: Iterable[Diagnostic]) -> tuple[Diagnostic, ...]:
     """Diagnostics as ``validate`` says them: in the order of the file (by check, a warning
-    on line 8 came before one on line 5), a finding at several uses of a subtree once,
-    naming each (:func:`merged_uses`)."""
-    return tuple(sorted(merged_uses(itertools.chain.from_iterable(found))))
+    on line 8 came before one on line 5); one in a library's subtree that a use caused at
+    that use (:func:`said_at_use`); a finding at several uses of a subtree written in their
+    own file once, naming each (:func:`merged_uses`)."""
+    every = itertools.chain.from_iterable(found)
+    return tuple(sorted(merged_uses(itertools.chain.from_iterable(map(said_at_use, every)))))
 
 
 def _tree_warnings(

@@ -14,6 +14,7 @@ A diagnostic in a file the mission includes carries the include chain that reach
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
@@ -71,7 +72,12 @@ class Diagnostic:
 
     ``used_in``: of a diagnostic about a node of a subtree's body (said at its definition),
     each use of the subtree it was found at (:data:`UseChain`); one found the same at
-    several uses is said once, naming them all (:func:`merged_uses`). Empty otherwise."""
+    several uses is said once, naming them all (:func:`merged_uses`). Empty otherwise.
+
+    ``in_subtree``: of a diagnostic said at the use that caused it (:func:`said_at_use`),
+    where in the subtree's body it was found: the place in the body (and the subtree's
+    name), then each use of a subtree between that body and the use said (the place, and
+    the subtree it is in), innermost first. Empty otherwise."""
 
     file: str
     line: int
@@ -82,6 +88,7 @@ class Diagnostic:
     included_from: tuple[IncludeSite, ...] = ()
     began_at: tuple[int, ...] = ()
     used_in: tuple[UseChain, ...] = ()
+    in_subtree: tuple[SubtreeUse, ...] = ()
 
     def __str__(self) -> str:
         where = (
@@ -97,15 +104,24 @@ class Diagnostic:
         """``used_in`` as the line says it: `` (in subtree turn, used at m.yaml:12:5 and at
         m.yaml:20:5)``; a use within another subtree names that one's use too (`` (in
         subtree turn, used at m.yaml:4:9 in subtree square at m.yaml:12:5)``); "" for a
-        diagnostic outside subtrees. At most :data:`USES_SAID` uses, then how many more."""
+        diagnostic outside subtrees. At most :data:`USES_SAID` uses, then how many more.
+        One said at its use (``in_subtree``) names the subtree's line first: `` (in subtree
+        leg, lib.yaml:30:19)``."""
+        inside = _inside_said(self.in_subtree)
         if not self.used_in:
-            return ""
+            return inside
         said = [_chain_said(chain) for chain in self.used_in[:USES_SAID]]
         more = len(self.used_in) - USES_SAID
         if more > 0:
             said.append(f"{more:,} more")
         name = escaped(self.used_in[0][0].name, UNPRINTABLE)
-        return f" (in subtree {name}, used at " + " and at ".join(said) + ")"
+        return f"{inside} (in subtree {name}, used at " + " and at ".join(said) + ")"
+
+    def used_at(self, use: SubtreeUse) -> Diagnostic:
+        """This diagnostic, found in a subtree's body, as caused by its use at ``use`` (a
+        value it gave; outside the uses it has, as :meth:`Loc.used_at`)."""
+        chains = tuple((*chain, use) for chain in self.used_in) or ((use,),)
+        return replace(self, used_in=chains)
 
     def chain_said(self) -> str:
         """``included_from`` as the line says it: `` (included from a.yaml:3:11, from
@@ -139,6 +155,48 @@ def _chain_said(chain: UseChain) -> str:
     of the subtrees it is in."""
     outer = "".join(f" in subtree {escaped(use.name, UNPRINTABLE)} at {use}" for use in chain[1:])
     return f"{chain[0]}{outer}"
+
+
+def _inside_said(inside: tuple[SubtreeUse, ...]) -> str:
+    """`` (in subtree turn, lib.yaml:12:11, used at lib.yaml:32:35 in subtree leg)``: where
+    in a subtree's body a diagnostic said at its use was found; "" when it was not."""
+    if not inside:
+        return ""
+    first, *between = inside
+    said = "".join(
+        f", used at {use} in subtree {escaped(use.name, UNPRINTABLE)}" for use in between
+    )
+    return f" (in subtree {escaped(first.name, UNPRINTABLE)}, {first}{said})"
+
+
+def said_at_use(diagnostic: Diagnostic) -> list[Diagnostic]:
+    """``diagnostic`` said at the use that caused it, one for each use it was found at, when
+    that use is in another file than the subtree's body (a library's): the mission that
+    uses the library wrongly is the file to fix, the one counted and annotated, and its line
+    is the use (``missions/x.yaml:17:19: ... (in subtree leg, lib.yaml:30:19)``). The use
+    that caused it is the outermost one it names: a value given there, or the place in the
+    tree that the mission's checks (modes, keys) follow the body from. One found in a body
+    written in the file of its use stays at the body's line, naming the use."""
+    if not diagnostic.used_in:
+        return [diagnostic]
+    said = []
+    for chain in diagnostic.used_in:
+        use = chain[-1]
+        if use.file == diagnostic.file:
+            said.append(replace(diagnostic, used_in=(chain,)))
+            continue
+        body = SubtreeUse(diagnostic.file, diagnostic.line, diagnostic.column, chain[0].name)
+        between = tuple(
+            SubtreeUse(inner.file, inner.line, inner.column, outer.name)
+            for inner, outer in itertools.pairwise(chain)  # the use in the next
+        )
+        said.append(
+            replace(
+                diagnostic, file=use.file, line=use.line, column=use.column,
+                used_in=(), in_subtree=(body, *between), included_from=(),
+            )
+        )  # fmt: skip
+    return said
 
 
 def merged_uses(diagnostics: Iterable[Diagnostic]) -> list[Diagnostic]:

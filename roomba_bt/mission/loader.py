@@ -570,6 +570,7 @@ class Loader:
         fields = known_fields(node, loc, f"subtree {name!r}", ("parameters", "tree", "doc"))
         params: dict[str, tuple[ValueType, Any, Loc]] = {}
         default_texts: dict[str, str] = {}
+        default_at: dict[str, Loc] = {}
         broken: set[str] = set()
         if "parameters" in fields:
             pnode, _, ploc = fields["parameters"]
@@ -585,6 +586,7 @@ class Loader:
                 params[pname] = (vtype, default if has_default else None, pkloc)
                 if has_default:
                     default_texts[pname] = _default_text(vtype, pvalue, default)
+                    default_at[pname] = _default_at(pvalue, pvloc)
         if "tree" not in fields:
             self.ctx.error(loc.at(f"subtree {name!r} needs a tree:"))
             body, body_loc = None, loc
@@ -592,7 +594,7 @@ class Loader:
             body, _, body_loc = fields["tree"]
         self.ctx.subtrees[name] = SubtreeDef(
             name, key_loc, params, body, body_loc, broken=frozenset(broken),
-            default_texts=default_texts,
+            default_texts=default_texts, default_at=default_at,
         )  # fmt: skip
 
 

@@ -9,6 +9,7 @@ parsed by :mod:`roomba_bt.mission.control`, behaviour leaves by
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 
 import yaml
 
@@ -114,6 +115,9 @@ class NodeParser:
         self._count = 0
         self._uses: list[Loc] = []
         self._too_many = False
+        #: each subtree's errors parsed alone (:meth:`_own_errors`), found once when a use
+        #: first has errors in its body
+        self._alone: dict[str, frozenset[Diagnostic]] = {}
 
     def node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
         """Parse one node; errors are recorded and None returned for a node that cannot be
@@ -399,20 +403,58 @@ class NodeParser:
             return None
         self._use_stack.append(name)
         self._uses.append(key_loc)
+        use = SubtreeUse(key_loc.file, key_loc.line, key_loc.column, name)
         try:
-            body = self.node(sub.body, sub.body_loc, sub_env)
+            with self.ctx.collecting() as found:
+                body = self.node(sub.body, sub.body_loc, sub_env)
         finally:
             self._use_stack.pop()
             self._uses.pop()
+        if found:
+            own = self._own_errors(sub)
+            for error in found:  # the body's own (as its file alone says it), or this use's
+                self.ctx.error(error if error in own else error.used_at(use))
         if body is None:
             return None
         if body.name == body.kind and body.kind != "leaf":
             body.name = name
-        _mark_used(body, SubtreeUse(key_loc.file, key_loc.line, key_loc.column, name))
+        _mark_used(body, use)
         # show draws the use with what it was given, whatever the body
         given = ", ".join(f"{p}={written_text(n, env, lists=True)}" for p, n, _, _ in args)
         body.use = f"{name}({given})" if given else name
         return body
+
+    def _own_errors(self, sub: SubtreeDef) -> frozenset[Diagnostic]:
+        """The errors ``sub``'s body has parsed alone, as ``validate`` of its file checks it
+        (its defaults, unknown values for the parameters without one): those are its own,
+        wrong at every use; an error a use's body has beyond these the use caused (a value
+        it gave, a key its argument names)."""
+        own = self._alone.get(sub.name)
+        if own is None:
+            assert sub.body is not None  # a use found errors in it
+            warned, counted = len(self.ctx.warnings), self._count
+            self._use_stack.append(sub.name)
+            try:
+                with self.ctx.collecting() as found:
+                    self.node(sub.body, sub.body_loc, self._alone_env(sub))
+            finally:  # what the use's own parse said and counted, not twice
+                self._use_stack.pop()
+                del self.ctx.warnings[warned:]
+                self._count = counted
+            own = self._alone[sub.name] = frozenset(found)
+        return own
+
+    def _alone_env(self, sub: SubtreeDef) -> dict[str, Bound]:
+        """The parameters ``sub``'s body sees when it is checked without a use: the
+        mission's, then each of its own by its default, unknown without one."""
+        env = dict(self.global_env)
+        for pname in sub.broken:
+            env[pname] = Bound(STR, UNKNOWN, "?")
+        for pname, (vtype, default, _) in sub.params.items():
+            env[pname] = (
+                Bound(vtype, UNKNOWN, "?") if default is None else self._by_default(sub, pname)
+            )
+        return env
 
     def _subtree_env(
         self,
@@ -455,8 +497,18 @@ class NodeParser:
                 self.ctx.error(key_loc.at(f"subtree {name!r} needs parameter {pname!r}"))
                 sub_env[pname] = Bound(vtype, UNKNOWN, "?")
             else:
-                sub_env[pname] = Bound(vtype, default, sub.default_texts[pname])
+                sub_env[pname] = self._by_default(sub, pname)
         return sub_env
+
+    def _by_default(self, sub: SubtreeDef, pname: str) -> Bound:
+        """Subtree parameter ``pname`` bound to its default: an error its value makes names
+        the default's place and how a use gives another (``speed: VALUE at the use``)."""
+        vtype, default, _ = sub.params[pname]
+        at_use = replace(self.ctx.wording, give_template="{name}: {value} at the use")
+        return Bound(
+            vtype, default, sub.default_texts[pname], default_at=sub.default_at.get(pname),
+            wording=at_use,
+        )  # fmt: skip
 
     def check_unused_subtrees(self) -> None:
         """Check subtrees no tree uses (library files), with unknown values for parameters
@@ -465,11 +517,6 @@ class NodeParser:
             if sub.used or sub.body is None:
                 continue
             sub.used = True
-            env = dict(self.global_env)
-            for pname in sub.broken:
-                env[pname] = Bound(STR, UNKNOWN, "?")
-            for pname, (vtype, default, _) in sub.params.items():
-                env[pname] = Bound(vtype, UNKNOWN if default is None else default, "?")
             self._use_stack.append(sub.name)
-            self.node(sub.body, sub.body_loc, env)
+            self.node(sub.body, sub.body_loc, self._alone_env(sub))
             self._use_stack.pop()

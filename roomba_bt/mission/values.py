@@ -10,7 +10,8 @@ parameters.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Collection, Iterable, Mapping
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -316,6 +317,9 @@ class SubtreeDef:
     #: each default as the library writes it (``10min``), the text a use that gives none
     #: names its nodes with
     default_texts: Mapping[str, str] = field(default_factory=dict)
+    #: where each default is written: an error its value makes in the body names it
+    #: (:func:`said_default`), as a mission parameter's
+    default_at: Mapping[str, Loc] = field(default_factory=dict)
 
 
 @dataclass
@@ -391,6 +395,18 @@ class Context:
         more = len(unread) - len(named)
         listed = ", ".join(named) + (f" and {more} more" if more else "")
         return f"the includes of {listed} failed, and may have defined it"
+
+    @contextmanager
+    def collecting(self) -> Iterator[list[Diagnostic]]:
+        """The errors said within the ``with``, collected apart (into the list it gives),
+        not said: a subtree's body parsed at a use, whose errors the use may have caused
+        (:meth:`NodeParser.node`'s caller decides where each is said)."""
+        said, reported = self.diagnostics, self._reported
+        self.diagnostics, self._reported = [], set()
+        try:
+            yield self.diagnostics
+        finally:
+            self.diagnostics, self._reported = said, reported
 
     def report(self, bad: Bad) -> None:
         """A :class:`Bad`'s diagnostic and those raised with it (each key of a mapping that

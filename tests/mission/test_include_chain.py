@@ -82,7 +82,9 @@ def test_a_warning_in_a_library_and_a_load_mission_error_carry_the_chain_too(rep
     )
     [warning] = validate_files(["missions/delivery/square.yaml"], permissions=SHARED)
     assert warning.severity == "warning"  # a drive in Full mode that reads no cliff
-    assert warning.file == "missions/common/lib/escapes.yaml"
+    # a check that follows the mission's tree into the library: said at the use
+    assert warning.file == "missions/delivery/square.yaml"
+    assert warning.in_subtree[0].file == "missions/common/lib/escapes.yaml"
     assert warning.checked_file == "missions/delivery/square.yaml"
     (repo / "missions/common/lib/escapes.yaml").write_text(ESCAPES)
     with pytest.raises(MissionError) as raised:

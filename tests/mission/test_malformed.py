@@ -218,15 +218,16 @@ def test_a_value_out_of_range_from_the_command_line_says_so_where_it_is_used(
         "    - subtree: {id: go, v: '${speed}', n: '${laps}'}\n"
     )
     _, problems = compile_mission(path, {"speed": "600mm/s"})
+    # each said in the mission: the second at the subtree's use, which passed it on
     assert [(p.file.rsplit("/", 1)[-1], p.line, p.message) for p in problems] == [
-        ("lib.yaml", 5, "drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s "
-                        "(${v} is speed=600mm/s, given in params)"),
         ("m.yaml", 6, "drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s "
                       "(${speed} is speed=600mm/s, given in params)"),
+        ("m.yaml", 7, "drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s "
+                      "(${v} is speed=600mm/s, given in params)"),
     ]  # fmt: skip
     _, (problem,) = compile_mission(path, {"laps": "0"})
     assert (problem.line, problem.message) == (
-        5,
+        7,
         "repeat.times must be at least 1, got 0 (${n} is laps=0, given in params)",
     )
     assert compile_mission(path, {"speed": "400mm/s"})[1] == []

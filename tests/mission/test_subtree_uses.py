@@ -12,7 +12,14 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.mission import CompiledMission, Diagnostic, SubtreeUse, compile_mission
+from roomba_bt.mission import (
+    CompiledMission,
+    Diagnostic,
+    SubtreeUse,
+    compile_mission,
+    validate_file,
+)
+from roomba_bt.oi.profiles import ROOMBA500
 
 #: a subtree whose second step can never run: its drive has no end
 NUDGE = """\
@@ -118,3 +125,113 @@ def test_validate_says_the_use_on_the_line_and_in_json(
     assert found["used_in"] == [
         [{"subtree": "nudge", "file": str(path), "line": line, "column": 7}] for line in (12, 13)
     ]
+
+
+#: a library (its own file) of subtrees: each is right on its own, wrong only as a use
+#: below uses it
+LIBRARY = """\
+subtrees:
+  leg:
+    tree:
+      drive: {velocity: 100 mm/s, distance: 10cm}
+  say:
+    parameters:
+      t: {type: str, default: "OK"}
+    tree:
+      display: "${t}"
+  count_into:
+    parameters:
+      out: {type: str}
+    tree:
+      check: {key: "${out}", op: ">=", value: 1}
+  go:
+    parameters:
+      speed: {type: speed, default: 100 mm/s}
+    tree:
+      drive: {velocity: "${speed}", distance: 10cm}
+"""
+
+
+def _library_and_mission(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, tree: str, library: str = LIBRARY
+) -> list[Diagnostic]:
+    """The diagnostics ``validate`` gives the mission ``m.yaml`` (``tree`` its steps, after
+    an include of ``lib.yaml`` and a bool key ``flag``), the library alone having none."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "lib.yaml").write_text(library)
+    (tmp_path / "m.yaml").write_text(
+        "include: [lib.yaml]\nblackboard:\n  flag: {type: bool, initial: false}\n"
+        "tree:\n  sequence:\n" + tree
+    )
+    assert validate_file("lib.yaml", profile=ROOMBA500).diagnostics == []
+    return validate_file("m.yaml", profile=ROOMBA500).diagnostics
+
+
+@pytest.mark.parametrize(
+    ("tree", "line", "message", "in_library"),
+    [
+        pytest.param(  # a: the use is where the tree reaches the drive in Passive
+            "    - subtree: leg\n", 6, "drive sends Drive (137)", (4, 7), id="mode"
+        ),
+        pytest.param(  # b: a text given at the use
+            "    - mode: safe\n    - subtree: {id: say, t: TOOLONG}\n",
+            7, "display.text: the display has 4 digits; 'TOOLONG'", (9, 16), id="text",
+        ),
+        pytest.param(  # c: a key the use names types the check's value
+            "    - mode: safe\n    - subtree: {id: count_into, out: flag}\n",
+            7, "check.value: expected true or false, got 1", (14, 47), id="key",
+        ),
+        pytest.param(  # d: a number given at the use
+            "    - mode: safe\n    - subtree: {id: go, speed: 900 mm/s}\n",
+            7, "drive: velocity 900 mm/s is out of range", (19, 25), id="number",
+        ),
+    ],
+)  # fmt: skip
+def test_an_error_a_use_causes_in_a_library_is_the_missions(
+    tree: str,
+    line: int,
+    message: str,
+    in_library: tuple[int, int],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Said at the use (the file counted and annotated), the library's line beside it."""
+    [error] = _library_and_mission(tmp_path, monkeypatch, tree)
+    assert (error.file, error.line, error.column) == ("m.yaml", line, 7)
+    assert error.message.startswith(message), error
+    assert error.included_from == ()  # the mission's own: not "an included file has errors"
+    [inside] = error.in_subtree
+    assert (inside.file, inside.line, inside.column) == ("lib.yaml", *in_library)
+    assert f"(in subtree {inside.name}, lib.yaml:{in_library[0]}:{in_library[1]})" in str(error)
+
+
+def test_an_error_of_the_library_itself_stays_at_the_library(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A default out of range is wrong at every use: the library's, naming the default."""
+    library = LIBRARY.replace("default: 100 mm/s", "default: 650 mm/s")
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "lib.yaml").write_text(library)
+    [alone] = validate_file("lib.yaml").diagnostics
+    (tmp_path / "m.yaml").write_text(
+        "include: [lib.yaml]\ntree:\n  sequence:\n    - mode: safe\n    - subtree: go\n"
+    )
+    [error] = validate_file("m.yaml").diagnostics
+    assert error.located() == alone
+    assert (error.file, error.line, error.in_subtree) == ("lib.yaml", 19, ())
+    assert error.message.endswith(
+        "(${speed} is 650 mm/s, the default of parameter speed at 17:37: "
+        "give speed: 500mm/s at the use, or another default there)"
+    ), error
+
+
+def test_a_subtree_in_a_library_subtree_names_the_use_between(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    library = LIBRARY + "  twice:\n    tree:\n      sequence: [{subtree: leg}, {subtree: leg}]\n"
+    errors = _library_and_mission(tmp_path, monkeypatch, "    - subtree: twice\n", library)
+    assert [(e.file, e.line) for e in errors] == [("m.yaml", 6)] * 2
+    assert str(errors[0]).startswith("m.yaml:6:7: drive sends Drive (137)")
+    assert "(in subtree leg, lib.yaml:4:7, used at lib.yaml:22:19 in subtree twice)" in str(
+        errors[0]
+    )

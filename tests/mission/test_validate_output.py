@@ -149,9 +149,9 @@ def test_strict_names_a_warning_that_comes_through_an_include(repo: Path, capsys
         ESCAPES.replace("mode: safe", "mode: full").replace("10 parsecs", "10 cm")
     )
     assert main(["validate", "--strict", *SHARED, "missions/delivery/square.yaml"]) == 7
+    # the mission's tree reaches the library's drive in Full mode: the use's warning
     assert capsys.readouterr().out.splitlines()[-1] == (
-        "missions/delivery/square.yaml: failed --strict (an included file has warnings: "
-        "1 warning in missions/common/lib/escapes.yaml, included at line 2)"
+        "missions/delivery/square.yaml: failed --strict (1 warning)"
     )
 
 
@@ -184,6 +184,7 @@ def test_json_lists_every_diagnostic_with_its_chain_and_each_file_verdict(
         "included_from": [],
         "began_at": None,
         "used_in": [],
+        "in_subtree": [],
         "checked_file": "missing.yaml",
     }
     assert missing["message"].startswith("no such mission file")
@@ -201,6 +202,7 @@ def test_json_lists_every_diagnostic_with_its_chain_and_each_file_verdict(
         ],
         "began_at": None,
         "used_in": [],
+        "in_subtree": [],
         "checked_file": "missions/delivery/to-kitchen.yaml",
     }
     said = (warning["severity"], warning["checked_file"], warning["line"])
@@ -320,13 +322,17 @@ def test_a_shipped_file_is_named_by_its_shipped_name_in_every_format(
     library, dock = "roomba-bt:lib/docking.yaml", "roomba-bt:dock.yaml"
     if form == "json":
         included, own = (json.loads(out) for out in said)
-        assert [(d["file"], d["line"]) for d in included["diagnostics"]] == [(library, 43)]
+        # the use gave the speed: said there, the library's place named by its shipped name
+        [at_use] = included["diagnostics"]
+        assert (at_use["file"], at_use["line"]) == ("m.yaml", 5)
+        assert [(u["file"], u["line"]) for u in at_use["in_subtree"]] == [(library, 43)]
         assert [(d["file"], d["line"]) for d in own["diagnostics"]] == [(dock, 17)]
-        assert included["files"][0]["said"].endswith(f"1 error in {library}, included at line 1)")
     elif form == "github":
-        assert said[0].startswith(f"::error file={library.replace(':', '%3A')},line=43,col=44,")
+        assert said[0].startswith("::error file=m.yaml,line=5,col=7,")
+        assert f"(in subtree dock, {library}:43:44)" in said[0]
         assert said[1].startswith(f"::error file={dock.replace(':', '%3A')},line=17,col=3,")
     else:
-        assert said[0].startswith(f"{library}:43:44: dock_search: speed 900 mm/s is out of range")
-        assert f"m.yaml: failed (an included file has errors: 1 error in {library}," in said[0]
+        assert said[0].startswith("m.yaml:5:7: dock_search: speed 900 mm/s is out of range")
+        assert f"(in subtree dock, {library}:43:44)" in said[0]
+        assert "m.yaml: failed (1 error)" in said[0]
         assert said[1].startswith(f"{dock}:17:3: parameter time_limit=abc (from the command line)")
