@@ -29,7 +29,7 @@ Standard library only; the project file is found by :mod:`roomba_bt.project`.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,6 +44,7 @@ __all__ = [  # the project file's names too, where the loader's messages take th
     "PROJECT_TABLE",
     "IncludeGrant",
     "configured_include_dirs",
+    "granted_files",
 ]
 
 #: The environment variable of include folders, ``os.pathsep``-separated (``:``, ``;`` on
@@ -164,3 +165,24 @@ def _not_a_folder(folder: Path, entry: str) -> str | None:
     except (OSError, RuntimeError) as exc:  # a link loop, a folder the user cannot enter
         return f"{path_written(entry)} cannot be read ({why(exc)})"
     return f"{path_written(entry)} is no folder (looked for {folder.absolute()})"
+
+
+#: at most this many files of the granted folders are looked at for a hint (an included
+#: file moved, a subtree's library not included): a home folder granted whole is not walked
+#: to its end
+FILES_LOOKED_AT = 5_000
+
+
+def granted_files(roots: Iterable[Path], limit: int = FILES_LOOKED_AT) -> Iterator[Path]:
+    """The files of ``roots`` (the folders a mission may include from), in name order,
+    hidden folders left out, at most ``limit``: where an error's hint looks for the file a
+    mission may have meant."""
+    seen = 0
+    for root in roots:
+        for folder, folders, files in os.walk(root):
+            folders[:] = sorted(f for f in folders if not f.startswith("."))
+            for name in sorted(files):
+                seen += 1
+                if seen > limit:
+                    return
+                yield Path(folder) / name

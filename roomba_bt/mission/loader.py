@@ -37,9 +37,10 @@ Python program's arguments, or the command line's flags).
 
 from __future__ import annotations
 
+import itertools
 import os
 import re
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
@@ -66,6 +67,7 @@ from roomba_bt.mission.include_path import (
     INCLUDE_PATH_VARIABLE,
     PROJECT_FILE,
     PROJECT_TABLE,
+    granted_files,
 )
 from roomba_bt.mission.nodes import NodeParser
 from roomba_bt.mission.plan import KeyDecl, Node
@@ -247,6 +249,7 @@ class Loader:
             *SHIPPED_LIBRARY,
             *(folder.resolve() for folder in self.permissions.include_dirs),
         )
+        self.nodes.granted = self._include_roots
         self._include_stack.append(resolved)
         _literal_section(self.ctx, sections)  # before any text of the file is read
         # the parameters first: a blackboard key's initial value may be one ("${speed}"),
@@ -441,8 +444,10 @@ class Loader:
         if self._refused(text, target, iloc, "include", allowed=True):
             return False
         if target in self._include_stack:
-            chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
-            self.ctx.error(iloc.at(f"include cycle: {' -> '.join([*chain, target.name])}"))
+            # named as diagnostics name them: a library's docking.yaml, and the shipped one
+            cycle = self._include_stack[self._include_stack.index(target) :]
+            chain = [self.display(p) for p in (*cycle, target)]
+            self.ctx.error(iloc.at(f"include cycle: {' -> '.join(chain)}"))
             return True
         misnamed = _package_file_problem(text, target, self.permissions.wording)
         if misnamed is not None:
@@ -453,7 +458,7 @@ class Loader:
             self.ctx.error(iloc.at(f"cannot read included file {path_written(text)}: {unreadable}"))
             return False
         if not target.is_file():
-            self.ctx.error(iloc.at(_not_a_file(path, text, target)))
+            self.ctx.error(iloc.at(_not_a_file(path, text, target, self._include_roots)))
             return False
         if self._again(target, text, iloc):
             return True
@@ -941,10 +946,11 @@ def _shown_path(folder: Path) -> str:
         return str(folder)
 
 
-def _not_a_file(path: Path, text: str, target: Path) -> str:
+def _not_a_file(path: Path, text: str, target: Path, roots: Sequence[Path] = ()) -> str:
     """What an include names when it is no file: a directory, or nothing, with the file it
     most likely meant (``lib\\b.yaml`` written the Windows way, ``lib/B.yaml`` in the wrong
-    case: both found on Windows, not here)."""
+    case: both found on Windows, not here); else a file of its name in ``roots``, the
+    folders the mission may include from (:func:`_same_name_in`): where it was moved?"""
     if target.is_dir():
         return (
             f"included file {path_written(text)} is a directory, not a file: name a .yaml file "
@@ -974,10 +980,33 @@ def _not_a_file(path: Path, text: str, target: Path) -> str:
         )
     looked = _shown_path(target)  # where "../lib/x.yaml" led, unless the text says it
     looked_for = f"looked for {looked}: " if looked != text else ""
+    moved = [  # each as this file's include would write it; the shipped one said below
+        Path(os.path.relpath(p, path.parent)).as_posix()
+        for p in _same_name_in(roots, target.name)
+        if shipped_name(p) is None
+    ]
+    if moved:
+        found = " or ".join(path_written(each) for each in moved)
+        said = f"; moved? a file of that name is {found}"
+    elif target.name in _SHIPPED_NAMES:  # the shipped library, maybe meant
+        said = f"; the shipped docking library is {DOCKING_LIBRARY}"
+    else:
+        said = ""
     return (
         f"included file {path_written(text)} not found ({looked_for}paths are relative to the "
-        f"including file; the shipped docking library is {DOCKING_LIBRARY})"
+        f"including file{said})"
     )
+
+
+#: the shipped library's file names: an include of one not found may mean it
+_SHIPPED_NAMES = frozenset(("docking.yaml", "undock.yaml"))
+
+
+def _same_name_in(roots: Iterable[Path], name: str, limit: int = 3) -> list[Path]:
+    """Up to ``limit`` files named ``name`` in ``roots`` (the folders a mission may include
+    from, :func:`granted_files`): where an included file not found may have been moved."""
+    same = (path for path in granted_files(roots) if path.name == name)
+    return list(itertools.islice(same, limit))
 
 
 def _written_with_backslashes(what: str, folder: Path, text: str) -> str | None:

@@ -8,8 +8,11 @@ parsed by :mod:`roomba_bt.mission.control`, behaviour leaves by
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import os
+import re
+from collections.abc import Iterable, Mapping
 from dataclasses import replace
+from pathlib import Path
 
 import yaml
 
@@ -18,6 +21,7 @@ from roomba_bt.behaviours.units import STR, closest
 from roomba_bt.mission.control import parse_composite, parse_decorator
 from roomba_bt.mission.diagnostics import Diagnostic, SubtreeUse
 from roomba_bt.mission.foreign import foreign_hint, suggestion
+from roomba_bt.mission.include_path import granted_files
 from roomba_bt.mission.leaves import parse_leaf, written_text
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import library_defining
@@ -37,6 +41,7 @@ from roomba_bt.mission.values import (
     unknown,
     warn_escaped,
 )
+from roomba_bt.mission.wording import Wording
 from roomba_bt.printable import path_written
 from roomba_bt.yamlsource import NOT_PLAIN_SPACES, named_character
 
@@ -118,6 +123,9 @@ class NodeParser:
         #: each subtree's errors parsed alone (:meth:`_own_errors`), found once when a use
         #: first has errors in its body
         self._alone: dict[str, frozenset[Diagnostic]] = {}
+        #: the folders the mission may include from (the loader's): an unknown subtree's
+        #: library, not included, is looked for in them
+        self.granted: tuple[Path, ...] = ()
 
     def node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
         """Parse one node; errors are recorded and None returned for a node that cannot be
@@ -317,20 +325,6 @@ class NodeParser:
             return f"{word!r} is one text to YAML: write a space after the colon: `{name}: {value}`"
         return None
 
-    def _unknown_subtree_hint(self, name: str, at: Loc) -> str:
-        """What follows ``unknown subtree NAME``: that an include was not read (its
-        subtrees are unknown, so a "did you mean" or the shipped library's name would send
-        the user the wrong way), else a close name, else the shipped library file that
-        defines it."""
-        note = self.ctx.unread_include_note(at)
-        if note is not None:
-            return f" ({note})"
-        hint = closest(name, list(self.ctx.subtrees))
-        library = None if hint else library_defining(name)
-        if library is not None:  # the shipped docking subtree, used without its include
-            hint = f" (the shipped {library} defines it: include: [{library}])"
-        return hint
-
     def _check_guard(self, condition: Node, guard: str) -> None:
         for n in condition.walk():
             decl = n.declared
@@ -389,9 +383,8 @@ class NodeParser:
                 "replaced there (name the subtree)"
             ))  # fmt: skip
         if sub is None:
-            raise Bad(
-                id_loc.at(f"unknown subtree {name!r}{self._unknown_subtree_hint(name, id_loc)}")
-            )
+            hint = _unknown_subtree_hint(self.ctx, name, id_loc, self.granted)
+            raise Bad(id_loc.at(f"unknown subtree {name!r}{hint}"))
         if name in self._use_stack:
             chain = self._use_stack[self._use_stack.index(name) :]
             raise Bad(id_loc.at(f"recursive subtree: {' -> '.join([*chain, name])}"))
@@ -436,25 +429,15 @@ class NodeParser:
             self._use_stack.append(sub.name)
             try:
                 with self.ctx.collecting() as found:
-                    self.node(sub.body, sub.body_loc, self._alone_env(sub))
+                    self.node(
+                        sub.body, sub.body_loc, _alone_env(sub, self.global_env, self.ctx.wording)
+                    )
             finally:  # what the use's own parse said and counted, not twice
                 self._use_stack.pop()
                 del self.ctx.warnings[warned:]
                 self._count = counted
             own = self._alone[sub.name] = frozenset(found)
         return own
-
-    def _alone_env(self, sub: SubtreeDef) -> dict[str, Bound]:
-        """The parameters ``sub``'s body sees when it is checked without a use: the
-        mission's, then each of its own by its default, unknown without one."""
-        env = dict(self.global_env)
-        for pname in sub.broken:
-            env[pname] = Bound(STR, UNKNOWN, "?")
-        for pname, (vtype, default, _) in sub.params.items():
-            env[pname] = (
-                Bound(vtype, UNKNOWN, "?") if default is None else self._by_default(sub, pname)
-            )
-        return env
 
     def _subtree_env(
         self,
@@ -489,6 +472,9 @@ class NodeParser:
                 as_written(vtype, resolved, pvalue, env) if resolved is not UNKNOWN else "?",
                 origin_of(pvalue, env) or given_to(pvalue, pvloc, name),
             )
+        for warning in _shadowed(sub, self.global_env, key_loc):
+            if warning not in self.ctx.warnings:
+                self.ctx.warnings.append(warning)
         given = {a[0] for a in args}
         for pname, (vtype, default, _) in sub.params.items():
             if pname in given:
@@ -497,18 +483,8 @@ class NodeParser:
                 self.ctx.error(key_loc.at(f"subtree {name!r} needs parameter {pname!r}"))
                 sub_env[pname] = Bound(vtype, UNKNOWN, "?")
             else:
-                sub_env[pname] = self._by_default(sub, pname)
+                sub_env[pname] = _by_default(sub, pname, self.ctx.wording)
         return sub_env
-
-    def _by_default(self, sub: SubtreeDef, pname: str) -> Bound:
-        """Subtree parameter ``pname`` bound to its default: an error its value makes names
-        the default's place and how a use gives another (``speed: VALUE at the use``)."""
-        vtype, default, _ = sub.params[pname]
-        at_use = replace(self.ctx.wording, give_template="{name}: {value} at the use")
-        return Bound(
-            vtype, default, sub.default_texts[pname], default_at=sub.default_at.get(pname),
-            wording=at_use,
-        )  # fmt: skip
 
     def check_unused_subtrees(self) -> None:
         """Check subtrees no tree uses (library files), with unknown values for parameters
@@ -518,5 +494,100 @@ class NodeParser:
                 continue
             sub.used = True
             self._use_stack.append(sub.name)
-            self.node(sub.body, sub.body_loc, self._alone_env(sub))
+            self.node(sub.body, sub.body_loc, _alone_env(sub, self.global_env, self.ctx.wording))
             self._use_stack.pop()
+
+
+def _alone_env(sub: SubtreeDef, mission: Mapping[str, Bound], wording: Wording) -> dict[str, Bound]:
+    """The parameters ``sub``'s body sees when it is checked without a use: the
+    ``mission``'s, then each of its own by its default, unknown without one."""
+    env = dict(mission)
+    for pname in sub.broken:
+        env[pname] = Bound(STR, UNKNOWN, "?")
+    for pname, (vtype, default, _) in sub.params.items():
+        env[pname] = (
+            Bound(vtype, UNKNOWN, "?") if default is None else _by_default(sub, pname, wording)
+        )
+    return env
+
+
+def _by_default(sub: SubtreeDef, pname: str, wording: Wording) -> Bound:
+    """Subtree parameter ``pname`` bound to its default: an error its value makes names
+    the default's place and how a use gives another (``speed: VALUE at the use``)."""
+    vtype, default, _ = sub.params[pname]
+    at_use = replace(wording, give_template="{name}: {value} at the use")
+    return Bound(
+        vtype, default, sub.default_texts[pname], default_at=sub.default_at.get(pname),
+        wording=at_use,
+    )  # fmt: skip
+
+
+#: at most this many subtrees are listed after ``unknown subtree`` (a renamed one)
+SUBTREES_LISTED = 12
+
+
+def _unknown_subtree_hint(ctx: Context, name: str, at: Loc, granted: Iterable[Path]) -> str:
+    """What follows ``unknown subtree NAME``: that an include was not read (its subtrees
+    are unknown, so a "did you mean" or the shipped library's name would send the user the
+    wrong way), else a close name, else the shipped library file that defines it, else the
+    granted files that define one of that name (an include forgotten), else the subtrees
+    known (one renamed), the first :data:`SUBTREES_LISTED`."""
+    note = ctx.unread_include_note(at)
+    if note is not None:
+        return f" ({note})"
+    hint = closest(name, list(ctx.subtrees))
+    library = None if hint else library_defining(name)
+    if hint or library is not None:  # the shipped docking subtree, used without its include
+        return hint or f" (the shipped {library} defines it: include: [{library}])"
+    defining = _files_defining(name, granted, at.file)
+    if defining:
+        files = " and ".join(defining)
+        return f" ({files} define{'s' if len(defining) == 1 else ''} it: include it)"
+    known = sorted(ctx.subtrees)
+    if not known:
+        return ""
+    more = len(known) - SUBTREES_LISTED
+    said = ", ".join(known[:SUBTREES_LISTED]) + (f" and {more:,} more" if more > 0 else "")
+    return f"; known: {said}"
+
+
+#: a subtree's definition in a library's text: its name as a key, indented under subtrees:
+_SUBTREES_SECTION = re.compile(r"^subtrees\s*:", re.MULTILINE)
+
+
+def _files_defining(name: str, granted: Iterable[Path], using: str, limit: int = 3) -> list[str]:
+    """Up to ``limit`` YAML files of the ``granted`` folders (:func:`granted_files`) with a
+    ``subtrees:`` section that has a key ``name`` (read as text: a hint, not a compile),
+    each named from the working folder as diagnostics name files, ``using`` left out."""
+    key = re.compile(rf"^[ \t]+{re.escape(name)}[ \t]*:", re.MULTILINE)
+    found: list[str] = []
+    for path in granted_files(granted):
+        if len(found) >= limit:
+            break
+        if path.suffix not in (".yaml", ".yml"):
+            continue
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):  # a file not to read: no hint from it
+            continue
+        shown = Path(os.path.relpath(path)).as_posix()
+        if shown != using and _SUBTREES_SECTION.search(text) and key.search(text):
+            found.append(shown)
+    return found
+
+
+def _shadowed(sub: SubtreeDef, mission: Mapping[str, Bound], use: Loc) -> list[Diagnostic]:
+    """A warning at ``use`` for each of ``sub``'s parameters that hides one of the
+    ``mission``'s of another type (a library's ``laps: distance`` in a mission with ``laps:
+    int``): ``${laps}`` in the body is the subtree's, which the mission's writer may not
+    expect. One of the same type is no surprise (the subtree's wins, as documented)."""
+    return [
+        use.at(
+            f"subtree {sub.name!r} has its own parameter {pname!r} ({vtype.describe()}), "
+            f"which hides the mission's {pname!r} ({mission[pname].type.describe()}) in its "
+            f"body: ${{{pname}}} there is the subtree's; rename one of them if the body "
+            "should read the mission's"
+        ).as_warning()
+        for pname, (vtype, _, _) in sub.params.items()
+        if pname in mission and mission[pname].type.name != vtype.name
+    ]

@@ -517,7 +517,7 @@ def resolve(
             bound = env.get(pname)
             if bound is None:
                 hint = _not_a_parameter(ctx, pname, env, allow_ref, no_ref)
-                raise Bad(loc.at(f"{what}: unknown parameter ${{{pname}}}{hint}; {ESCAPE_HINT}"))
+                raise Bad(loc.at(_unknown_parameter(what, pname, hint, loc)))
             if bound.value is UNKNOWN:
                 return UNKNOWN
             if compatible(bound.type, vtype):
@@ -777,6 +777,19 @@ def name_text(raw: str, loc: Loc, env: Mapping[str, Bound]) -> tuple[str, bool]:
     return substituted(raw, text_of), bool(names)
 
 
+def _unknown_parameter(what: str, name: str, hint: str, loc: Loc) -> str:
+    """``drive.velocity: unknown parameter ${cruise}``, with ``hint``; in a subtree's body,
+    how it gets a mission's parameter that only some missions declare (a library's body read
+    ``${cruise}`` of the missions that have one, and failed in the others)."""
+    if not hint and loc.path.startswith("subtrees."):
+        hint = (
+            f" (a subtree's body sees its own parameters and those of the mission compiled, "
+            f"which has no {name}: declare {name} in the subtree's parameters, and let each "
+            f'use give it, {name}: "${{{name}}}" to pass a mission\'s on)'
+        )
+    return f"{what}: unknown parameter ${{{name}}}{hint}; {ESCAPE_HINT}"
+
+
 def _parameters_used(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) -> list[str]:
     """The parameters ``raw`` uses, each in ``env``; :class:`Bad` at the first ``${`` that
     starts none, or names an unknown one, saying how a literal one is written."""
@@ -793,7 +806,7 @@ def _parameters_used(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) ->
     for name in names:
         if name not in env:
             hint = closest(name, list(env))
-            raise Bad(loc.at(f"{what}: unknown parameter ${{{name}}}{hint}; {ESCAPE_HINT}"))
+            raise Bad(loc.at(_unknown_parameter(what, name, hint, loc)))
     return names
 
 
