@@ -120,11 +120,9 @@ class NodeParser:
         self._count = 0
         self._uses: list[Loc] = []
         self._too_many = False
-        #: each subtree's errors parsed alone (:meth:`_own_errors`), found once when a use
-        #: first has errors in its body
+        #: each subtree's errors parsed alone (:meth:`_own_errors`), once a use has some
         self._alone: dict[str, frozenset[Diagnostic]] = {}
-        #: the folders the mission may include from (the loader's): an unknown subtree's
-        #: library, not included, is looked for in them
+        #: the folders the mission may include from: an unknown subtree's library is sought
         self.granted: tuple[Path, ...] = ()
 
     def node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
@@ -392,21 +390,8 @@ class NodeParser:
         if sub.written_wrongly:  # its definition's error is the one to fix
             return None
         sub_env = self._subtree_env(sub, args, key_loc, env)
-        if sub.body is None:
-            return None
-        self._use_stack.append(name)
-        self._uses.append(key_loc)
         use = SubtreeUse(key_loc.file, key_loc.line, key_loc.column, name)
-        try:
-            with self.ctx.collecting() as found:
-                body = self.node(sub.body, sub.body_loc, sub_env)
-        finally:
-            self._use_stack.pop()
-            self._uses.pop()
-        if found:
-            own = self._own_errors(sub)
-            for error in found:  # the body's own (as its file alone says it), or this use's
-                self.ctx.error(error if error in own else error.used_at(use))
+        body = self._body_at(sub, sub_env, use, key_loc)
         if body is None:
             return None
         if body.name == body.kind and body.kind != "leaf":
@@ -415,6 +400,27 @@ class NodeParser:
         # show draws the use with what it was given, whatever the body
         given = ", ".join(f"{p}={written_text(n, env, lists=True)}" for p, n, _, _ in args)
         body.use = f"{name}({given})" if given else name
+        return body
+
+    def _body_at(
+        self, sub: SubtreeDef, env: Mapping[str, Bound], use: SubtreeUse, key_loc: Loc
+    ) -> Node | None:
+        """``sub``'s body parsed at ``use`` (at ``key_loc``) with ``env``; each error in it
+        the body's own (its file alone has it) or caused by ``use`` (Diagnostic.used_at)."""
+        if sub.body is None:
+            return None
+        self._use_stack.append(sub.name)
+        self._uses.append(key_loc)
+        try:
+            with self.ctx.collecting() as found:
+                body = self.node(sub.body, sub.body_loc, env)
+        finally:
+            self._use_stack.pop()
+            self._uses.pop()
+        if found:
+            own = self._own_errors(sub)
+            for error in found:
+                self.ctx.error(error if error in own else error.used_at(use))
         return body
 
     def _own_errors(self, sub: SubtreeDef) -> frozenset[Diagnostic]:
