@@ -146,12 +146,21 @@ class Power(Motion):
         self._charge_owed = 0
 
     def _power_inputs(self) -> tuple[object, ...]:
-        """What the currents are computed from (:meth:`_power_changed`)."""
+        """What the currents are computed from (:meth:`_power_changed`) and may change from
+        step to step. The world's timeline's effects (the dock's power, the wall charger's
+        plug, an overcurrent event) are left out: they change only when an event starts or
+        ends, and :meth:`_timeline_changed_power` drops the key then, so a world without
+        events does not pay for reading and comparing them on every battery step."""
         return (
-            self.left_speed, self.right_speed, self.brush_pwm, self.docked, self.dock_powered,
-            self.mode, self.blocked, self._stall_steps > 30, self._event_overcurrents,
-            self.plugged_in,
+            self.left_speed, self.right_speed, self.brush_pwm, self.docked, self.mode,
+            self.blocked, self._stall_steps > 30,
         )  # fmt: skip
+
+    def _timeline_changed_power(self) -> None:
+        """An event started or ended (robot.py's ``_world_events``): the currents are
+        computed again on the next step, whatever the key (:meth:`_power_inputs`)."""
+        self._power_key = None
+        self._power_due = True
 
     def _power_changed(self) -> None:
         v = self.values

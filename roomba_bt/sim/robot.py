@@ -333,7 +333,7 @@ class Simulator(OIProtocol):
                 self._event_bump, self.lifted, self.dock_powered, self._event_overcurrents,
                 self.plugged_in,
             ) = effects  # fmt: skip
-            self._power_due = True  # the charger may have come on or gone off
+            self._timeline_changed_power()  # a charger may have come on or gone off
             self._check_safety()  # a plug put in is one of Safe mode's stops
             self._body_changed()
             self._geometry_dirty = True

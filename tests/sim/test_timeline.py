@@ -146,3 +146,22 @@ def test_safe_entered_while_plugged_in_falls_back_to_passive() -> None:
     host.send(C.safe())
     host.run(0.05)
     assert host.sim.mode is OIMode.PASSIVE
+
+
+def test_the_plug_put_in_and_pulled_out_is_followed_with_nothing_else_changing() -> None:
+    """The battery's currents are computed again only when what they depend on changes
+    (power.py's key); the timeline's effects are not in that key, so a world without events
+    pays nothing for them, and the start and end of an event drop the key instead. A robot
+    standing in Passive, whose speeds, brushes and mode never change, still starts and stops
+    charging at the plug's start and end."""
+    host = make(BOX + "events: [{at: 0.3, kind: plug, duration: 0.5}]\n", mode="passive")
+    host.send(C.stream([21, 23, 34]))
+    host.run(0.2)
+    assert host.sim.values[34] == 0 and host.sim.values[21] == 0
+    assert host.sim.values[23] < 0
+    host.run(0.2)
+    assert host.sim.values[34] == 0b01 and host.sim.values[21] == 2
+    assert host.sim.values[23] == 1500
+    host.run(0.5)
+    assert host.sim.values[34] == 0 and host.sim.values[21] == 0
+    assert host.sim.values[23] < 0
