@@ -308,9 +308,10 @@ class Connection:
             self.send(oi.full())
         if stream_command is not None:
             self.send(stream_command)
-        log.info(
-            "%s: %s in %s, streaming %s", self.name, self.profile.title, target.label, list(ids)
-        )
+        # without packets (``sensors`` below 57600) nothing streams: "streaming []" read as a
+        # stream of nothing, so the log says how the sensors are read instead
+        how = f"streaming {list(ids)}" if ids else "no stream (a Query List (149) each reading)"
+        log.info("%s: %s in %s, %s", self.name, self.profile.title, target.label, how)
 
     def _resync(self) -> None:
         """The start-up's Query List went unanswered: the robot's OI parser set in step, as

@@ -43,6 +43,22 @@ def test_sensors_shows_every_packet_at_each_rate(
     assert "left_encoder_counts" in rows["43"]
 
 
+@pytest.mark.parametrize(
+    ("rate", "said"),
+    [(115200, "streaming [100]"), (19200, "no stream (a Query List (149) each reading)")],
+)
+def test_the_start_up_log_says_how_the_sensors_are_read(
+    rate: int, said: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Below 57600 no stream is asked for: the connection's start-up said "streaming []",
+    a stream of nothing, where each table is a Query List."""
+    caplog.set_level("INFO", logger="roomba_bt.robot.connection")
+    assert main(["sensors", "--baud", str(rate), "--count", "1"]) == 0
+    started = [r.getMessage() for r in caplog.records if " in Passive, " in r.getMessage()]
+    assert len(started) == 1 and started[0].endswith(f"in Passive, {said}")
+    assert "streaming []" not in caplog.text
+
+
 def test_sensors_at_19200_over_a_pty_queries_every_packet(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
