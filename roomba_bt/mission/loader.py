@@ -97,6 +97,7 @@ from roomba_bt.mission.source import (
 from roomba_bt.mission.values import (
     LIST_ITEM_TYPES,
     PARAMETER_TYPE_NAMES,
+    PARAMETER_TYPE_OPTIONS,
     PARAMETER_TYPES,
     UNKNOWN,
     Bound,
@@ -753,14 +754,6 @@ def param_decl(
     return vtype, default, True, doc
 
 
-#: the option a parameter's type is declared with beside ``type:``: the type that reads it,
-#: and what that type is
-_TYPE_OPTIONS = {
-    "choices": ("enum", "a closed set of words"),
-    "items": ("list", "a list of values of one type"),
-}
-
-
 def _declared_type(name: str, fields: Mapping[str, tuple[yaml.Node, Loc, Loc]]) -> ValueType:
     """The type parameter ``name``'s declaration ``fields`` give: a name
     (:data:`PARAMETER_TYPES`), ``enum`` with its ``choices:``, or ``list`` with its
@@ -768,7 +761,7 @@ def _declared_type(name: str, fields: Mapping[str, tuple[yaml.Node, Loc, Loc]]) 
     2m]``). Raises :class:`Bad`."""
     tnode, _, tloc = fields["type"]
     written = plain(tnode, tloc)
-    for option, (owner, meaning) in _TYPE_OPTIONS.items():
+    for option, (owner, meaning) in PARAMETER_TYPE_OPTIONS.items():
         if option in fields and written != owner:  # read by no other type: it was ignored
             raise Bad(fields[option][2].at(
                 f"parameter {name!r}: {option} only goes with type: {owner} ({meaning}), not "
@@ -785,7 +778,7 @@ def _declared_type(name: str, fields: Mapping[str, tuple[yaml.Node, Loc, Loc]]) 
     return _type_named(tnode, tloc, PARAMETER_TYPES, "type", also=("enum", "list"))
 
 
-#: what each option of :data:`_TYPE_OPTIONS` is said to need when it is missing
+#: what each option of :data:`PARAMETER_TYPE_OPTIONS` is said to need when it is missing
 _OPTION_SAID = {
     "choices": "[...], the words it may take",
     "items": f"TYPE, the type of each item (one of {', '.join(LIST_ITEM_TYPES)})",

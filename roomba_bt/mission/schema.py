@@ -25,7 +25,11 @@ from roomba_bt.behaviours.declare import Declaration, Param, range_said
 from roomba_bt.behaviours.language import KEY_ITEMS, MODIFIERS, STRUCTURAL, WORDS, NodeKind, Shape
 from roomba_bt.behaviours.registry import Registry, default_registry
 from roomba_bt.behaviours.units import UNITS, VALUE_TYPES, boolean_schema, quantity_schema
-from roomba_bt.mission.values import LIST_ITEM_TYPES, PARAMETER_TYPE_NAMES
+from roomba_bt.mission.values import (
+    LIST_ITEM_TYPES,
+    PARAMETER_TYPE_NAMES,
+    PARAMETER_TYPE_OPTIONS,
+)
 
 _NODE = {"$ref": "#/$defs/node"}
 _NAME = r"[A-Za-z_][A-Za-z0-9_]*"
@@ -264,6 +268,16 @@ def _declarations() -> tuple[dict[str, Any], dict[str, Any]]:
         },
         "required": ["type"],
         "additionalProperties": False,
+        # choices: with enum alone and items: with list alone, each needed there, as
+        # validate says (an option another type does not read was silently ignored)
+        "allOf": [
+            {
+                "if": {"properties": {"type": {"const": owner}}},
+                "then": {"required": [option]},
+                "else": {"not": {"required": [option]}},
+            }
+            for option, (owner, _) in PARAMETER_TYPE_OPTIONS.items()
+        ],
     }
     key = {
         "anyOf": [

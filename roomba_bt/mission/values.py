@@ -429,6 +429,11 @@ def parse_type_name(
     vtype = VALUE_TYPES.get(text)
     if vtype is None or (vtype is MARK and not allow_mark):
         names = [n for n in VALUE_TYPES if allow_mark or n != "mark"] + list(also)
+        if text in PARAMETER_ONLY_TYPES:  # "unknown" would send one to look for a typo
+            raise Bad(loc.at(
+                f"{text!r} is a parameter type, not a key type: {PARAMETER_ONLY_TYPES[text]}; "
+                f"key types: {', '.join(names)}"
+            ))  # fmt: skip
         raise Bad(
             loc.at(f"unknown type {text!r}{closest(text, names)}; known types: {', '.join(names)}")
         )
@@ -444,6 +449,22 @@ PARAMETER_TYPES: dict[str, ValueType] = {
 #: every word a parameter's ``type:`` may be: ``enum`` with its ``choices:``, ``list`` with
 #: its ``items:`` (:func:`roomba_bt.mission.loader.param_decl`)
 PARAMETER_TYPE_NAMES: tuple[str, ...] = (*PARAMETER_TYPES, "enum", "list")
+#: the parameter types a blackboard key (or a record's field) cannot be, and what to write
+#: instead: each is more than one value, or words only a parameter declares
+PARAMETER_ONLY_TYPES: dict[str, str] = {
+    "list": "a key holds one value: declare a parameter {type: list, items: TYPE} and give "
+    "it to for_each.in, whose key holds each item in turn",
+    "notes": "a key holds one value: declare a parameter {type: notes} and give it to song.notes",
+    "enum": "its choices are declared on a parameter {type: enum, choices: [...]}; a key "
+    "holds a word as str",
+}
+#: the option a parameter's type is declared with beside ``type:``: the type that reads it
+#: (and needs it), and what that type is; validate (the loader's ``_declared_type``) and the
+#: JSON Schema (schema.py) both read it, so they refuse the same declarations
+PARAMETER_TYPE_OPTIONS: dict[str, tuple[str, str]] = {
+    "choices": ("enum", "a closed set of words"),
+    "items": ("list", "a list of values of one type"),
+}
 #: what a list parameter's ``items:`` may be: one value each (a song is a list already)
 LIST_ITEM_TYPES: dict[str, ValueType] = {
     name: vtype for name, vtype in PARAMETER_TYPES.items() if vtype is not NOTES

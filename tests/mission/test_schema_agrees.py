@@ -222,6 +222,17 @@ PARAMETERS = [
         True),
     ("int parameter as the power colour", _parameter(
         {"type": "int", "default": 200}, _leds("${p}")["tree"]), True),
+    # an option another type does not read: the schema accepted these, validate refuses
+    ("items on a distance parameter", _parameter(
+        {"type": "distance", "items": "distance", "default": "1m"}, _WAIT), False),
+    ("choices on a str parameter", _parameter(
+        {"type": "str", "choices": ["a", "b"], "default": "a"}, _WAIT), False),
+    ("list parameter without items", _parameter({"type": "list", "default": []}, _WAIT),
+     False),
+    ("enum parameter without choices", _parameter({"type": "enum", "default": "a"}, _WAIT),
+     False),
+    ("enum parameter with items", _parameter(
+        {"type": "enum", "choices": ["a"], "items": "str", "default": "a"}, _WAIT), False),
 ]  # fmt: skip
 
 _CASES = (
