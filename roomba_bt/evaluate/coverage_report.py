@@ -6,7 +6,7 @@ Runs, on the same seeds (so the same start poses) for both missions:
 
 * the apartment's living room: ``--runs`` starts in the living room, 20 minutes each,
   coverage of the living room at 5, 10 and 20 minutes; the coverage-over-time curves of both
-  in one figure (``docs/routines/coverage-living-room.png``);
+  in one figure (``docs/routines/coverage-living-room.png``, the legend below the chart);
 * the whole apartment: ``--apartment-runs`` starts anywhere, 60 minutes each, coverage per
   room, the longest brush time without new floor;
 * the whole apartment with a low battery (20 %): the runs that reach the missions' 15 %
@@ -25,6 +25,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from roomba_bt.evaluate import EpisodeSpec, run_episodes
 from roomba_bt.evaluate.coverage import CoverageSummary, Spread, summarize_coverage
@@ -129,34 +130,49 @@ def _apartment_table(summaries: dict[str, CoverageSummary]) -> list[str]:
 def _curves_figure(results: dict[str, list[EpisodeResult]], path: Path) -> None:
     from roomba_bt.sim.plot import pyplot
 
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
+    fig = curves_figure(results)
     try:
-        for name, episodes in results.items():
-            covered = [r.coverage for r in episodes if r.coverage is not None]
-            # an episode that ended sooner (the floor done) keeps its coverage to the end
-            times = [t for t, _ in max((c.curve for c in covered), key=len)]
-            means, lows, highs = [], [], []
-            for t in times:
-                values = sorted(c.at(t) for c in covered)
-                means.append(100 * sum(values) / len(values))
-                lows.append(100 * values[len(values) // 10])
-                highs.append(100 * values[(9 * len(values)) // 10])
-            minutes = [t / 60 for t in times]
-            shown = _label(name).replace("`", "")
-            (line,) = ax.plot(minutes, means, label=f"{shown} (mean)")
-            ax.fill_between(minutes, lows, highs, color=line.get_color(), alpha=0.15,
-                            label=f"{shown} (10th..90th percentile)")  # fmt: skip
-        ax.set_xlabel("time (min)")
-        ax.set_ylabel("living room covered (%)")
-        ax.set_ylim(0, 100)
-        ax.grid(alpha=0.3)
-        ax.legend(loc="lower right", fontsize=8)
-        ax.set_title(f"Apartment living room, {len(next(iter(results.values())))} seeded starts")
-        fig.tight_layout()
-        fig.savefig(str(path))
+        # cut to fit what is drawn, the legend below the chart included
+        fig.savefig(str(path), bbox_inches="tight")
     finally:
-        plt.close(fig)
+        pyplot().close(fig)
+
+
+def curves_figure(results: dict[str, list[EpisodeResult]]) -> Any:
+    """The living room's coverage over time, each mission's mean and its 10th..90th
+    percentile band (a matplotlib ``Figure``, for the caller to save and close)."""
+    from roomba_bt.sim.plot import pyplot
+
+    fig, ax = pyplot().subplots(figsize=(7, 4.5), dpi=110)
+    means_drawn, bands_drawn = [], []  # the legend's two columns: a row a mission
+    for name, episodes in results.items():
+        covered = [r.coverage for r in episodes if r.coverage is not None]
+        # an episode that ended sooner (the floor done) keeps its coverage to the end
+        times = [t for t, _ in max((c.curve for c in covered), key=len)]
+        means, lows, highs = [], [], []
+        for t in times:
+            values = sorted(c.at(t) for c in covered)
+            means.append(100 * sum(values) / len(values))
+            lows.append(100 * values[len(values) // 10])
+            highs.append(100 * values[(9 * len(values)) // 10])
+        minutes = [t / 60 for t in times]
+        shown = _label(name).replace("`", "")
+        (line,) = ax.plot(minutes, means, label=f"{shown} (mean)")
+        band = ax.fill_between(minutes, lows, highs, color=line.get_color(), alpha=0.15,
+                               label=f"{shown} (10th..90th percentile)")  # fmt: skip
+        means_drawn.append(line)
+        bands_drawn.append(band)
+    ax.set_xlabel("time (min)")
+    ax.set_ylabel("living room covered (%)")
+    ax.set_ylim(0, 100)
+    ax.grid(alpha=0.3)
+    # below the chart, not on it: "lower right" hid the bands from 5 minutes on (as eval
+    # --plot's legends, below each map); a row a mission, its mean beside its band
+    ax.legend(handles=[*means_drawn, *bands_drawn], loc="upper center",
+              bbox_to_anchor=(0.5, -0.14), ncol=2, fontsize=8, frameon=False)  # fmt: skip
+    ax.set_title(f"Apartment living room, {len(next(iter(results.values())))} seeded starts")
+    fig.tight_layout()
+    return fig
 
 
 def _battery_lines(results: dict[str, list[EpisodeResult]]) -> list[str]:
