@@ -140,9 +140,12 @@ if TYPE_CHECKING:
         RunBoard,
         SharedBlackboard,
         UnwrittenKey,
-        declare,
         default_registry,
     )
+
+    # from its module: mypy, reaching this package from roomba_bt._entry inside an import
+    # cycle, took the package's ``declare`` for its submodule of that name (no-redef)
+    from roomba_bt.behaviours.declare import declare
     from roomba_bt.cli.profile_choice import configured_profile
     from roomba_bt.errors import RoombaBtError
     from roomba_bt.mission import (

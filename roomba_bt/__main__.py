@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import sys
 
-from roomba_bt.cli import main
+from roomba_bt._entry import main  # the signals taken before the command line loads
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -47,8 +47,11 @@ INSTALLATION = "installation"
 #: below every layer too, run first by the top package: the current folder off ``sys.path``
 #: under ``python -m roomba_bt``, with only the modules Python loaded at start-up
 SAFE_PATH = "_safe_path"
+#: below every layer too: the command's entry point, the ending signals taken before anything
+#: heavy loads, and what their handlers raise (``Terminated``, which robot.safety re-exports)
+ENTRY = "_entry"
 #: what every layer may import, the protocol's included
-STDLIB_ONLY = {LAZY, PRINTABLE, ERRORS, PROJECT, INSTALLATION, SAFE_PATH}
+STDLIB_ONLY = {LAZY, PRINTABLE, ERRORS, PROJECT, INSTALLATION, SAFE_PATH, ENTRY}
 ALLOWED: dict[str, set[str]] = {
     BOTTOM: {BOTTOM, PRINTABLE},
     "oi": {"oi", *STDLIB_ONLY},  # the protocol stays standard-library only, so no YAML

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from roomba_bt import __version__
+from roomba_bt._entry import EARLY_SIGNALS, interrupted_early, take_signals_early
 from roomba_bt.cli.streams import guard_std_streams, stdout_problem
 from roomba_bt.installation import IncompleteInstallation, missing_from_installation
 from roomba_bt.robot.wording import COMMAND_LINE, UNATTENDED, ConnectionWording, spoken
@@ -237,34 +238,30 @@ def _as_the_process() -> None:
     * stdout and stderr that a closed pipe, a full disk, a closed descriptor or an encoding
       without ``✓`` cannot end the command with (:func:`~roomba_bt.cli.streams.guard_std_streams`):
       its exit code is its outcome's, never 0 for a broken pipe;
-    * SIGTERM and SIGHUP raise :class:`~roomba_bt.robot.safety.Terminated` (exit 130, as the
-      run's own handlers make it) from here on: in the half second of imports and loading
-      before a run installs its handlers they ended the process with 143 (129), not the
-      130 the exit-code table says. One the process was started with ignored (``nohup``'s
-      SIGHUP) stays ignored;
-    * SIGINT, when the process was started with it ignored (a script's ``roomba-bt run ...
-      &``: a shell without job control starts its background jobs so), raises
-      :class:`KeyboardInterrupt` from here on, as a terminal's Ctrl-C does. The run's
-      handlers take it all the same, but Python keeps an ignored SIGINT ignored until
-      then: a script's ``kill -INT $!`` in the seconds of start-up, the port's opening and
-      the handshake (on a loaded machine) was lost, and the whole mission ran, exit 0;
+    * the handlers of the entry point (:func:`roomba_bt._entry.take_signals_early`, in
+      before this module was imported; here when ``main()`` was reached another way) give
+      way to the run's kind, which wait for a safe point
+      (:data:`~roomba_bt.robot.safety.interrupts_deferred`: a compressed record's header
+      and first flush, written before a run's own handlers are in, are whole whatever
+      signal comes): SIGTERM, SIGHUP and SIGQUIT raise
+      :class:`~roomba_bt.robot.safety.Terminated`, SIGINT a marked
+      :class:`KeyboardInterrupt` (:func:`~roomba_bt.robot.safety.raise_interrupt`), exit 130,
+      also when the process was started with SIGINT or SIGQUIT ignored (a script's
+      ``roomba-bt run ... &``: its ``kill -INT $!`` was lost in the seconds of start-up,
+      and the whole mission ran, exit 0). A SIGHUP started ignored (``nohup``) stays so;
     * a 0.1.0 plugin's call of the encoder's module shown on stderr, at the plugin's line
       (:data:`~roomba_bt.oi.encode.ENCODE_MODULE_CALLED`): Python hides a DeprecationWarning
       outside ``__main__``, and this one's reader is whoever runs the plugin. Not when
       ``-W`` or ``PYTHONWARNINGS`` chose what to show (``error`` makes the call fail)."""
     guard_std_streams()
-    with contextlib.suppress(ValueError):  # not the main thread
-        if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
-            signal.signal(signal.SIGINT, signal.default_int_handler)
-    from roomba_bt.robot.safety import IGNORED_AT_START, raise_terminated
+    take_signals_early()  # a process started by another way than roomba_bt._entry
+    from roomba_bt.robot.safety import raise_interrupt, raise_terminated
 
-    for name in ("SIGTERM", "SIGHUP"):
-        signum = getattr(signal, name, None)
-        if signum is None or signum in IGNORED_AT_START:
-            continue
+    for signum in EARLY_SIGNALS:
         with contextlib.suppress(ValueError):  # not the main thread
-            if signal.getsignal(signum) is signal.SIG_DFL:
-                signal.signal(signum, raise_terminated)
+            if signal.getsignal(signum) is interrupted_early:
+                raising = raise_interrupt if signum == signal.SIGINT else raise_terminated
+                signal.signal(signum, raising)
     if not sys.warnoptions:
         from roomba_bt.oi.encode import ENCODE_MODULE_CALLED
 

@@ -23,17 +23,23 @@ import signal
 import threading
 from collections.abc import Callable, Iterator
 from types import FrameType
-from typing import Any, ClassVar, TypeVar
+from typing import Any, ClassVar
+
+from roomba_bt._entry import DELIVERED_BY, EARLY_SIGNALS
+from roomba_bt._entry import Terminated as Terminated  # its home before the entry point took it
+from roomba_bt._entry import delivered as delivered
 
 log = logging.getLogger(__name__)
 
 #: Signals whose usual meaning leaves a robot on the wall clock driving, so on the wall clock
 #: they end the run with its safe stop (decided): Ctrl-Z (a suspended process cannot stop its
-#: robot, which would drive on with its last Drive until ``fg``) and Ctrl-\ (SIGQUIT: quit
-#: at once, with a core dump). Where nothing drives on the wall clock (an evaluation,
-#: ``--fast``, a replay) they keep their meaning. POSIX only.
+#: robot, which would drive on with its last Drive until ``fg``). Where nothing drives on the
+#: wall clock (an evaluation, ``--fast``, a replay) it keeps its meaning. POSIX only. Ctrl-\
+#: (SIGQUIT, quit at once with a core dump) was one too until session 35; it now ends every
+#: run and every command as SIGTERM does (:data:`~roomba_bt._entry.EARLY_SIGNALS`): an
+#: operator who presses it wants a stop, and a ``--fast`` run's record closed whole.
 WALL_CLOCK_SIGNALS: tuple[int, ...] = tuple(
-    getattr(signal, name) for name in ("SIGTSTP", "SIGQUIT") if hasattr(signal, name)
+    getattr(signal, name) for name in ("SIGTSTP",) if hasattr(signal, name)
 )
 
 #: The terminal's own stops, Ctrl-Z's kin: a process in the background is stopped by SIGTTOU
@@ -44,14 +50,10 @@ TERMINAL_STOP_SIGNALS: tuple[int, ...] = tuple(
     getattr(signal, name) for name in ("SIGTTOU", "SIGTTIN") if hasattr(signal, name)
 )
 
-#: The signals that end a run with its safe stop: Ctrl-C, ``kill``/systemd, the terminal
-#: gone, and :data:`WALL_CLOCK_SIGNALS`. SIGHUP exists on POSIX only.
-ENDING_SIGNALS: tuple[int, ...] = (
-    signal.SIGINT,
-    signal.SIGTERM,
-    *(getattr(signal, name) for name in ("SIGHUP",) if hasattr(signal, name)),
-    *WALL_CLOCK_SIGNALS,
-)
+#: The signals that end a run with its safe stop: those that end the command from its first
+#: line (Ctrl-C, ``kill``/systemd, the terminal gone, Ctrl-\:
+#: :data:`~roomba_bt._entry.EARLY_SIGNALS`), and :data:`WALL_CLOCK_SIGNALS`.
+ENDING_SIGNALS: tuple[int, ...] = (*EARLY_SIGNALS, *WALL_CLOCK_SIGNALS)
 
 
 #: The ending signals this process was started with ignored, which stay so (decided): ``nohup``
@@ -91,19 +93,6 @@ HAD_A_TERMINAL = _has_a_terminal()
 def _taken(signals: tuple[int, ...]) -> tuple[int, ...]:
     """``signals`` less those the process keeps ignored (:data:`IGNORED_AT_START`)."""
     return tuple(signum for signum in signals if signum not in IGNORED_AT_START)
-
-
-class Terminated(KeyboardInterrupt):
-    """Raised in the main thread when SIGTERM, SIGHUP, SIGTSTP (Ctrl-Z) or SIGQUIT (Ctrl-\\)
-    arrives inside :func:`sigterm_raises` or an :class:`InterruptGuard`.
-
-    A :class:`KeyboardInterrupt`, so whatever handles Ctrl-C (the CLI: exit code 130) handles
-    it too, and ``except Exception`` does not swallow it.
-    """
-
-    def __init__(self, signum: int = signal.SIGTERM) -> None:
-        self.signum = signum
-        super().__init__(f"terminated by signal {signal.Signals(signum).name}")
 
 
 def signal_reason(signum: int, *, terminal: bool | None = None) -> str:
@@ -205,21 +194,6 @@ def signal_interrupt(exc: BaseException) -> KeyboardInterrupt | None:
     return None
 
 
-#: the attribute a signal's interrupt carries (its signal's number), which one a plugin's
-#: code raised lacks: :func:`signal_delivered`
-_DELIVERED_BY = "roomba_bt_signal"
-
-_Interrupt = TypeVar("_Interrupt", bound=KeyboardInterrupt)
-
-
-def delivered(interrupt: _Interrupt, signum: int) -> _Interrupt:
-    """``interrupt`` marked as the one signal ``signum`` delivered (each handler of ours
-    raises it so): :func:`signal_delivered` tells it from a ``raise KeyboardInterrupt`` in a
-    plugin's code."""
-    setattr(interrupt, _DELIVERED_BY, signum)
-    return interrupt
-
-
 def signal_delivered(exc: BaseException) -> bool:
     """Whether ``exc`` is an interrupt a signal delivered, the operator's Ctrl-C or a
     ``kill`` (exit 130), and not a ``raise KeyboardInterrupt`` in a plugin's code (decided:
@@ -231,7 +205,7 @@ def signal_delivered(exc: BaseException) -> bool:
     cannot be told apart, and an interrupt is taken for a signal's, as it always was."""
     if not isinstance(exc, KeyboardInterrupt):
         return False
-    mark = getattr(exc, _DELIVERED_BY, None)
+    mark = getattr(exc, DELIVERED_BY, None)
     if mark is not None:
         return bool(mark)  # 0: told apart as the code's (interrupts_told_apart)
     if threading.current_thread() is not threading.main_thread():
@@ -301,8 +275,8 @@ def interrupts_told_apart() -> Iterator[None]:
     try:
         yield
     except KeyboardInterrupt as exc:  # told apart here, where it can be: marked for later
-        if getattr(exc, _DELIVERED_BY, None) is None:
-            setattr(exc, _DELIVERED_BY, 0)  # no signal's: raised by code
+        if getattr(exc, DELIVERED_BY, None) is None:
+            setattr(exc, DELIVERED_BY, 0)  # no signal's: raised by code
         raise
     finally:
         signal.signal(signal.SIGINT, signal.default_int_handler)

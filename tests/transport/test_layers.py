@@ -12,8 +12,8 @@ import pytest
 
 PACKAGE = pathlib.Path(__file__).resolve().parents[2] / "roomba_bt"
 #: below every layer, standard library only (tests/test_layers.py): lazy exports, escaping,
-#: the base of the package's errors
-BELOW = {"roomba_bt._lazy", "roomba_bt.printable", "roomba_bt.errors"}
+#: the base of the package's errors, the entry point's signals (``Terminated``)
+BELOW = {"roomba_bt._lazy", "roomba_bt.printable", "roomba_bt.errors", "roomba_bt._entry"}
 ALLOWED = {
     "transport": {"roomba_bt.transport", "serial", *BELOW},
     "robot": {

@@ -1,0 +1,127 @@
+"""The ``roomba-bt`` command's entry point (``[project.scripts]``, ``python -m roomba_bt``):
+the ending signals taken before anything heavy is imported.
+
+The command line's module (argparse, logging, the streams' guard, the wording) takes from
+30 ms on an idle machine to a second on a loaded one to import, and its handlers were put in
+only once it had loaded: until then a SIGTERM ended the process with 143, a script's
+``kill -INT $!`` (SIGINT ignored at start in a shell's background job) was lost and the whole
+mission ran, and a terminal's Ctrl-C printed Python's own traceback. This module imports only
+``signal`` and ``sys`` (the top package before it drops the current folder off ``sys.path``:
+``_safe_path`` stays first), so its handlers are in some milliseconds after Python's own
+start-up; the CLI's (:func:`roomba_bt.cli._as_the_process`) take their place once it has
+loaded, and a signal before then is ``roomba-bt: interrupted``, exit 130, nothing sent.
+
+It also holds what those handlers raise, :class:`Terminated` and the mark of a signal's
+interrupt (:func:`delivered`), which :mod:`roomba_bt.robot.safety` raises too: one class
+for a signal's ending from the first line of the command to the run's last. Standard library
+only, below every layer.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import sys
+from types import FrameType
+from typing import TypeVar
+
+#: The signals that end the command from its first line, as they end a run: Ctrl-C, ``kill``
+#: and systemd, the terminal gone, and Ctrl-\ (SIGQUIT: an operator who presses it wants a
+#: stop, never the core dump that is its default, which leaves a robot driving; decided,
+#: session 35). SIGHUP and SIGQUIT exist on POSIX only. Ctrl-Z is not here: a command
+#: suspended in its start-up has sent nothing yet, and a run on the wall clock takes it.
+EARLY_SIGNALS: tuple[int, ...] = tuple(
+    getattr(signal, name)
+    for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
+    if hasattr(signal, name)
+)
+
+#: the attribute a signal's interrupt carries (its signal's number), which one a plugin's
+#: code raised lacks (:func:`roomba_bt.robot.safety.signal_delivered`)
+DELIVERED_BY = "roomba_bt_signal"
+
+_Interrupt = TypeVar("_Interrupt", bound=KeyboardInterrupt)
+
+
+def delivered(interrupt: _Interrupt, signum: int) -> _Interrupt:
+    """``interrupt`` marked as the one signal ``signum`` delivered (each handler of ours
+    raises it so): :func:`~roomba_bt.robot.safety.signal_delivered` tells it from a ``raise
+    KeyboardInterrupt`` in a plugin's code."""
+    setattr(interrupt, DELIVERED_BY, signum)
+    return interrupt
+
+
+class Terminated(KeyboardInterrupt):
+    """Raised in the main thread when SIGTERM, SIGHUP, SIGTSTP (Ctrl-Z) or SIGQUIT (Ctrl-\\)
+    arrives while one of our handlers holds it (the command's, from its first line; a run's
+    :class:`~roomba_bt.robot.safety.InterruptGuard`;
+    :func:`~roomba_bt.robot.safety.sigterm_raises`).
+
+    A :class:`KeyboardInterrupt`, so whatever handles Ctrl-C (the CLI: exit code 130) handles
+    it too, and ``except Exception`` does not swallow it.
+    """
+
+    def __init__(self, signum: int = signal.SIGTERM) -> None:
+        self.signum = signum
+        super().__init__(f"terminated by signal {signal.Signals(signum).name}")
+
+
+def interrupted_early(signum: int, frame: FrameType | None) -> None:
+    """The handler of :data:`EARLY_SIGNALS` until the CLI's own are in: Ctrl-C's
+    :class:`KeyboardInterrupt`, another signal's :class:`Terminated`, marked as the signal's.
+    Nothing is written yet, so nothing waits for a safe point."""
+    interrupt = KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+    raise delivered(interrupt, signum)
+
+
+def take_signals_early() -> None:
+    """Put :func:`interrupted_early` in for each of :data:`EARLY_SIGNALS` that has its default
+    action, or Python's, or that the process was started with ignored, SIGHUP aside: a
+    script's background job starts with SIGINT and SIGQUIT ignored by accident of job control,
+    and its ``kill -INT`` is the script's only way to ask a stop, while ``nohup`` ignores
+    SIGHUP on purpose (it stays ignored, and so the safety module reads it:
+    :data:`~roomba_bt.robot.safety.IGNORED_AT_START`). A handler a program set is left as it
+    is. Signal handlers are the main thread's: elsewhere nothing is set."""
+    hang_up = getattr(signal, "SIGHUP", None)
+    for signum in EARLY_SIGNALS:
+        now = signal.getsignal(signum)
+        if now in (signal.SIG_DFL, signal.SIG_IGN, signal.default_int_handler) and not (
+            now is signal.SIG_IGN and signum == hang_up
+        ):
+            with contextlib.suppress(ValueError):  # not the main thread
+                signal.signal(signum, interrupted_early)
+
+
+def main() -> int:
+    """``roomba-bt``: the signals taken, then the command line's module imported and run. An
+    interrupt before its ``main`` has its own handling (its import, a class made as it loads,
+    which Python wraps the interrupt of in a RuntimeError before 3.12) is said in one line,
+    exit 130, as the CLI says it."""
+    take_signals_early()
+    try:
+        from roomba_bt.cli import main as command
+
+        return command()
+    except KeyboardInterrupt as exc:
+        return _interrupted(exc)
+    except RuntimeError as exc:
+        if not isinstance(exc.__cause__, KeyboardInterrupt):
+            raise
+        return _interrupted(exc.__cause__)
+
+
+def _interrupted(exc: KeyboardInterrupt) -> int:
+    """``roomba-bt: interrupted [by SIGTERM]``, exit 130 (``ExitCode.INTERRUPTED``, whose
+    module is not imported for it); a second signal now ends the process at once."""
+    for signum in EARLY_SIGNALS:
+        if signal.getsignal(signum) is not signal.SIG_IGN:
+            signal.signal(signum, signal.SIG_DFL)
+    ending = getattr(exc, "signum", None)
+    by = f" by {signal.Signals(ending).name}" if ending is not None else ""
+    with contextlib.suppress(OSError):  # stderr closed: the exit code says it all the same
+        print(f"roomba-bt: interrupted{by}", file=sys.stderr)
+    return INTERRUPTED
+
+
+#: ``ExitCode.INTERRUPTED`` (``tests/cli/test_entry.py`` checks the two agree)
+INTERRUPTED = 130

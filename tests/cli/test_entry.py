@@ -1,0 +1,96 @@
+"""The command's entry point takes the ending signals before the command line's module loads
+(``roomba_bt/_entry.py``): a signal in the start-up is ``roomba-bt: interrupted``, exit 130,
+never Python's traceback, 143, or a script's ``kill -INT`` lost."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from roomba_bt._entry import INTERRUPTED
+from roomba_bt.runtime.summary import ExitCode
+
+#: ``roomba-bt validate dock`` as a script's background job starts it (SIGINT and SIGQUIT
+#: ignored), with an import hook that notes each ending signal's handler when the command
+#: line's module is first imported
+HANDLERS_WHEN_CLI_LOADS = """
+import signal, sys
+
+class Note:
+    handlers = None
+
+    def find_spec(self, name, path=None, target=None):
+        if name == "roomba_bt.cli" and Note.handlers is None:
+            Note.handlers = [getattr(signal.getsignal(s), "__name__", "not ours") for s in
+                             (signal.SIGINT, signal.SIGTERM, signal.SIGQUIT)]
+        return None
+
+for s in (signal.SIGINT, signal.SIGQUIT):
+    signal.signal(s, signal.SIG_IGN)
+sys.meta_path.insert(0, Note())
+sys.argv = ["roomba-bt", "validate", "dock"]
+from roomba_bt._entry import main
+code = main()
+print(Note.handlers)
+sys.exit(code)
+"""
+
+
+def test_the_signals_are_taken_before_the_command_line_loads() -> None:
+    """Until session 35 the handlers came once ``roomba_bt.cli`` had loaded (up to a second
+    on a loaded machine): a SIGTERM then was 143, a script's SIGINT or SIGQUIT lost."""
+    done = subprocess.run(
+        [sys.executable, "-c", HANDLERS_WHEN_CLI_LOADS],
+        capture_output=True, text=True, timeout=120, check=True,
+    )  # fmt: skip
+    assert done.stdout.splitlines()[-1] == str(["interrupted_early"] * 3)
+
+
+def test_the_entry_points_exit_code_is_the_tables() -> None:
+    assert INTERRUPTED == ExitCode.INTERRUPTED
+
+
+def _caught(pid: int, signum: int) -> bool:
+    """Whether process ``pid``, once it runs ``python -m roomba_bt``, has a handler of its
+    own for ``signum`` (``SigCgt``; the Python before its exec has one for SIGINT)."""
+    if b"-m\0roomba_bt" not in Path(f"/proc/{pid}/cmdline").read_bytes():
+        return False
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("SigCgt:"):
+            return bool(int(line.split()[1], 16) >> (signum - 1) & 1)
+    return False
+
+
+#: ``roomba-bt validate dock`` started as a script's job, as tests/conftest.py's script_job
+_AS_A_SCRIPTS_JOB = (
+    "import os, signal, sys\n"
+    "for s in (signal.SIGINT, signal.SIGQUIT): signal.signal(s, signal.SIG_IGN)\n"
+    "os.execv(sys.executable, [sys.executable, '-m', 'roomba_bt', 'validate', 'dock'])\n"
+)
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc")
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGQUIT],
+                         ids=["SIGINT", "SIGTERM", "SIGQUIT"])  # fmt: skip
+def test_a_signal_as_soon_as_the_command_takes_it_is_exit_130_without_a_traceback(
+    signum: int,
+) -> None:
+    """The signal sent the moment the process has a handler for it (its first, the entry
+    point's: waited for by event, not by time), many times over: each is ``roomba-bt:
+    interrupted``, exit 130, no traceback (a RuntimeError Python wrapped it in included)."""
+    for _ in range(5):
+        proc = subprocess.Popen(
+            [sys.executable, "-c", _AS_A_SCRIPTS_JOB],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        while proc.poll() is None and not _caught(proc.pid, signum):
+            continue
+        proc.send_signal(signum)
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode == ExitCode.INTERRUPTED, err
+        assert "Traceback" not in err
+        assert err.startswith("roomba-bt: interrupted"), err
