@@ -237,9 +237,10 @@ class _CompressedLines:
 
     def __init__(self, raw: IO[bytes]) -> None:
         self._raw = raw
-        self._gzip = gzip.GzipFile(
-            filename="", mode="wb", fileobj=raw, compresslevel=COMPRESS_LEVEL, mtime=0
-        )
+        with interrupts_deferred:  # gzip's header, written here in several writes, whole
+            self._gzip = gzip.GzipFile(
+                filename="", mode="wb", fileobj=raw, compresslevel=COMPRESS_LEVEL, mtime=0
+            )
         #: the lines written since the last compress
         self._lines: list[str] = []
         #: after each flush that reached the file, the latest last: the file's size then
@@ -781,6 +782,41 @@ class RecordError(ValueError, RoombaBtError):
     """A record file that cannot be replayed; names the file and line."""
 
 
+class TornTrailer(RecordError):
+    """A compressed record whose every line decompressed, ``after`` of them, but whose gzip
+    trailer (the text's CRC-32 and length) does not match them (``reason``: gzip's words)."""
+
+    def __init__(self, path: Path, after: int, reason: str) -> None:
+        super().__init__(f"{path}:{after + 1}: damaged compressed data ({reason})")
+        self.after = after
+        self.reason = reason
+
+
+#: what gzip says of a trailer that does not match the text it ends
+_TORN_TRAILER = re.compile(r"CRC check failed|Incorrect length of data produced")
+
+
+def _up_to_damage(
+    path: Path, lines: Iterator[tuple[int, str, bool, int]]
+) -> Iterator[tuple[int, str, bool, int]]:
+    """``lines``, up to a gzip trailer that does not match them (:class:`TornTrailer`), said
+    once in a warning: the record is read and replayed up to there, each line checked as
+    any record's (decided, session 35: such a record, every line readable, was refused
+    whole, exit 2; a run ended by a signal inside a gzip write left one before then).
+    Compressed data that does not decompress is still refused, its line named: what it
+    decompresses to past the damage cannot be trusted."""
+    try:
+        yield from lines
+    except TornTrailer as exc:
+        log.warning(
+            "%s: damaged after line %d: its gzip trailer (the CRC-32 and length of the text) "
+            "does not match the text (%s); the %d lines were read, each checked, and are "
+            "replayed, but gzip -t refuses the file (zcat reads it). A run ended by a signal "
+            "inside a write of its record could leave it so (until session 35's fix)",
+            path, exc.after, exc.reason, exc.after,
+        )  # fmt: skip
+
+
 @dataclass
 class Record:
     """A record file, checked whole by :func:`load_record` but not held in memory: its chunks
@@ -883,6 +919,8 @@ class Record:
                 item = _chunk(self.path, number, line) if line.strip() else None
                 if isinstance(item, tuple):
                     yield item
+        except TornTrailer:  # said once, when the record was loaded; it ends there
+            return
         except RecordError as exc:
             log.warning("%s; the record changed since it was read: it ends here", exc)
 
@@ -920,7 +958,7 @@ def load_record(path: str | Path) -> Record:
     _, first, _, size = next(lines)
     record = Record(_header(path, first), path, size=size)
     last = 0.0
-    for number, line, whole, end in lines:
+    for number, line, whole, end in _up_to_damage(path, lines):
         if not line.strip():
             continue
         if record.ended:
@@ -1062,6 +1100,8 @@ def _read_lines(path: Path, file: io.BufferedIOBase) -> Iterator[bytes]:
         except EOFError:  # gzip: "Compressed file ended before the end-of-stream marker"
             return
         except (zlib.error, gzip.BadGzipFile) as exc:
+            if number and _TORN_TRAILER.match(str(exc)):
+                raise TornTrailer(path, number, str(exc)) from None
             raise RecordError(
                 f"{path}:{number + 1}: damaged compressed data ({exc}); expected a "
                 f"{RECORD_FORMAT} file as run --record wrote it (gzip when named .gz)"

@@ -123,6 +123,32 @@ def test_damaged_compressed_data_is_an_error_naming_the_file_not_a_traceback(
     assert "Traceback" not in err
 
 
+@pytest.mark.parametrize("field", ["crc", "length"])
+def test_a_record_whose_gzip_trailer_is_torn_is_replayed_up_to_it_and_said_so(
+    field: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A run ended by a signal inside a gzip write left a trailer (CRC-32, then length) that
+    did not match its text, every line readable: replay refused the whole file, exit 2.
+    It replays (exit by the bytes), and a warning says where the record is damaged."""
+    record = _record(tmp_path / "run.jsonl.gz", capsys)
+    data = bytearray(record.read_bytes())
+    at = len(data) - (8 if field == "crc" else 4)
+    data[at] ^= 0xFF
+    record.write_bytes(bytes(data))
+    assert main(["replay", str(record)]) == 0
+    captured = capsys.readouterr()
+    assert "the tree wrote the same" in captured.out, captured.out
+    assert "Traceback" not in captured.err
+    said = caplog.text  # the CLI's log handler writes it to stderr
+    assert f"{record}: damaged after line" in said, said
+    assert "gzip trailer" in said and "gzip -t refuses the file" in said
+    assert ("CRC check failed" if field == "crc" else "Incorrect length") in said
+    assert load_record(record).ended  # the run's end line, before the damage, was read
+
+
 def test_a_compressed_record_may_be_written_over_as_a_plain_one_is(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
