@@ -19,6 +19,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from roomba_bt.runtime.claimed import IN_USE, held_by_a_writer
+
 if TYPE_CHECKING:
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
     from roomba_bt.evaluate.parallel import Evaluation
@@ -107,13 +109,16 @@ def _holds_records(path: Path) -> bool:
 def refused_over(args: argparse.Namespace) -> str | None:
     """The problem with ``--out``, before any episode runs: a file holding episodes,
     without ``--resume`` or ``--force``; ``--resume`` and ``--force`` together, or
-    ``--resume`` without ``--out``."""
+    ``--resume`` without ``--out``; a sweep writing it now (its partial file's lock), which
+    neither resumes nor writes over."""
     if args.resume and args.force:
         return (
             "--resume and --force: give one (--resume keeps --out's episodes, --force drops them)"
         )
     if args.out is None:
         return "--resume: give --out FILE, the results to resume" if args.resume else None
+    if held_by_a_writer(partial_path(args.out)):  # a sweep running now: not an earlier one's
+        return f"--out {args.out}: {IN_USE}"
     if args.resume or args.force:
         return None
     held = earlier_files(args.out)

@@ -188,7 +188,7 @@ def test_eval_out_is_written_and_free_again_after_the_sweep(
     out = tmp_path / "e.jsonl"
     for _ in range(2):
         assert main(["eval", BUMP, "--runs", "1", "-p", "duration=1s", "--timeout", "1s",
-                     "--no-progress", "--out", str(out)]) in (0, 1)  # fmt: skip
+                     "--no-progress", "--out", str(out), "--force"]) in (0, 1)  # fmt: skip
         assert len(out.read_text().splitlines()) == 1
         ClaimedFile(out).release()  # nobody holds it
     assert "results written" in capsys.readouterr().err
