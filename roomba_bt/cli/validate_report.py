@@ -265,9 +265,11 @@ def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
     """A diagnostic's fields by their names, the include chain innermost first; ``began_at``,
     ``{line, column}`` of where a YAML syntax error's structure began, else null;
     ``used_in``, each use of a subtree it was found at, a list of ``{subtree, file, line,
-    column}`` innermost first (the use, then the use of the subtree it is in); ``in_subtree``,
-    of one said at the use in a mission that caused it, where in the library's subtree it was
-    found: ``{subtree, file, line, column}``, the body's place first, then the uses between."""
+    column}`` innermost first (the use, then the use of the subtree it is in), or of one said
+    at a use, each use in the mission that found it, its own line first; ``in_subtree``, of
+    one said at the use in a mission that caused it, where in the library's subtree it was
+    found: ``{subtree, file, line, column, yaml_path}``, the body's place first, then the
+    uses between."""
     return {
         "file": d.file,
         "line": d.line,
@@ -284,7 +286,13 @@ def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
             for chain in d.used_in
         ],
         "in_subtree": [
-            {"subtree": u.name, "file": u.file, "line": u.line, "column": u.column}
+            {
+                "subtree": u.name,
+                "file": u.file,
+                "line": u.line,
+                "column": u.column,
+                "yaml_path": u.path,
+            }
             for u in d.in_subtree
         ],
     }

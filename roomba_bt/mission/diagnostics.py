@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from roomba_bt.errors import RoombaBtError
 from roomba_bt.printable import ANY_CONTROL, MAX_LISTED, UNPRINTABLE, escaped, more_listed
@@ -45,9 +45,12 @@ class IncludeSite(Place):
 class SubtreeUse(Place):
     """Where a ``subtree:`` was used (its ``subtree`` key), and the subtree's name: a
     diagnostic about a node of its body says the use beside the definition's line, which
-    alone did not say which use of the subtree it meant."""
+    alone did not say which use of the subtree it meant. ``path``: the YAML path of the
+    place (the use's ``subtree`` key, or the node in the body), which a diagnostic said at
+    the use takes as its own; not compared, as the place says the same."""
 
     name: str
+    path: str = field(default="", compare=False)
 
 
 #: the uses of subtrees that expanded a node: one use of its own subtree, then the use of
@@ -76,8 +79,10 @@ class Diagnostic:
 
     ``in_subtree``: of a diagnostic said at the use that caused it (:func:`said_at_use`),
     where in the subtree's body it was found: the place in the body (and the subtree's
-    name), then each use of a subtree between that body and the use said (the place, and
-    the subtree it is in), innermost first. Empty otherwise."""
+    name, and the body's YAML path), then each use of a subtree between that body and the
+    use said (the place, and the subtree it is in), innermost first. Empty otherwise. Its
+    ``used_in`` is then each use in the mission it was found at, one a chain: its own line
+    first, then the others (:func:`merged_uses`)."""
 
     file: str
     line: int
@@ -105,17 +110,19 @@ class Diagnostic:
         m.yaml:20:5)``; a use within another subtree names that one's use too (`` (in
         subtree turn, used at m.yaml:4:9 in subtree square at m.yaml:12:5)``); "" for a
         diagnostic outside subtrees. At most :data:`USES_SAID` uses, then how many more.
-        One said at its use (``in_subtree``) names the subtree's line first: `` (in subtree
-        leg, lib.yaml:30:19)``."""
-        inside = _inside_said(self.in_subtree)
+        One said at its use (``in_subtree``) names the subtree's line and path instead: `` (in
+        subtree leg, lib.yaml:30:19 [subtrees.leg.tree.drive])``, and the other uses found
+        the same, if any (``, used here and at m.yaml:8:7``)."""
+        if self.in_subtree:
+            return _inside_said(self.in_subtree, self.used_in)
         if not self.used_in:
-            return inside
+            return ""
         said = [_chain_said(chain) for chain in self.used_in[:USES_SAID]]
         more = len(self.used_in) - USES_SAID
         if more > 0:
             said.append(f"{more:,} more")
         name = escaped(self.used_in[0][0].name, UNPRINTABLE)
-        return f"{inside} (in subtree {name}, used at " + " and at ".join(said) + ")"
+        return f" (in subtree {name}, used at " + " and at ".join(said) + ")"
 
     def used_at(self, use: SubtreeUse) -> Diagnostic:
         """This diagnostic, found in a subtree's body, as caused by its use at ``use`` (a
@@ -157,26 +164,33 @@ def _chain_said(chain: UseChain) -> str:
     return f"{chain[0]}{outer}"
 
 
-def _inside_said(inside: tuple[SubtreeUse, ...]) -> str:
-    """`` (in subtree turn, lib.yaml:12:11, used at lib.yaml:32:35 in subtree leg)``: where
-    in a subtree's body a diagnostic said at its use was found; "" when it was not."""
-    if not inside:
-        return ""
+def _inside_said(inside: tuple[SubtreeUse, ...], uses: tuple[UseChain, ...]) -> str:
+    """`` (in subtree turn, lib.yaml:12:11 [subtrees.turn.tree.drive], used at lib.yaml:32:35
+    in subtree leg, used here and at m.yaml:9:7)``: where in a subtree's body a diagnostic
+    said at its use was found, and the other ``uses`` in the mission that found the same (at
+    most :data:`USES_SAID` uses in all, then how many more)."""
     first, *between = inside
+    body = f"{first} [{escaped(shortened_path(first.path), ANY_CONTROL)}]" if first.path else first
     said = "".join(
         f", used at {use} in subtree {escaped(use.name, UNPRINTABLE)}" for use in between
     )
-    return f" (in subtree {escaped(first.name, UNPRINTABLE)}, {first}{said})"
+    others = " and at ".join(_chain_said(chain) for chain in uses[1:USES_SAID])
+    more = len(uses) - USES_SAID
+    also = f", used here and at {others}" if others else ""
+    if more > 0:
+        also += f" and {more:,} more"
+    return f" (in subtree {escaped(first.name, UNPRINTABLE)}, {body}{said}{also})"
 
 
 def said_at_use(diagnostic: Diagnostic) -> list[Diagnostic]:
     """``diagnostic`` said at the use that caused it, one for each use it was found at, when
     that use is in another file than the subtree's body (a library's): the mission that
     uses the library wrongly is the file to fix, the one counted and annotated, and its line
-    is the use (``missions/x.yaml:17:19: ... (in subtree leg, lib.yaml:30:19)``). The use
-    that caused it is the outermost one it names: a value given there, or the place in the
-    tree that the mission's checks (modes, keys) follow the body from. One found in a body
-    written in the file of its use stays at the body's line, naming the use."""
+    is the use (``missions/x.yaml:17:19: ... (in subtree leg, lib.yaml:30:19 [subtrees.leg.
+    tree.drive])``), its YAML path the use's. The use that caused it is the outermost one it
+    names: a value given there, or the place in the tree that the mission's checks (modes,
+    keys) follow the body from. One found in a body written in the file of its use stays at
+    the body's line, naming the use."""
     if not diagnostic.used_in:
         return [diagnostic]
     said = []
@@ -185,15 +199,18 @@ def said_at_use(diagnostic: Diagnostic) -> list[Diagnostic]:
         if use.file == diagnostic.file:
             said.append(replace(diagnostic, used_in=(chain,)))
             continue
-        body = SubtreeUse(diagnostic.file, diagnostic.line, diagnostic.column, chain[0].name)
+        body = SubtreeUse(
+            diagnostic.file, diagnostic.line, diagnostic.column, chain[0].name,
+            diagnostic.yaml_path,
+        )  # fmt: skip
         between = tuple(
-            SubtreeUse(inner.file, inner.line, inner.column, outer.name)
+            SubtreeUse(inner.file, inner.line, inner.column, outer.name, inner.path)
             for inner, outer in itertools.pairwise(chain)  # the use in the next
         )
         said.append(
             replace(
-                diagnostic, file=use.file, line=use.line, column=use.column,
-                used_in=(), in_subtree=(body, *between), included_from=(),
+                diagnostic, file=use.file, line=use.line, column=use.column, yaml_path=use.path,
+                used_in=((use,),), in_subtree=(body, *between), included_from=(),
             )
         )  # fmt: skip
     return said
@@ -202,13 +219,34 @@ def said_at_use(diagnostic: Diagnostic) -> list[Diagnostic]:
 def merged_uses(diagnostics: Iterable[Diagnostic]) -> list[Diagnostic]:
     """``diagnostics`` with those that differ only by the subtree use they were found at
     made one, naming every use (in the order found): a subtree used twice gave the same
-    warning twice at its definition's line. One whose message differs with the use (a
+    warning twice at its definition's line. One said at its use in the mission
+    (:func:`said_at_use`) is made one with those said at the other uses in the same file
+    with the same text, from the same place in the body: a library's subtree used a hundred
+    times gave a hundred lines. It is said at its first use (the mission's line, the one
+    counted and annotated), naming the others. One whose message differs with the use (a
     parameter's value said) stays one a use."""
     uses: dict[Diagnostic, list[UseChain]] = {}
+    first: dict[Diagnostic, Diagnostic] = {}
     for diagnostic in diagnostics:
-        found = uses.setdefault(replace(diagnostic, used_in=()), [])
+        same = replace(diagnostic, used_in=())
+        if diagnostic.in_subtree:  # the finding, wherever in the mission's file it was caused
+            same = replace(same, line=0, column=0, yaml_path="")
+        found = uses.setdefault(same, [])
         found.extend(chain for chain in diagnostic.used_in if chain not in found)
-    return [replace(d, used_in=tuple(chains)) if chains else d for d, chains in uses.items()]
+        if same not in first or _place(diagnostic) < _place(first[same]):
+            first[same] = diagnostic
+    merged = []
+    for same, chains in uses.items():
+        said = first[same]
+        if said.in_subtree:  # its own use first, the others in the file's order
+            own = said.used_in[0][-1]
+            chains = sorted(chains, key=lambda chain: (chain[-1] != own, chain[-1]))
+        merged.append(replace(said, used_in=tuple(chains)) if chains else said)
+    return merged
+
+
+def _place(diagnostic: Diagnostic) -> tuple[int, int]:
+    return diagnostic.line, diagnostic.column
 
 
 #: a YAML path longer than this is shown by its ends (:func:`shortened_path`)

@@ -390,7 +390,7 @@ class NodeParser:
         if sub.written_wrongly:  # its definition's error is the one to fix
             return None
         sub_env = self._subtree_env(sub, args, key_loc, env)
-        use = SubtreeUse(key_loc.file, key_loc.line, key_loc.column, name)
+        use = SubtreeUse(key_loc.file, key_loc.line, key_loc.column, name, key_loc.path)
         body = self._body_at(sub, sub_env, use, key_loc)
         if body is None:
             return None

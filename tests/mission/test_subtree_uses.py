@@ -202,7 +202,11 @@ def test_an_error_a_use_causes_in_a_library_is_the_missions(
     assert error.included_from == ()  # the mission's own: not "an included file has errors"
     [inside] = error.in_subtree
     assert (inside.file, inside.line, inside.column) == ("lib.yaml", *in_library)
-    assert f"(in subtree {inside.name}, lib.yaml:{in_library[0]}:{in_library[1]})" in str(error)
+    # the use's YAML path is the line's; the body's is said with the body's place
+    assert error.yaml_path == f"tree.sequence[{line - 6}].subtree"
+    assert inside.path.startswith(f"subtrees.{inside.name}.tree.")
+    body = f"lib.yaml:{in_library[0]}:{in_library[1]} [{inside.path}]"
+    assert f"(in subtree {inside.name}, {body}) [{error.yaml_path}]" in str(error)
 
 
 def test_an_error_of_the_library_itself_stays_at_the_library(
@@ -232,6 +236,27 @@ def test_a_subtree_in_a_library_subtree_names_the_use_between(
     errors = _library_and_mission(tmp_path, monkeypatch, "    - subtree: twice\n", library)
     assert [(e.file, e.line) for e in errors] == [("m.yaml", 6)] * 2
     assert str(errors[0]).startswith("m.yaml:6:7: drive sends Drive (137)")
-    assert "(in subtree leg, lib.yaml:4:7, used at lib.yaml:22:19 in subtree twice)" in str(
-        errors[0]
+    assert (
+        "(in subtree leg, lib.yaml:4:7 [subtrees.leg.tree.drive], used at lib.yaml:22:19 in "
+        "subtree twice)"
+    ) in str(errors[0])
+
+
+def test_a_library_subtree_used_many_times_is_said_once_at_its_first_use(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A hundred uses reached in Passive: one line, at the mission's first use (the file
+    counted), naming the first five uses and how many more; in JSON, every use. A finding
+    whose text differs with the use (each use's own speed) stays one a use."""
+    tree = "    - subtree: leg\n" * 100 + "    - mode: safe\n"
+    tree += "    - subtree: {id: go, speed: 900 mm/s}\n    - subtree: {id: go, speed: 800 mm/s}\n"
+    leg, *speeds = _library_and_mission(tmp_path, monkeypatch, tree)
+    assert (leg.file, leg.line, leg.column) == ("m.yaml", 6, 7)
+    assert [chain[-1].line for chain in leg.used_in] == list(range(6, 106))
+    assert leg.uses_said() == (
+        " (in subtree leg, lib.yaml:4:7 [subtrees.leg.tree.drive], used here and at "
+        "m.yaml:7:7 and at m.yaml:8:7 and at m.yaml:9:7 and at m.yaml:10:7 and 95 more)"
     )
+    assert [(d.line, d.message.split()[2]) for d in speeds] == [(107, "900"), (108, "800")]
+    assert [len(d.used_in) for d in speeds] == [1, 1]
+    assert leg.included_from == ()  # the mission's own error, counted there

@@ -329,10 +329,10 @@ def test_a_shipped_file_is_named_by_its_shipped_name_in_every_format(
         assert [(d["file"], d["line"]) for d in own["diagnostics"]] == [(dock, 17)]
     elif form == "github":
         assert said[0].startswith("::error file=m.yaml,line=5,col=7,")
-        assert f"(in subtree dock, {library}:43:44)" in said[0]
+        assert f"(in subtree dock, {library}:43:44 [subtrees.dock.tree." in said[0]
         assert said[1].startswith(f"::error file={dock.replace(':', '%3A')},line=17,col=3,")
     else:
         assert said[0].startswith("m.yaml:5:7: dock_search: speed 900 mm/s is out of range")
-        assert f"(in subtree dock, {library}:43:44)" in said[0]
+        assert f"(in subtree dock, {library}:43:44 [subtrees.dock.tree." in said[0]
         assert "m.yaml: failed (1 error)" in said[0]
         assert said[1].startswith(f"{dock}:17:3: parameter time_limit=abc (from the command line)")
