@@ -17,6 +17,7 @@ from pathlib import Path
 import yaml
 
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
+from roomba_bt.behaviours.registry import Registry
 from roomba_bt.behaviours.units import STR, closest
 from roomba_bt.mission.control import parse_composite, parse_decorator
 from roomba_bt.mission.diagnostics import Diagnostic, SubtreeUse
@@ -50,6 +51,9 @@ from roomba_bt.yamlsource import NOT_PLAIN_SPACES, named_character
 #: ran the parser, the checks and the tick out of Python's stack ("internal error ...
 #: RecursionError" at about 250): it is refused at this depth instead (decided).
 MAX_TREE_DEPTH = 100
+
+#: what parsing a subtree's body alone found, errors or warnings (:meth:`NodeParser._alone`)
+Findings = frozenset[Diagnostic]
 
 #: How many nodes a compile may build, subtrees expanded where they are used (decided). The
 #: largest shipped mission expands to 95 (``patrol``); a subtree that uses another twice, which
@@ -120,8 +124,8 @@ class NodeParser:
         self._count = 0
         self._uses: list[Loc] = []
         self._too_many = False
-        #: each subtree's errors parsed alone (:meth:`_own_errors`), once a use has some
-        self._alone: dict[str, frozenset[Diagnostic]] = {}
+        #: each subtree's findings parsed alone (:meth:`_alone`), once a use has some
+        self._alone_found: dict[tuple[str, bool], tuple[Findings, Findings]] = {}
         #: the folders the mission may include from: an unknown subtree's library is sought
         self.granted: tuple[Path, ...] = ()
 
@@ -282,7 +286,7 @@ class NodeParser:
         # contains the word (u_metres in u_metres_nodefault's)
         named = [e for e in errors if word in e.names]
         message = f"unknown node {word!r}{where}"
-        unspaced = self._missing_space(word)
+        unspaced = _missing_space(word, self.ctx.registry)
         if unspaced is not None:  # before "no plugin package 'mode'": the likelier cause
             return f"{message}: {unspaced}"
         qualified = self.ctx.registry.why_unknown(word)  # package:name, said by its package
@@ -301,27 +305,6 @@ class NodeParser:
                 failed += f"; and {more} more (roomba-bt behaviours lists them)"
             message += f" (note: {failed})"
         return message
-
-    def _missing_space(self, word: str) -> str | None:
-        """What is wrong with ``mode:safe`` or ``mode safe`` (a node's word and its value
-        written as one text: YAML needs ``: ``, a colon and a plain space), or None. The
-        commonest beginner's mistake; ``mode:safe`` read as ``package:name`` sent students
-        looking for a plugin package called ``mode``."""
-        for separator in (":", " "):
-            name, found, rest = word.partition(separator)
-            if not found or not (name in WORDS or name in self.ctx.registry):
-                continue
-            value = rest.lstrip(NOT_PLAIN_SPACES + " ")
-            if separator == " ":
-                return f"write a colon and a space after the word: `{name}: {value}`"
-            odd = rest[:1]
-            if odd and odd in NOT_PLAIN_SPACES:  # a no-break space pasted from a web page
-                return (
-                    f"{named_character(odd)} after the colon is no space to YAML: write a "
-                    f"plain space: `{name}: {value}`"
-                )
-            return f"{word!r} is one text to YAML: write a space after the colon: `{name}: {value}`"
-        return None
 
     def _check_guard(self, condition: Node, guard: str) -> None:
         for n in condition.walk():
@@ -406,44 +389,56 @@ class NodeParser:
         self, sub: SubtreeDef, env: Mapping[str, Bound], use: SubtreeUse, key_loc: Loc
     ) -> Node | None:
         """``sub``'s body parsed at ``use`` (at ``key_loc``) with ``env``; each error in it
-        the body's own (its file alone has it) or caused by ``use`` (Diagnostic.used_at)."""
+        the body's own (its file alone has it) or caused by ``use`` (Diagnostic.used_at);
+        each warning too, except that one in a body written in the use's file names the use
+        (at the body's line: :func:`~roomba_bt.mission.diagnostics.said_at_use`)."""
         if sub.body is None:
             return None
         self._use_stack.append(sub.name)
         self._uses.append(key_loc)
         try:
-            with self.ctx.collecting() as found:
+            with self.ctx.collecting() as (errors, warnings):
                 body = self.node(sub.body, sub.body_loc, env)
         finally:
             self._use_stack.pop()
             self._uses.pop()
-        if found:
-            own = self._own_errors(sub)
-            for error in found:
+        if errors:
+            own = self._alone(sub, with_mission=True)[0]
+            for error in errors:
                 self.ctx.error(error if error in own else error.used_at(use))
+        if warnings:  # a library's own (its file alone warns of it) said once as it is
+            library = sub.body_loc.file != use.file
+            own = self._alone(sub, with_mission=False)[1] if library else frozenset()
+            for warning in warnings:
+                said = warning if warning in own else warning.used_at(use)
+                if said not in self.ctx.warnings:
+                    self.ctx.warnings.append(said)
         return body
 
-    def _own_errors(self, sub: SubtreeDef) -> frozenset[Diagnostic]:
-        """The errors ``sub``'s body has parsed alone, as ``validate`` of its file checks it
-        (its defaults, unknown values for the parameters without one): those are its own,
-        wrong at every use; an error a use's body has beyond these the use caused (a value
-        it gave, a key its argument names)."""
-        own = self._alone.get(sub.name)
+    def _alone(self, sub: SubtreeDef, *, with_mission: bool) -> tuple[Findings, Findings]:
+        """The errors and warnings ``sub``'s body has parsed alone, as ``validate`` of its
+        file checks it (its defaults, unknown values for the parameters without one; and
+        ``with_mission``, the mission's): its own, wrong at every use; one a use's body has
+        beyond these the use caused (a value it gave, a key or a mission parameter it names).
+        Parsed once each way, when a use first has findings in its body."""
+        own = self._alone_found.get((sub.name, with_mission))
         if own is None:
-            assert sub.body is not None  # a use found errors in it
-            warned, counted = len(self.ctx.warnings), self._count
-            self._use_stack.append(sub.name)
-            try:
-                with self.ctx.collecting() as found:
-                    self.node(
-                        sub.body, sub.body_loc, _alone_env(sub, self.global_env, self.ctx.wording)
-                    )
-            finally:  # what the use's own parse said and counted, not twice
-                self._use_stack.pop()
-                del self.ctx.warnings[warned:]
-                self._count = counted
-            own = self._alone[sub.name] = frozenset(found)
+            counted = self._count
+            with self.ctx.collecting() as (errors, warnings):
+                self._parse_alone(sub, self.global_env if with_mission else {})
+            self._count = counted  # what the use's own parse counted, not twice
+            own = self._alone_found[sub.name, with_mission] = frozenset(errors), frozenset(warnings)
         return own
+
+    def _parse_alone(self, sub: SubtreeDef, mission: Mapping[str, Bound]) -> None:
+        """``sub``'s body parsed without a use (:func:`_alone_env`), ``mission`` the
+        parameters it sees beside its own."""
+        assert sub.body is not None  # a use found something in it, or it is unused
+        self._use_stack.append(sub.name)
+        try:
+            self.node(sub.body, sub.body_loc, _alone_env(sub, mission, self.ctx.wording))
+        finally:
+            self._use_stack.pop()
 
     def _subtree_env(
         self,
@@ -499,9 +494,29 @@ class NodeParser:
             if sub.used or sub.body is None:
                 continue
             sub.used = True
-            self._use_stack.append(sub.name)
-            self.node(sub.body, sub.body_loc, _alone_env(sub, self.global_env, self.ctx.wording))
-            self._use_stack.pop()
+            self._parse_alone(sub, self.global_env)
+
+
+def _missing_space(word: str, registry: Registry) -> str | None:
+    """What is wrong with ``mode:safe`` or ``mode safe`` (a node's word and its value
+    written as one text: YAML needs ``: ``, a colon and a plain space), or None. The
+    commonest beginner's mistake; ``mode:safe`` read as ``package:name`` sent students
+    looking for a plugin package called ``mode``."""
+    for separator in (":", " "):
+        name, found, rest = word.partition(separator)
+        if not found or not (name in WORDS or name in registry):
+            continue
+        value = rest.lstrip(NOT_PLAIN_SPACES + " ")
+        if separator == " ":
+            return f"write a colon and a space after the word: `{name}: {value}`"
+        odd = rest[:1]
+        if odd and odd in NOT_PLAIN_SPACES:  # a no-break space pasted from a web page
+            return (
+                f"{named_character(odd)} after the colon is no space to YAML: write a "
+                f"plain space: `{name}: {value}`"
+            )
+        return f"{word!r} is one text to YAML: write a space after the colon: `{name}: {value}`"
+    return None
 
 
 def _alone_env(sub: SubtreeDef, mission: Mapping[str, Bound], wording: Wording) -> dict[str, Bound]:

@@ -397,16 +397,16 @@ class Context:
         return f"the includes of {listed} failed, and may have defined it"
 
     @contextmanager
-    def collecting(self) -> Iterator[list[Diagnostic]]:
-        """The errors said within the ``with``, collected apart (into the list it gives),
-        not said: a subtree's body parsed at a use, whose errors the use may have caused
-        (:meth:`NodeParser.node`'s caller decides where each is said)."""
-        said, reported = self.diagnostics, self._reported
-        self.diagnostics, self._reported = [], set()
+    def collecting(self) -> Iterator[tuple[list[Diagnostic], list[Diagnostic]]]:
+        """The errors and the warnings said within the ``with``, collected apart (into the
+        two lists it gives), not said: a subtree's body parsed at a use, whose findings the
+        use may have caused (:meth:`NodeParser.node`'s caller decides where each is said)."""
+        said, reported, warned = self.diagnostics, self._reported, self.warnings
+        self.diagnostics, self._reported, self.warnings = [], set(), []
         try:
-            yield self.diagnostics
+            yield self.diagnostics, self.warnings
         finally:
-            self.diagnostics, self._reported = said, reported
+            self.diagnostics, self._reported, self.warnings = said, reported, warned
 
     def report(self, bad: Bad) -> None:
         """A :class:`Bad`'s diagnostic and those raised with it (each key of a mapping that

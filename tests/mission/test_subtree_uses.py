@@ -260,3 +260,49 @@ def test_a_library_subtree_used_many_times_is_said_once_at_its_first_use(
     assert [(d.line, d.message.split()[2]) for d in speeds] == [(107, "900"), (108, "800")]
     assert [len(d.used_in) for d in speeds] == [1, 1]
     assert leg.included_from == ()  # the mission's own error, counted there
+
+
+#: a subtree's text with a lone "$$" (its own text: every use has it) and "$${speed}"
+#: (the text "${speed}" only where the mission declares speed: warned of there alone)
+DOLLARS = """\
+  priced:
+    tree:
+      log: "cost $${speed}"
+      name: "a $$ b"
+"""
+
+
+def test_a_warning_parsing_a_subtree_body_names_its_use(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    """In the mission's own file: at the body's line, naming each use, said once."""
+    mission = compile_text(
+        "subtrees:\n" + DOLLARS + "tree:\n  sequence:\n    - subtree: priced\n"
+        "    - subtree: priced\n"
+    )
+    [doubled] = mission.warnings
+    path = doubled.file
+    assert (doubled.line, doubled.message.split(":")[0]) == (5, "name")
+    assert doubled.uses_said() == (f" (in subtree priced, used at {path}:8:7 and at {path}:9:7)")
+
+
+def test_a_warning_a_use_causes_in_a_library_body_is_the_missions(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The library's own text is warned of at the library, once (the fix is there, for
+    every use); the "$${speed}" only the mission's parameter makes a warning is said at its uses."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "lib.yaml").write_text("subtrees:\n" + DOLLARS)
+    (tmp_path / "m.yaml").write_text(
+        "include: [lib.yaml]\nparameters:\n  speed: {type: speed, default: 100 mm/s}\n"
+        "tree:\n  sequence:\n    - subtree: priced\n    - subtree: priced\n"
+    )
+    own, used = validate_file("m.yaml").diagnostics
+    assert (own.file, own.line, own.used_in, own.in_subtree) == ("lib.yaml", 5, (), ())
+    assert [site.file for site in own.included_from] == ["m.yaml"]
+    assert (used.file, used.line, used.severity) == ("m.yaml", 6, "warning")
+    assert '"$${speed}" is the text' in used.message
+    assert used.uses_said() == (
+        " (in subtree priced, lib.yaml:4:18 [subtrees.priced.tree.log], used here and at "
+        "m.yaml:7:7)"
+    )
