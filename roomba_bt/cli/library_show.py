@@ -41,11 +41,20 @@ def library_listed(file: str, subtrees: list[LibrarySubtree], description: str) 
 
 
 def subtree_mission(
-    file: str, found: Path, subtrees: list[LibrarySubtree], name: str, given: dict[str, str]
+    file: str,
+    found: Path,
+    subtrees: list[LibrarySubtree],
+    name: str,
+    given: dict[str, str],
+    *,
+    safe_first: bool = False,
 ) -> MissionText | str:
     """A mission whose tree is one use of the library's subtree ``name``, each ``-p`` given
     as its argument (the defaults for the rest), to be compiled and drawn as any mission;
-    else why not (an unknown subtree, an unknown or missing argument), one line."""
+    else why not (an unknown subtree, an unknown or missing argument), one line.
+    ``safe_first``: after a ``mode: safe`` step, as a mission reaches a subtree whose body
+    drives without entering a mode itself (alone, each drive in it is an error, "reached in
+    Passive mode", that no use of it has)."""
     from roomba_bt.behaviours.units import closest
 
     chosen = {subtree.name: subtree for subtree in subtrees}.get(name)
@@ -66,13 +75,13 @@ def subtree_mission(
         kinds = ", ".join(f"{p.name} ({p.type})" for p in missing)
         return f"subtree {name!r} needs a value for {kinds} (no default): give {wanted}"
     use = {"id": name, **{pname: _argument(value) for pname, value in given.items()}}
+    steps = [{"mode": "safe"}] if safe_first else []
+    tree = {"sequence": [*steps, {"subtree": use}]}
     text = (
         f"mission: {json.dumps(name)}\n"
         f"description: {json.dumps(chosen.doc)}\n"
         f"include: [{json.dumps(found.name)}]\n"
-        # after a mode change, as a mission reaches it: alone, every drive in it was an
-        # error ("reached in Passive mode") that no use of it has
-        f"tree: {{sequence: [{{mode: safe}}, {{subtree: {json.dumps(use, default=str)}}}]}}\n"
+        f"tree: {json.dumps(tree, default=str)}\n"
     )
     # beside the library, so that its includes are found from where it stands
     return MissionText(text, f"{file} --subtree {name}", found.with_name(f"{found.name}#{name}"))

@@ -421,7 +421,19 @@ def _library_drawn(
             return refused("-p sets a subtree's arguments: give --subtree NAME with it")
         return library_listed(args.file, subtrees, description)
     drawn = subtree_mission(args.file, Path(found), subtrees, args.subtree, params)
-    return refused(drawn) if isinstance(drawn, str) else drawn
+    if isinstance(drawn, str):
+        return refused(drawn)
+    alone, _ = compile_mission(
+        drawn.path, profile=get_profile(args.profile), baud=args.baud,
+        permissions=permissions(args, found), text=drawn,
+    )  # fmt: skip
+    if alone is not None:  # drawn as it runs: undock enters Full itself, from any mode
+        return drawn
+    # as a mission reaches one whose drives need a mode it does not enter (its errors, if
+    # that is not why, said of this)
+    safe = subtree_mission(args.file, Path(found), subtrees, args.subtree, params, safe_first=True)
+    assert not isinstance(safe, str)  # the same subtree and arguments, found right above
+    return safe
 
 
 def missions_command(args: argparse.Namespace) -> int:

@@ -26,7 +26,7 @@ from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.plan import Node
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.printable import ANY_CONTROL, escaped, shortened
+from roomba_bt.printable import ANY_CONTROL, TEXT_LIMIT, escaped, shortened
 from roomba_bt.robot.interface import RobotHandle
 from roomba_bt.robot.safety import code_failure, failure_said, interrupts_told_apart
 
@@ -211,7 +211,7 @@ def _use_said(node: Node, what: str) -> str:
     options, a leaf, a name the library gave it). A use was drawn as the subtree's name
     alone (``{-} bump_recovery``), or as ``retry(times=3) named 'drive_leg'`` where the
     root is a decorator: two looks, neither with the arguments."""
-    said = f"subtree {shortened(node.use)}"
+    said = f"subtree {shortened(node.use, TEXT_LIMIT)}"  # the arguments a text, as a description
     if node.options_written or node.kind in ("leaf", GUARD.word):
         said = f"{said}: {what}"
     # a name the library or the use gave it (a leaf's own name and a guard's are what)

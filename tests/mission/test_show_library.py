@@ -71,6 +71,49 @@ def test_one_subtree_is_drawn_with_its_arguments(library: str, capsys: Capsys) -
     assert "drive(velocity=200 mm/s, distance=1m)" in out
 
 
+@pytest.mark.parametrize(
+    ("argv", "mode_first"),
+    [
+        # drives that need a mode it does not enter: after mode: safe, as a mission has it
+        (["lib/recovery.yaml", "--subtree", "drive_leg", "-p", "dist=1m"], True),
+        # enters Full itself, from any mode: drawn as it runs, no mode step before it
+        (["roomba-bt:lib/undock.yaml", "--subtree", "undock"], False),
+    ],
+)
+def test_a_subtree_is_drawn_after_a_mode_step_only_where_its_body_needs_one(
+    argv: list[str], mode_first: bool, library: str, capsys: Capsys
+) -> None:
+    assert main(["show", *argv]) == 0
+    drawn = capsys.readouterr().out.splitlines()
+    assert drawn[1] == "{-} sequence"
+    assert (drawn[2] == "    --> mode(safe)") is mode_first
+    assert drawn[2 + mode_first].startswith(("    -^- subtree", "    {o} subtree"))
+
+
+def test_a_long_use_is_drawn_whole_up_to_the_text_limit(
+    library: str, mission_file: Callable[..., Path], capsys: Capsys
+) -> None:
+    """A use's arguments are texts the mission wrote, as its description: cut at
+    TEXT_LIMIT, not at a name's 80 characters (the shipped dock's use has 165)."""
+    from roomba_bt.printable import TEXT_LIMIT
+
+    long_use = "subtree drive_leg(dist=1." + "0" * 150 + "m)"
+    mission_file(
+        "include: [lib/recovery.yaml]\ntree:\n  sequence:\n    - mode: safe\n"
+        f"    - subtree: {{id: drive_leg, dist: 1.{'0' * 150}m}}\n"
+        f"    - subtree: {{id: drive_leg, dist: 2.{'0' * 600}m}}\n"
+    )
+    assert main(["show", "m.yaml"]) == 0
+    out = capsys.readouterr().out
+    assert f"-^- {long_use}: retry(times=3)" in out
+    cut = (
+        "subtree drive_leg(dist=2."
+        + "0" * (TEXT_LIMIT - len("drive_leg(dist=2."))
+        + "... (619 characters)"
+    )
+    assert cut in out
+
+
 def test_a_use_s_arguments_are_drawn_at_the_use(
     library: str, mission_file: Callable[..., Path], capsys: Capsys
 ) -> None:
