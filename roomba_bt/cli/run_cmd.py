@@ -679,6 +679,11 @@ def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | s
 
         return world_error_text(exc)
     world = simulator.world
+    if not (args.random_start and world.start_region is not None):  # its given start
+        from roomba_bt.cli.worlds_cmd import world_warnings_text
+
+        for line in world_warnings_text(world.warnings):
+            print(line, file=sys.stderr)
     if args.random_start and world.start_region is None:  # eval says it too
         x, y = world.start.x / 1000.0, world.start.y / 1000.0
         print(

@@ -13,6 +13,8 @@ from roomba_bt.printable import ANY_CONTROL, TEXT_LIMIT, escaped, listed, name_s
 from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from roomba_bt.mission import Diagnostic
     from roomba_bt.sim.world import WorldError, WorldProblem
 
@@ -91,19 +93,20 @@ def _list_worlds(files: dict[str, Path]) -> int:
 
 def world_diagnostics(path: str) -> list[Diagnostic] | None:
     """Every problem of the world file ``path`` as ``validate`` reports a mission's (each at
-    file:line:col), none for a good world; None when the file is no world (a mapping with
-    ``rooms:`` and no ``tree:``, as the mission loader tells one). A world's checks were
-    reached only by running a mission in it, whose first line began ``roomba-bt: `` and
-    broke a ``^file:line:col`` matcher."""
+    file:line:col), and for a world that loads its warnings (a given start whose body
+    reaches over a drop); none for a good world; None when the file is no world (a mapping
+    with ``rooms:`` and no ``tree:``, as the mission loader tells one). A world's checks
+    were reached only by running a mission in it, whose first line began ``roomba-bt: ``
+    and broke a ``^file:line:col`` matcher."""
     if not is_world_file(Path(path)):
         return None
     from roomba_bt.sim.world import WorldError, parse_world, world_text
 
     try:
-        parse_world(*world_text(Path(path)))
+        world = parse_world(*world_text(Path(path)))
     except WorldError as exc:
         return [_as_diagnostic(problem) for problem in exc.problems]
-    return []
+    return [_as_diagnostic(problem, "warning") for problem in world.warnings]
 
 
 def is_world_file(path: Path) -> bool:
@@ -131,14 +134,22 @@ def is_world_file(path: Path) -> bool:
     return "rooms" in keys and "tree" not in keys
 
 
-def _as_diagnostic(problem: WorldProblem) -> Diagnostic:
-    """A world's problem as a mission's diagnostic: the same line, ``file:line:col:
-    field: ...``; one without a place (none is found reading a file that exists) at 1:1."""
+def world_warnings_text(warnings: Sequence[WorldProblem]) -> list[str]:
+    """A loaded world's warnings as ``run --world`` says them on stderr: each
+    ``file:line:col: warning: robot.start: ...``, as ``validate`` says it."""
+    return [str(_as_diagnostic(problem, "warning")) for problem in warnings]
+
+
+def _as_diagnostic(problem: WorldProblem, severity: str = "error") -> Diagnostic:
+    """A world's problem (or warning) as a mission's diagnostic: the same line,
+    ``file:line:col: field: ...``; one without a place (none is found reading a file that
+    exists) at 1:1."""
     from roomba_bt.mission import Diagnostic
 
     where = f"{problem.source}:{problem.line}:{problem.column}" if problem.line else problem.source
     message = str(problem).removeprefix(where).removeprefix(": ")
-    return Diagnostic(problem.source, problem.line or 1, problem.column or 1, message)
+    return Diagnostic(problem.source, problem.line or 1, problem.column or 1, message,
+                      severity=severity)  # fmt: skip
 
 
 def world_error_text(exc: WorldError) -> str:

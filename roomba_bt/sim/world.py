@@ -275,6 +275,9 @@ class World:
     areas: tuple[AreaSpec, ...] = ()
     source: str = "<world>"
     description: str = ""
+    #: what loads but is likely a mistake, at its place in the file (a given start whose
+    #: body reaches over a drop): ``validate`` and ``run --world`` say them
+    warnings: tuple[WorldProblem, ...] = field(default=(), compare=False)
     solid: tuple[Segment, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -324,6 +327,19 @@ class World:
             distance_sq_to_segment(pose.x, pose.y, edge) >= limit
             for drop in self.drops
             for edge in polygon_edges(drop)
+        )
+
+    def nearest_drop(self, pose: Pose) -> tuple[int, float]:
+        """The drop whose edge is nearest the pose's centre: its index in ``drops`` and the
+        distance (mm; infinite with no drop), which tells how far a body reaches over it."""
+        return min(
+            (
+                (i, math.sqrt(min(distance_sq_to_segment(pose.x, pose.y, e) for e in edges)))
+                for i, drop in enumerate(self.drops)
+                if (edges := polygon_edges(drop))
+            ),
+            key=lambda found: found[1],
+            default=(-1, math.inf),
         )
 
     def area(self, name: str) -> AreaSpec | None:
@@ -443,13 +459,23 @@ class _Checker:
         self.source = source
         self.marks = marks
         self.problems: list[WorldProblem] = []
+        self.warnings: list[WorldProblem] = []
 
     def error(self, path: PathKey, found: str, allowed: str, at: PathKey | None = None) -> None:
+        self.problems.append(self._placed(path, found, allowed, at))
+
+    def warn(self, path: PathKey, found: str, allowed: str) -> None:
+        """Something that loads but is likely a mistake, said at its place as an error is."""
+        self.warnings.append(self._placed(path, found, allowed))
+
+    def _placed(
+        self, path: PathKey, found: str, allowed: str, at: PathKey | None = None
+    ) -> WorldProblem:
         probe = at if at is not None and at in self.marks else path
         while probe not in self.marks and probe:
             probe = probe[:-1]
         line, col = self.marks.get(probe, (0, 0))
-        self.problems.append(WorldProblem(self.source, line, col, _dotted(path), found, allowed))
+        return WorldProblem(self.source, line, col, _dotted(path), found, allowed)
 
     def mapping(
         self, value: object, path: PathKey, keys: tuple[str, ...], required: tuple[str, ...] = ()
@@ -933,7 +959,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     _check_placement(c, world, start is not None, broken)
     if c.problems:
         raise WorldError(c.problems)
-    return world
+    return replace(world, warnings=tuple(c.warnings)) if c.warnings else world
 
 
 def _room(c: _Checker, value: object, path: PathKey) -> Polygon | None:
@@ -1220,12 +1246,32 @@ def _check_placement(
                 "robot does not fit",
                 f"a robot.start {{at: [x, y], heading: degrees}} at {fits}",
             )
+    elif start_given:
+        _warn_if_over_a_drop(c, world)
     if world.start_region is not None:
         try:
             world.sample_start(0)
         except WorldError:
             c.error(("robot", "start_region"), "a region with no free pose for the robot",
                     "a region on the floor with room for the robot (340 mm across)")  # fmt: skip
+
+
+def _warn_if_over_a_drop(c: _Checker, world: World) -> None:
+    """A given start whose centre is clear of the drops but whose body is not (a tyre or a
+    cliff sensor past the edge: the robot falls, or reads a cliff on its first frame) is
+    warned of, by how much; a drawn start keeps the body 20 mm off. A warning, not an error:
+    a test may put the robot at an edge on purpose."""
+    index, distance = world.nearest_drop(world.start)
+    if distance >= ROBOT_RADIUS_MM:
+        return
+    where = f"({world.start.x / 1000:.3f}, {world.start.y / 1000:.3f}) m"
+    c.warn(("robot", "start"), f"a start pose {where} whose body reaches "
+           f"{(ROBOT_RADIUS_MM - distance) / 1000:.3f} m over drops[{index}] (its edge "
+           f"{distance / 1000:.3f} m from the centre, the body's radius "
+           f"{ROBOT_RADIUS_MM / 1000:.3f} m): the robot may fall or read a cliff at once",
+           f"a start with the whole body off every drop ({(ROBOT_RADIUS_MM + 20) / 1000:.2f} m "
+           "from its edge, as a drawn start keeps it), or this on purpose (a test at an "
+           "edge)")  # fmt: skip
 
 
 def shipped_worlds() -> tuple[str, ...]:

@@ -113,3 +113,55 @@ def test_a_world_of_thousands_of_errors_lists_the_first_hundred(
     assert "... and 1,700 more errors (the first 100 are listed)" in lines
     first = "worlds/many.yaml:3:17: obstacles[0].polygon[0][0]: found 'x'"
     assert any(first in line for line in lines[:2]), lines[:2]  # after "sim: invalid world:"
+
+
+def _world_starting_at(x: float) -> str:
+    """A room 5 x 4 m with stairs down from x = 3 m, the robot given a start at ``x``."""
+    return (
+        "name: edge\n"
+        "rooms:\n"
+        "  - {rect: [0, 0, 5, 4]}\n"
+        "drops:\n"
+        "  - {name: stairs, rect: [3, 0, 5, 4]}\n"
+        "robot:\n"
+        f"  start: {{at: [{x}, 2], heading: 0}}\n"
+    )
+
+
+def test_a_given_start_whose_body_is_over_a_drop_is_warned_of(worlds: Path, capsys: Capsys) -> None:
+    """The centre 0.1 m from the stairs' edge: the body (0.17 m) reaches 0.07 m over them.
+    A drawn start keeps it 20 mm off; a given one loads (a test may put a robot at an edge
+    on purpose) with a warning at robot.start's place, by how much; --strict fails it."""
+    (worlds / "worlds" / "edge.yaml").write_text(_world_starting_at(2.9))
+    assert main(["validate", "worlds/edge.yaml"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == (
+        "worlds/edge.yaml:7:10: warning: robot.start: found a start pose (2.900, 2.000) m "
+        "whose body reaches 0.070 m over drops[0] (its edge 0.100 m from the centre, the "
+        "body's radius 0.170 m): the robot may fall or read a cliff at once; allowed: a start "
+        "with the whole body off every drop (0.19 m from its edge, as a drawn start keeps it), "
+        "or this on purpose (a test at an edge)"
+    )
+    assert out[-1] == "worlds/edge.yaml: ok, with warnings"
+    assert main(["validate", "--strict", "worlds/edge.yaml"]) == 7
+    capsys.readouterr()
+    argv = ["run", "dock", "--fast", "--display", "none", "--timeout", "1", "--world"]
+    main([*argv, "worlds/edge.yaml"])
+    assert out[0] in capsys.readouterr().err.splitlines()
+
+
+@pytest.mark.parametrize(
+    ("x", "said"),
+    [
+        (2.5, None),  # the body 0.33 m off the edge: nothing to say
+        (3.1, "where the robot does not fit"),  # the centre over the stairs: an error
+    ],
+)
+def test_a_start_clear_of_the_drop_or_over_it_is_no_warning(
+    x: float, said: str | None, worlds: Path, capsys: Capsys
+) -> None:
+    (worlds / "worlds" / "edge.yaml").write_text(_world_starting_at(x))
+    assert main(["validate", "worlds/edge.yaml"]) == (0 if said is None else 2)
+    out = capsys.readouterr().out
+    assert "warning" not in out
+    assert said is None or said in out

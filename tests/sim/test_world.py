@@ -709,3 +709,12 @@ def test_a_list_of_more_items_than_a_home_needs_is_one_error_at_the_list() -> No
     )
     [problem] = problems(f"rooms: [{', '.join(['[[0, 0], [1, 0], [1, 1]]'] * (limit + 1))}]\n")
     assert f"rooms: found {limit + 1:,} items" in problem
+
+
+@pytest.mark.parametrize("name", shipped_worlds())
+def test_a_shipped_worlds_start_warns_of_nothing(name: str) -> None:
+    """Each shipped world's given start keeps the whole body off its drops: none of the
+    warnings a start at an edge gets (:func:`world_module._warn_if_over_a_drop`)."""
+    world = load_world(name)
+    assert world.warnings == ()
+    assert world.nearest_drop(world.start)[1] >= world_module.ROBOT_RADIUS_MM
