@@ -478,8 +478,9 @@ def _resumed(
         print(f"roomba-bt eval: --resume: {resumed.reused} episode(s) read back from "
               f"{args.out}, {left} to run", file=sys.stderr)  # fmt: skip
         if args.plot and resumed.reused:
-            print("roomba-bt eval: --plot draws the episodes run now: a results file keeps "
-                  "no trajectory", file=sys.stderr)  # fmt: skip
+            print(f"roomba-bt eval: --plot draws only the {left} episode(s) run now, not the "
+                  f"{resumed.reused} read back: a results file keeps no trajectory (--force "
+                  "runs them all again)", file=sys.stderr)  # fmt: skip
     return resumed
 
 
@@ -531,18 +532,24 @@ def _save(
 
 
 def _statistics(
-    args: argparse.Namespace, chosen: list[Variant], done: list[Evaluation], world: str
+    args: argparse.Namespace,
+    chosen: list[Variant],
+    done: list[Evaluation],
+    world: str,
+    profiles: list[str] | None = None,
 ) -> Evaluated:
     """Each variant's summary, and each later variant compared with the first: over the
-    seeds both finished when interrupted, or a line saying why there is no comparison."""
+    seeds both finished when interrupted, or a line saying why there is no comparison.
+    ``profiles``: each variant's profile line (``eval --from``: as its records name it);
+    None: ``--profile``'s for every variant."""
     from roomba_bt.cli.profile_choice import profile_line
     from roomba_bt.evaluate import summarize
     from roomba_bt.evaluate.stats import compare_finished
 
-    shown = profile_line(args)
+    shown = profiles or [profile_line(args)] * len(chosen)
     summaries = [
-        replace(summarize(v.mission, world, e.results, shown), timings=not args.reproducible)
-        for v, e in zip(chosen, done, strict=True)
+        replace(summarize(v.mission, world, e.results, line), timings=not args.reproducible)
+        for v, e, line in zip(chosen, done, shown, strict=True)
     ]
     comparisons: list[Comparison | str] = []
     for v, e in zip(chosen[1:], done[1:], strict=True):

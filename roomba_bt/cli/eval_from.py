@@ -89,8 +89,9 @@ def report_from_files(args: argparse.Namespace) -> int:
     ]
     done = [Evaluation(results) for _, _, results in variants]
     first = variants[0][2][0]
+    profiles = [_profile_said(results, args.profile) for _, _, results in variants]
     _as_read(args, first, done)
-    evaluated = eval_cmd._statistics(args, chosen, done, first.world)
+    evaluated = eval_cmd._statistics(args, chosen, done, first.world, profiles)
     eval_cmd._report(args, "", evaluated)
     print(f"roomba-bt eval: {eval_cmd._count(done)} episode(s) of {len(chosen)} variant(s) "
           f"read from {', '.join(args.from_files)}; none run", file=sys.stderr)  # fmt: skip
@@ -101,18 +102,41 @@ def _label(mission: str, params: tuple[tuple[str, str], ...]) -> str:
     return " ".join([mission, *(f"-p {name}={value}" for name, value in params)])
 
 
+def _profile_said(results: list[EpisodeResult], given: str | None) -> str:
+    """A variant's profile line as its records name the model (``roomba500 (Roomba 500
+    series)``, "" for create2, as ``eval`` says it after a run); episodes of several models
+    each named; records written before the column (none named): ``--profile``'s if given,
+    else said to be unknown rather than taken for create2."""
+    from roomba_bt.oi.profiles import PROFILES
+    from roomba_bt.printable import escaped
+    from roomba_bt.runtime.summary import profile_shown
+
+    named = list(dict.fromkeys(r.profile for r in results))
+    if named == [""]:
+        if given is None:
+            return "not recorded (results written before records named it; --profile to say it)"
+        named = [given]
+    said = [
+        profile_shown(PROFILES[name]) if name in PROFILES else escaped(name or "not recorded")
+        for name in named
+    ]
+    if len(said) == 1:
+        return said[0]
+    return "mixed: " + ", ".join(line or "create2" for line in said)
+
+
 def _as_read(args: argparse.Namespace, first: EpisodeResult, done: list[Evaluation]) -> None:
     """``args`` as the report reads them, from the records: the ``key:`` columns they have
     (their units are the missions', which the records do not keep), the most episodes of a
-    variant, the first record's world (the line to run an episode again names it), the
-    default profile's summary (the records do not name theirs), no provenance of this run,
+    variant, the first record's world and profile (the line to run an episode again names
+    them; create2 in records written before they named it), no provenance of this run,
     and no times measured when the records have none."""
     results = [r for e in done for r in e.results]
     args.key = list(dict.fromkeys(name for r in results for name, _ in r.keys))
     args.key_units = dict.fromkeys(args.key, "")
     args.runs = max(len(e.results) for e in done)
     args.world = first.world
-    args.profile = args.profile or "create2"
+    args.profile = args.profile or first.profile or "create2"
     args.made_by = {}
     # records written with --reproducible have no wall-clock columns: said as that run did
     args.reproducible = args.reproducible or not any(r.wall_s or r.cpu_s for r in results)

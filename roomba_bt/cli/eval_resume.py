@@ -5,9 +5,9 @@ A sweep's ``--out`` holds hours of episodes. Running ``eval`` again with the sam
 results file that holds episodes, or the ``FILE.partial.jsonl`` a killed sweep left, is
 refused before any episode runs (exit 2), unless ``--force`` (replace it) or ``--resume``:
 its episodes are read back, checked against this evaluation (the missions and parameters,
-the seeds, what made them: the release, the world's and each mission file's SHA-256, the
-plugins, each start pose, the ``--key`` columns), and only the (variant, seed) pairs it lacks
-run. The file written at the end holds every episode in the plan's order, as one
+the seeds, what made them: the profile, the release, the world's and each mission file's
+SHA-256, the plugins, each start pose, the ``--key`` columns), and only the (variant, seed)
+pairs it lacks run. The file written at the end holds every episode in the plan's order, as one
 uninterrupted run writes it, and the summary and comparisons count them all.
 """
 
@@ -194,12 +194,15 @@ def _check_alike(
     world: World,
 ) -> None:
     """ResumeError when the record at ``where`` was not made as this evaluation makes
-    ``spec``'s episode: another world, release, mission file or plugin (the provenance
-    columns), another start pose for its seed (``--within``, ``--start-area``, the world's
-    start region), or other ``--key`` columns."""
+    ``spec``'s episode: another world, profile (a record that names one), release, mission
+    file or plugin (the provenance columns), another start pose for its seed (``--within``,
+    ``--start-area``, the world's start region), or other ``--key`` columns."""
     if result.world != world.name:
         raise ResumeError(f"{where}: the episode ran in world {result.world!r}, this "
                           f"evaluation's is {world.name!r}")  # fmt: skip
+    if result.profile and result.profile != spec.profile:  # "": a file written before
+        raise ResumeError(f"{where}: the episode ran as profile {result.profile!r}, this "
+                          f"evaluation's is {spec.profile!r} (--profile)")  # fmt: skip
     for column, now in made_by.items():
         then = _provenance(column, row.get(column))
         if then != now:

@@ -259,6 +259,9 @@ class EpisodeResult:
     #: way it ended, so a patrol's "laps done" and its "docked on a low battery", both a
     #: SUCCESS, are told apart in a sweep's records and report
     said: str = ""
+    #: the robot model the episode's mission ran as (``EpisodeSpec.profile``): a results
+    #: file read back (``eval --from``, ``--resume``) names it; "" in files written before
+    profile: str = ""
 
     @property
     def succeeded(self) -> bool:
@@ -702,6 +705,7 @@ def _measured(
             (key, _named_as_given(spec, where)) for key, where in undeclared_writes(board)
         ),
         said=summary.said,
+        profile=spec.profile,
     )
 
 
@@ -756,7 +760,7 @@ def hung_result(
         return EpisodeResult(
             spec.seed, HUNG, reason, 0.0, limit_s, 0, zero, zero, 0, (), False, False, 0,
             False, 0, 0.0, 0.0, mission=spec.mission, world=spec.world, params=spec.params,
-            stage=stage,
+            stage=stage, profile=spec.profile,
         )  # fmt: skip
     runner = stack.runner
     runner.count_written()
@@ -784,7 +788,7 @@ def died_result(spec: EpisodeSpec, how: str, worker: str = "") -> EpisodeResult:
     return EpisodeResult(
         spec.seed, DIED, f"the worker running it died: {how}", 0.0, 0.0, 0, zero, zero, 0, (),
         False, False, 0, False, 0, 0.0, 0.0, mission=spec.mission, world=spec.world,
-        params=spec.params, worker=worker,
+        params=spec.params, worker=worker, profile=spec.profile,
     )  # fmt: skip
 
 

@@ -23,7 +23,12 @@ to Passive on the charger in every episode, which ``falls > 0`` read as a hazard
 written before they were recorded reads back as episodes without a fall. ``mission_said`` is
 the mission's last words (``run``'s ``mission said`` line; empty when it said nothing, and in
 files written before it was recorded): which way it ended, e.g. a patrol's ``patrol done (laps:
-1)`` or its docking on a low battery, both a ``SUCCESS``.
+1)`` or its docking on a low battery, both a ``SUCCESS``. ``profile`` is the robot model the
+mission ran as (``create2``, ``roomba600``...; empty in files written before it was recorded).
+``undeclared_keys`` holds each blackboard key a behaviour wrote that the mission does not
+declare, with who wrote it first and where (``{"secret": "by 'probe' at lab.py:17"}``; its
+JSON text in CSV; empty or absent: none, or a file written before it was recorded): the
+warning ``run`` says, which the summary of a resumed run or of ``eval --from`` says again.
 
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
@@ -92,6 +97,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "falls_by_cause": ("falls", "falls by cause"),
     "hazard_falls": ("falls", "hazard falls"),
     "mission_said": ("said", "str?"),
+    "profile": ("profile", "str?"),
+    "undeclared_keys": ("undeclared", "undeclared"),
 }
 
 #: the coverage columns (empty when the episode did not clean): name -> Coverage field
@@ -151,6 +158,8 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
             value = dict(value)
         elif kind == "hazard falls":
             value = sum(hazard_falls(dict(value)).values())
+        elif kind == "undeclared":
+            value = dict(value)
         out[column] = value
     out.update(_coverage_record(result))
     out.update((KEY_PREFIX + name, value) for name, value in result.keys)
@@ -227,6 +236,9 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
         if kind == "falls by cause":
             values[name] = _falls(record.get(column))
             continue
+        if kind == "undeclared":
+            values[name] = _undeclared(record.get(column))
+            continue
         raw = record[column]
         if kind == "str":
             values[name] = "" if raw is None else str(raw)
@@ -286,6 +298,20 @@ def _falls(raw: Any) -> tuple[tuple[str, int], ...]:
         raise ValueError(f"falls_by_cause {raw!r}: expected cause=count pairs")
     counts = {str(cause): _count(times) for cause, times in pairs}
     return falls_in_order({cause: times for cause, times in counts.items() if times})
+
+
+def _undeclared(raw: Any) -> tuple[tuple[str, str], ...]:
+    """``undeclared_keys`` as :attr:`EpisodeResult.undeclared`: an object in JSON Lines, its
+    JSON text in a CSV cell (who wrote a key, ``by 'probe' at lab.py:17``, may hold any
+    separator); none when the column is empty or absent (a file written before it was
+    recorded: its summary then has no warning the episodes would have said)."""
+    if raw is None or raw == "":
+        return ()
+    if isinstance(raw, str):
+        raw = json.loads(raw)
+    if not isinstance(raw, dict):
+        raise ValueError(f"undeclared_keys {raw!r}: expected an object of key: writer")
+    return tuple((str(key), str(where)) for key, where in raw.items())
 
 
 def _count(raw: Any) -> int:
@@ -391,9 +417,11 @@ class PartialResults:
 
 def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
     """The record's structured values as CSV cells (``None`` is an empty cell already)."""
+    undeclared = record["undeclared_keys"]
     cells = {
         "params": ";".join(f"{k}={v}" for k, v in record["params"].items()),
         "falls_by_cause": ";".join(f"{c}={n}" for c, n in record["falls_by_cause"].items()),
+        "undeclared_keys": json.dumps(undeclared) if undeclared else "",  # a writer's ; and =
     }
     if record.get("sources") is not None:
         cells["sources"] = ";".join(f"{n}={d}" for n, d in record["sources"].items())

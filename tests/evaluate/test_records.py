@@ -41,6 +41,29 @@ def test_a_results_file_reloads_to_the_same_summary(
     assert [to_record(r) for r in again] == [to_record(r) for r in results]
 
 
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_a_record_keeps_the_profile_and_the_undeclared_keys(
+    tmp_path: Path, results: list[EpisodeResult], suffix: str
+) -> None:
+    """A resumed run's or ``eval --from``'s summary says the model and the undeclared-key
+    warnings of episodes read back: both are columns (a writer's ``;`` and ``=`` kept in
+    CSV), and a file written before them reads back as episodes of no named model and no
+    warning."""
+    assert {r.profile for r in results} == {"create2"}
+    odd = replace(results[0], undeclared=(("secret", " by 'probe' at a;b=c.py:17"),))
+    path = tmp_path / f"results{suffix}"
+    write_results(path, [odd, *results[1:]])
+    again = read_results(path)
+    assert again[0].undeclared == odd.undeclared and again[0].profile == "create2"
+    assert (
+        summarize(BUMP, "apartment", again)
+        .undeclared_said()[0]
+        .startswith("write_key('secret') by 'probe' at a;b=c.py:17: blackboard key 'secret'")
+    )
+    older = {k: v for k, v in to_record(odd).items() if k not in ("profile", "undeclared_keys")}
+    assert from_record(older) == replace(odd, undeclared=(), profile="", trajectory=())
+
+
 def test_a_record_has_the_columns_a_script_needs(results: list[EpisodeResult]) -> None:
     from roomba_bt.evaluate.records import COVERAGE_COLUMNS
 

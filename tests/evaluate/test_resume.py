@@ -80,6 +80,11 @@ def _other_sources(out: Path) -> None:
     _second_row_changed(out, sources={BUMP: "0" * 64})
 
 
+def _another_profile(out: Path) -> None:
+    """The second episode ran as a Roomba 500."""
+    _second_row_changed(out, profile="roomba500")
+
+
 def _another_key(out: Path) -> None:
     """The second episode was run with ``--key found``."""
     _second_row_changed(out, **{"key:found": 3})
@@ -95,6 +100,8 @@ def _another_key(out: Path) -> None:
         (["--within", "1.0"], None, ":1: seed 0 started at"),
         ([], _another_key, ":2: the record reports the keys ['found'], this evaluation --key []"),
         ([], _other_sources, ":2: sources differs from this evaluation's ({"),
+        ([], _another_profile,
+         ":2: the episode ran as profile 'roomba500', this evaluation's is 'create2'"),
     ],
 )  # fmt: skip
 def test_a_resume_refuses_episodes_made_otherwise(

@@ -109,3 +109,41 @@ def test_from_without_records_or_with_a_mission_exits_2(
 ) -> None:
     assert main(argv) == 2
     assert f"roomba-bt eval: {said}" in capsys.readouterr().err
+
+
+def _rows_changed(out: Path, **columns: object) -> None:
+    rows = [json.loads(line) for line in out.read_text().splitlines()]
+    for row in rows:
+        row.update(columns)
+        for column in [c for c, v in columns.items() if v is None]:
+            del row[column]
+    out.write_text("".join(json.dumps(row) + "\n" for row in rows))
+
+
+@pytest.mark.parametrize(
+    ("columns", "options", "said"),
+    [
+        ({"profile": "roomba500"}, [], "profile      roomba500 (Roomba 500 series)"),
+        ({"profile": None}, [], "profile      not recorded (results written before records"),
+        ({"profile": None}, ["--profile", "roomba600"], "profile      roomba600 (Roomba 600"),
+        ({"undeclared_keys": {"secret": " by 'probe' at lab.py:17"}}, [],
+         "warning      write_key('secret') by 'probe' at lab.py:17: blackboard key 'secret' "
+         "is not declared by the mission, in 3 of 3 episodes"),
+    ],
+)  # fmt: skip
+def test_from_says_the_profile_and_warnings_the_records_hold(
+    ran: tuple[Path, str],
+    columns: dict[str, object],
+    options: list[str],
+    said: str,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Records name the model their episodes ran as and the keys written undeclared: the
+    report says them as the run did (create2 unsaid); records written before the profile
+    column are said to be of no known model unless --profile names it."""
+    out, report = ran
+    _rows_changed(out, **columns)
+    assert main(["eval", "--from", str(out), *options]) == 0
+    again = capsys.readouterr().out
+    assert said in again, again
+    assert "profile" not in report
