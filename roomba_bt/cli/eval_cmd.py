@@ -43,7 +43,7 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -72,21 +72,31 @@ from roomba_bt.cli.arguments import (
     seed_list,
 )
 from roomba_bt.cli.eval_from import add_from_option, report_from_files
+from roomba_bt.cli.eval_report import (
+    Evaluated,
+    Variant,
+    count_episodes,
+    finished_said,
+    interruption_of,
+    print_report,
+    refusal_as_json,
+    refused,
+    statistics,
+    verdict,
+    wall_limit,
+)
 from roomba_bt.cli.eval_resume import add_resume_options
 from roomba_bt.cli.record_header import add_reproducible_option
 from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
-from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
+from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
-    from collections.abc import Sequence
-
     from roomba_bt.cli.eval_resume import Resumed
     from roomba_bt.cli.validate_report import Checked
     from roomba_bt.evaluate import EvaluationError
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, MissionNotCompiled
-    from roomba_bt.evaluate.parallel import Engine, Evaluation, Interruption, Progress
+    from roomba_bt.evaluate.parallel import Engine, Evaluation, Progress
     from roomba_bt.evaluate.records import PartialResults
-    from roomba_bt.evaluate.stats import Comparison, Summary
     from roomba_bt.mission import Diagnostic, Permissions
     from roomba_bt.sim.world import World
 
@@ -243,19 +253,6 @@ def near_dock_distance(text: str) -> float:
     return metres(text, *NEAR_DOCK_RANGE_M)
 
 
-def _error(
-    message: str, args: argparse.Namespace | None = None, errors: Sequence[dict[str, Any]] = ()
-) -> int:
-    """``message`` on stderr, exit 2; under ``--json`` (``args`` given) also on stdout as
-    :func:`_refusal_as_json` writes it, so a script's ``json.load`` reads why nothing ran;
-    ``errors``: its places in a file (a world's problems), each as a diagnostic."""
-    if args is not None and getattr(args, "json", False):
-        said_alone = message.replace(" (said above)", "")  # stdout holds the errors too
-        _refusal_as_json(said_alone, [], getattr(args, "not_found", []), errors)
-    print(f"roomba-bt eval: {message}", file=sys.stderr)
-    return ExitCode.INVALID
-
-
 def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
     """``["buoy_range=0.5", "red=-5,25"]`` -> ((name, value), ...); a message on error. Each
     number in the range a world file's ``dock:`` allows (the same table: ``DOCK_LIMITS``)."""
@@ -294,40 +291,6 @@ def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
         except ValueError:
             return f"--dock {item!r}: {text!r} is not a number (or FROM,TO for red/green)"
     return tuple(out)
-
-
-@dataclass(frozen=True)
-class Variant:
-    """One thing evaluated: a mission with its parameters, labelled for the report."""
-
-    #: the mission and every parameter that applied once: ``-p``'s that it does not
-    #: override, then its own (``dock -p search_speed=250mm/s -p turn_speed=90mm/s``): a
-    #: label of its own values alone read as if the ``-p`` base had not applied
-    label: str
-    #: how the results, the summary and the records name the mission (:func:`results_name`)
-    mission: str
-    params: tuple[tuple[str, str], ...]
-    #: the file read: where the project file and the include folders are looked for
-    path: str
-    #: its own parameters, on top of ``-p`` (``--sweep``'s value, ``--variant``'s set)
-    own: tuple[tuple[str, str], ...] = ()
-    #: how the command line gave them (``--variant 'speed=fast'``), which a message about
-    #: one of them names; "" for a mission's own variant
-    given_as: str = ""
-
-
-@dataclass(frozen=True)
-class Evaluated:
-    """A finished evaluation, what its report, plot and exit code are made of: each variant
-    (``chosen``), its episodes (``done``) and its summary, in the same order, and each later
-    variant compared with the first (or the line that says why there is no comparison)."""
-
-    chosen: list[Variant]
-    done: list[Evaluation]
-    summaries: list[Summary]
-    comparisons: list[Comparison | str]
-    #: the episodes each variant was to run (``--runs``)
-    runs: int
 
 
 def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] | str:
@@ -391,7 +354,7 @@ def eval_command(args: argparse.Namespace) -> int:
         return report_from_files(args)
     problem = _check_arguments(args)
     if problem is not None:
-        return _error(problem, args)
+        return refused(problem, args)
     plan = _plan(args)
     if isinstance(plan, int):
         return plan
@@ -415,21 +378,21 @@ def eval_command(args: argparse.Namespace) -> int:
     # the records first: a summary that fails (a bug in the statistics) loses no episode
     unwritten = _save(args, done, partial)
     try:
-        evaluated = _statistics(args, chosen, done, world.name)
-        _report(args, engine.describe(), evaluated)
+        evaluated = statistics(args, chosen, done, world.name)
+        print_report(args, engine.describe(), evaluated, run_conditions(args))
     except Exception:
         kept = args.out if unwritten is None else partial.path if partial else None
         if kept is not None:
-            print(f"roomba-bt eval: the summary failed; the {_count(done)} episode(s) that "
+            print(f"roomba-bt eval: the summary failed; the {count_episodes(done)} episode(s) that "
                   f"finished are in {kept}", file=sys.stderr)  # fmt: skip
         raise
     if unwritten is not None:
-        return _error(unwritten, args)
+        return refused(unwritten, args)
     interruption = interruption_of(done)
     if interruption is not None:
         failed = interruption.environment_failed
         said = interruption.said if failed else f"interrupted {interruption.said}"
-        print(f"roomba-bt eval: {said}; {_finished(done, evaluated)}, summarised above",
+        print(f"roomba-bt eval: {said}; {finished_said(done, evaluated)}, summarised above",
               file=sys.stderr)  # fmt: skip
         # the workers or the cluster gone: the run environment failed, not the missions
         # (3, as a connection's failure); a signal is the operator's (130)
@@ -438,7 +401,7 @@ def eval_command(args: argparse.Namespace) -> int:
         plotted = _plot(args.plot, world, evaluated)
         if plotted is not None:
             return plotted
-    return _verdict(args, evaluated.summaries, done)
+    return verdict(args, evaluated.summaries, done)
 
 
 def _engine(args: argparse.Namespace, batches: list[list[EpisodeSpec]]) -> Engine:
@@ -468,11 +431,11 @@ def _resumed(
 
     problem = refused_over(args)
     if problem is not None:
-        return _error(problem, args)
+        return refused(problem, args)
     try:
         resumed = resume(args, chosen, planned, world)
     except ResumeError as exc:
-        return _error(f"--resume: {exc}", args)
+        return refused(f"--resume: {exc}", args)
     if args.resume:
         left = sum(len(batch) for batch in resumed.todo)
         print(f"roomba-bt eval: --resume: {resumed.reused} episode(s) read back from "
@@ -482,27 +445,6 @@ def _resumed(
                   f"{resumed.reused} read back: a results file keeps no trajectory (--force "
                   "runs them all again)", file=sys.stderr)  # fmt: skip
     return resumed
-
-
-def _count(done: list[Evaluation]) -> int:
-    return sum(len(e.results) for e in done)
-
-
-def _finished(done: list[Evaluation], evaluated: Evaluated) -> str:
-    """``12 of 200 episode(s) finished``: of every variant's episodes."""
-    planned = evaluated.runs * len(evaluated.chosen)
-    return f"{_count(done)} of {planned} episode(s) finished"
-
-
-def interruption_of(done: list[Evaluation]) -> Interruption | None:
-    """Why the evaluation stopped before its end: the first batch interrupted says (the
-    later ones were skipped); None when it ran to its end."""
-    from roomba_bt.evaluate.parallel import Interruption
-
-    for e in done:
-        if e.interrupted:  # an Evaluation a program made itself may not say why
-            return e.interruption or Interruption("unknown", "for a reason not said")
-    return None
 
 
 def _save(
@@ -529,120 +471,6 @@ def _save(
     partial.done()
     print(f"results written to {out}", file=sys.stderr)
     return None
-
-
-def _statistics(
-    args: argparse.Namespace,
-    chosen: list[Variant],
-    done: list[Evaluation],
-    world: str,
-    profiles: list[str] | None = None,
-) -> Evaluated:
-    """Each variant's summary, and each later variant compared with the first: over the
-    seeds both finished when interrupted, or a line saying why there is no comparison.
-    ``profiles``: each variant's profile line (``eval --from``: as its records name it);
-    None: ``--profile``'s for every variant."""
-    from roomba_bt.cli.profile_choice import profile_line
-    from roomba_bt.evaluate import summarize
-    from roomba_bt.evaluate.stats import compare_finished
-
-    shown = profiles or [profile_line(args)] * len(chosen)
-    summaries = [
-        replace(summarize(v.mission, world, e.results, line), timings=not args.reproducible)
-        for v, e, line in zip(chosen, done, shown, strict=True)
-    ]
-    comparisons: list[Comparison | str] = []
-    for v, e in zip(chosen[1:], done[1:], strict=True):
-        c = compare_finished(chosen[0].label, v.label, done[0].results, e.results)
-        if c is None:
-            comparisons.append(f"A/B          {chosen[0].label} against {v.label}: no "
-                               "comparison, no seed finished with both (interrupted)")  # fmt: skip
-        else:
-            comparisons.append(replace(c, interrupted=e.interrupted or done[0].interrupted))
-    return Evaluated(chosen, done, summaries, comparisons, args.runs)
-
-
-def rerun_command(args: argparse.Namespace, result: Any) -> str:
-    """The ``roomba-bt run`` line that runs episode ``result`` again, alone, with its
-    traceback: every option that shaped the episode, its seed and seeded start, world,
-    parameters, profile, charge, mission time limit (``run --fast``'s own is 2 h, eval's
-    15 min: a late error ran alone under another limit), encoders' error, faults and what
-    the evaluation was allowed to load; for a HUNG one, its ``--wall-limit``, which then
-    names where it is stuck as the evaluation did. ``run`` has no --within, --start-area nor
-    --dock: with any of those the line says its start or world may differ."""
-    from roomba_bt.evaluate.episode import HUNG
-
-    words = ["roomba-bt", "-v", "run", result.mission, "--fast", "--random-start", "--seed",
-             str(result.seed)]  # fmt: skip
-    if args.world != "empty-room":
-        words += ["--world", args.world]
-    for name, value in dict(result.params).items():
-        words += ["-p", f"{name}={value}"]
-    if args.profile != "create2":
-        words += ["--profile", args.profile]
-    if args.battery is not None:
-        words += ["--battery", f"{args.battery:g}"]
-    timeout = parse_timeout(args.timeout)  # checked before any episode: seconds
-    if isinstance(timeout, float):
-        words += ["--timeout", f"{timeout:g}"]
-    if args.odometry_error:  # each episode's draw is its seed's, as run's
-        words += ["--odometry-error", f"{args.odometry_error:g}"]
-    if getattr(args, "allow_plugin_files", False):
-        words.append("--allow-plugin-files")
-    limit = wall_limit(args)
-    if result.outcome == HUNG and isinstance(limit, float):  # else the run hangs silently
-        words += ["--wall-limit", f"{limit:g}"]
-    for folder in getattr(args, "include_dir", None) or ():
-        words += ["--include-dir", folder]
-    for option in fault_options_set(args):  # each episode's draws are its seed's
-        words += option.split(" ", 1)
-    line = shlex.join(words)
-    unmatched = [
-        option for option, given in (
-            ("--within", args.within is not None), ("--start-area", args.start_area is not None),
-            ("--dock", bool(args.dock)),
-        ) if given
-    ]  # fmt: skip
-    if unmatched:
-        line += f" (run has no {', '.join(unmatched)}: its start or world may differ)"
-    return line
-
-
-def _verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Evaluation]) -> int:
-    """The exit code of a finished evaluation, with what decided it on stderr: 4 when a
-    behaviour raised in an episode, one ran past ``--wall-limit`` (HUNG) or one's worker
-    died running it (DIED), 1 when a success rate is below ``--min-rate``, else 0."""
-    min_rate: float | None = args.min_rate
-    low = [s for s in summaries if min_rate is not None and s.rate < min_rate]
-    for s in low:
-        print(
-            f"roomba-bt eval: {s.mission}: success rate {100 * s.rate:.1f} % is below "
-            f"--min-rate {100 * (min_rate or 0.0):.1f} %",
-            file=sys.stderr,
-        )
-    from roomba_bt.evaluate.episode import DIED, HUNG
-
-    bug = False
-    for ending, how, then in (
-        (Outcome.ERROR.value, "ended with a behaviour's exception (a bug in it or its plugin)",
-         "see its traceback with"),
-        (HUNG, "ran past --wall-limit (stuck: an endless loop in a behaviour?)",
-         "run it alone with"),
-        (DIED, "killed the worker process running it (os._exit in a behaviour? a crash in C "
-         "code?)", "run it alone with"),
-    ):  # fmt: skip
-        found = [r for e in done for r in e.results if r.outcome == ending]
-        if found:
-            bug = True
-            print(
-                f"roomba-bt eval: {len(found)} episode(s) {how}, the first: seed "
-                f"{found[0].seed}: {escaped(found[0].reason, ANY_CONTROL)}; {then}: "
-                f"{rerun_command(args, found[0])}",
-                file=sys.stderr,
-            )
-    if bug:
-        return ExitCode.BEHAVIOUR_ERROR
-    return ExitCode.MISSION_FAILED if low else ExitCode.OK
 
 
 #: The most episodes one evaluation runs (a million: days of a 2-core machine's time).
@@ -752,18 +580,6 @@ def _profile_of_the_missions(args: argparse.Namespace) -> str | None:
     return None
 
 
-def wall_limit(args: argparse.Namespace) -> float | str | None:
-    """``--wall-limit`` in seconds (None: ``none``), by default
-    :func:`~roomba_bt.evaluate.episode.default_wall_limit` of ``--timeout``; a message when
-    either is not a duration."""
-    from roomba_bt.evaluate.episode import default_wall_limit
-
-    if args.wall_limit is not None:
-        return limit_seconds(args.wall_limit, "--wall-limit")
-    timeout = parse_timeout(args.timeout)
-    return default_wall_limit(timeout) if isinstance(timeout, float) else timeout
-
-
 def worker_wait(args: argparse.Namespace) -> float | str | None:
     """``--worker-wait`` in seconds (None: ``none``), by default
     :data:`~roomba_bt.evaluate.parallel.WORKER_WAIT_S`; a message when it is not a
@@ -783,16 +599,16 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
 
     params = parse_params(args.param)
     if isinstance(params, str):
-        return _error(params, args)
+        return refused(params, args)
     timeout = parse_timeout(args.timeout)
     if isinstance(timeout, str) or timeout is None:
-        return _error(str(timeout), args)
+        return refused(str(timeout), args)
     dock = parse_dock(args.dock)
     if isinstance(dock, str):
-        return _error(dock, args)
+        return refused(dock, args)
     chosen = variants(args, params)
     if isinstance(chosen, str):
-        return _error(chosen, args)
+        return refused(chosen, args)
     batches = [
         episode_specs(
             v.mission,
@@ -822,13 +638,13 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         return missions
     same = _same_variant_twice(chosen, missions)
     if same is not None:
-        return _error(same, args)
+        return refused(same, args)
     try:
         world = build_world(batches[0][0])
         start_pose(world, batches[0][0])
         batches = _reading_keys(args, chosen, missions, batches)
     except EvaluationError as exc:
-        return _error(str(exc), args, _world_errors(exc))
+        return refused(str(exc), args, _world_errors(exc))
     args.made_by = made_by(args, chosen, missions, world)
     _warn_if_one_start(args, world)
     return chosen, batches, world
@@ -864,10 +680,10 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
         said = (f"{count} of {given + len(args.not_found)} missions cannot be evaluated; "
                 "no episode runs")  # fmt: skip
         if args.json:
-            _refusal_as_json(said, failed, args.not_found)
+            refusal_as_json(said, failed, args.not_found)
         if given + len(args.not_found) == 1:
             return ExitCode.INVALID  # its errors are the whole story
-        return _error(_cannot_be_evaluated(count, given + len(args.not_found)))
+        return refused(_cannot_be_evaluated(count, given + len(args.not_found)))
     warned = [(v, m) for v, m in zip(chosen, missions, strict=True) if m.warnings]
     if not (args.strict and warned):
         return missions
@@ -876,7 +692,7 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
         print(f"roomba-bt eval: {said}; no episode runs", file=sys.stderr)
     if args.json:
         fails = "; ".join(failed_strict(v.label, m.warnings) for v, m in warned)
-        _refusal_as_json(f"{fails}; no episode runs", [w for _, m in warned for w in m.warnings])
+        refusal_as_json(f"{fails}; no episode runs", [w for _, m in warned for w in m.warnings])
     return ExitCode.STRICT
 
 
@@ -900,27 +716,6 @@ def _naming_the_variant(granted: Permissions, variant: Variant) -> Permissions:
     user to find the bad one)."""
     origins = tuple((name, variant.given_as) for name, _ in variant.own)
     return replace(granted, wording=replace(granted.wording, origins=origins))
-
-
-def _refusal_as_json(
-    said: str,
-    diagnostics: list[Diagnostic],
-    not_found: Sequence[Checked] = (),
-    errors: Sequence[dict[str, Any]] = (),
-) -> None:
-    """``eval --json`` refusing to start, on stdout as data a script reads (its ``json.load``
-    of an empty stdout raised): ``{"error": what stops it, "errors": [...]}``, each error as
-    ``validate --format json`` gives a diagnostic (``file``, ``line``, ``column``,
-    ``message``, ...), a mission not found in the file asked for at no line or column (its
-    ``file`` was null: a script could not tell which of several it was), then ``errors``
-    as they are. stderr says the same as without ``--json``; the exit code is the same."""
-    import json
-
-    from roomba_bt.cli.validate_report import diagnostic_as_json, problem_as_json
-
-    listed = [diagnostic_as_json(d) for d in diagnostics]
-    listed += [problem_as_json(one) for one in not_found]
-    print(json.dumps({"error": said, "errors": [*listed, *errors]}, indent=2))
 
 
 def _world_errors(exc: EvaluationError) -> list[dict[str, Any]]:
@@ -1029,7 +824,7 @@ def _partial(args: argparse.Namespace) -> PartialResults | int | None:
     try:
         return PartialResults(out, getattr(args, "made_by", None), reproducible=args.reproducible)
     except OSError as exc:
-        return _error(f"--out {out}: {exc.strerror or exc}", args)
+        return refused(f"--out {out}: {exc.strerror or exc}", args)
 
 
 def _run(
@@ -1057,7 +852,7 @@ def _run(
         print(f"roomba-bt eval: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
     except ClusterUnavailableError as exc:
-        return _error(str(exc))
+        return refused(str(exc))
     except MissionNotCompiled as exc:
         _not_on_the_worker(args, exc)
         return ExitCode.CONNECTION
@@ -1088,81 +883,6 @@ def _recorded(partial: PartialResults, bar: Progress | None) -> Progress:
             bar(done, total, result)
 
     return progress
-
-
-def _report(args: argparse.Namespace, engine: str, evaluated: Evaluated) -> None:
-    """The summaries, coverage and comparisons on stdout: as JSON with ``--json``, else text."""
-    from roomba_bt.evaluate.coverage import summarize_coverage
-    from roomba_bt.evaluate.keys import summarize_keys
-
-    if args.json:
-        _json_report(args, engine, evaluated)
-        return
-    chosen, done = evaluated.chosen, evaluated.done
-    for v, s, e in zip(chosen, evaluated.summaries, done, strict=True):
-        if len(chosen) > 1 or v.params:  # one variant's -p: said nowhere else in the text
-            print(f"variant      {v.label}")
-        print(s)
-        coverage = summarize_coverage(e.results)
-        if coverage is not None:
-            print(coverage)
-        for key in summarize_keys(e.results, args.key, args.key_units):
-            print(key.line())
-        print()
-    for c in evaluated.comparisons:
-        print(c)
-        print()
-    interruption = interruption_of(done)
-    if interruption is not None:
-        print(escaped(f"interrupted  {interruption.said}; {_finished(done, evaluated)}",
-                      ANY_CONTROL))  # fmt: skip
-    if not args.reproducible and engine:  # which ran them, and what was lost: not the results
-        retried = sum(e.retried for e in done)
-        print(f"engine       {engine}; {retried} episode(s) run again after a worker was lost")
-
-
-def _json_report(args: argparse.Namespace, engine: str, evaluated: Evaluated) -> None:
-    """``--json``: the conditions, what made the episodes (the release, each plugin, each
-    variant's files: :func:`made_by`), the ``--min-rate`` verdict (``passed``: each variant's
-    and all of them; null without ``--min-rate``), each variant's summary and coverage, and
-    the comparisons. ``--reproducible``: the engine, the episodes run again and the times
-    measured on the wall clock null, so that the same episodes run again print the same."""
-    import json
-
-    from roomba_bt.evaluate.coverage import summarize_coverage
-    from roomba_bt.evaluate.keys import summarize_keys
-    from roomba_bt.evaluate.stats import METHODS, tidy
-
-    made = getattr(args, "made_by", {})
-    plugins: dict[str, Any] = {}
-    for provenance in made.values():
-        plugins.update(provenance["plugins"])
-    summaries, done = evaluated.summaries, evaluated.done
-    passed = [None if args.min_rate is None else s.rate >= args.min_rate for s in summaries]
-    measured = not args.reproducible
-    interruption = interruption_of(done)
-    print(json.dumps(tidy({
-        # --from: the records do not say every condition (none: the report's own defaults)
-        "conditions": None if args.from_files else run_conditions(args),
-        "engine": (engine or None) if measured else None,
-        "retried": sum(e.retried for e in done) if measured else None,
-        "interrupted": interruption is not None,
-        "interrupted_by": interruption.cause if interruption else None,
-        "interruption": interruption.said if interruption else None,
-        "passed": None if args.min_rate is None else all(passed),
-        "plugins": dict(sorted(plugins.items())),
-        "variants": [{"label": v.label, "params": dict(v.params), "own_params": dict(v.own),
-                      **s.to_dict(),
-                      "passed": ok, "sources": made.get(v.mission, {}).get("sources"),
-                      "coverage": c.to_dict() if c is not None else None,
-                      "keys": {k.name: k.to_dict()
-                               for k in summarize_keys(e.results, args.key, args.key_units)}}
-                     for v, s, c, ok, e in zip(evaluated.chosen, summaries,
-                                               [summarize_coverage(e.results) for e in done],
-                                               passed, done, strict=True)],
-        "comparisons": [c.to_dict() for c in evaluated.comparisons if not isinstance(c, str)],
-        "methods": METHODS,
-    }), indent=2))  # fmt: skip
 
 
 def run_conditions(args: argparse.Namespace) -> dict[str, Any]:
@@ -1227,6 +947,6 @@ def _plot(out: str, world: World, evaluated: Evaluated) -> int | None:
         print(f"roomba-bt eval: {exc}", file=sys.stderr)
         return ExitCode.INVALID
     except OSError as exc:
-        return _error(f"--plot {out}: {exc.strerror or exc}")
+        return refused(f"--plot {out}: {exc.strerror or exc}")
     print(f"trajectories written to {out}", file=sys.stderr)
     return None

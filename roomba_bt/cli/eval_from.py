@@ -72,30 +72,37 @@ def report_from_files(args: argparse.Namespace) -> int:
     """The report of ``args.from_files``' episodes (:func:`read_variants`) as ``eval``
     prints it after running them; exit 2 when a file cannot be read, or a mission was also
     given (``--from`` runs nothing), else 0 (or 1 under ``--min-rate``, 4 when an episode
-    was a bug's: :func:`~roomba_bt.cli.eval_cmd._verdict`)."""
-    from roomba_bt.cli import eval_cmd
+    was a bug's: :func:`~roomba_bt.cli.eval_report.verdict`)."""
+    from roomba_bt.cli.eval_report import (
+        Variant,
+        count_episodes,
+        print_report,
+        refused,
+        statistics,
+        verdict,
+    )
     from roomba_bt.evaluate.parallel import Evaluation
 
     if args.missions:
-        return eval_cmd._error(f"--from and {args.missions[0]}: --from runs no mission: "
+        return refused(f"--from and {args.missions[0]}: --from runs no mission: "
                                "give one or the other", args)  # fmt: skip
     try:
         variants = read_variants(args.from_files)
     except FromFilesError as exc:
-        return eval_cmd._error(f"--from {exc}", args)
+        return refused(f"--from {exc}", args)
     chosen = [
-        eval_cmd.Variant(_label(mission, params), mission, params, mission)
+        Variant(_label(mission, params), mission, params, mission)
         for mission, params, _ in variants
     ]
     done = [Evaluation(results) for _, _, results in variants]
     first = variants[0][2][0]
     profiles = [_profile_said(results, args.profile) for _, _, results in variants]
     _as_read(args, first, done)
-    evaluated = eval_cmd._statistics(args, chosen, done, first.world, profiles)
-    eval_cmd._report(args, "", evaluated)
-    print(f"roomba-bt eval: {eval_cmd._count(done)} episode(s) of {len(chosen)} variant(s) "
+    evaluated = statistics(args, chosen, done, first.world, profiles)
+    print_report(args, "", evaluated)
+    print(f"roomba-bt eval: {count_episodes(done)} episode(s) of {len(chosen)} variant(s) "
           f"read from {', '.join(args.from_files)}; none run", file=sys.stderr)  # fmt: skip
-    return eval_cmd._verdict(args, evaluated.summaries, done)
+    return verdict(args, evaluated.summaries, done)
 
 
 def _label(mission: str, params: tuple[tuple[str, str], ...]) -> str:
