@@ -44,14 +44,16 @@ def read_variants(
     from roomba_bt.evaluate.records import ResultsFileError, read_rows, written_record
 
     found: dict[tuple[str, tuple[tuple[str, str], ...]], dict[int, tuple[str, EpisodeResult]]] = {}
+    worlds: list[tuple[str, str, str | None]] = []  # the first record's: place, name, SHA-256
     for path in files:
         try:
             rows = read_rows(path)
         except (ResultsFileError, ValueError) as exc:
             raise FromFilesError(str(exc)) from None
-        for line, _, result in rows:
+        for line, row, result in rows:
             episodes = found.setdefault((result.mission, tuple(sorted(result.params))), {})
             where = f"{path}:{line}"
+            _one_world(worlds, where, result.world, row.get("world_sha256") or None)
             first = episodes.setdefault(result.seed, (where, result))
             same = written_record(first[1], reproducible=True) == written_record(
                 result, reproducible=True
@@ -66,6 +68,28 @@ def read_variants(
         (mission, params, [result for _, (_, result) in sorted(episodes.items())])
         for (mission, params), episodes in found.items()
     ]
+
+
+def _one_world(
+    worlds: list[tuple[str, str, str | None]], where: str, name: str, digest: str | None
+) -> None:
+    """FromFilesError when the record at ``where`` ran in another world than the first
+    record read (by name, or by the file's SHA-256 where both records have it): the seeds of
+    two worlds paired as "the same starts" compared nothing (an apartment's file and an
+    empty room's were merged, labelled the first's world). ``--resume`` refuses the same."""
+    if not worlds:
+        worlds.append((where, name, digest))
+        return
+    first_at, first_name, first_digest = worlds[0]
+    other_file = digest is not None and first_digest is not None and digest != first_digest
+    if name != first_name or other_file:
+        if name != first_name:
+            said = f"world {name!r}, {first_at} in {first_name!r}"
+        else:  # the same name, another file (edited between the sweeps)
+            said = (f"world {name!r} of SHA-256 {(digest or '')[:12]}..., {first_at} in one "
+                    f"of {(first_digest or '')[:12]}... (the world file changed)")  # fmt: skip
+        raise FromFilesError(f"{where}: the episode ran in {said}: a report compares "
+                             "episodes of one world; give each world's files alone")  # fmt: skip
 
 
 def report_from_files(args: argparse.Namespace) -> int:

@@ -97,6 +97,37 @@ def test_from_refuses_one_episode_with_two_results(
 
 
 @pytest.mark.parametrize(
+    ("change", "said"),
+    [
+        ({"world": "apartment"}, "the episode ran in world 'apartment', {out}:1 in"),
+        ({"world_sha256": "0" * 64}, "of SHA-256 000000000000..., {out}:1 in one of"),
+    ],
+)
+def test_from_refuses_episodes_of_two_worlds(
+    ran: tuple[Path, str],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    change: dict[str, str],
+    said: str,
+) -> None:
+    """An apartment's results and an empty room's were merged with no word, each variant
+    labelled with the first file's world and the two worlds' seeds paired as the same
+    starts (the verifier, session 35): another world, by name or by its file's SHA-256, is
+    refused, naming both places, as ``--resume`` refuses it."""
+    out, _ = ran
+    row = json.loads(out.read_text().splitlines()[0])
+    assert row["world_sha256"]  # the records carry the world file's digest
+    row.update(change, seed=99)
+    other = tmp_path / "other.jsonl"
+    other.write_text(json.dumps(row) + "\n")
+    assert main(["eval", "--from", str(out), str(other)]) == 2
+    err = capsys.readouterr().err
+    assert f"--from {other}:1: the episode ran in world " in err
+    assert said.format(out=out) in err
+    assert "give each world's files alone" in err
+
+
+@pytest.mark.parametrize(
     ("argv", "said"),
     [
         (["eval", BUMP, "--from", "x.jsonl"], f"--from and {BUMP}: --from runs no mission"),
