@@ -322,8 +322,9 @@ class OIProtocol(StreamOutput):
         Query List included) until a BRC pulse. The 600 spec's only wake for this sleep is
         the BRC pulse ("Passive Mode"; Appendix B: "Dock wakeup: BRC pulse"); Start is what
         Off listens for, and a robot asleep answers no byte (robotics.stackexchange.com/q/10666).
-        A robot in Safe or Full never sleeps by itself; the fault puts one to sleep all the
-        same, as if it had been left in Passive."""
+        A robot in Safe or Full never sleeps: the fault waits for Passive
+        (``Simulator._timed_fault``); called in Safe or Full (a test's direct call), it drops
+        the robot to Passive first."""
         self.builtin = self.paused_cycle = None
         self._stop_wheels()
         self.left_speed = self.right_speed = 0.0

@@ -57,6 +57,8 @@ __all__ = [
 _STEP_NS = float(round(STEP_SECONDS * 1e9))
 _from_bytes = int.from_bytes
 _PASSIVE, _SAFE, _FULL = OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL
+#: The kind of a ``sleep_at`` fault that came due in Safe or Full and waited for Passive.
+SLEEP_IN_PASSIVE = "sleep, once in Passive (Safe and Full never sleep)"
 
 
 class Simulator(OIProtocol):
@@ -277,13 +279,20 @@ class Simulator(OIProtocol):
 
     def _timed_fault(self) -> None:
         """The one-off faults due now (``Faults.reset_at``, ``stream_stop_at``, ``sleep_at``,
-        ``baud_change_at``)."""
+        ``baud_change_at``). ``sleep_at`` is the power-saving sleep of five idle minutes in
+        Passive; the OI spec's Safe and Full "never sleep", so a robot in them when it is due
+        sleeps at its first step in Passive (``SLEEP_IN_PASSIVE``): a run that ends sleeps
+        after its safe stop, and a run that drives never meets a sleep no robot has."""
         if self._fault_clock_waits:
             if self._stream is None:
                 return  # _fault_at stays due: the next step looks again
             self._start_fault_clock()
+        waits_for_passive = False
         while self._timed_faults and self._timed_faults[0][0] <= self.time:
             _, kind = self._timed_faults.pop(0)
+            if kind.startswith("sleep") and (self.mode is _SAFE or self.mode is _FULL):
+                waits_for_passive = True  # Safe and Full never sleep (the OI spec)
+                continue
             self._event("fault", kind)
             if kind == "reset":  # as Reset (7) does: the mode it leads to, then the banner
                 spec = COMMANDS[opcodes("reset")[0]]
@@ -297,14 +306,16 @@ class Simulator(OIProtocol):
                     self._stream = self._gapped_stream
                     self._settle_far()  # the far sensors may be streamed again
                 self._gapped_stream = None
-            elif kind == "sleep":
-                self.fall_asleep("fault: sleep_at")  # deaf until BRC, as the 5-min sleep
+            elif kind.startswith("sleep"):
+                self.fall_asleep(f"fault: {kind}")  # deaf until BRC, as the 5-min sleep
             elif kind == "baud change":
                 to = self.faults.baud_change_to
                 self.baud = to if to is not None else 19200 if self.baud == 115200 else 115200
                 self._event("baud", f"now {self.baud}")
             else:
                 self._end_stream()
+        if waits_for_passive:  # looked at again next step: it sleeps once in Passive
+            self._timed_faults.insert(0, (self.time, SLEEP_IN_PASSIVE))
         self._next_timed = self._timed_faults[0][0] if self._timed_faults else math.inf
         self._fault_at = min(self._disconnect_at, self._next_timed)
 

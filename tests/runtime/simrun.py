@@ -58,6 +58,13 @@ tree:
     - drive: {velocity: 100 mm/s, radius: spin_left}
 """
 
+#: A mission that leaves the robot in Passive, idle: the only mode a robot sleeps in.
+WAIT_IN_PASSIVE = """
+mission: wait-in-passive
+tree:
+  wait: 10min
+"""
+
 
 def spins_then_passive(name: str, *spins: tuple[str, str]) -> str:
     """A mission that goes to Safe, spins in place for each ``(wait, drive)`` of ``spins`` in

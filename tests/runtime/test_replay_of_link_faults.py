@@ -13,7 +13,7 @@ from roomba_bt.oi.profiles import CREATE2, ROOMBA500, RobotProfile
 from roomba_bt.runtime.recording import ReplayTransport, load_record
 from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 
-from .simrun import SPIN, record_run, write_mission
+from .simrun import SPIN, WAIT_IN_PASSIVE, record_run, write_mission
 
 FRAME = "131a070009000a000b000c001906511a0a88220023022b020d2c020dca"
 HEADER = {"format": "roomba-bt-record", "version": 2, "profile": "create2", "baud": 115200,
@@ -51,17 +51,18 @@ def test_a_wait_under_the_clocks_last_bit_at_the_record_s_end_still_moves_it(
 
 
 @pytest.mark.parametrize(
-    ("faults", "profile", "verdict"),
+    ("faults", "profile", "mission", "verdict"),
     [
-        (Faults(disconnect_at=1.0), CREATE2, "lost its link at mission time"),  # cable pulled
-        (Faults(reset_at=1.0), CREATE2, "lost its link at mission time"),
-        (Faults(sleep_at=1.0), CREATE2, "lost its link at mission time"),  # woken by BRC
+        (Faults(disconnect_at=1.0), CREATE2, SPIN, "lost its link at mission time"),  # pulled
+        (Faults(reset_at=1.0), CREATE2, SPIN, "lost its link at mission time"),
+        # woken by BRC; asleep in Passive, as only there a robot sleeps
+        (Faults(sleep_at=1.0), CREATE2, WAIT_IN_PASSIVE, "lost its link at mission time"),
         # the listen at the new rate replayed whole (its reads stamped past their waits
         # too): the same bytes to the end, the stop's own
-        (Faults(baud_change_at=1.0), CREATE2, "the same 51 bytes as the recorded run"),
+        (Faults(baud_change_at=1.0), CREATE2, SPIN, "the same 51 bytes as the recorded run"),
         # the wrong profile: its run ends at the watchdog's trip (certain there), the stop as
         # the replay's own: no difference at all (it went on querying through the grace)
-        (Faults(), ROOMBA500, "the tree wrote the same 28 bytes as the recorded run"),
+        (Faults(), ROOMBA500, SPIN, "the tree wrote the same 28 bytes as the recorded run"),
     ],
     ids=["port gone", "reset", "asleep", "baud change", "wrong profile"],
 )
@@ -70,6 +71,7 @@ def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and
     capsys: pytest.CaptureFixture[str],
     faults: Faults,
     profile: RobotProfile,
+    mission: str,
     verdict: str,
 ) -> None:
     """Each ending of the noisy cable's table. Past the recorded run's last tick it wrote
@@ -77,7 +79,7 @@ def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and
     which the replay, on a line that cannot fail, does not: that was its "first
     difference", exit 1, read as "your mission changed"."""
     link = SimLink(Simulator(load_world("empty-room"), profile, 0, faults))
-    record = record_run(tmp_path, link)
+    record = record_run(tmp_path, link, mission)
     capsys.readouterr()
     assert main(["replay", str(record)]) == 0
     out = capsys.readouterr().out

@@ -30,13 +30,7 @@ from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 from roomba_bt.sim.world import parse_world
 from roomba_bt.transport.testing import NullTransport
 
-from .simrun import SPIN, TapLink
-
-WAIT_IN_PASSIVE = """
-mission: wait-in-passive
-tree:
-  wait: 10min
-"""
+from .simrun import SPIN, WAIT_IN_PASSIVE, TapLink
 
 
 class NoModemLines(SimLink):
@@ -108,17 +102,52 @@ def test_a_robot_that_answers_after_a_pulse_too_soon_to_sleep_is_not_called_asle
     assert summary.stop_delivered  # it answered after the pulse: it hears the stop
 
 
+class SwitchedOffAt3s(SimLink):
+    """A robot switched off (or its cable cut inside the plug) 3 s in: from then on nothing
+    comes from it and nothing written reaches it, while the port stays open."""
+
+    def _off(self) -> bool:
+        return self.simulator.time >= 3.0
+
+    def write(self, data: bytes) -> None:
+        if not self._off():
+            super().write(data)
+
+    def read(self, timeout: float) -> bytes:
+        data = super().read(timeout)
+        return b"" if self._off() else data
+
+
+DRIVE_IN_SAFE = "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n"
+
+
 def test_a_robot_silent_in_safe_is_neither_called_asleep_nor_hung_up_on(tmp_path: Path) -> None:
     """Safe and Full never sleep: a robot last seen driving in Safe that answers no query is
-    asked once more, with no BRC pulse (``sim --sleep-at`` drops it from Safe to sleep, which
-    no robot does; it stays deaf)."""
-    driving = "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n"
-    summary, simulator = run(tmp_path, driving, Faults(sleep_at=3.0))
+    asked once more, with no BRC pulse."""
+    summary, simulator = run(tmp_path, DRIVE_IN_SAFE, Faults(), SwitchedOffAt3s)
     assert "asleep" not in summary.reason, summary.reason
     assert "it answered no query, asked twice 1 s apart, and it was in Safe, which never " \
         "sleeps: switched off, a flat battery, or the cable" in summary.reason  # fmt: skip
     assert simulator.brc_pulses == 1  # keep-awake's first only: no wake pulse
     assert not summary.stop_delivered
+
+
+def test_the_sleep_fault_waits_for_passive_as_safe_never_sleeps(tmp_path: Path) -> None:
+    """``sim --sleep-at`` due while the robot drives in Safe: no robot sleeps there (the OI
+    spec: "In Safe and Full modes, Roomba will never sleep"), so the run drives on to its end
+    and the robot sleeps only once the safe stop left it in Passive. Before, the simulator
+    slept in Safe and the run, rightly for a real robot, reasoned "in Safe, which never
+    sleeps" and tried no BRC pulse."""
+    summary, simulator = run(tmp_path, DRIVE_IN_SAFE, Faults(sleep_at=1.0), timeout=3.0)
+    assert summary.outcome is Outcome.TIMEOUT, summary.reason
+    assert summary.stop_delivered
+    assert not [e for e in simulator.events if e.kind == "sleep"], "no sleep in Safe"
+    simulator.run(0.1)  # the robot, left powered after the run, in Passive: it sleeps now
+    sleeps = [e for e in simulator.events if e.kind == "sleep"]
+    assert [e.detail for e in sleeps] == [
+        "fault: sleep, once in Passive (Safe and Full never sleep)"
+    ]
+    assert simulator.asleep and simulator.mode is OIMode.PASSIVE
 
 
 class FrozenAdapter(NoModemLines):

@@ -147,7 +147,6 @@ def test_truncated_frames_are_cut_short_and_the_next_one_follows() -> None:
     [
         (Faults(reset_at=1.0), "reset", False),
         (Faults(stream_stop_at=1.0), "stream stop", False),
-        (Faults(sleep_at=1.0), "sleep", False),
     ],
 )
 def test_timed_faults_happen_once_at_their_time(
@@ -161,8 +160,33 @@ def test_timed_faults_happen_once_at_their_time(
     assert 60 <= len(frames) <= 68  # one second of frames, then none
     if event == "reset":
         assert b"Roomba by iRobot" in data and sim.mode is OIMode.OFF
-    if event == "sleep":
-        assert sim.asleep
+
+
+@pytest.mark.parametrize("mode", [C.safe(), C.full()], ids=["safe", "full"])
+def test_the_sleep_fault_in_safe_or_full_waits_for_passive(mode: C.Command) -> None:
+    """The OI spec: "In Safe and Full modes, Roomba will never sleep". The ``sleep_at`` fault
+    due there leaves the robot streaming; it sleeps at its first step in Passive."""
+    sim = Simulator(world(BOX), seed=0, faults=Faults(sleep_at=1.0))
+    sim.receive(C.start().data + mode.data + C.stream(IDS).data)
+    data = sim.run(2.0)
+    assert not sim.asleep and sim.streaming
+    assert 130 <= len(StreamParser(IDS).feed(data)) <= 136  # two seconds of frames
+    sim.receive(C.start().data)  # Start: into Passive
+    sim.run(0.03)
+    assert sim.asleep and sim.mode is OIMode.PASSIVE and not sim.streaming
+    assert [e.detail for e in sim.events if e.kind == "fault"] == [
+        "sleep, once in Passive (Safe and Full never sleep)"
+    ]
+
+
+def test_the_sleep_fault_in_passive_sleeps_at_its_time() -> None:
+    """Passive is where a robot sleeps: the fault puts it to sleep at 1 s, the stream ended."""
+    sim = Simulator(world(BOX), seed=0, faults=Faults(sleep_at=1.0))
+    sim.receive(C.start().data + C.stream(IDS).data)
+    data = sim.run(2.0)
+    assert [e.detail for e in sim.events if e.kind == "fault"] == ["sleep"]
+    assert sim.asleep and not sim.streaming
+    assert 60 <= len(StreamParser(IDS).feed(data)) <= 68  # one second of frames, then none
 
 
 @pytest.mark.parametrize(

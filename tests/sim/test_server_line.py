@@ -148,7 +148,8 @@ def test_the_sleep_at_fault_is_the_power_saving_sleep_start_does_not_wake_it(
 ) -> None:
     """``sim --sleep-at``: the robot sleeps as after five idle minutes in Passive, its motors
     off, deaf to every byte: Start does not wake it (the 600 spec wakes this sleep by a BRC
-    pulse only; Start is what Off listens for), the pty's hang-up pulse does."""
+    pulse only; Start is what Off listens for), the pty's hang-up pulse does. Due while it
+    drives in Safe, which never sleeps, the sleep waits until Start puts it in Passive."""
     one = Served(PtyEndpoint(), faults=Faults(sleep_at=1.5))
     served.append(one)
     sim = one.simulator
@@ -156,6 +157,9 @@ def test_the_sleep_at_fault_is_the_power_saving_sleep_start_does_not_wake_it(
     try:
         port.write(C.start().data + C.safe().data + C.drive(200, 1).data)
         until(lambda: sim.mode is OIMode.SAFE and sim.requested_left != 0)
+        until(lambda: sim.time > 1.6)
+        assert not sim.asleep and sim.mode is OIMode.SAFE, "Safe never sleeps"
+        port.write(C.start().data)
         until(lambda: sim.asleep)
         assert sim.mode is OIMode.PASSIVE
         assert sim.requested_left == sim.requested_right == 0
