@@ -36,7 +36,7 @@ from roomba_bt.robot import wording
 from roomba_bt.robot.errors import ConnectionFailed, NoAnswer
 from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.transport.base import TransportError
-from roomba_bt.transport.link_kind import link_of
+from roomba_bt.transport.link_kind import LinkKind, link_of
 
 log = logging.getLogger(__name__)
 
@@ -52,10 +52,15 @@ WRONG_RATE = (
 NOT_AWAKE = f"no power or the robot asleep ({wording.PYTHON.wake_asleep})"
 
 
-def not_awake() -> str:
+def not_awake(port: str = "") -> str:
     """Why a robot may not answer, its power or sleep, and what its owner can do, in the
     words of the caller (:data:`~roomba_bt.robot.wording.current`): a button at the robot,
-    or for a service, which nobody watches, BRC and the power."""
+    or for a service, which nobody watches, BRC and the power. On a pty (the simulator's
+    ``sim --pty``), which has no modem lines, the start-up gave no BRC pulse: what pulses
+    one there by a hang-up is said instead of a cable's wiring (the long-haul report: a run
+    against ``sim --pty --asleep`` said "BRC wired to the port's RTS or DTR" of a pty)."""
+    if port and link_of(port).kind is LinkKind.PTY:
+        return f"no power or the robot asleep ({wording.current.wake_on_pty.format(port=port)})"
     return f"no power or the robot asleep ({wording.current.wake_asleep})"
 
 
@@ -63,7 +68,7 @@ def no_answer_causes(port: str) -> tuple[str, str, str]:
     """Why the robot on ``port`` may not answer: the rate, its power or sleep, and the
     link's wiring, a cable's or a bridge's serial side (a bridge's user was told to check
     a cable there is none of)."""
-    return (WRONG_RATE, not_awake(), link_of(port).wiring)
+    return (WRONG_RATE, not_awake(port), link_of(port).wiring)
 
 
 #: 0.1.0's name (in ``robot.connection.__all__``): the causes said for a device path, a

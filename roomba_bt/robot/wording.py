@@ -46,6 +46,14 @@ class ConnectionWording:
     #: or without power: at the robot, a button; with nobody there (a service, a timer), the
     #: BRC line that wakes it and keeps it awake, and its power
     wake_asleep: str = "press Clean or the power button"
+    #: the same on a pty (``{port}``), which has no modem lines: the start-up pulsed no BRC,
+    #: and a 1 s hang-up is the pulse there (what wakes ``sim --pty --asleep``). A run does
+    #: not hang up at start-up: on a robot's cable the port's open pulls BRC low, and a
+    #: hang-up there would add a second pulse (three after power-on set 19200 baud)
+    wake_on_pty: str = (
+        "a pty has no modem lines, so the start-up pulsed no BRC; `roomba-bt doctor --port "
+        "{port}` pulses it by a 1 s hang-up, which wakes the simulator's robot"
+    )
 
 
 #: A Python program's words: ``Connection``'s, ``Connection.open``'s and ``RunStack``'s
@@ -74,6 +82,12 @@ COMMAND_LINE = ConnectionWording(
     replay_until="--to",
     profile_named="--profile {name}",
     wall_limit="--wall-limit {limit}",
+    wake_on_pty=(
+        "a pty has no modem lines, so this run's start-up pulsed no BRC: `roomba-bt doctor "
+        "--port {port}` or run --baud auto pulses it by a 1 s hang-up, which wakes the "
+        "simulator's robot; a run at a set rate adds no hang-up, as on a robot's cable the "
+        "port's open is the pulse"
+    ),
 )
 
 #: The ``roomba-bt`` command's words where nobody is at a terminal (stdin no TTY: a systemd

@@ -72,3 +72,25 @@ def test_a_run_at_a_terminal_that_finds_no_robot_says_press_clean(
     monkeypatch.setattr("sys.stdin", Terminal())
     assert cli.main(["run", DOCK, "--port", silent_bridge, "--display", "none"]) == 3
     assert PRESS in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "words",
+    [wording.PYTHON, wording.COMMAND_LINE, wording.UNATTENDED],
+    ids=["python", "command line", "unattended"],
+)
+def test_a_pty_s_silence_names_the_hang_up_that_wakes_it_not_a_cable_s_brc_wiring(
+    words: wording.ConnectionWording,
+) -> None:
+    """The long-haul report: a run against ``sim --pty --asleep`` (exit 3) was told of "BRC
+    wired to the port's RTS or DTR", on a pty, which has none, and not that ``doctor``'s 1 s
+    hang-up wakes it. A device path keeps its own words."""
+    with wording.spoken(words):
+        said = no_answer_causes("/dev/pts/7")[1]
+        on_a_cable = no_answer_causes("/dev/ttyUSB0")[1]
+    assert said.startswith("no power or the robot asleep (a pty has no modem lines")
+    assert "`roomba-bt doctor --port /dev/pts/7`" in said and "1 s hang-up" in said
+    assert "RTS or DTR" not in said
+    assert on_a_cable == f"no power or the robot asleep ({words.wake_asleep})"
+    if words is not wording.PYTHON:
+        assert "run --baud auto" in said and "a run at a set rate adds no hang-up" in said
