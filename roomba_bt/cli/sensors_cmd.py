@@ -161,8 +161,8 @@ def sensors_command(args: argparse.Namespace) -> int:
     except (ConnectionFailed, LinkDown) as exc:
         print(f"roomba-bt: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
-    except KeyboardInterrupt:
-        return ExitCode.INTERRUPTED
+    # a Ctrl-C or a signal goes on to main, which says "roomba-bt: interrupted" (by what) and
+    # exits 130, as every command: caught here it ended the tables without a word
     return ExitCode.OK
 
 

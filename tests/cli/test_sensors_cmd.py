@@ -124,3 +124,19 @@ def test_sensors_rides_through_a_stall_as_run_does(capsys: pytest.CaptureFixture
     err = capsys.readouterr().err
     assert code == 0, err
     assert "waiting up to 2 s for valid frames" in err and "valid frames are back" in err
+
+
+@pytest.mark.parametrize("rate", [19200, 115200], ids=["query list", "stream"])
+def test_sensors_interrupted_says_so_and_exits_130(
+    rate: int, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A Ctrl-C (or SIGINT) while the tables go on: exit 130 with the usual line, as every
+    command; it exited 130 without a word."""
+    from roomba_bt.cli import sensors_cmd
+
+    def interrupted(*_: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sensors_cmd, "_print_table", interrupted)
+    assert main(["sensors", "--baud", str(rate)]) == 130
+    assert capsys.readouterr().err.strip().splitlines()[-1] == "roomba-bt: interrupted"
