@@ -59,6 +59,10 @@ _from_bytes = int.from_bytes
 _PASSIVE, _SAFE, _FULL = OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL
 #: The kind of a ``sleep_at`` fault that came due in Safe or Full and waited for Passive.
 SLEEP_IN_PASSIVE = "sleep, once in Passive (Safe and Full never sleep)"
+#: How long such a sleep waits in Passive with no byte or BRC pulse from the host: the five
+#: idle minutes of the OI's own sleep, shortened so a test sees it, long enough that the
+#: run's stop into Passive is confirmed first.
+QUIET_BEFORE_SLEEP_S = 1.0
 
 
 class Simulator(OIProtocol):
@@ -281,8 +285,8 @@ class Simulator(OIProtocol):
         """The one-off faults due now (``Faults.reset_at``, ``stream_stop_at``, ``sleep_at``,
         ``baud_change_at``). ``sleep_at`` is the power-saving sleep of five idle minutes in
         Passive; the OI spec's Safe and Full "never sleep", so a robot in them when it is due
-        sleeps at its first step in Passive (``SLEEP_IN_PASSIVE``): a run that ends sleeps
-        after its safe stop, and a run that drives never meets a sleep no robot has."""
+        sleeps once in Passive and idle (:meth:`_may_sleep`): a run that ends sleeps after
+        its safe stop, and a run that drives never meets a sleep no robot has."""
         if self._fault_clock_waits:
             if self._stream is None:
                 return  # _fault_at stays due: the next step looks again
@@ -290,8 +294,8 @@ class Simulator(OIProtocol):
         waits_for_passive = False
         while self._timed_faults and self._timed_faults[0][0] <= self.time:
             _, kind = self._timed_faults.pop(0)
-            if kind.startswith("sleep") and (self.mode is _SAFE or self.mode is _FULL):
-                waits_for_passive = True  # Safe and Full never sleep (the OI spec)
+            if kind.startswith("sleep") and not self._may_sleep(kind):
+                waits_for_passive = True
                 continue
             self._event("fault", kind)
             if kind == "reset":  # as Reset (7) does: the mode it leads to, then the banner
@@ -318,6 +322,17 @@ class Simulator(OIProtocol):
             self._timed_faults.insert(0, (self.time, SLEEP_IN_PASSIVE))
         self._next_timed = self._timed_faults[0][0] if self._timed_faults else math.inf
         self._fault_at = min(self._disconnect_at, self._next_timed)
+
+    def _may_sleep(self, kind: str) -> bool:
+        """Whether a ``sleep_at`` fault due now sleeps now: never in Safe or Full (the OI
+        spec: they "never sleep"); in Passive at once, or, once it waited for Passive
+        (:data:`SLEEP_IN_PASSIVE`), after :data:`QUIET_BEFORE_SLEEP_S` with nothing from the
+        host. A sleep the instant a run's stop put the robot in Passive cut that stop's
+        confirmation short (the run then named a lost stream); a real robot waits five
+        minutes of that quiet."""
+        if self.mode is _SAFE or self.mode is _FULL:
+            return False
+        return kind != SLEEP_IN_PASSIVE or self.time - self._last_activity >= QUIET_BEFORE_SLEEP_S
 
     def _start_fault_clock(self) -> None:
         """``Faults.from_stream``: the first step with a stream on; the fault times, offsets

@@ -142,7 +142,7 @@ def test_the_sleep_fault_waits_for_passive_as_safe_never_sleeps(tmp_path: Path) 
     assert summary.outcome is Outcome.TIMEOUT, summary.reason
     assert summary.stop_delivered
     assert not [e for e in simulator.events if e.kind == "sleep"], "no sleep in Safe"
-    simulator.run(0.1)  # the robot, left powered after the run, in Passive: it sleeps now
+    simulator.run(1.1)  # left powered in Passive after the run, idle a second: it sleeps
     sleeps = [e for e in simulator.events if e.kind == "sleep"]
     assert [e.detail for e in sleeps] == [
         "fault: sleep, once in Passive (Safe and Full never sleep)"

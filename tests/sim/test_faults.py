@@ -165,14 +165,17 @@ def test_timed_faults_happen_once_at_their_time(
 @pytest.mark.parametrize("mode", [C.safe(), C.full()], ids=["safe", "full"])
 def test_the_sleep_fault_in_safe_or_full_waits_for_passive(mode: C.Command) -> None:
     """The OI spec: "In Safe and Full modes, Roomba will never sleep". The ``sleep_at`` fault
-    due there leaves the robot streaming; it sleeps at its first step in Passive."""
+    due there leaves the robot streaming; it sleeps in Passive once the host has been quiet
+    for a second (a run's stop into Passive is confirmed first)."""
     sim = Simulator(world(BOX), seed=0, faults=Faults(sleep_at=1.0))
     sim.receive(C.start().data + mode.data + C.stream(IDS).data)
     data = sim.run(2.0)
     assert not sim.asleep and sim.streaming
     assert 130 <= len(StreamParser(IDS).feed(data)) <= 136  # two seconds of frames
     sim.receive(C.start().data)  # Start: into Passive
-    sim.run(0.03)
+    sim.run(0.9)
+    assert not sim.asleep and sim.mode is OIMode.PASSIVE, "the host spoke under a second ago"
+    sim.run(0.2)
     assert sim.asleep and sim.mode is OIMode.PASSIVE and not sim.streaming
     assert [e.detail for e in sim.events if e.kind == "fault"] == [
         "sleep, once in Passive (Safe and Full never sleep)"
