@@ -272,7 +272,13 @@ FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
     ("stream_stop_at", float, None, "the stream stops at this time (s)"),
     ("stream_gap_at", float, None, "the stream pauses at this time (s), then goes on"),
     ("stream_gap_s", float, 0.8, "how long the stream's gap lasts (s)"),
-    ("sleep_at", float, None, "the robot falls asleep at this time (s)"),
+    (
+        "sleep_at",
+        float,
+        None,
+        "the robot falls asleep at this time (s); due in Safe or Full, which never sleep, "
+        "once in Passive with the client quiet 1 s",
+    ),
     ("baud_change_at", float, None, "the robot's port changes its rate at this time (s)"),
     ("baud_change_to", int, None, "the rate it changes to (default: the other OI rate)"),
     ("host_drop_rate", float, 0.0, "per-byte probability that a byte from the client is lost"),
