@@ -82,6 +82,7 @@ def recording(
         mission_path=str(Path(args.mission).resolve()) if relative and not reproducible else None,
         simulator=simulator_options(args, folder), options=run_options(args, folder),
         paths_from_record=True, claimed=claimed, max_bytes=args.record_max,
+        required=bool(getattr(args, "require_record", False)),
     )  # fmt: skip
 
 

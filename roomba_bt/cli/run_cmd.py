@@ -399,31 +399,28 @@ def _claimed_run(
         if monitor is not None:
             monitor.finish(None)
         if isinstance(exc, OSError):  # the record cannot be written
-            return _error(f"--record {args.record}: {exc.strerror or exc}")
+            return _error(_record_refused(args, exc))
         raise  # a bug (main() says it, exit 70), or Ctrl-C
-    unrecorded = _record_refused(args, stack)
-    if unrecorded is not None:
-        with contextlib.suppress(Exception):
-            link.close()  # nothing was written to it: the robot's start is the run's
-        if monitor is not None:
-            monitor.finish(None)
-        return _error(unrecorded)
     if monitor is not None:
         monitor.start()  # the port is open: its URL now, not one a busy port never serves
     return _run_and_report(args, stack, observer, simulator, monitor)
 
 
-def _record_refused(args: argparse.Namespace, stack: RunStack) -> str | None:
-    """Why the run does not start: ``--require-record`` and a record whose header could not
-    be written (a full disk: the file left empty); None to go on. A lab that needs a record
-    of every run got a 0-byte file and a summary line ``stopped at 0.000 s``, easy to miss."""
-    stopped = getattr(stack.transport, "stopped", None)
-    if not getattr(args, "require_record", False) or not stopped:
-        return None
-    return (
-        f"--record {args.record}: the record's header could not be written ({stopped}); "
-        "--require-record: not started, nothing sent"
-    )
+def _record_refused(args: argparse.Namespace, exc: OSError) -> str:
+    """Why the run does not start, its record not writable: the file not opened, or, with
+    ``--require-record``, its header not written (a full disk; the file this run made
+    removed). A lab that needs a record of every run got a 0-byte file and a summary line
+    ``stopped at 0.000 s``, easy to miss; then a warning that "the run goes on" before
+    the refusal that it did not start."""
+    from roomba_bt.runtime.recording import RecordNotStarted
+
+    why = exc.strerror or str(exc)
+    if isinstance(exc, RecordNotStarted):
+        return (
+            f"--record {args.record}: the record's header could not be written ({why}); "
+            "--require-record: not started, nothing sent"
+        )
+    return f"--record {args.record}: {why}"
 
 
 def _mission_at_its_rate(

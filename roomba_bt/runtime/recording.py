@@ -341,6 +341,11 @@ def _open_for_writing(claimed: ClaimedFile, path: str) -> LineFile:
     return claimed.open_text()
 
 
+class RecordNotStarted(OSError):
+    """A record the run may not go without (``required``, ``run --require-record``) could
+    not be started: its header was not written (``strerror``: why; a full disk)."""
+
+
 class RecordingTransport:
     """Wraps a transport; writes every chunk in and out to a JSON Lines record.
 
@@ -356,12 +361,15 @@ class RecordingTransport:
         header: dict[str, Any],
         claimed: ClaimedFile | None = None,
         max_bytes: int | None = None,
+        required: bool = False,
     ) -> None:
         """``claimed``: ``path`` already claimed (``run`` claims it before it opens the
         robot); else it is claimed here. Either way a file another run writes is refused
         (:class:`~roomba_bt.runtime.claimed.FileInUse`, an OSError) before it is emptied.
         ``max_bytes``: the file's size limit (``run --record-max``), None for none; less
-        than :data:`MIN_RECORD_MAX` is a ValueError."""
+        than :data:`MIN_RECORD_MAX` is a ValueError. ``required``: the run may not go on
+        without its record (``run --require-record``): a header that cannot be written is
+        :class:`RecordNotStarted`, not the warning that the run goes on."""
         if max_bytes is not None and max_bytes < MIN_RECORD_MAX:
             raise ValueError(
                 f"max_bytes={max_bytes}: a record's size limit is {size_text(MIN_RECORD_MAX)} "
@@ -376,7 +384,8 @@ class RecordingTransport:
         self.path = str(path)
         #: written gzip-compressed (the path ends in ``.gz``)
         self.compressed = compressed_name(path)
-        self._file: LineFile = _open_for_writing(claimed or ClaimedFile(path), self.path)
+        claimed = claimed or ClaimedFile(path)
+        self._file: LineFile = _open_for_writing(claimed, self.path)
         self._t0: float | None = None
         #: why and when the recording stopped before the run's end (None: it did not)
         self.stopped: str | None = None
@@ -392,7 +401,27 @@ class RecordingTransport:
         if self.wall_clock or self.loses_bytes:
             head[STOP_LISTENED] = True
         self._flushed_at = -math.inf  # the header goes out at once, and the first chunk
-        self._put(json.dumps(head) + "\n", 0.0)
+        if required:
+            self._header_or_refuse(json.dumps(head) + "\n", claimed)
+        else:
+            self._put(json.dumps(head) + "\n", 0.0)
+
+    def _header_or_refuse(self, line: str, claimed: ClaimedFile) -> None:
+        """Write the header of a record the run may not go without, or refuse: the file
+        closed, removed when this claim made it and it is still empty (a full disk left
+        a 0-byte file behind, beside the refusal), and :class:`RecordNotStarted` raised.
+        Its caller says the refusal; a warning that "the run goes on" came before it."""
+        try:
+            self._file.write(line)
+            self._flushed_at = 0.0
+            self._flushed()
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                if claimed.created and os.fstat(self._file.fileno()).st_size == 0:
+                    os.unlink(self.path)  # still locked: no other writer has it meanwhile
+            with contextlib.suppress(OSError):  # its flush fails again; the file is closed
+                self._file.close()
+            raise RecordNotStarted(exc.errno, exc.strerror or str(exc), self.path) from None
 
     def _put(self, line: str, now: float) -> None:
         """Write one line; flush when :data:`FLUSH_EVERY_S` of the link's clock has passed."""

@@ -159,6 +159,9 @@ class Recording:
     #: the file's size limit in bytes (``run --record-max``): the recording stops there, as
     #: on a full disk, and the run goes on; None: none
     max_bytes: int | None = None
+    #: the run may not go on without its record (``run --require-record``): a header that
+    #: cannot be written (a full disk) raises ``recording.RecordNotStarted``, nothing sent
+    required: bool = False
 
     def header(
         self, profile: RobotProfile, baud: int, packets: Sequence[int], watchdog: float,
@@ -263,9 +266,10 @@ class RunStack:
         if record is not None:
             watchdog_s = connection.link.watchdog if connection else _made_watchdog(made)
             header = record.header(profile, baud, self.packets, watchdog_s, grace)
-            # OSError: the file cannot be written (FileInUse: another run writes it)
+            # OSError: the file cannot be written (FileInUse: another run writes it;
+            # RecordNotStarted: a required record's header)
             transport = RecordingTransport(
-                link, record.path, header, record.claimed, record.max_bytes
+                link, record.path, header, record.claimed, record.max_bytes, record.required
             )
         self.link = link
         self.transport = transport

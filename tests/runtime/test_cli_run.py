@@ -701,6 +701,7 @@ def test_a_run_that_must_be_recorded_refuses_to_start_when_its_header_cannot_be_
     out, err = capsys.readouterr()
     assert "--record /dev/full: the record's header could not be written" in err
     assert "--require-record: not started, nothing sent" in err
+    assert "the run goes on" not in err  # the refusal alone, no warning that it runs before it
     assert "outcome" not in out  # no run, no summary
     assert _run_file(tmp_path, "spin.yaml", SPIN, *argv) == 1  # the timeout's, as before
     assert "record       stopped at 0.000 s: No space left on device" in capsys.readouterr().out

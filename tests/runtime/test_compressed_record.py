@@ -28,6 +28,7 @@ from roomba_bt.runtime.recording import (
     FLUSH_EVERY_S,
     GZIP_MAGIC,
     RecordingTransport,
+    RecordNotStarted,
     RecordSize,
     load_record,
     record_size,
@@ -360,6 +361,26 @@ def test_a_record_cut_by_a_full_disk_ends_with_its_note_plain_or_compressed(
         assert json.loads(text.splitlines()[-1])["note"] == {
             "record_stopped": "No space left on device"
         }
+
+
+@pytest.mark.parametrize("made_here", [True, False])
+@pytest.mark.parametrize("name", ["run.jsonl", "run.jsonl.gz"])
+def test_a_required_record_on_a_full_disk_refuses_and_leaves_no_empty_file_it_made(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, name: str, made_here: bool
+) -> None:
+    """``run --require-record`` on a full disk: the header is not written, and the record
+    refuses (the caller's "not started") without first warning that the run goes on, and
+    removes the 0-byte file it made; a file that was there before is not removed."""
+    path = tmp_path / name
+    if not made_here:
+        path.write_text("an earlier record\n", encoding="utf-8")
+    claimed = _ClaimedOnAFullDisk(path, room=0)
+    with pytest.raises(RecordNotStarted, match="No space left on device"):
+        RecordingTransport(_Link(), path, HEADER, claimed, required=True)  # type: ignore[arg-type]
+    assert "the run goes on" not in caplog.text
+    assert path.exists() is not made_here
+    claimed.release()  # as run's end does: the file handed over, nothing more to do
+    assert path.exists() is not made_here
 
 
 #: the run each record size limit's test makes: a plain record writes its 64 kB in about
