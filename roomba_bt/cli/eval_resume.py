@@ -124,11 +124,13 @@ def refused_over(args: argparse.Namespace) -> str | None:
     held = earlier_files(args.out)
     if not held:
         return None
-    said = " and ".join(str(path) for path in held)
+    # --out itself is "the file": its name, said just before, said again read as two files
+    said = " and ".join("the file" if path == Path(args.out) else str(path) for path in held)
+    holds, them = ("hold", "them") if len(held) > 1 else ("holds", "it")
     return (
-        f"--out {args.out}: {said} already hold(s) episodes of an earlier evaluation; give "
-        "--resume to run only the episodes missing from it (the same missions, parameters and "
-        "options), --force to write over it, or another --out"
+        f"--out {args.out}: {said} already {holds} episodes of an earlier evaluation; give "
+        f"--resume to run only the episodes missing from {them} (the same missions, parameters "
+        f"and options), --force to write over {them}, or another --out"
     )
 
 

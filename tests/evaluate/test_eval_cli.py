@@ -465,7 +465,7 @@ def test_earlier_results_are_written_over_only_when_forced(
     before = out.read_text()
     assert main([*argv, "--runs", "3"]) == 2
     err = capsys.readouterr().err
-    assert f"--out {out}: {out} already hold(s) episodes of an earlier evaluation" in err
+    assert f"--out {out}: the file already holds episodes of an earlier evaluation" in err
     assert "give --resume" in err and "--force to write over it" in err
     assert out.read_text() == before
     assert main([*argv, "--runs", "3", "--force"]) == 0

@@ -3,12 +3,14 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 
 import pytest
 
 from roomba_bt.cli import main
+from roomba_bt.cli.eval_resume import refused_over
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 BUMP = str(MISSIONS / "bump-and-turn.yaml")
@@ -62,7 +64,7 @@ def test_a_resume_reads_the_partial_file_a_killed_sweep_left(
     rows = uninterrupted[".jsonl"].splitlines(keepends=True)
     (tmp_path / "r.jsonl.partial.jsonl").write_text("".join([rows[5], rows[0], rows[1]]))
     assert _sweep(out, 4) == 2  # refused: the partial file holds episodes
-    assert "r.jsonl.partial.jsonl already hold(s) episodes" in capsys.readouterr().err
+    assert "r.jsonl.partial.jsonl already holds episodes" in capsys.readouterr().err
     assert _sweep(out, 4, "--resume") == 0
     assert "3 episode(s) read back" in capsys.readouterr().err
     assert out.read_text() == uninterrupted[".jsonl"]
@@ -146,6 +148,31 @@ def test_resume_and_force_are_checked_before_any_episode(
     assert main([*argv, *out]) == 2
     assert f"roomba-bt eval: {said}" in capsys.readouterr().err
     assert not Path("never-made.jsonl").exists()
+
+
+@pytest.mark.parametrize(
+    ("holding", "said"),
+    [
+        (["r.jsonl"], "the file already holds episodes"),
+        (["r.jsonl.partial.jsonl"], "{folder}/r.jsonl.partial.jsonl already holds episodes"),
+        (["r.jsonl", "r.jsonl.partial.jsonl"], "the file and {folder}/r.jsonl.partial.jsonl "
+         "already hold episodes"),
+    ],
+)  # fmt: skip
+def test_an_out_holding_episodes_is_named_once_and_said_in_good_grammar(
+    tmp_path: Path, holding: list[str], said: str
+) -> None:
+    """The refusal said "--out c2.jsonl: c2.jsonl already hold(s) episodes": --out's own
+    name twice, and a plural for one file. "it" or "them" as the files are one or two."""
+    for name in holding:
+        (tmp_path / name).write_text('{"seed": 1}\n', encoding="utf-8")
+    out = str(tmp_path / "r.jsonl")
+    args = argparse.Namespace(out=out, resume=False, force=False)
+    refusal = refused_over(args)
+    assert refusal is not None
+    assert refusal.startswith(f"--out {out}: " + said.format(folder=tmp_path)), refusal
+    them = "them" if len(holding) > 1 else "it"
+    assert f"missing from {them} " in refusal and f"--force to write over {them}," in refusal
 
 
 def test_a_resume_with_nothing_left_runs_no_episode(
