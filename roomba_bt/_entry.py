@@ -96,9 +96,10 @@ def main() -> int:
     """``roomba-bt``: the signals taken, then the command line's module imported and run. An
     interrupt before its ``main`` has its own handling (its import, a class made as it loads,
     which Python wraps the interrupt of in a RuntimeError before 3.12) is said in one line,
-    exit 130, as the CLI says it."""
-    take_signals_early()
+    exit 130, as the CLI says it. The signals are taken inside the ``try``: a SIGINT whose
+    handler is in while the next signal's is being put in was Python's traceback."""
     try:
+        take_signals_early()
         from roomba_bt.cli import main as command
 
         return command()
