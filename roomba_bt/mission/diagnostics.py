@@ -117,12 +117,12 @@ class Diagnostic:
             return _inside_said(self.in_subtree, self.used_in)
         if not self.used_in:
             return ""
-        said = [_chain_said(chain) for chain in self.used_in[:USES_SAID]]
+        said = " and at ".join(_chain_said(chain) for chain in self.used_in[:USES_SAID])
         more = len(self.used_in) - USES_SAID
         if more > 0:
-            said.append(f"{more:,} more")
+            said += f" and {more:,} more"  # as _inside_said says it
         name = escaped(self.used_in[0][0].name, UNPRINTABLE)
-        return f" (in subtree {name}, used at " + " and at ".join(said) + ")"
+        return f" (in subtree {name}, used at {said})"
 
     def used_at(self, use: SubtreeUse) -> Diagnostic:
         """This diagnostic, found in a subtree's body, as caused by its use at ``use`` (a

@@ -99,11 +99,13 @@ def escaped_parameters(text: str, names: Collection[str]) -> list[tuple[int, str
 
 def escape_warning(where: Loc, what: str, name: str) -> Diagnostic:
     """The warning of a ``$${name}`` naming a parameter (:func:`escaped_parameters`), with
-    both answers: the spelling of a ``$`` and the value, and ``literal:`` for the text."""
+    both answers: the spelling of a ``$`` and the value, and ``literal:`` for the text. The
+    file to say it in is named: a warning a mission's use causes in a library's subtree is
+    said at the use, in the mission, and ``literal:`` belongs at the top of the library."""
     return where.at(
         f'{what}: "$${{{name}}}" is the text "${{{name}}}"; a "$" before the value is written '
         f'"$$${{{name}}}" (in 0.1.0, "$${{{name}}}" was a "$" and then the value); if the '
-        f"text is meant, say so at the top of the file: literal: [{name}]"
+        f"text is meant, say so at the top of {where.file}: literal: [{name}]"
     ).as_warning()
 
 

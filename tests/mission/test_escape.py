@@ -140,10 +140,11 @@ def test_a_dollar_before_a_value_is_written_with_three(
     ]
     assert mission.description == "costs ${price}"
     said = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    file = mission.warnings[0].file
     tail = (
         '"$${price}" is the text "${price}"; a "$" before the value is written "$$${price}" '
         '(in 0.1.0, "$${price}" was a "$" and then the value); if the text is meant, say so '
-        "at the top of the file: literal: [price]"
+        f"at the top of {file}: literal: [price]"
     )
     assert said == [
         f"2:21: description: {tail}",

@@ -79,6 +79,18 @@ def test_a_warning_that_differs_with_the_use_is_said_at_each(
     assert said == [(12, True, False), (13, False, True)]
 
 
+def test_many_uses_of_a_subtree_in_its_own_file_say_how_many_more(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    """The five uses named, then "and 95 more": as a finding said at a library's use says
+    it, not "and at 95 more" (a count is no place)."""
+    mission = compile_text(NUDGE + "    - subtree: nudge\n" * 100)
+    [warning] = _blocked(mission)
+    path = warning.file
+    named = " and at ".join(f"{path}:{line}:7" for line in range(12, 17))
+    assert warning.uses_said() == f" (in subtree nudge, used at {named} and 95 more)"
+
+
 def test_a_subtree_in_a_subtree_names_both_uses(
     compile_text: Callable[..., CompiledMission],
 ) -> None:
@@ -302,6 +314,8 @@ def test_a_warning_a_use_causes_in_a_library_body_is_the_missions(
     assert [site.file for site in own.included_from] == ["m.yaml"]
     assert (used.file, used.line, used.severity) == ("m.yaml", 6, "warning")
     assert '"$${speed}" is the text' in used.message
+    # said at the mission's use, it names the file whose top the literal: goes at
+    assert used.message.endswith("say so at the top of lib.yaml: literal: [speed]")
     assert used.uses_said() == (
         " (in subtree priced, lib.yaml:4:18 [subtrees.priced.tree.log], used here and at "
         "m.yaml:7:7)"
