@@ -410,7 +410,7 @@ def _library_drawn(
         require_tree=False,
         permissions=permissions(args, found),
     )
-    if diagnostics:
+    if any(d.severity != "warning" for d in diagnostics):  # its warnings are validate's
         for line in reported(diagnostics):
             print(line)
         return ExitCode.INVALID

@@ -186,10 +186,11 @@ def _checked(
     text: MissionText | None = None,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
     """The mission file (or ``text``) read, checked and built: the compiler's stages in
-    order."""
+    order. A library (no tree) that reads without error has its warnings as its diagnostics:
+    ``validate lib.yaml`` said a lone ``$$`` of it only where a mission included it."""
     parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree, text=text)
     if parsed is None or parsed.tree is None:
-        return None, list(_said(ctx.diagnostics))
+        return None, list(_said(ctx.diagnostics or ctx.warnings))
     tree = parsed.tree
     modes = ModeCheck(ctx.wording)
     modes.run(tree)

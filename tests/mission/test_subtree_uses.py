@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from roomba_bt.cli import main
 from roomba_bt.mission import (
     CompiledMission,
     Diagnostic,
@@ -320,3 +321,21 @@ def test_a_warning_a_use_causes_in_a_library_body_is_the_missions(
         " (in subtree priced, lib.yaml:4:18 [subtrees.priced.tree.log], used here and at "
         "m.yaml:7:7)"
     )
+
+
+def test_a_library_validated_alone_says_its_own_warnings(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``validate lib.yaml`` said "ok" of a library whose lone "$$" it warned of where a
+    mission included it: alone it says the same warning, and ``--strict`` fails on it (7),
+    as for a mission. The "$${speed}" is no warning there: no speed is in scope alone."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "lib.yaml").write_text("subtrees:\n" + DOLLARS)
+    [own] = validate_file("lib.yaml").diagnostics
+    assert (own.file, own.line, own.severity, own.included_from) == ("lib.yaml", 5, "warning", ())
+    assert main(["validate", "lib.yaml"]) == 0
+    assert main(["validate", "--strict", "lib.yaml"]) == 7
+    out = capsys.readouterr().out
+    assert out.count("lib.yaml:5:16: warning: name:") == 2, out
+    assert "lib.yaml: failed --strict (1 warning)" in out
+    assert main(["show", "lib.yaml"]) == 0  # its warnings are validate's to say
