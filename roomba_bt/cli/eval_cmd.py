@@ -647,6 +647,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         return refused(str(exc), args, _world_errors(exc))
     args.made_by = made_by(args, chosen, missions, world)
     _warn_if_one_start(args, world)
+    _warn_of_given_start(args, world)
     return chosen, batches, world
 
 
@@ -811,6 +812,19 @@ def _warn_if_one_start(args: argparse.Namespace, world: World) -> None:
             "interval below counts one episode as many",
             file=sys.stderr,
         )
+
+
+def _warn_of_given_start(args: argparse.Namespace, world: World) -> None:
+    """The world's warnings (a given ``robot.start`` whose body reaches over a drop) on
+    stderr, once for the whole evaluation, when the episodes start at that given pose (no
+    start region, --within or --start-area draws one), as ``run --world`` and ``validate``
+    say them: eval said nothing, and every episode may fall at once."""
+    if world.start_region is not None or args.within is not None or args.start_area is not None:
+        return
+    from roomba_bt.cli.worlds_cmd import world_warnings_text
+
+    for line in world_warnings_text(world.warnings):
+        print(line, file=sys.stderr)
 
 
 def _partial(args: argparse.Namespace) -> PartialResults | int | None:

@@ -165,3 +165,14 @@ def test_a_start_clear_of_the_drop_or_over_it_is_no_warning(
     out = capsys.readouterr().out
     assert "warning" not in out
     assert said is None or said in out
+
+
+def test_eval_says_a_given_start_s_warning_once(worlds: Path, capsys: Capsys) -> None:
+    """eval in a world whose given start reaches over a drop said nothing, where run and
+    validate warn: once on stderr for all its episodes, which all start there."""
+    (worlds / "worlds" / "edge.yaml").write_text(_world_starting_at(2.9))
+    argv = ["eval", "dock", "--runs", "2", "--jobs", "1", "--timeout", "1"]
+    main([*argv, "--world", "worlds/edge.yaml"])
+    err = capsys.readouterr().err.splitlines()
+    said = [line for line in err if line.startswith("worlds/edge.yaml:7:10: warning: robot.start")]
+    assert len(said) == 1, err
