@@ -344,7 +344,7 @@ def parse_decorator(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
     if child is None:
         return None
     if kind.condition_child:
-        _condition_child(parser.ctx, word, child)
+        _condition_child(parser.ctx, word, parser.uses.marked(child))
     return Node(word, key_loc, word, [child], options=options,
                 options_written=_options_written(fields, env))  # fmt: skip
 

@@ -43,10 +43,10 @@ class Loc:
         used_in = (self.used_in,) if self.used_in else ()
         return Diagnostic(self.file, self.line, self.column, message, self.path, used_in=used_in)
 
-    def used_at(self, use: SubtreeUse) -> Loc:
-        """This place as the subtree use ``use`` expands it (``use`` outside the ones it
-        has: those of a subtree used within the subtree ``use`` names)."""
-        return Loc(self.file, self.line, self.column, self.path, (*self.used_in, use))
+    def used_at(self, *uses: SubtreeUse) -> Loc:
+        """This place as the subtree use ``uses`` expand it, innermost first (outside the
+        ones it has: those of a subtree used within the subtree a use names)."""
+        return Loc(self.file, self.line, self.column, self.path, (*self.used_in, *uses))
 
     def child(self, node: yaml.Node, segment: str) -> Loc:
         return loc_of(node, self.file, join(self.path, segment))

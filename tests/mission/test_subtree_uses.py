@@ -20,6 +20,7 @@ from roomba_bt.mission import (
     compile_mission,
     validate_file,
 )
+from roomba_bt.mission.plan import Node
 from roomba_bt.oi.profiles import ROOMBA500
 
 #: a subtree whose second step can never run: its drive has no end
@@ -339,3 +340,38 @@ def test_a_library_validated_alone_says_its_own_warnings(
     assert out.count("lib.yaml:5:16: warning: name:") == 2, out
     assert "lib.yaml: failed --strict (1 warning)" in out
     assert main(["show", "lib.yaml"]) == 0  # its warnings are validate's to say
+
+
+def test_each_node_of_nested_subtrees_is_marked_once_with_its_whole_chain(
+    compile_text: Callable[..., CompiledMission], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Eight levels of a subtree using the next twice: each node of the expanded tree is
+    given its uses once, the innermost first (marking each nested use's whole body again
+    took 30 such levels from 0.24 s to 0.46 s of CPU, O(nodes x depth))."""
+    from roomba_bt.mission import nodes
+
+    marked: list[int] = []
+    mark = nodes._mark_used
+
+    def counted(node: Node, uses: tuple[SubtreeUse, ...]) -> None:
+        marked.append(id(node))
+        mark(node, uses)
+
+    monkeypatch.setattr(nodes, "_mark_used", counted)
+    levels = "".join(
+        f"  s{i}:\n    tree: {{sequence: [{{subtree: s{i + 1}}}, {{subtree: s{i + 1}}}]}}\n"
+        for i in range(8)
+    )
+    mission = compile_text(
+        f"subtrees:\n{levels}  s8:\n    tree: {{log: leaf}}\ntree: {{subtree: s0}}\n"
+    )
+    walked = list(mission.plan.walk())
+    assert sorted(marked) == sorted(id(node) for node in walked)  # each once, and all
+    leaves = [node for node in walked if node.kind == "leaf"]
+    assert len(leaves) == 2**8
+    chain = leaves[0].loc.used_in
+    assert [use.name for use in chain] == [f"s{i}" for i in range(8, -1, -1)]
+    assert (chain[0].path, chain[-1].path) == (
+        "subtrees.s7.tree.sequence[0].subtree",
+        "tree.subtree",
+    )
