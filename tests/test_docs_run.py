@@ -81,6 +81,8 @@ NOT_RUN: dict[str, str] = {
     "roomba-bt eval MISSION [MISSION_B ...] [--world W] [--runs N] [--seed S] [--jobs J]": (
         "a synopsis (every word a placeholder), not a command; the eval commands above it are run"
     ),
+    "roomba-bt eval --from ab.jsonl other-machine.jsonl --json": "other-machine.jsonl is "
+    "another machine's results; tests/evaluate/test_seeds_and_from.py merges two files",
     "pip install roomba-bt": "an install from the package index (network, and a new venv); "
     "the two roomba-bt commands after it are run",
     "pip install -e plugins/roomba-bt-dirt": "`make venv` / `make test` installed it into "
@@ -212,7 +214,10 @@ def fast_variant(command: str) -> list[str]:
             argv += ["--count", "1"]
     if sub == "run" and "--fast" not in argv:
         argv.append("--fast")
-    if sub == "eval":
+    if sub == "eval" and "--seeds" in argv:  # a list of seeds: its first two, no --runs
+        i = argv.index("--seeds")
+        argv[i + 1] = ",".join(str(seed) for seed in range(1, int(EVAL_RUNS) + 1))
+    elif sub == "eval":
         runs = LONG_EPISODE_RUNS if "--timeout" in argv else EVAL_RUNS
         if "--runs" in argv:
             argv[argv.index("--runs") + 1] = runs
