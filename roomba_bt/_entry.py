@@ -1,15 +1,16 @@
 """The ``roomba-bt`` command's entry point (``[project.scripts]``, ``python -m roomba_bt``):
 the ending signals taken before anything heavy is imported.
 
-The command line's module (argparse, logging, the streams' guard, the wording) takes from
-30 ms on an idle machine to a second on a loaded one to import, and its handlers were put in
-only once it had loaded: until then a SIGTERM ended the process with 143, a script's
-``kill -INT $!`` (SIGINT ignored at start in a shell's background job) was lost and the whole
-mission ran, and a terminal's Ctrl-C printed Python's own traceback. This module imports only
-``signal`` and ``sys`` (the top package before it drops the current folder off ``sys.path``:
-``_safe_path`` stays first), so its handlers are in some milliseconds after Python's own
-start-up; the CLI's (:func:`roomba_bt.cli._as_the_process`) take their place once it has
-loaded, and a signal before then is ``roomba-bt: interrupted``, exit 130, nothing sent.
+The command line's module (argparse, logging, the streams' guard, the wording) takes from 30
+ms on an idle machine to a second on a loaded one to import, and its handlers were put in
+only once it had loaded: until then a SIGTERM ended the process with 143, a script's ``kill
+-INT $!`` (SIGINT ignored at start in a shell's background job) was lost and the whole
+mission ran, and a terminal's Ctrl-C printed Python's own traceback. This module imports
+only ``signal``, ``sys``, ``contextlib`` and names for its hints (the top package before it,
+which drops the current folder off ``sys.path``: ``_safe_path`` stays first), so its
+handlers are in some milliseconds after Python's own start-up; the CLI's
+(:func:`roomba_bt.cli._as_the_process`) take their place once it has loaded, and a signal
+before then is ``roomba-bt: interrupted``, exit 130, nothing sent.
 
 It also holds what those handlers raise, :class:`Terminated` and the mark of a signal's
 interrupt (:func:`delivered`), which :mod:`roomba_bt.robot.safety` raises too: one class
