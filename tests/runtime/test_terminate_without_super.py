@@ -150,7 +150,9 @@ def test_an_until_guard_halts_an_action_whose_terminate_skips_super(
 ) -> None:
     """The stranger's ``m/halt.yaml``: drive 0 is written in the tick the bump guard fires,
     the bump reflex does not send the dead action's drive again, and the robot stands
-    through the wait."""
+    through the wait. The reflex's hold is drive 0 at the onset frame; the guard fires a
+    frame later and its halt is that tick's wheel command, so the held forward drive is not
+    written again."""
     mission = """
     plugins: [./mine.py]
     tree:
@@ -179,25 +181,6 @@ def test_an_until_guard_halts_an_action_whose_terminate_skips_super(
     assert said.startswith("forward_logged (ForwardLogged.terminate at ")
     assert f"{plugin}:" in said
     assert "did not call super().terminate(): the wheels were left turning; halted" in said
-
-
-def test_the_reflex_resends_nothing_once_the_guard_has_fired(
-    run_warned: RunMission, plugin: Path
-) -> None:
-    """The bump reflex's hold: drive 0 at the onset frame; the guard fires a frame later and
-    its halt is that tick's wheel command, so the held forward drive is not written again."""
-    mission = """
-    plugins: [./mine.py]
-    tree:
-      sequence:
-        - mode: safe
-        - forward_logged: {}
-          until: {bump: any}
-        - wait: 1s
-    """
-    run = run_warned(mission)
-    drives = [data for _, data in _drives(run.link.writes)]
-    assert drives == [FORWARD, HALT], drives
 
 
 def test_a_timeout_halts_wheels_started_in_start_with_a_terminate_that_does_nothing(
