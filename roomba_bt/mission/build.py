@@ -212,6 +212,8 @@ def _use_said(node: Node, what: str) -> str:
     alone (``{-} bump_recovery``), or as ``retry(times=3) named 'drive_leg'`` where the
     root is a decorator: two looks, neither with the arguments."""
     said = f"subtree {shortened(node.use, TEXT_LIMIT)}"  # the arguments a text, as a description
+    if node.own_keys:  # where its own keys are on the blackboard: /mission/go#1/here
+        said = f"{said} [own keys: {', '.join(node.own_keys)}]"
     if node.options_written or node.kind in ("leaf", GUARD.word):
         said = f"{said}: {what}"
     # a name the library or the use gave it (a leaf's own name and a guard's are what)

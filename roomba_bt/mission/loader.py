@@ -551,12 +551,21 @@ class Loader:
             except Bad as bad:
                 self.ctx.report(bad)
 
-    def _key_decl(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
-        _new_name(name, key_loc, "blackboard key", "blackboard key", self.ctx.keys, "declared")
+    def _key_decl(
+        self,
+        name: str,
+        node: yaml.Node,
+        key_loc: Loc,
+        loc: Loc,
+        into: dict[str, KeyDecl] | None = None,
+    ) -> None:
+        """A key of the mission's (``into`` None), or of a subtree's own ``blackboard:``."""
+        keys = self.ctx.keys if into is None else into
+        _new_name(name, key_loc, "blackboard key", "blackboard key", keys, "declared")
         try:
-            key_decl(self.ctx, self.nodes.global_env, name, node, key_loc, loc)
+            key_decl(self.ctx, self.nodes.global_env, name, node, key_loc, loc, into=keys)
         except Bad:  # declared wrongly: its uses are not reported again as an unknown key
-            self.ctx.keys[name] = KeyDecl(name, ANY, key_loc, None, True, "")
+            keys[name] = KeyDecl(name, ANY, key_loc, None, True, "")
             raise
 
     def _subtree_def(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
@@ -573,7 +582,9 @@ class Loader:
         _new_name(name, key_loc, "subtree name", "subtree", self.ctx.subtrees, "defined")
         if name in WORDS or name in self.ctx.registry:
             raise Bad(key_loc.at(f"subtree name {name!r} is already a node name"))
-        fields = known_fields(node, loc, f"subtree {name!r}", ("parameters", "tree", "doc"))
+        fields = known_fields(
+            node, loc, f"subtree {name!r}", ("parameters", "blackboard", "tree", "doc")
+        )
         params: dict[str, tuple[ValueType, Any, Loc]] = {}
         default_texts: dict[str, str] = {}
         default_at: dict[str, Loc] = {}
@@ -593,6 +604,13 @@ class Loader:
                 if has_default:
                     default_texts[pname] = _default_text(vtype, pvalue, default)
                     default_at[pname] = _default_at(pvalue, pvloc)
+        local: dict[str, KeyDecl] = {}
+        if "blackboard" in fields:  # keys of each use's own (docs/missions.md, Subtrees)
+            self._each(
+                *fields["blackboard"][::2],
+                "blackboard",
+                lambda *entry: self._key_decl(*entry, into=local),
+            )
         if "tree" not in fields:
             self.ctx.error(loc.at(f"subtree {name!r} needs a tree:"))
             body, body_loc = None, loc
@@ -600,7 +618,7 @@ class Loader:
             body, _, body_loc = fields["tree"]
         self.ctx.subtrees[name] = SubtreeDef(
             name, key_loc, params, body, body_loc, broken=frozenset(broken),
-            default_texts=default_texts, default_at=default_at,
+            default_texts=default_texts, default_at=default_at, keys=local,
         )  # fmt: skip
 
 
@@ -821,10 +839,18 @@ def _choices(node: yaml.Node, loc: Loc) -> list[str]:
 
 
 def key_decl(
-    ctx: Context, env: Mapping[str, Bound], name: str, node: yaml.Node, key_loc: Loc, loc: Loc
+    ctx: Context,
+    env: Mapping[str, Bound],
+    name: str,
+    node: yaml.Node,
+    key_loc: Loc,
+    loc: Loc,
+    *,
+    into: dict[str, KeyDecl] | None = None,
 ) -> None:
-    """A blackboard key's declaration into ``ctx.keys`` (its initial value may use the
-    mission's parameters, ``env``). Raises :class:`Bad`."""
+    """A blackboard key's declaration into ``into`` (``ctx.keys`` when None; a subtree's own
+    keys otherwise); its initial value may use the mission's parameters, ``env``. Raises
+    :class:`Bad`."""
     initial: Any = None
     has_initial = False
     initial_loc: Loc | None = None
@@ -851,7 +877,8 @@ def key_decl(
             has_initial, initial_loc = True, iloc
         if "doc" in fields:
             doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
-    ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc, initial_loc)
+    keys = ctx.keys if into is None else into
+    keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc, initial_loc)
 
 
 def _not_allowed(text: str, wording: Wording) -> str:

@@ -53,6 +53,9 @@ class Node:
     #: the subtree use this node is the body of, with the arguments the use writes
     #: (``bump_recovery(angle=45deg)``), for ``show`` to draw every use one way; "" otherwise
     use: str = ""
+    #: the names the use's own blackboard keys have (``go#1/here``: a subtree's own
+    #: ``blackboard:``, :mod:`roomba_bt.mission.own_keys`), for ``show`` to say; () otherwise
+    own_keys: tuple[str, ...] = ()
 
     @property
     def declared(self) -> Declaration | None:

@@ -322,6 +322,9 @@ class SubtreeDef:
     #: where each default is written: an error its value makes in the body names it
     #: (:func:`said_default`), as a mission parameter's
     default_at: Mapping[str, Loc] = field(default_factory=dict)
+    #: its own ``blackboard:``, by the names its body writes: keys of each use's own,
+    #: renamed at each use (``NodeParser``: ``go#1/here``), hiding the mission's there
+    keys: Mapping[str, KeyDecl] = field(default_factory=dict)
 
 
 @dataclass
