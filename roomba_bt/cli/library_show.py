@@ -27,6 +27,8 @@ def print_subtrees(subtrees: list[LibrarySubtree], indent: str = "") -> None:
         print(escaped(f"{indent}{subtree.name}{doc}", ANY_CONTROL))
         for param in subtree.parameters:
             print(escaped(f"{indent}    {parameter_line(param)}", ANY_CONTROL))
+        for key in subtree.keys:  # each use's own (docs/missions.md, Subtrees)
+            print(escaped(f"{indent}    own key {key}", ANY_CONTROL))
 
 
 def library_listed(file: str, subtrees: list[LibrarySubtree], description: str) -> int:

@@ -72,6 +72,7 @@ from roomba_bt.behaviours.declare import Declaration, Param
 from roomba_bt.behaviours.language import ALL, FAILURE, SELECTED, SUCCESS, WORDS, Outcomes
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.plan import KeyDecl, Node
+from roomba_bt.mission.own_keys import said_key, written_ref
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.ticks import (
     answers,
@@ -427,7 +428,8 @@ class KeyCheck:
                     self._reported.add((id(node), key))
                     self.errors.append(
                         loc.at(
-                            f"{node.name} reads blackboard key {key!r} before anything writes "
+                            f"{node.name} reads blackboard key {said_key(key)} before anything "
+                            "writes "
                             "it on some path: give it an initial value under blackboard:, "
                             "or write it first (set, mark, for_each)"
                         )
@@ -508,8 +510,8 @@ def key_ranges(root: Node, keys: Mapping[str, KeyDecl]) -> list[Diagnostic]:
                 at = at if use.file == where.file else f"{use.file}:{at}"
                 out.append(
                     where.at(
-                        f"{what} of blackboard key {key!r}: {behaviour}'s {param.name} reads it "
-                        f"as {ref} (at {at}): {problem}"
+                        f"{what} of blackboard key {said_key(key)}: {behaviour}'s {param.name} "
+                        f"reads it as {written_ref(ref)} (at {at}): {problem}"
                     )
                 )
     return out
@@ -819,7 +821,7 @@ def parallel_keys(root: Node) -> list[Diagnostic]:
     for parallel, key, first, later in _claimed_in_two_branches(root, _keys_written):
         warnings.append(
             later.loc.at(
-                f"{later.name} writes blackboard key {key!r} in one branch of the parallel "
+                f"{later.name} writes blackboard key {said_key(key)} in one branch of the parallel "
                 f"({parallel.loc.line}:{parallel.loc.column}) and {first.name} "
                 f"({_line_of(first.loc, later.loc)}) in another: the branches are ticked in "
                 "order, so when both write on one tick the last write wins and the value "

@@ -44,6 +44,23 @@ def is_own_key(name: str) -> bool:
     return USE_MARK in name
 
 
+def said_key(name: str) -> str:
+    """A key as a message names it: ``'leg'``, and a use's own by the name its body writes,
+    ``'here' (subtree go's own)``: the use itself is named beside the finding (in subtree
+    go, used at ...), and the same finding at every use of a library's subtree is one."""
+    if not is_own_key(name):
+        return repr(name)
+    subtree, _, rest = name.partition(USE_MARK)
+    return f"{rest.partition('/')[2]!r} (subtree {subtree}'s own)"
+
+
+def written_ref(ref: BlackboardRef) -> str:
+    """``@here`` for a use's own key ``go#1/here``, as its body writes it; ``@leg`` else."""
+    if not is_own_key(ref.key):
+        return str(ref)
+    return str(BlackboardRef(ref.key.partition("/")[2], ref.field))
+
+
 def renamed(body: Node, names: Mapping[str, str]) -> None:
     """Each reference to a key of ``names`` in ``body`` renamed as it says: ``@here``,
     ``set: {key: here}``, ``check: {key: here.x}``, ``for_each.key``, a plugin's key

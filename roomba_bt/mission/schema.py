@@ -206,11 +206,17 @@ def _named(each: dict[str, Any]) -> dict[str, Any]:
     return {"type": "object", "additionalProperties": each, "propertyNames": _SNAKE_CASE}
 
 
-def _subtree_schema(parameter: dict[str, Any]) -> dict[str, Any]:
-    """A subtree's definition: its tree, its doc and its parameters."""
+def _subtree_schema(parameter: dict[str, Any], key: dict[str, Any]) -> dict[str, Any]:
+    """A subtree's definition: its tree, its doc, its parameters and its own blackboard
+    keys (declared as the mission's are)."""
     return {
         "type": "object",
-        "properties": {"parameters": _named(parameter), "tree": _NODE, "doc": {"type": "string"}},
+        "properties": {
+            "parameters": _named(parameter),
+            "blackboard": _named(key),
+            "tree": _NODE,
+            "doc": {"type": "string"},
+        },
         "required": ["tree"],
         "additionalProperties": False,
     }
@@ -245,7 +251,7 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
             "blackboard": _named(key),
             "plugins": {"type": "array", "items": {"type": "string"}},
             "include": {"type": "array", "items": {"type": "string"}},
-            "subtrees": _named(_subtree_schema(parameter)),
+            "subtrees": _named(_subtree_schema(parameter, key)),
             "tree": _NODE,
             "literal": {"type": "array", "items": {"type": "string"}},
         },

@@ -240,6 +240,9 @@ class LibrarySubtree:
     name: str
     doc: str
     parameters: tuple[ShippedParameter, ...]
+    #: its own blackboard keys (``blackboard:`` in the subtree, each use's own), each as
+    #: listed: ``here: mark``, ``n: int, initial 0``
+    keys: tuple[str, ...] = ()
 
 
 def describe_library(text: str) -> tuple[str, list[LibrarySubtree]]:
@@ -248,9 +251,29 @@ def describe_library(text: str) -> tuple[str, list[LibrarySubtree]]:
     the file first (its errors said, never a traceback here)."""
     data: Any = yaml.safe_load(text) or {}
     return str(data.get("description") or ""), [
-        LibrarySubtree(name, str(body.get("doc", "")), _declared(body.get("parameters") or {}))
+        LibrarySubtree(
+            name,
+            str(body.get("doc", "")),
+            _declared(body.get("parameters") or {}),
+            _own_keys(body.get("blackboard") or {}),
+        )
         for name, body in (data.get("subtrees") or {}).items()
     ]
+
+
+def _own_keys(declared: dict[str, Any]) -> tuple[str, ...]:
+    """A subtree's ``blackboard:`` as listed: ``here: mark``, ``n: int, initial 0``, a
+    record as ``wp: record``, its ``doc:`` after two spaces."""
+    out = []
+    for key, decl in declared.items():
+        if not isinstance(decl, dict):
+            out.append(f"{key}: {decl}")
+            continue
+        line = f"{key}: {'record' if 'fields' in decl else decl.get('type', '')}"
+        if "initial" in decl:
+            line += f", initial {_default_written(decl['initial'])}"
+        out.append(line + (f"  {decl['doc']}" if decl.get("doc") else ""))
+    return tuple(out)
 
 
 def _declared(declared: dict[str, Any]) -> tuple[ShippedParameter, ...]:

@@ -235,11 +235,33 @@ PARAMETERS = [
         {"type": "enum", "choices": ["a"], "items": "str", "default": "a"}, _WAIT), False),
 ]  # fmt: skip
 
+def _own_keys(keys: Any, tree: Any) -> dict[str, Any]:
+    """A mission using twice a subtree that declares ``keys`` of its own (session 36)."""
+    return _tree({"sequence": [{"mode": "safe"}, {"subtree": "leg"}, {"subtree": "leg"}]},
+                 subtrees={"leg": {"blackboard": keys, "tree": tree}})  # fmt: skip
+
+
+_MARK_AND_MEASURE = {"sequence": [{"mark": {"key": "here"}},
+                                  {"odometry": {"since": "here", "distance": "1cm"}}]}  # fmt: skip
+#: a subtree's own ``blackboard:`` (session 36), declared as the mission's are
+OWN_KEYS = [
+    ("subtree's own mark", _own_keys({"here": "mark"}, _MARK_AND_MEASURE), True),
+    ("subtree's own key with initial", _own_keys(
+        {"n": {"type": "int", "initial": 0}}, {"set": {"key": "n", "value": 1}}), True),
+    ("subtree's own record", _own_keys(
+        {"wp": {"fields": {"d": "distance"}}}, {"set": {"key": "wp", "value": {"d": "1m"}}}),
+        True),
+    ("subtree's own key without type", _own_keys({"n": {"initial": 0}}, _WAIT), False),
+    ("subtree's own key not snake_case", _own_keys({"Here": "mark"}, _WAIT), False),
+    ("subtree's own key of an unknown type", _own_keys({"n": "integer"}, _WAIT), False),
+]  # fmt: skip
+
 _CASES = (
     [(name, mission, None) for name, mission in _edge_cases()]
     + REPORTED
     + POWER_COLORS
     + PARAMETERS
+    + OWN_KEYS
 )
 
 
