@@ -558,12 +558,15 @@ class Loader:
         key_loc: Loc,
         loc: Loc,
         into: dict[str, KeyDecl] | None = None,
+        env: Mapping[str, Bound] | None = None,
     ) -> None:
-        """A key of the mission's (``into`` None), or of a subtree's own ``blackboard:``."""
+        """A key of the mission's (``into`` None), or of a subtree's own ``blackboard:``
+        (whose initial value sees ``env``: the mission's parameters and the subtree's)."""
         keys = self.ctx.keys if into is None else into
         _new_name(name, key_loc, "blackboard key", "blackboard key", keys, "declared")
+        seen = self.nodes.global_env if env is None else env
         try:
-            key_decl(self.ctx, self.nodes.global_env, name, node, key_loc, loc, into=keys)
+            key_decl(self.ctx, seen, name, node, key_loc, loc, into=keys)
         except Bad:  # declared wrongly: its uses are not reported again as an unknown key
             keys[name] = KeyDecl(name, ANY, key_loc, None, True, "")
             raise
@@ -605,12 +608,25 @@ class Loader:
                     default_texts[pname] = _default_text(vtype, pvalue, default)
                     default_at[pname] = _default_at(pvalue, pvloc)
         local: dict[str, KeyDecl] = {}
+        initials: dict[str, tuple[yaml.Node, Loc]] = {}
         if "blackboard" in fields:  # keys of each use's own (docs/missions.md, Subtrees)
-            self._each(
-                *fields["blackboard"][::2],
-                "blackboard",
-                lambda *entry: self._key_decl(*entry, into=local),
-            )
+            # an initial value may be one of the subtree's parameters: unknown here, given
+            # at each use (NodeParser), where the key's initial value is that use's
+            unknown_params = {p: Bound(vtype, UNKNOWN, "?") for p, (vtype, _, _) in params.items()}
+            env = {**self.nodes.global_env, **unknown_params}
+            for pname in broken:
+                env[pname] = Bound(STR, UNKNOWN, "?")
+
+            def own(key: str, knode: yaml.Node, kloc: Loc, vloc: Loc) -> None:
+                self._key_decl(key, knode, kloc, vloc, into=local, env=env)
+                inode = _initial_node(knode)
+                texts = _scalars(inode) if inode is not None else []
+                if inode is not None and any(
+                    used in params for text in texts for used in parameters_used(text)
+                ):
+                    initials[key] = (inode, local[key].initial_loc or vloc)
+
+            self._each(*fields["blackboard"][::2], "blackboard", own)
         if "tree" not in fields:
             self.ctx.error(loc.at(f"subtree {name!r} needs a tree:"))
             body, body_loc = None, loc
@@ -619,6 +635,7 @@ class Loader:
         self.ctx.subtrees[name] = SubtreeDef(
             name, key_loc, params, body, body_loc, broken=frozenset(broken),
             default_texts=default_texts, default_at=default_at, keys=local,
+            initials=initials,
         )  # fmt: skip
 
 
@@ -879,6 +896,27 @@ def key_decl(
             doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
     keys = ctx.keys if into is None else into
     keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc, initial_loc)
+
+
+def _initial_node(node: yaml.Node) -> yaml.Node | None:
+    """The value of a key declaration's ``initial:``, None when it has none."""
+    if not isinstance(node, yaml.MappingNode):
+        return None
+    for knode, vnode in node.value:
+        if isinstance(knode, yaml.ScalarNode) and knode.value == "initial":
+            return vnode
+    return None
+
+
+def _scalars(node: yaml.Node) -> list[str]:
+    """Every scalar's text in ``node`` (a record's fields, a list's items too)."""
+    if isinstance(node, yaml.ScalarNode):
+        return [str(node.value)]
+    if isinstance(node, yaml.SequenceNode):
+        return [text for item in node.value for text in _scalars(item)]
+    if isinstance(node, yaml.MappingNode):
+        return [text for _, value in node.value for text in _scalars(value)]
+    return []
 
 
 def _not_allowed(text: str, wording: Wording) -> str:

@@ -425,7 +425,7 @@ class NodeParser:
         if body.name == body.kind and body.kind != "leaf":
             body.name = name
         if sub.keys:
-            body.own_keys = self._own_keys(sub, body)
+            body.own_keys = self._own_keys(sub, body, sub_env, use)
         self.uses.add(body, use, outermost=not self._uses)
         # show draws the use with what it was given, whatever the body
         given = ", ".join(f"{p}={written_text(n, env, lists=True)}" for p, n, _, _ in args)
@@ -502,15 +502,28 @@ class NodeParser:
         finally:
             self.ctx.keys, self._outside_keys = before, outside
 
-    def _own_keys(self, sub: SubtreeDef, body: Node) -> tuple[str, ...]:
+    def _own_keys(
+        self, sub: SubtreeDef, body: Node, env: Mapping[str, Bound], use: SubtreeUse
+    ) -> tuple[str, ...]:
         """``sub``'s own keys at this use, parsed into ``body``: each given the use's name
         (:func:`~roomba_bt.mission.own_keys.own_key_name`), renamed so in the body and
-        declared beside the mission's, where the checks and the run find them."""
+        declared beside the mission's, where the checks and the run find them; an initial
+        value that uses the subtree's parameters is the one ``env``, the use's, gives (and
+        a finding about it names the use)."""
         number = self._key_uses[sub.name] = self._key_uses.get(sub.name, 0) + 1
         names = {key: own_key_name(sub.name, number, key) for key in sub.keys}
         outside = self.ctx.keys if self._outside_keys is None else self._outside_keys
         for key, full in names.items():
-            outside[full] = replace(sub.keys[key], name=full)
+            decl = replace(sub.keys[key], name=full)
+            if key in sub.initials:
+                inode, iloc = sub.initials[key]
+                try:
+                    value = resolve(self.ctx, inode, iloc, decl.type, env, f"initial value of {key}")
+                except Bad as bad:
+                    self.ctx.report(bad)
+                    value = UNKNOWN
+                decl = replace(decl, initial=value, initial_loc=iloc.used_at(use))
+            outside[full] = decl
         renamed(body, names)
         return tuple(names.values())
 

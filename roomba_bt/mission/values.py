@@ -39,6 +39,7 @@ from roomba_bt.behaviours.units import (
 )
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.foreign import port_remapping, suggestion
+from roomba_bt.mission.own_keys import is_own_key
 from roomba_bt.mission.plan import KeyDecl
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text, sequence
 from roomba_bt.mission.wording import PYTHON, Wording
@@ -325,6 +326,9 @@ class SubtreeDef:
     #: its own ``blackboard:``, by the names its body writes: keys of each use's own,
     #: renamed at each use (``NodeParser``: ``go#1/here``), hiding the mission's there
     keys: Mapping[str, KeyDecl] = field(default_factory=dict)
+    #: the ``initial:`` of each of its own keys that uses one of its parameters, with its
+    #: place: resolved at each use, with the values that use gives
+    initials: Mapping[str, tuple[yaml.Node, Loc]] = field(default_factory=dict)
 
 
 @dataclass
@@ -377,7 +381,8 @@ class Context:
         note = self.unread_include_note(at)
         if note is not None:
             return f"unknown blackboard key {key!r} ({note})"
-        return unknown("blackboard key", key, list(self.keys))
+        # a use's own keys (``go#1/here``) are no name a file writes: not offered
+        return unknown("blackboard key", key, [k for k in self.keys if not is_own_key(k)])
 
     def unread_include_note(self, at: Loc) -> str | None:
         """What an unknown name at ``at`` follows from when an include was not read, instead
