@@ -71,8 +71,8 @@ from roomba_bt.behaviours.conditions import comparison_problem
 from roomba_bt.behaviours.declare import Declaration, Param
 from roomba_bt.behaviours.language import ALL, FAILURE, SELECTED, SUCCESS, WORDS, Outcomes
 from roomba_bt.mission.diagnostics import Diagnostic
-from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.own_keys import said_key, written_ref
+from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.ticks import (
     answers,

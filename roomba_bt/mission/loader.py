@@ -904,7 +904,8 @@ def _initial_node(node: yaml.Node) -> yaml.Node | None:
         return None
     for knode, vnode in node.value:
         if isinstance(knode, yaml.ScalarNode) and knode.value == "initial":
-            return vnode
+            found: yaml.Node = vnode
+            return found
     return None
 
 

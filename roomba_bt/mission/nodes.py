@@ -518,7 +518,8 @@ class NodeParser:
             if key in sub.initials:
                 inode, iloc = sub.initials[key]
                 try:
-                    value = resolve(self.ctx, inode, iloc, decl.type, env, f"initial value of {key}")
+                    what = f"initial value of {key}"
+                    value = resolve(self.ctx, inode, iloc, decl.type, env, what)
                 except Bad as bad:
                     self.ctx.report(bad)
                     value = UNKNOWN

@@ -87,9 +87,9 @@ def _rename_node(node: Node, names: Mapping[str, str]) -> None:
                 node.params[pname] = names[key] + dot + field
     word = WORDS.get(node.kind)
     if word is not None and word.writes_key is not None:
-        key = node.options.get(word.writes_key)
-        if isinstance(key, str) and key in names:
-            node.options[word.writes_key] = names[key]
+        written = node.options.get(word.writes_key)
+        if isinstance(written, str) and written in names:
+            node.options[word.writes_key] = names[written]
 
 
 def hidden_keys(

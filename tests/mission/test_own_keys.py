@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+
 from roomba_bt.behaviours import INT, STR, Condition, Param, declare, default_registry, write_key
 from roomba_bt.behaviours.blackboard import BlackboardRef
 from roomba_bt.cli import main
@@ -18,12 +19,12 @@ from roomba_bt.mission import CompiledMission, Diagnostic, compile_mission
 from roomba_bt.mission.plan import Node
 from roomba_bt.robot.interface import Snapshot
 
-
 Errors = Callable[..., list[str]]
 
 
 def short(d: Diagnostic) -> str:
     return f"{d.line}:{d.column}: {d.message}"
+
 
 #: a subtree that marks where it starts and drives until 5 cm from there, used twice; the
 #: mission has a key ``here`` of its own, of another type, which the body does not see
@@ -301,4 +302,5 @@ def test_show_says_each_uses_own_keys_and_the_library_lists_them(
     )
     assert main(["show", str(library)]) == 0
     out = capsys.readouterr().out
-    assert "leg  one leg\n    own key here: mark\n    own key n: int, initial 0  legs driven\n" in out
+    listed = "leg  one leg\n    own key here: mark\n    own key n: int, initial 0  legs driven\n"
+    assert listed in out

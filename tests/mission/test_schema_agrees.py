@@ -235,6 +235,7 @@ PARAMETERS = [
         {"type": "enum", "choices": ["a"], "items": "str", "default": "a"}, _WAIT), False),
 ]  # fmt: skip
 
+
 def _own_keys(keys: Any, tree: Any) -> dict[str, Any]:
     """A mission using twice a subtree that declares ``keys`` of its own (session 36)."""
     return _tree({"sequence": [{"mode": "safe"}, {"subtree": "leg"}, {"subtree": "leg"}]},
