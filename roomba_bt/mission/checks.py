@@ -71,8 +71,7 @@ from roomba_bt.behaviours.conditions import comparison_problem
 from roomba_bt.behaviours.declare import Declaration, Param
 from roomba_bt.behaviours.language import ALL, FAILURE, SELECTED, SUCCESS, WORDS, Outcomes
 from roomba_bt.mission.diagnostics import Diagnostic
-from roomba_bt.mission.own_keys import said_key, written_ref
-from roomba_bt.mission.plan import KeyDecl, Node
+from roomba_bt.mission.plan import KeyDecl, Node, is_own_key, said_key, written_ref
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.ticks import (
     answers,
@@ -402,11 +401,19 @@ def _leads_to_within(node: Node) -> Modes:
 class KeyCheck:
     """The static read-before-write pass over blackboard keys."""
 
-    def __init__(self) -> None:
+    def __init__(self, shown: Callable[[str], str] = said_key) -> None:
         self.errors: list[Diagnostic] = []
         self._reported: set[tuple[int, str]] = set()
+        #: how a message names a key
+        self._shown = shown
+        #: the keys judged (a subtree's own, in its body: ``OwnKeys.checked``), the bodies
+        #: of the subtrees used in it passed by; None: every key but a use's own, which its
+        #: body alone judges (nothing outside it reads or writes them)
+        self._judged: frozenset[str] | None = None
 
-    def run(self, root: Node, initial: frozenset[str]) -> None:
+    def run(
+        self, root: Node, initial: frozenset[str], judged: frozenset[str] | None = None
+    ) -> None:
         """Unless a node that could not be built may have written a key it does not name (a
         ``for_each`` not parsed, a behaviour whose key did not resolve): its readers are
         judged in the pass after it is fixed, not said unwritten because of it. One that
@@ -415,20 +422,28 @@ class KeyCheck:
         error showed only after the type errors beside it were fixed)."""
         if any(_may_write(node) for node in root.walk()):
             return
+        self._judged = judged
         self.visit(root, initial)
+
+    def _judges(self, key: str) -> bool:
+        return not is_own_key(key) if self._judged is None else key in self._judged
 
     def visit(self, node: Node, written: frozenset[str]) -> frozenset[str]:
         """Keys certainly written after ``node`` succeeds."""
         kind = node.kind
+        if self._judged is not None and node.use:  # a body used in it: sees none of them
+            return written
         if kind == "unbuilt":  # writes only the keys it names (run); its reads are not known
             return written | frozenset(node.params.values())
         if kind == "leaf":
             for key, loc in node.keys_read():
-                if key not in written and (id(node), key) not in self._reported:
+                if key in written or not self._judges(key):
+                    continue
+                if (id(node), key) not in self._reported:
                     self._reported.add((id(node), key))
                     self.errors.append(
                         loc.at(
-                            f"{node.name} reads blackboard key {said_key(key)} before anything "
+                            f"{node.name} reads blackboard key {self._shown(key)} before anything "
                             "writes "
                             "it on some path: give it an initial value under blackboard:, "
                             "or write it first (set, mark, for_each)"

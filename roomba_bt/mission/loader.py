@@ -122,6 +122,8 @@ from roomba_bt.yamlsource import (
     yaml11_number_problem,
 )
 
+#: what a subtree's definition may hold
+_SUBTREE_FIELDS = ("parameters", "blackboard", "tree", "doc")
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
              "subtrees", "tree", "literal")  # fmt: skip
 _IDENT = re.compile(r"^[a-z_][a-z0-9_]*$")
@@ -551,24 +553,12 @@ class Loader:
             except Bad as bad:
                 self.ctx.report(bad)
 
-    def _key_decl(
-        self,
-        name: str,
-        node: yaml.Node,
-        key_loc: Loc,
-        loc: Loc,
-        into: dict[str, KeyDecl] | None = None,
-        env: Mapping[str, Bound] | None = None,
-    ) -> None:
-        """A key of the mission's (``into`` None), or of a subtree's own ``blackboard:``
-        (whose initial value sees ``env``: the mission's parameters and the subtree's)."""
-        keys = self.ctx.keys if into is None else into
-        _new_name(name, key_loc, "blackboard key", "blackboard key", keys, "declared")
-        seen = self.nodes.global_env if env is None else env
+    def _key_decl(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
+        _new_name(name, key_loc, "blackboard key", "blackboard key", self.ctx.keys, "declared")
         try:
-            key_decl(self.ctx, seen, name, node, key_loc, loc, into=keys)
+            key_decl(self.ctx, self.nodes.global_env, name, node, key_loc, loc)
         except Bad:  # declared wrongly: its uses are not reported again as an unknown key
-            keys[name] = KeyDecl(name, ANY, key_loc, None, True, "")
+            self.ctx.keys[name] = KeyDecl(name, ANY, key_loc, None, True, "")
             raise
 
     def _subtree_def(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
@@ -585,9 +575,7 @@ class Loader:
         _new_name(name, key_loc, "subtree name", "subtree", self.ctx.subtrees, "defined")
         if name in WORDS or name in self.ctx.registry:
             raise Bad(key_loc.at(f"subtree name {name!r} is already a node name"))
-        fields = known_fields(
-            node, loc, f"subtree {name!r}", ("parameters", "blackboard", "tree", "doc")
-        )
+        fields = known_fields(node, loc, f"subtree {name!r}", _SUBTREE_FIELDS)
         params: dict[str, tuple[ValueType, Any, Loc]] = {}
         default_texts: dict[str, str] = {}
         default_at: dict[str, Loc] = {}
@@ -596,9 +584,8 @@ class Loader:
             pnode, _, ploc = fields["parameters"]
             for pname, pvalue, pkloc, pvloc in mapping(pnode, ploc, "parameters"):
                 try:
-                    vtype, default, has_default, _ = param_decl(
-                        self.ctx, pvalue, pvloc, pname, pkloc
-                    )
+                    decl = param_decl(self.ctx, pvalue, pvloc, pname, pkloc)
+                    vtype, default, has_default, _ = decl
                 except Bad as bad:
                     self.ctx.report(bad)
                     broken.add(pname)  # not reported again at its uses and arguments
@@ -607,26 +594,7 @@ class Loader:
                 if has_default:
                     default_texts[pname] = _default_text(vtype, pvalue, default)
                     default_at[pname] = _default_at(pvalue, pvloc)
-        local: dict[str, KeyDecl] = {}
-        initials: dict[str, tuple[yaml.Node, Loc]] = {}
-        if "blackboard" in fields:  # keys of each use's own (docs/missions.md, Subtrees)
-            # an initial value may be one of the subtree's parameters: unknown here, given
-            # at each use (NodeParser), where the key's initial value is that use's
-            unknown_params = {p: Bound(vtype, UNKNOWN, "?") for p, (vtype, _, _) in params.items()}
-            env = {**self.nodes.global_env, **unknown_params}
-            for pname in broken:
-                env[pname] = Bound(STR, UNKNOWN, "?")
-
-            def own(key: str, knode: yaml.Node, kloc: Loc, vloc: Loc) -> None:
-                self._key_decl(key, knode, kloc, vloc, into=local, env=env)
-                inode = _initial_node(knode)
-                texts = _scalars(inode) if inode is not None else []
-                if inode is not None and any(
-                    used in params for text in texts for used in parameters_used(text)
-                ):
-                    initials[key] = (inode, local[key].initial_loc or vloc)
-
-            self._each(*fields["blackboard"][::2], "blackboard", own)
+        local, initials = subtree_keys(self.ctx, fields, self.nodes.global_env, params, broken)
         if "tree" not in fields:
             self.ctx.error(loc.at(f"subtree {name!r} needs a tree:"))
             body, body_loc = None, loc
@@ -634,8 +602,7 @@ class Loader:
             body, _, body_loc = fields["tree"]
         self.ctx.subtrees[name] = SubtreeDef(
             name, key_loc, params, body, body_loc, broken=frozenset(broken),
-            default_texts=default_texts, default_at=default_at, keys=local,
-            initials=initials,
+            default_texts=default_texts, default_at=default_at, keys=local, initials=initials,
         )  # fmt: skip
 
 
@@ -853,6 +820,50 @@ def _choices(node: yaml.Node, loc: Loc) -> list[str]:
             raise Bad(iloc.at(f"choice {value!r} is listed twice"))
         words.append(value)
     return words
+
+
+def subtree_keys(
+    ctx: Context,
+    fields: Mapping[str, tuple[yaml.Node, Loc, Loc]],
+    mission: Mapping[str, Bound],
+    params: Mapping[str, tuple[ValueType, Any, Loc]],
+    broken: set[str],
+) -> tuple[dict[str, KeyDecl], dict[str, tuple[yaml.Node, Loc]]]:
+    """A subtree's own ``blackboard:`` (among its definition's ``fields``), keys of each
+    use's own (docs/missions.md, Subtrees), each entry declared as a mission's key is, a
+    wrong one reported and the others read on: its keys by
+    name, and the ``initial:`` of each that uses one of the subtree's ``params`` with its
+    place, resolved at each use (``NodeParser``) with the values that use gives. Here those
+    parameters are unknown; ``mission``'s are known."""
+    keys: dict[str, KeyDecl] = {}
+    initials: dict[str, tuple[yaml.Node, Loc]] = {}
+    section = fields.get("blackboard")
+    if section is None:
+        return keys, initials
+    env = {**mission, **{p: Bound(vtype, UNKNOWN, "?") for p, (vtype, _, _) in params.items()}}
+    env.update((pname, Bound(STR, UNKNOWN, "?")) for pname in broken)
+    node, _, loc = section
+    try:
+        items = mapping(node, loc, "blackboard")
+    except Bad as bad:
+        ctx.report(bad)
+        return keys, initials
+    for name, value, key_loc, vloc in items:
+        try:
+            _new_name(name, key_loc, "blackboard key", "blackboard key", keys, "declared")
+            try:
+                key_decl(ctx, env, name, value, key_loc, vloc, into=keys)
+            except Bad:  # declared wrongly: not reported again at each read as unknown
+                keys[name] = KeyDecl(name, ANY, key_loc, None, True, "")
+                raise
+        except Bad as bad:
+            ctx.report(bad)
+            continue
+        inode = _initial_node(value)
+        used = [p for text in _scalars(inode) for p in parameters_used(text)] if inode else []
+        if inode is not None and any(pname in params for pname in used):
+            initials[name] = (inode, keys[name].initial_loc or vloc)
+    return keys, initials
 
 
 def key_decl(

@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterable, Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Iterable, Mapping
 from dataclasses import replace
 from pathlib import Path
 
@@ -25,8 +24,8 @@ from roomba_bt.mission.diagnostics import Diagnostic, SubtreeUse
 from roomba_bt.mission.foreign import foreign_hint, suggestion
 from roomba_bt.mission.include_path import granted_files
 from roomba_bt.mission.leaves import parse_leaf, written_text
-from roomba_bt.mission.own_keys import hidden_keys, own_key_name, renamed
-from roomba_bt.mission.plan import KeyDecl, Node
+from roomba_bt.mission.own_keys import OwnKeys
+from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import library_defining
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text
 from roomba_bt.mission.values import (
@@ -164,11 +163,8 @@ class NodeParser:
         self.granted: tuple[Path, ...] = ()
         #: the uses each subtree body was expanded at, given to its nodes once
         self.uses = _UseMarks()
-        #: the keys outside every subtree body being parsed (the mission's, and each use's
-        #: own once renamed), which a body sees beneath its own; None: no body is parsed
-        self._outside_keys: dict[str, KeyDecl] | None = None
-        #: the uses of each subtree with keys of its own so far, which number them
-        self._key_uses: dict[str, int] = {}
+        #: the keys each body sees, and each use's own keys (a subtree's ``blackboard:``)
+        self.own_keys = OwnKeys(ctx)
 
     def node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
         """Parse one node; errors are recorded and None returned for a node that cannot be
@@ -414,10 +410,7 @@ class NodeParser:
         if sub.written_wrongly:  # its definition's error is the one to fix
             return None
         sub_env = self._subtree_env(sub, args, key_loc, env)
-        outside = self.ctx.keys if self._outside_keys is None else self._outside_keys
-        for warning in hidden_keys(name, sub.keys, outside, key_loc):
-            if warning not in self.ctx.warnings:
-                self.ctx.warnings.append(warning)
+        self.own_keys.hidden(sub, key_loc)
         use = SubtreeUse(key_loc.file, key_loc.line, key_loc.column, name, key_loc.path)
         body = self._body_at(sub, sub_env, use, key_loc)
         if body is None:
@@ -425,7 +418,7 @@ class NodeParser:
         if body.name == body.kind and body.kind != "leaf":
             body.name = name
         if sub.keys:
-            body.own_keys = self._own_keys(sub, body, sub_env, use)
+            body.own_keys = self.own_keys.at_use(sub, body, sub_env, use)
         self.uses.add(body, use, outermost=not self._uses)
         # show draws the use with what it was given, whatever the body
         given = ", ".join(f"{p}={written_text(n, env, lists=True)}" for p, n, _, _ in args)
@@ -444,8 +437,9 @@ class NodeParser:
         self._use_stack.append(sub.name)
         self._uses.append(key_loc)
         try:
-            with self.ctx.collecting() as (errors, warnings), self._keys_of(sub):
+            with self.ctx.collecting() as (errors, warnings), self.own_keys.seen_in(sub):
                 body = self.node(sub.body, sub.body_loc, env)
+                self.own_keys.checked(sub, body)
         finally:
             self._use_stack.pop()
             self._uses.pop()
@@ -483,50 +477,11 @@ class NodeParser:
         assert sub.body is not None  # a use found something in it, or it is unused
         self._use_stack.append(sub.name)
         try:
-            with self._keys_of(sub):
-                self.node(sub.body, sub.body_loc, _alone_env(sub, mission, self.ctx.wording))
+            with self.own_keys.seen_in(sub):
+                env = _alone_env(sub, mission, self.ctx.wording)
+                self.own_keys.checked(sub, self.node(sub.body, sub.body_loc, env))
         finally:
             self._use_stack.pop()
-
-    @contextmanager
-    def _keys_of(self, sub: SubtreeDef) -> Iterator[None]:
-        """The keys ``sub``'s body sees while it is parsed: those outside every body (the
-        mission's), then its own by the names it writes, hiding a mission key of the same
-        name; not the own keys of a body it is used in (each body's own are its alone)."""
-        before, outside = self.ctx.keys, self._outside_keys
-        base = before if outside is None else outside
-        self._outside_keys = base
-        self.ctx.keys = {**base, **sub.keys} if sub.keys else base
-        try:
-            yield
-        finally:
-            self.ctx.keys, self._outside_keys = before, outside
-
-    def _own_keys(
-        self, sub: SubtreeDef, body: Node, env: Mapping[str, Bound], use: SubtreeUse
-    ) -> tuple[str, ...]:
-        """``sub``'s own keys at this use, parsed into ``body``: each given the use's name
-        (:func:`~roomba_bt.mission.own_keys.own_key_name`), renamed so in the body and
-        declared beside the mission's, where the checks and the run find them; an initial
-        value that uses the subtree's parameters is the one ``env``, the use's, gives (and
-        a finding about it names the use)."""
-        number = self._key_uses[sub.name] = self._key_uses.get(sub.name, 0) + 1
-        names = {key: own_key_name(sub.name, number, key) for key in sub.keys}
-        outside = self.ctx.keys if self._outside_keys is None else self._outside_keys
-        for key, full in names.items():
-            decl = replace(sub.keys[key], name=full)
-            if key in sub.initials:
-                inode, iloc = sub.initials[key]
-                try:
-                    what = f"initial value of {key}"
-                    value = resolve(self.ctx, inode, iloc, decl.type, env, what)
-                except Bad as bad:
-                    self.ctx.report(bad)
-                    value = UNKNOWN
-                decl = replace(decl, initial=value, initial_loc=iloc.used_at(use))
-            outside[full] = decl
-        renamed(body, names)
-        return tuple(names.values())
 
     def _subtree_env(
         self,

@@ -105,3 +105,39 @@ class KeyDecl:
     doc: str = ""
     #: where the initial value is written (the range check of its readers says it there)
     initial_loc: Loc | None = None
+
+
+#: what separates a subtree's name from the number of its use in the name of a use's own
+#: key (:func:`own_key_name`): no key a file declares has it (keys are snake_case), so no
+#: use's key meets a mission's
+USE_MARK = "#"
+
+
+def own_key_name(subtree: str, use: int, key: str) -> str:
+    """The name key ``key`` of ``subtree``'s own blackboard has at its ``use``-th use in the
+    compiled tree (1 first, in the file's order, subtrees expanded): ``go#2/here``, that
+    is ``/mission/go#2/here`` on py_trees' blackboard. A number, not the use's line: a use
+    in a library's subtree has the library's line at every use of that subtree."""
+    return f"{subtree}{USE_MARK}{use}/{key}"
+
+
+def is_own_key(name: str) -> bool:
+    """Whether ``name`` is a use's own key (:func:`own_key_name`), not one a file wrote."""
+    return USE_MARK in name
+
+
+def said_key(name: str) -> str:
+    """A key as a message names it: ``'leg'``, and a use's own by the name its body writes,
+    ``'here' (subtree go's own)``: the use itself is named beside the finding (in subtree
+    go, used at ...), and the same finding at every use of a library's subtree is one."""
+    if not is_own_key(name):
+        return repr(name)
+    subtree, _, rest = name.partition(USE_MARK)
+    return f"{rest.partition('/')[2]!r} (subtree {subtree}'s own)"
+
+
+def written_ref(ref: BlackboardRef) -> str:
+    """``@here`` for a use's own key ``go#1/here``, as its body writes it; ``@leg`` else."""
+    if not is_own_key(ref.key):
+        return str(ref)
+    return str(BlackboardRef(ref.key.partition("/")[2], ref.field))

@@ -39,8 +39,7 @@ from roomba_bt.behaviours.units import (
 )
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.foreign import port_remapping, suggestion
-from roomba_bt.mission.own_keys import is_own_key
-from roomba_bt.mission.plan import KeyDecl
+from roomba_bt.mission.plan import KeyDecl, is_own_key
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text, sequence
 from roomba_bt.mission.wording import PYTHON, Wording
 from roomba_bt.printable import path_written

@@ -97,9 +97,11 @@ def test_a_key_of_the_mission_hidden_by_one_of_another_type_is_warned_of_at_each
     assert compile_text(same_type).warnings == ()
 
 
-def test_an_own_key_read_before_it_is_written_is_said_once_naming_each_use(
+def test_an_own_key_read_before_it_is_written_is_the_subtrees_error_said_once(
     mission_file: Callable[..., Path],
 ) -> None:
+    """Nothing outside the body reads or writes its own keys: the body alone decides,
+    and the error is the subtree's own, once, at its line (a library's alone finds it)."""
     text = TWO_MARKS.replace("        - mark: {key: here}\n", "")
     mission, diagnostics = compile_mission(mission_file(text))
     assert mission is None
@@ -108,9 +110,36 @@ def test_an_own_key_read_before_it_is_written_is_said_once_naming_each_use(
         "own) before anything writes it on some path: give it an initial value under "
         "blackboard:, or write it first (set, mark, for_each)"
     ]
-    assert [(chain[0].line, chain[0].column) for chain in diagnostics[0].used_in] == [
-        (17, 7),
-        (19, 7),
+    library = text.replace("mission: two_marks", "description: a library").split("tree:\n  seq")
+    path = mission_file(library[0], "lib.yaml")
+    found = [short(d) for d in compile_mission(path, require_tree=False)[1]]
+    assert found == [short(diagnostics[0])]
+
+
+def test_an_own_key_is_judged_in_its_body_and_a_missions_key_in_the_mission(
+    errors_of: Errors,
+) -> None:
+    """The body's mark may come from the mission's key ``start`` written before the use:
+    the mission's keys are judged over the whole tree, as before."""
+    text = """
+    mission: m
+    blackboard: {start: mark}
+    subtrees:
+      leg:
+        blackboard: {here: mark}
+        tree:
+          sequence:
+            - odometry: {since: start, distance: 1cm}
+            - mark: {key: here}
+            - odometry: {since: here, distance: 1cm}
+    tree:
+      sequence: [{mode: safe}, {mark: {key: start}}, {subtree: leg}]
+    """
+    assert errors_of(text) == []
+    assert errors_of(text.replace("{mark: {key: start}}, ", "")) == [
+        "8:29: odometry(since=start, distance=1cm) reads blackboard key 'start' before anything "
+        "writes it on some path: give it an initial value under blackboard:, or write it "
+        "first (set, mark, for_each)"
     ]
 
 
