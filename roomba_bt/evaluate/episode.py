@@ -755,12 +755,13 @@ def hung_result(
     stage = behaviour.name.split("(", 1)[0] if behaviour is not None else ""
     run = next((f.f_locals for f, _ in frames or () if f.f_code is _run_episode.__code__), {})
     stack = run.get("stack")
+    cpu_s = _cpu_so_far(frames)
     if not isinstance(stack, RunStack):
         zero = (0.0, 0.0, 0.0)
         return EpisodeResult(
             spec.seed, HUNG, reason, 0.0, limit_s, 0, zero, zero, 0, (), False, False, 0,
             False, 0, 0.0, 0.0, mission=spec.mission, world=spec.world, params=spec.params,
-            stage=stage, profile=spec.profile,
+            stage=stage, profile=spec.profile, cpu_s=cpu_s,
         )  # fmt: skip
     runner = stack.runner
     runner.count_written()
@@ -771,7 +772,18 @@ def hung_result(
     measured = _measured(
         spec, run["world"], run["pose"], run["simulator"], summary, HUNG, stage, runner.blackboard
     )
-    return tidied(measured)
+    return tidied(replace(measured, cpu_s=cpu_s))
+
+
+def _cpu_so_far(frames: list[tuple[FrameType, int]] | None) -> float:
+    """The CPU time the stuck episode's thread has spent since :func:`run_episode` began
+    (its ``started``, read from its frame): a HUNG result is made in that thread (the
+    local worker's SIGUSR1 handler, Dask's exception in it). It recorded none, and the
+    summary's speed counted its mission time over the others' CPU time; 0.0 when no
+    Python frame answered (a loop in C code)."""
+    code = run_episode.__code__
+    started = next((f.f_locals.get("started") for f, _ in frames or () if f.f_code is code), None)
+    return max(0.0, _cpu_clock() - started) if isinstance(started, float) else 0.0
 
 
 #: The outcome of an episode whose worker process died while running it, and again when it

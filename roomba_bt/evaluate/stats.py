@@ -104,6 +104,12 @@ class Summary:
     simulated_s: float
     #: the episodes' CPU time summed (:attr:`EpisodeResult.cpu_s`)
     cpu_s: float = 0.0
+    #: the episodes that measured no CPU time (DIED; HUNG in C code, where no stack
+    #: answered; records read back without the column, ``--reproducible``'s) and their
+    #: mission time: the speed is of the others alone. Their mission time over the others'
+    #: CPU time read high: a sweep with HUNG episodes said it ran faster than it did
+    untimed: int = 0
+    untimed_simulated_s: float = 0.0
     #: the robot profile, said when not the default (``runtime.summary.profile_shown``: "" for
     #: create2); ``eval --json`` has it in its conditions
     profile: str = ""
@@ -183,13 +189,26 @@ class Summary:
     def __str__(self) -> str:
         return "\n".join(self.lines())
 
+    @property
+    def speed(self) -> float | None:
+        """Mission seconds per CPU second, over the episodes that measured their CPU time
+        (both sides of the ratio of the same episodes); None when none did."""
+        if self.cpu_s <= 0:
+            return None
+        return (self.simulated_s - self.untimed_simulated_s) / self.cpu_s
+
     def _cpu_said(self) -> str:
         """The CPU time and the speed it gives; none measured when every episode HUNG or
-        DIED (they record no CPU time: "0x real time" said the simulator stood still)."""
-        if self.cpu_s <= 0:
+        DIED (they record no CPU time: "0x real time" said the simulator stood still). The
+        episodes without CPU time are said apart, their mission time left out of the speed."""
+        speed = self.speed
+        if speed is None:
             return ", CPU time not measured (HUNG and DIED episodes record none)"
-        speed = self.simulated_s / self.cpu_s
-        return f" in {self.cpu_s:.1f} s of CPU time ({speed:.0f}x real time per CPU second)"
+        said = f" in {self.cpu_s:.1f} s of CPU time ({speed:.0f}x real time per CPU second"
+        if self.untimed:
+            said += (f", over the {self.runs - self.untimed} episode(s) that measured it: "
+                     f"{self.untimed} DIED, HUNG or read back without CPU time left out")  # fmt: skip
+        return said + ")"
 
     def undeclared_said(self) -> list[str]:
         """The undeclared keys written, each as ``run`` warns of it, and in how many of the
@@ -269,6 +288,10 @@ class Summary:
             "episodes_with_charger_arrivals": self.episodes_with_charger_arrivals,
             "wall_time": self.wall_s if self.timings else None,
             "cpu_time": self.cpu_s if self.timings else None,
+            # mission time per CPU second of the episodes that measured it (not
+            # mission_time / cpu_time: that counts the untimed episodes' mission time)
+            "real_time_factor": self.speed if self.timings else None,
+            "episodes_without_cpu_time": self.untimed if self.timings else None,
             "mission_time": self.simulated_s,
             "undeclared_keys": [
                 {"key": key, "written": where.strip(), "episodes": episodes}
@@ -324,6 +347,8 @@ def summarize(
         wall_s=sum(r.wall_s for r in results),
         simulated_s=sum(r.time_s for r in results),
         cpu_s=sum(r.cpu_s for r in results),
+        untimed=sum(1 for r in results if r.cpu_s <= 0),
+        untimed_simulated_s=sum(r.time_s for r in results if r.cpu_s <= 0),
         profile=profile,
         falls=in_order,
         episodes_with_falls=sum(1 for r in results if r.falls),

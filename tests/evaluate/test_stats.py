@@ -247,6 +247,25 @@ def test_no_speed_is_said_when_no_episode_measured_its_cpu_time() -> None:
     assert "0x" not in text and "0.6 s of wall-clock time summed over the episodes" in text
 
 
+def test_the_speed_is_of_the_episodes_that_measured_their_cpu_time() -> None:
+    """A DIED episode (or a HUNG one in C code, or a record read back without the column)
+    has its mission time and no CPU time: the speed summed its mission time over the others'
+    CPU time and read high (40 s over 2 s: 20x, where the episodes measured ran 10x). It is
+    of the episodes measured, and the others are said apart, in --json too."""
+    timed = [replace(result(s, time_s=10.0), wall_s=1.0, cpu_s=1.0) for s in range(2)]
+    died = replace(result(2, "died", time_s=20.0), wall_s=30.0)
+    summary = summarize("m", "w", [*timed, died])
+    text = str(summary)
+    assert "40 s of mission time in 2.0 s of CPU time (10x real time per CPU second, over " in text
+    assert "the 2 episode(s) that measured it: 1 DIED, HUNG or read back without CPU time " in text
+    assert "32.0 s of wall-clock time summed over the episodes" in text  # every one's
+    said = summary.to_dict()
+    assert (said["real_time_factor"], said["episodes_without_cpu_time"]) == (10.0, 1)
+    assert "that measured it" not in str(summarize("m", "w", timed))
+    untimed = replace(summary, timings=False).to_dict()  # --reproducible: none measured
+    assert (untimed["real_time_factor"], untimed["episodes_without_cpu_time"]) == (None, None)
+
+
 def test_a_timeout_decorator_and_the_episode_s_timeout_group_apart(tmp_path: Path) -> None:
     """ "timeout: timed out after 2 s" (a decorator in the tree) and "timeout: --timeout 3 s
     of mission time ran out" (the episode's limit; ``eval`` names it by its flag, a spec made

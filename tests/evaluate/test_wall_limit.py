@@ -75,6 +75,9 @@ def test_a_stuck_episode_is_hung_where_it_was_and_the_others_run(
     assert hung.reason.startswith("--wall-limit 2 s of wall-clock time ran out in behaviour ")
     assert re.search(rf"stuck \(at {re.escape(str(tmp_path))}/stuck.py:1[12]\)$", hung.reason)
     assert hung.time_s == pytest.approx(1.02)  # the mission time it was stuck at
+    # the CPU time its loop burnt is its own (it recorded none: the summary's speed counted
+    # its mission time over the other episodes' CPU time alone)
+    assert hung.cpu_s > 0
     assert [r.outcome for r in others] == ["success"] * 3
     assert run.retried >= 1  # queued in the pool behind it
 
@@ -105,6 +108,7 @@ def test_on_a_dask_worker_the_limit_raises_in_the_episode_s_thread(tmp_path: Pat
     assert (hung.outcome, hung.stage) == (HUNG, "stuck")
     assert "ran out in behaviour sequence / stuck (at " in hung.reason
     assert hung.commands_sent > 0  # the start-up's and the safe stop's
+    assert hung.cpu_s > 0  # its thread's, measured in it
     (quick,) = _quick(1)
     assert within_wall_limit(quick, 30.0).outcome == "success"
 
