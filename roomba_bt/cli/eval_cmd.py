@@ -199,7 +199,8 @@ def _add_output_options(ev: argparse.ArgumentParser) -> None:
     ev.add_argument(
         "--plot", metavar="FILE", type=plot_file,
         help="draw every trajectory (matplotlib), a panel per variant side by side; the "
-        "suffix is the format: .png, .pdf, .svg or another matplotlib writes",
+        "suffix is the format: .png, .pdf, .svg or another matplotlib writes; with --resume "
+        "the episodes read back run again for their paths",
     )  # fmt: skip
 
 
@@ -398,10 +399,60 @@ def eval_command(args: argparse.Namespace) -> int:
         # (3, as a connection's failure); a signal is the operator's (130)
         return ExitCode.CONNECTION if failed else ExitCode.INTERRUPTED
     if args.plot:
-        plotted = _plot(args.plot, world, evaluated)
+        traced = _paths_read_back(args, evaluated, resumed.read_back(planned), engine)
+        if isinstance(traced, int):
+            return traced
+        plotted = _plot(args.plot, world, traced)
         if plotted is not None:
             return plotted
     return verdict(args, evaluated.summaries, done)
+
+
+def _paths_read_back(
+    args: argparse.Namespace, evaluated: Evaluated, specs: list[list[EpisodeSpec]], engine: Engine
+) -> Evaluated | int:
+    """``evaluated`` with the paths of the episodes ``--resume`` read back (``specs``), for
+    ``--plot``: a results file keeps no trajectory, and the plot of a resumed sweep drew
+    only the episodes run in its last invocation. Each episode is decided by its spec alone,
+    so each runs again for its path, the same as an uninterrupted sweep's; its record stays
+    the one read back (the summary and ``--out`` are not touched). One that runs otherwise
+    now (an option the records do not carry, ``--timeout``, ``--battery``..., given
+    otherwise) is said. An exit code when the runs again were stopped: no plot then."""
+    count = sum(len(batch) for batch in specs)
+    if not count:
+        return evaluated
+    print(f"roomba-bt eval: --plot: the {count} episode(s) read back run again for their paths "
+          "(a results file keeps none)", file=sys.stderr)  # fmt: skip
+    again = _run(args, evaluated.chosen, specs, engine)
+    if isinstance(again, int):
+        return again
+    if interruption_of(again) is not None:
+        print(f"roomba-bt eval: --plot {args.plot} not drawn: interrupted while the episodes "
+              "read back ran again for their paths; the summary and the records are above",
+              file=sys.stderr)  # fmt: skip
+        return ExitCode.INTERRUPTED
+    from roomba_bt.evaluate.records import written_record
+
+    paths = [{r.seed: r for r in e.results} for e in again]
+    done, otherwise = [], []
+    for e, ran in zip(evaluated.done, paths, strict=True):
+        results = []
+        for result in e.results:
+            now = ran.get(result.seed)
+            if now is None:  # run in this invocation: its path is there
+                results.append(result)
+                continue
+            if written_record(now, reproducible=True) != written_record(result, reproducible=True):
+                otherwise.append(result.seed)
+            results.append(replace(result, trajectory=now.trajectory))
+        done.append(replace(e, results=results))
+    if otherwise:
+        seeds = ", ".join(str(seed) for seed in sorted(set(otherwise)))
+        print(f"roomba-bt eval: warning: --plot: {len(otherwise)} episode(s) read back ran "
+              f"otherwise now than their records say (seeds {seeds}): an option the records do "
+              "not carry (--timeout, --battery, --dock, --odometry-error, the faults) differs "
+              "from the first run's; their paths are of this run", file=sys.stderr)  # fmt: skip
+    return replace(evaluated, done=done)
 
 
 def _engine(args: argparse.Namespace, batches: list[list[EpisodeSpec]]) -> Engine:
@@ -440,10 +491,6 @@ def _resumed(
         left = sum(len(batch) for batch in resumed.todo)
         print(f"roomba-bt eval: --resume: {resumed.reused} episode(s) read back from "
               f"{args.out}, {left} to run", file=sys.stderr)  # fmt: skip
-        if args.plot and resumed.reused:
-            print(f"roomba-bt eval: --plot draws only the {left} episode(s) run now, not the "
-                  f"{resumed.reused} read back: a results file keeps no trajectory (--force "
-                  "runs them all again)", file=sys.stderr)  # fmt: skip
     return resumed
 
 

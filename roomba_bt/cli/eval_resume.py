@@ -75,6 +75,14 @@ class Resumed:
             for result in results:
                 partial.add(result)
 
+    def read_back(self, planned: list[list[EpisodeSpec]]) -> list[list[EpisodeSpec]]:
+        """Per variant, the specs of the episodes read back (in the plan's order): what
+        ``--plot`` runs again for their paths, which a results file does not keep."""
+        return [
+            [batch[places[result.seed]] for result in earlier]
+            for batch, earlier, places in zip(planned, self.earlier, self.places, strict=True)
+        ]
+
     def merged(self, done: list[Evaluation]) -> list[Evaluation]:
         """Each variant's episodes, those read back and those run now, in the plan's order
         (the order an uninterrupted run writes them in)."""

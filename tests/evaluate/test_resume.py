@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -185,3 +186,60 @@ def test_a_resume_with_nothing_left_runs_no_episode(
     assert _sweep(out, 2, "--resume") == 0
     assert "4 episode(s) read back" in capsys.readouterr().err
     assert out.read_text() == before
+
+
+def _plotted(monkeypatch: pytest.MonkeyPatch) -> list[list[tuple[str, list[tuple[Any, ...]]]]]:
+    """What each ``--plot`` is given to draw, per panel its title and each episode's seed,
+    outcome, start and path (the data, not the pixels), instead of a picture."""
+    import roomba_bt.evaluate.plot as plot
+
+    drawn: list[list[tuple[str, list[tuple[Any, ...]]]]] = []
+
+    def plot_variants(world: object, panels: Any, path: object) -> None:
+        drawn.append([
+            (title, [(r.seed, r.succeeded, r.start, r.trajectory) for r in results])
+            for title, results in panels
+        ])  # fmt: skip
+
+    monkeypatch.setattr(plot, "plot_variants", plot_variants)
+    return drawn
+
+
+def test_the_plot_of_a_resumed_sweep_is_that_of_an_uninterrupted_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--plot`` after ``--resume`` drew the episodes run in that invocation alone (a
+    results file keeps no path), under titles counting them all: the episodes read back run
+    again for their paths, and the plot's data, the report and ``--out`` are those of one
+    uninterrupted run."""
+    drawn = _plotted(monkeypatch)
+    plot = ["--plot", str(tmp_path / "ab.png")]
+    assert _sweep(tmp_path / "full.jsonl", 4, *plot) == 0
+    full_report = capsys.readouterr().out
+    out = tmp_path / "r.jsonl"
+    assert _sweep(out, 2, *plot) == 0
+    capsys.readouterr()
+    assert _sweep(out, 4, "--resume", *plot) == 0
+    report, err = capsys.readouterr()
+    full, _, resumed = drawn
+    assert [len(episodes) for _, episodes in resumed] == [4, 4]
+    assert all(path for _, episodes in resumed for *_, path in episodes)
+    assert resumed == full
+    assert report == full_report and out.read_text() == (tmp_path / "full.jsonl").read_text()
+    assert "--plot: the 4 episode(s) read back run again for their paths" in err
+    assert "otherwise" not in err
+
+
+def test_a_path_run_again_otherwise_is_said(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The records do not carry ``--timeout``: resumed with another, the episodes read back
+    run otherwise for their paths than their records say, and stderr says which."""
+    _plotted(monkeypatch)
+    out = tmp_path / "r.jsonl"
+    assert _sweep(out, 1, "--timeout", "1s", values="2s") == 0
+    capsys.readouterr()
+    assert _sweep(out, 2, "--resume", "--plot", str(tmp_path / "p.png"), values="2s") == 0
+    err = capsys.readouterr().err
+    assert "warning: --plot: 1 episode(s) read back ran otherwise now than their records " in err
+    assert "say (seeds 0): an option the records do not carry (--timeout, " in err
