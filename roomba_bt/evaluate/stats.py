@@ -206,8 +206,9 @@ class Summary:
             return ", CPU time not measured (HUNG and DIED episodes record none)"
         said = f" in {self.cpu_s:.1f} s of CPU time ({speed:.0f}x real time per CPU second"
         if self.untimed:
-            said += (f", over the {self.runs - self.untimed} episode(s) that measured it: "
-                     f"{self.untimed} DIED, HUNG or read back without CPU time left out")  # fmt: skip
+            measured = self.runs - self.untimed
+            said += (f", over the {measured} episode(s) that measured it: {self.untimed} "
+                     "DIED, HUNG or read back without CPU time left out")  # fmt: skip
         return said + ")"
 
     def undeclared_said(self) -> list[str]:
