@@ -376,7 +376,12 @@ def seed_list(text: str) -> list[int]:
             hi = int(last) if dash else lo
         except ValueError:
             raise argparse.ArgumentTypeError(f"found {item.strip()!r}; {allowed}") from None
-        if lo < 0 or hi < lo:
+        if hi < lo:  # "found '5-3'; allowed: ... 1-40" did not say what was wrong with it
+            raise argparse.ArgumentTypeError(
+                f"found {item.strip()!r}: a range from high to low; allowed: from low to high, "
+                f"{hi}-{lo}"
+            )
+        if lo < 0:
             raise argparse.ArgumentTypeError(f"found {item.strip()!r}; {allowed}")
         if len(seeds) + hi - lo + 1 > MAX_SEEDS:
             raise argparse.ArgumentTypeError(f"found {text!r}: more than {MAX_SEEDS:,} seeds")

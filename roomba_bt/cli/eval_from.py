@@ -26,8 +26,21 @@ def add_from_option(ev: argparse.ArgumentParser) -> None:
     ev.add_argument(
         "--from", dest="from_files", nargs="+", metavar="FILE",
         help="run nothing: summarise and compare the episodes in these results files (.jsonl "
-        "or .csv, as --out writes them; several are merged), by variant; with --json as JSON",
+        "or .csv, as --out writes them; several are merged), by variant; with --json as JSON; "
+        "the options that choose, vary or write episodes (--seeds, --runs, --out, --plot, "
+        "--resume, -p, --sweep, --key...) are refused with it",
     )  # fmt: skip
+
+
+#: The options of a run that ``--from`` would not use (each option, its ``args`` name): it
+#: chooses no episode, varies no parameter and writes no file. Given with it they were
+#: dropped without a word (``--from ab.jsonl --seeds 1-10`` reported every seed; ``--out``
+#: and ``--plot`` wrote nothing); the ``key:`` columns are the records' own.
+RUN_ONLY = (
+    ("--seed", "seed"), ("--seeds", "seeds"), ("--runs", "runs"), ("--out", "out"),
+    ("--plot", "plot"), ("--resume", "resume"), ("--force", "force"), ("--sweep", "sweep"),
+    ("--variant", "variant"), ("-p", "param"), ("--key", "key"),
+)  # fmt: skip
 
 
 class FromFilesError(ValueError):
@@ -110,6 +123,11 @@ def report_from_files(args: argparse.Namespace) -> int:
     if args.missions:
         return refused(f"--from and {args.missions[0]}: --from runs no mission: "
                                "give one or the other", args)  # fmt: skip
+    ignored = next((option for option, dest in RUN_ONLY if getattr(args, dest, None)), None)
+    if ignored is not None:
+        return refused(f"--from and {ignored}: --from reports on the episodes its files hold "
+                       f"as they are (it runs none and writes no file); {ignored} is for a "
+                       "run: give one or the other", args)  # fmt: skip
     try:
         variants = read_variants(args.from_files)
     except FromFilesError as exc:

@@ -442,10 +442,39 @@ def read_results(path: str | Path) -> list[EpisodeResult]:
     return [result for _, _, result in read_rows(path)]
 
 
+#: what JSON calls the values a line of a results file must not be, by their Python type
+_JSON_KINDS = {"list": "array", "str": "string", "int": "number", "float": "number",
+               "bool": "true or false", "NoneType": "null"}  # fmt: skip
+
+
+def _json_row(path: str | Path, n: int, text: str) -> dict[str, Any]:
+    """Line ``n`` of a JSON Lines results file, an object; ResultsFileError naming the
+    file, line and column, what was found and what a line holds. A line without its end
+    of line is said to be cut short: the last one a sweep killed while writing left."""
+    cut = "" if text.endswith("\n") else ", the line cut short (the file ends inside it)"
+    try:
+        record = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ResultsFileError(
+            f"{path}:{n}:{exc.colno}: not JSON ({exc.msg}){cut}; expected "
+            "one JSON object a line, as eval --out writes it"
+        ) from None
+    except RecursionError:  # json's decoder recurses: nested thousands deep
+        raise ResultsFileError(f"{path}:{n}: nested too deeply for a result") from None
+    if not isinstance(record, dict):
+        found = _JSON_KINDS.get(type(record).__name__, "value")
+        raise ResultsFileError(f"{path}:{n}: found a JSON {found}; expected an object per "
+                               "line, as eval --out writes it")  # fmt: skip
+    return record
+
+
 def read_rows(path: str | Path) -> list[tuple[int, dict[str, Any], EpisodeResult]]:
     """Each record of a file :func:`write_results` wrote, as (line, the row as written, the
     episode): the row keeps what :func:`from_record` leaves out (the provenance columns,
     which ``eval --resume`` checks); ResultsFileError naming file:line otherwise."""
+    expected = "expected results as eval --out writes them (.jsonl or .csv)"
+    if Path(path).is_dir():  # said as what it is: not "Is a directory", not "no suffix"
+        raise ResultsFileError(f"{path}: a directory; {expected}")
     fmt = results_format(path)
     rows: list[tuple[int, dict[str, Any]]] = []
     try:
@@ -455,19 +484,12 @@ def read_rows(path: str | Path) -> list[tuple[int, dict[str, Any], EpisodeResult
             for n, text in enumerate(src if fmt == ".jsonl" else (), 1):
                 if not text.strip():
                     continue
-                try:
-                    record = json.loads(text)
-                except json.JSONDecodeError as exc:
-                    raise ResultsFileError(
-                        f"{path}:{n}:{exc.colno}: not JSON ({exc.msg})"
-                    ) from None
-                except RecursionError:  # json's decoder recurses: nested thousands deep
-                    raise ResultsFileError(f"{path}:{n}: nested too deeply for a result") from None
-                if not isinstance(record, dict):
-                    raise ResultsFileError(f"{path}:{n}: expected an object per line")
-                rows.append((n, record))
+                rows.append((n, _json_row(path, n, text)))
     except OSError as exc:
         raise ResultsFileError(f"{path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:  # a ValueError: said without the file's name
+        raise ResultsFileError(f"{path}: not UTF-8 text (byte 0x{exc.object[exc.start]:02x}); "
+                               f"{expected}") from None  # fmt: skip
     out = []
     for line, row in rows:
         try:

@@ -28,7 +28,11 @@ def test_seeds_runs_the_seeds_listed(tmp_path: Path, capsys: pytest.CaptureFixtu
 @pytest.mark.parametrize(
     ("options", "said"),
     [
-        (["--seeds", "5-3"], "argument --seeds: found '5-3'; allowed: seeds 0 or more"),
+        (
+            ["--seeds", "5-3"],
+            "argument --seeds: found '5-3': a range from high to low; "
+            "allowed: from low to high, 3-5",
+        ),
         (["--seeds", "1,x"], "argument --seeds: found 'x'"),
         (["--seeds", "-1"], "argument --seeds: found '-1'"),
         (["--seeds", "1-3", "--runs", "3"], "--seeds and --runs: give the seeds one way"),
@@ -178,3 +182,69 @@ def test_from_says_the_profile_and_warnings_the_records_hold(
     again = capsys.readouterr().out
     assert said in again, again
     assert "profile" not in report
+
+
+@pytest.mark.parametrize(
+    ("content", "said"),
+    [
+        (None, "{path}: a directory; expected results as eval --out writes them (.jsonl or "
+         ".csv)"),
+        (b"\xff\xfe", "{path}: not UTF-8 text (byte 0xff); expected results as eval --out"),
+        (b'{"seed": 1, "outc', "{path}:1:13: not JSON (Unterminated string starting at), the "
+         "line cut short (the file ends inside it); expected one JSON object a line, as eval "
+         "--out writes it"),
+        (b"[1, 2]\n", "{path}:1: found a JSON array; expected an object per line, as eval --out"),
+    ],
+)  # fmt: skip
+def test_from_a_file_that_holds_no_results_says_which_and_why_in_one_line(
+    tmp_path: Path, content: bytes | None, said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A directory read as "Is a directory" (or "unknown results format '(no suffix)'"), a
+    file not UTF-8 as the codec's words without the file's name, a line cut short as the
+    JSON decoder's words alone: each is said as what it is, naming the file, and what a
+    results file holds, on one line, exit 2."""
+    path = tmp_path / "r.jsonl"
+    if content is None:
+        path.mkdir()
+    else:
+        path.write_bytes(content)
+    assert main(["eval", "--from", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith(f"roomba-bt eval: --from {said.format(path=path)}"), err
+
+
+@pytest.mark.parametrize(
+    "options",
+    [["--seeds", "1-2"], ["--runs", "2"], ["--out", "o.jsonl"], ["--plot", "p.png"],
+     ["--resume"], ["--sweep", "duration=1s,2s"], ["-p", "duration=1s"], ["--key", "k"]],
+)  # fmt: skip
+def test_from_refuses_the_options_of_a_run_it_would_drop(
+    ran: tuple[Path, str],
+    options: list[str],
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``--from ab.jsonl --seeds 1-2`` reported every seed, and ``--out`` or ``--plot``
+    wrote nothing, without a word: refused, naming the option, exit 2."""
+    monkeypatch.chdir(ran[0].parent)
+    assert main(["eval", "--from", str(ran[0]), *options]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"roomba-bt eval: --from and {options[0]}: --from reports on the episodes "
+                   f"its files hold as they are (it runs none and writes no file); {options[0]} "
+                   "is for a run: give one or the other\n")  # fmt: skip
+    assert sorted(p.name for p in ran[0].parent.iterdir()) == ["ab.jsonl"]
+
+
+def test_a_resume_of_a_partial_file_not_utf8_is_refused_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """It was roomba-bt's internal error (exit 70): the codec's error is a ValueError,
+    which the reader did not turn into its own."""
+    out = tmp_path / "r.jsonl"
+    (tmp_path / "r.jsonl.partial.jsonl").write_bytes(b"\xff\xfe\n")
+    assert main([*AB, "--runs", "2", "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"roomba-bt eval: --resume: {out}.partial.jsonl: not UTF-8 text (byte 0xff); "
+                   "expected results as eval --out writes them (.jsonl or .csv); --resume "
+                   "reads it back (--force: write over it)\n")  # fmt: skip
