@@ -209,7 +209,8 @@ def _check_alike(
     ``--start-area``, the world's start region), or other ``--key`` columns."""
     if result.world != world.name:
         raise ResumeError(f"{where}: the episode ran in world {result.world!r}, this "
-                          f"evaluation's is {world.name!r}")  # fmt: skip
+                          f"evaluation's is {world.name!r} (--world; --force writes over "
+                          "it)")  # fmt: skip
     if result.profile and result.profile != spec.profile:  # "": a file written before
         raise ResumeError(f"{where}: the episode ran as profile {result.profile!r}, this "
                           f"evaluation's is {spec.profile!r} (--profile)")  # fmt: skip

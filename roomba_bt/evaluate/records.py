@@ -219,6 +219,29 @@ def _coverage_from(record: dict[str, Any]) -> Coverage | None:
     )
 
 
+#: what a column of each kind holds, as a message about a bad value says it
+_EXPECTED = {"int": "a whole number", "params": "the parameters as --out writes them"}
+
+
+def _read_column(values: dict[str, Any], name: str, kind: str, raw: Any) -> None:
+    """``raw``, a record's cell of ``kind``, read into ``values[name]`` (a start or end
+    coordinate into its place); TypeError or ValueError when it is not of that kind."""
+    if kind == "str":
+        values[name] = "" if raw is None else str(raw)
+    elif kind == "int":
+        values[name] = int(raw)
+    elif kind == "float":
+        values[name] = float(raw)
+    elif kind == "bool":
+        values[name] = raw if isinstance(raw, bool) else str(raw) == "True"
+    elif kind == "outcome":
+        values[name] = str(raw).lower()
+    elif kind == "params":
+        values[name] = _params(raw)
+    else:
+        values[name][int(kind)] = float(raw)
+
+
 def from_record(record: dict[str, Any]) -> EpisodeResult:
     """The inverse of :func:`to_record` (trajectory and contact steps empty); values may be
     strings (CSV). KeyError/ValueError on a missing column or a bad value."""
@@ -240,20 +263,11 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
             values[name] = _undeclared(record.get(column))
             continue
         raw = record[column]
-        if kind == "str":
-            values[name] = "" if raw is None else str(raw)
-        elif kind == "int":
-            values[name] = int(raw)
-        elif kind == "float":
-            values[name] = float(raw)
-        elif kind == "bool":
-            values[name] = raw if isinstance(raw, bool) else str(raw) == "True"
-        elif kind == "outcome":
-            values[name] = str(raw).lower()
-        elif kind == "params":
-            values[name] = _params(raw)
-        else:
-            values[name][int(kind)] = float(raw)
+        try:
+            _read_column(values, name, kind, raw)
+        except (TypeError, ValueError):  # "invalid literal for int()" named no column
+            expected = _EXPECTED.get(kind, "a number")
+            raise ValueError(f"column {column!r}: found {raw!r}; expected {expected}") from None
     values["start"], values["end"] = tuple(values["start"]), tuple(values["end"])
     known = {f.name for f in fields(EpisodeResult)}
     defaults = {"contact_steps": (), "trajectory": ()}
@@ -442,6 +456,23 @@ def read_results(path: str | Path) -> list[EpisodeResult]:
     return [result for _, _, result in read_rows(path)]
 
 
+def _csv_row(path: str | Path, n: int, row: dict[str | None, Any]) -> dict[str, Any]:
+    """Row ``n`` of a CSV results file, a cell under each column of its header;
+    ResultsFileError when it has fewer (a row cut short: the cells it lacks read as None,
+    and a column's reading said "float() argument must be ... not 'NoneType'") or more."""
+    header = len(row) - (None in row)
+    if None in row:  # csv.DictReader keeps the cells past the header under None
+        raise ResultsFileError(f"{path}:{n}: {header + len(row[None])} cells in a header of "
+                               f"{header} columns; expected a cell under each column, as eval "
+                               "--out writes them")  # fmt: skip
+    cells = sum(1 for value in row.values() if value is not None)
+    if cells < header:
+        raise ResultsFileError(f"{path}:{n}: {cells} cells in a header of {header} columns "
+                               "(the row cut short?); expected a cell under each column, as "
+                               "eval --out writes them")  # fmt: skip
+    return {str(column): value for column, value in row.items()}
+
+
 #: what JSON calls the values a line of a results file must not be, by their Python type
 _JSON_KINDS = {"list": "array", "str": "string", "int": "number", "float": "number",
                "bool": "true or false", "NoneType": "null"}  # fmt: skip
@@ -480,7 +511,7 @@ def read_rows(path: str | Path) -> list[tuple[int, dict[str, Any], EpisodeResult
     try:
         with open(path, encoding="utf-8", newline="") as src:
             if fmt == ".csv":
-                rows = [(n, row) for n, row in enumerate(csv.DictReader(src), 2)]
+                rows = [(n, _csv_row(path, n, row)) for n, row in enumerate(csv.DictReader(src), 2)]
             for n, text in enumerate(src if fmt == ".jsonl" else (), 1):
                 if not text.strip():
                     continue
@@ -495,7 +526,8 @@ def read_rows(path: str | Path) -> list[tuple[int, dict[str, Any], EpisodeResult
         try:
             out.append((line, row, from_record(row)))
         except KeyError as exc:
-            raise ResultsFileError(f"{path}:{line}: missing column {exc.args[0]!r}") from None
+            raise ResultsFileError(f"{path}:{line}: missing column {exc.args[0]!r}; expected "
+                                   "a record as eval --out writes it") from None  # fmt: skip
         except (TypeError, ValueError) as exc:
             raise ResultsFileError(f"{path}:{line}: bad value ({exc})") from None
     return out

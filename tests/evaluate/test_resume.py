@@ -101,6 +101,8 @@ def _another_key(out: Path) -> None:
         (["--runs", "1"], None, ":2: seed 1 of"),
         (["--seed", "1"], None, ":1: seed 0 of"),
         (["--within", "1.0"], None, ":1: seed 0 started at"),
+        (["--world", "corridor"], None, ":1: the episode ran in world 'empty-room', this "
+         "evaluation's is 'corridor' (--world; --force writes over it)"),
         ([], _another_key, ":2: the record reports the keys ['found'], this evaluation --key []"),
         ([], _other_sources, ":2: sources differs from this evaluation's ({"),
         ([], _another_profile,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -248,3 +249,37 @@ def test_a_resume_of_a_partial_file_not_utf8_is_refused_naming_it(
     assert err == (f"roomba-bt eval: --resume: {out}.partial.jsonl: not UTF-8 text (byte 0xff); "
                    "expected results as eval --out writes them (.jsonl or .csv); --resume "
                    "reads it back (--force: write over it)\n")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("row", "said"),
+    [
+        (lambda cells: cells[:5], "{path}:2: 5 cells in a header of {n} columns (the row cut "
+         "short?); expected a cell under each column, as eval --out writes them"),
+        (lambda cells: [*cells, "more"], "{path}:2: {n1} cells in a header of {n} columns; "
+         "expected a cell under each column"),
+        (lambda cells: ["z" if c == "0" else c for c in cells], "{path}:2: bad value (column "
+         "'seed': found 'z'; expected a whole number)"),
+    ],
+)  # fmt: skip
+def test_from_a_csv_row_cut_short_or_too_long_is_said_so(
+    tmp_path: Path, row: Any, said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A CSV row cut short read its missing cells as None, said as "bad value (float()
+    argument must be a string or a real number, not 'NoneType')"; a bad cell named no
+    column ("invalid literal for int() with base 10: 'z'")."""
+    import csv
+
+    out = tmp_path / "r.csv"
+    assert main([*AB, "--runs", "1", "--out", str(out)]) == 0
+    with out.open(newline="") as file:
+        header, first, *_ = list(csv.reader(file))
+    cut = tmp_path / "cut.csv"
+    with cut.open("w", newline="") as file:
+        csv.writer(file).writerows([header, row(first)])
+    capsys.readouterr()
+    assert main(["eval", "--from", str(cut)]) == 2
+    err = capsys.readouterr().err
+    n = len(header)
+    assert err.startswith(f"roomba-bt eval: --from {said.format(path=cut, n=n, n1=n + 1)}"), err
+    assert err.count("\n") == 1
