@@ -139,6 +139,11 @@ class Summary:
     #: the commonest first: a patrol's "laps done" and "docked on a low battery" are both a
     #: success, and the rate alone mixed them
     endings: tuple[tuple[str, int], ...] = ()
+    #: per ending of :attr:`endings`, in its order, the odometry distance (m) its episodes
+    #: drove: the least, the median and the most. A patrol's lap round the apartment's
+    #: kitchen table (6-8 m) and one round the flat (25 m or more) both read "patrol done
+    #: (laps: 1)": ``--json`` could not tell them apart without the records
+    ending_distances: tuple[tuple[float, float, float], ...] = ()
 
     @property
     def rate(self) -> float:
@@ -180,7 +185,11 @@ class Summary:
         out += [f"warning      {said}" for said in self.undeclared_said()]
         if self.endings:
             out.append("successes    by what the mission said last")
-            out += [f"  {count:4d}  {said or '(nothing said)'}" for said, count in self.endings]
+            out += [
+                f"  {count:4d}  {said or '(nothing said)'}  ({_driven(*distances)})"
+                for (said, count), distances in zip(self.endings, self.ending_distances,
+                                                    strict=True)
+            ]  # fmt: skip
         if self.failures:
             out.append("failures")
             out += [f"  {count:4d}  {reason}" for reason, count in self.failures]
@@ -280,6 +289,11 @@ class Summary:
             "longest_trapped": self.longest_trapped_s,
             "failures": {reason: count for reason, count in self.failures},
             "success_endings": {said: count for said, count in self.endings},
+            "success_distances": {
+                said: {"min": lo, "median": median, "max": hi}
+                for (said, _), (lo, median, hi) in zip(self.endings, self.ending_distances,
+                                                       strict=True)
+            },  # fmt: skip
             "falls": dict(self.falls),
             "episodes_with_falls": self.episodes_with_falls,
             "episodes_with_falls_by_cause": dict(self.episodes_with_falls_by_cause),
@@ -334,6 +348,7 @@ def summarize(
         for key, where in r.undeclared:
             first, episodes = undeclared.get(key, (where, 0))
             undeclared[key] = (first, episodes + 1)
+    endings = success_endings(ok)
     return Summary(
         mission=mission,
         world=world,
@@ -358,8 +373,23 @@ def summarize(
         undeclared=tuple((key, where, n) for key, (where, n) in undeclared.items()),
         longest_trapped_s=max((r.longest_trapped_s for r in results), default=0.0),
         trapped=sum(1 for r in results if r.longest_trapped_s >= TRAPPED_S),
-        endings=success_endings(ok),
+        endings=endings,
+        ending_distances=tuple(
+            _distances([r.distance_m for r in ok if r.said == said]) for said, _ in endings
+        ),
     )
+
+
+def _distances(driven: Sequence[float]) -> tuple[float, float, float]:
+    """The least, the median and the most of ``driven`` (m; one at least)."""
+    return min(driven), percentile(driven, 50) or 0.0, max(driven)
+
+
+def _driven(lo: float, median: float, hi: float) -> str:
+    """``6.4..48.4 m driven, median 7.8 m``; ``7.8 m driven`` when all drove as far."""
+    if f"{lo:.1f}" == f"{hi:.1f}":
+        return f"{lo:.1f} m driven"
+    return f"{lo:.1f}..{hi:.1f} m driven, median {median:.1f} m"
 
 
 def success_endings(successes: Sequence[EpisodeResult]) -> tuple[tuple[str, int], ...]:

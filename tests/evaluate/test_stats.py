@@ -312,18 +312,25 @@ def test_the_successes_are_counted_by_what_the_mission_said_last() -> None:
     tells them apart by the mission's last words (``run``'s ``mission said`` line)."""
     from dataclasses import replace
 
-    laps = [replace(result(i), said="patrol done (laps: 1)") for i in range(3)]
-    docked = replace(result(3), said="docked on a low battery")
+    laps = [replace(result(i), said="patrol done (laps: 1)", distance_m=d)
+            for i, d in enumerate((6.4, 7.8, 48.4))]  # fmt: skip
+    docked = replace(result(3), said="docked on a low battery", distance_m=2.0)
     failed = replace(result(4, "failure", reason="x: lost"), said="lost")
     summary = summarize("patrol.yaml", "apartment", [*laps, docked, failed])
     assert summary.endings == (("patrol done (laps: 1)", 3), ("docked on a low battery", 1))
-    assert summary.to_dict()["success_endings"] == {
-        "patrol done (laps: 1)": 3, "docked on a low battery": 1,
+    said = summary.to_dict()
+    assert said["success_endings"] == {"patrol done (laps: 1)": 3, "docked on a low battery": 1}
+    # how far each ending's episodes drove: a lap round a table (6-8 m) and one round the
+    # flat (48 m) both read "laps: 1", and --json could not tell them apart
+    assert said["success_distances"] == {
+        "patrol done (laps: 1)": {"min": 6.4, "median": 7.8, "max": 48.4},
+        "docked on a low battery": {"min": 2.0, "median": 2.0, "max": 2.0},
     }  # fmt: skip
     lines = summary.lines()
     at = lines.index("successes    by what the mission said last")
     assert lines[at + 1 : at + 3] == [
-        "     3  patrol done (laps: 1)", "     1  docked on a low battery",
+        "     3  patrol done (laps: 1)  (6.4..48.4 m driven, median 7.8 m)",
+        "     1  docked on a low battery  (2.0 m driven)",
     ]  # fmt: skip
     silent = summarize("dock.yaml", "room", [result(1), result(2)])  # no log leaf: no line
     assert silent.endings == () and "successes" not in str(silent)
