@@ -271,6 +271,13 @@ class Summary:
             "not a hazard)"
         )
 
+    def _distances_by_ending(self) -> dict[str, dict[str, float]]:
+        """Each ending's distances (m), as ``--json`` names them."""
+        pairs = zip(self.endings, self.ending_distances, strict=True)
+        return {
+            said: {"min": lo, "median": median, "max": hi} for (said, _), (lo, median, hi) in pairs
+        }
+
     def to_dict(self) -> dict[str, object]:
         """The summary for scripts (``eval --json``): rates as fractions, times in seconds;
         ``rate`` and ``interval`` null when no episode finished."""
@@ -289,11 +296,7 @@ class Summary:
             "longest_trapped": self.longest_trapped_s,
             "failures": {reason: count for reason, count in self.failures},
             "success_endings": {said: count for said, count in self.endings},
-            "success_distances": {
-                said: {"min": lo, "median": median, "max": hi}
-                for (said, _), (lo, median, hi) in zip(self.endings, self.ending_distances,
-                                                       strict=True)
-            },  # fmt: skip
+            "success_distances": self._distances_by_ending(),
             "falls": dict(self.falls),
             "episodes_with_falls": self.episodes_with_falls,
             "episodes_with_falls_by_cause": dict(self.episodes_with_falls_by_cause),
