@@ -46,17 +46,18 @@ from __future__ import annotations
 
 import glob
 import importlib.util
-import os
 import re
 import shlex
 import shutil
-import subprocess
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
+from runtime.simrun import finished  # tests/runtime: a child run to its end, no fixed wait
 
 from roomba_bt.cli import main
 
@@ -321,7 +322,11 @@ RAN: dict[tuple[str, ...], tuple[int, str, str]] = {}
 
 @pytest.mark.parametrize(("where", "command"), RUN)
 def test_every_command_in_the_docs_runs(
-    where: str, command: str, workdir: Path, capsys: pytest.CaptureFixture[str]
+    where: str,
+    command: str,
+    workdir: Path,
+    capsys: pytest.CaptureFixture[str],
+    served_sim: Callable[..., Any],
 ) -> None:
     for part in command.split(" && "):
         redirect = None
@@ -331,25 +336,24 @@ def test_every_command_in_the_docs_runs(
         expanded = [w for word in argv for w in (sorted(glob.glob(word)) or [word])]
         assert expanded[0] == "roomba-bt", f"{where}: {part}"
         if part == command:  # the whole line: it needs no file an earlier part wrote
-            code, out, err = RAN.get(tuple(expanded)) or _run(expanded, capsys)
+            code, out, err = RAN.get(tuple(expanded)) or _run(expanded, capsys, served_sim)
             RAN[tuple(expanded)] = code, out, err
         else:
-            code, out, err = _run(expanded, capsys)
+            code, out, err = _run(expanded, capsys, served_sim)
         assert code == 0, f"{where}: {' '.join(expanded)} exited {code}\n{out}\n{err}"
         if redirect is not None:
             (workdir / redirect).write_text(out)
             assert out.strip(), f"{where}: {part} wrote nothing to {redirect}"
 
 
-def _run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+def _run(
+    argv: list[str], capsys: pytest.CaptureFixture[str], served_sim: Callable[..., Any]
+) -> tuple[int, str, str]:
     """``roomba-bt ...`` (``argv`` as rewritten): its exit code, stdout and stderr."""
     if argv[1] == "doctor":
-        return _doctor_on_a_simulator(argv)
+        return _doctor_on_a_simulator(argv, served_sim)
     if argv[1] == "sim":  # serves until stopped: its own process
-        done = subprocess.run(
-            [sys.executable, "-m", "roomba_bt.cli", *argv[1:]],
-            capture_output=True, text=True, timeout=60, env=dict(os.environ),
-        )  # fmt: skip
+        done = finished([sys.executable, "-m", "roomba_bt.cli", *argv[1:]])
         return done.returncode, done.stdout, done.stderr
     code = main(argv[1:])
     out, err = capsys.readouterr()
@@ -361,21 +365,14 @@ def _run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str,
 DOCTOR_SIM = ("sim", "--rfc2217", "127.0.0.1:0", "--asleep", "--baud", "19200")
 
 
-def _doctor_on_a_simulator(argv: list[str]) -> tuple[int, str, str]:
-    """``roomba-bt doctor`` (its ``--port`` already dropped) against :data:`DOCTOR_SIM`."""
-    sim = subprocess.Popen(
-        [sys.executable, "-m", "roomba_bt.cli", *DOCTOR_SIM],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+def _doctor_on_a_simulator(argv: list[str], served_sim: Callable[..., Any]) -> tuple[int, str, str]:
+    """``roomba-bt doctor`` (its ``--port`` already dropped) against :data:`DOCTOR_SIM`. Each
+    waits only for its event: the simulator's address printed, doctor's end, the
+    simulator's end once told (a ceiling that stops a hung one, no fixed bet)."""
+    sim = served_sim(*DOCTOR_SIM)
     try:
-        assert sim.stdout is not None
-        address = sim.stdout.readline().strip()
-        done = subprocess.run(
-            [sys.executable, "-m", "roomba_bt.cli", *argv[1:], "--port", address],
-            capture_output=True, text=True, timeout=30, env=dict(os.environ),
-        )  # fmt: skip
+        done = finished([sys.executable, "-m", "roomba_bt.cli", *argv[1:], "--port", sim.address])
         assert "found: " in done.stdout, done.stdout
         return done.returncode, done.stdout, done.stderr
     finally:
-        sim.terminate()
-        sim.communicate(timeout=10)
+        sim.stop()

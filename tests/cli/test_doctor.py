@@ -19,7 +19,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from runtime.simrun import BridgeLink  # tests/runtime: a WiFi bridge on the virtual clock
+from runtime.simrun import (  # tests/runtime: a WiFi bridge on the virtual clock; a child's end
+    BridgeLink,
+    ended,
+)
 
 import roomba_bt.transport as transport_package
 from roomba_bt.cli.doctor_cmd import (
@@ -66,21 +69,10 @@ def _started(*args: str) -> subprocess.Popen[str]:
     )
 
 
-def _ended(proc: subprocess.Popen[str]) -> tuple[str, str]:
-    """What ``proc`` wrote on stdout and stderr once it ended (:data:`COMMAND_WAIT_S` at
-    most: then SIGTERM, which lets it close its port, and the test fails)."""
-    try:
-        return proc.communicate(timeout=COMMAND_WAIT_S)
-    except subprocess.TimeoutExpired:
-        proc.terminate()
-        proc.communicate(timeout=COMMAND_WAIT_S)
-        raise
-
-
 def _cli(*args: str) -> subprocess.CompletedProcess[str]:
     """``roomba-bt ARGS`` run to its end."""
     with _started(*args) as proc:
-        out, err = _ended(proc)
+        out, err = ended(proc, COMMAND_WAIT_S)
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
@@ -100,7 +92,7 @@ def _doctor_timed(port: str) -> tuple[subprocess.CompletedProcess[str], float]:
         assert ready, "doctor printed nothing"
         first = proc.stdout.readline()
         began = time.monotonic()
-        out, err = _ended(proc)
+        out, err = ended(proc, COMMAND_WAIT_S)
         took = time.monotonic() - began
     assert "Traceback" not in err + out
     return subprocess.CompletedProcess(proc.args, proc.returncode, first + out, err), took

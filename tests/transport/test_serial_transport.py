@@ -486,6 +486,19 @@ def test_a_device_path_that_comes_back_is_reopened_and_carries_bytes(tmp_path: P
             os.close(fd)
 
 
+def _until_the_file_clock_passes(made_ns: int, probe: Path) -> None:
+    """Until a node made now has a later change time than ``made_ns``: the kernel stamps
+    nodes from a coarse clock (a tick of 1 to 10 ms), so a pty made again within the same
+    tick has the same time as the first. A file touched here is stamped by the same clock;
+    the wait ends on its first tick past, not after a fixed guess (it was 50 ms)."""
+    deadline = time.monotonic() + 10.0  # a clock that never moves: fail, do not hang
+    probe.touch()
+    while os.stat(probe).st_ctime_ns <= made_ns:
+        assert time.monotonic() < deadline, "the file clock did not move in 10 s"
+        time.sleep(0.001)
+        os.utime(probe)
+
+
 def test_a_link_left_to_a_pty_number_another_program_got_is_not_reopened(
     tmp_path: Path,
 ) -> None:
@@ -498,9 +511,10 @@ def test_a_link_left_to_a_pty_number_another_program_got_is_not_reopened(
     link.symlink_to(first[2])
     transport = SerialTransport.open(str(link))
     transport.close()
+    made = os.stat(first[2]).st_ctime_ns
     for fd in first[:2]:
         os.close(fd)
-    time.sleep(0.05)  # a node made later than the first, on a coarse clock too
+    _until_the_file_clock_passes(made, tmp_path / "clock")  # the next node made is newer
     held = [_pty() for _ in range(20)]  # the lowest free number is handed out: the first's
     try:
         other = next((pty for pty in held if pty[2] == first[2]), None)
