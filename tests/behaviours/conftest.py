@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -87,11 +88,28 @@ def sweep_spec(tmp_path: Path) -> SweepSpec:
     return build
 
 
+#: each episode :func:`sweep` ran in this session, by its arguments: "same spec, same result"
+#: (:class:`EpisodeSpec`), and a ``cover`` of the room is seconds of CPU, which two tests
+#: that ask the same episode (test_coverage_map.py: one pass, then two) need not pay twice.
+#: The tests only read a result.
+_SWEPT: dict[tuple[Any, ...], EpisodeResult] = {}
+
+
 @pytest.fixture
 def sweep(sweep_spec: SweepSpec) -> Sweep:
-    """``sweep(...)``: :func:`sweep_spec`'s episode, run."""
+    """``sweep(...)``: :func:`sweep_spec`'s episode, run (once a session for the same
+    arguments: :data:`_SWEPT`)."""
 
     def run(*args: Any, **kwargs: Any) -> EpisodeResult:
-        return run_episode(sweep_spec(*args, **kwargs))
+        spec = sweep_spec(*args, **kwargs)
+        # the spec without its scratch paths, and the texts they hold: the episode itself
+        key = (
+            Path(spec.mission).read_text(),
+            Path(spec.world).read_text(),
+            dataclasses.replace(spec, mission="", world=""),
+        )
+        if key not in _SWEPT:
+            _SWEPT[key] = run_episode(spec)
+        return _SWEPT[key]
 
     return run

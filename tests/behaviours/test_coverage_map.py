@@ -186,7 +186,10 @@ def test_cover_makes_a_second_pass_when_asked_and_sweeps_no_less(
     afresh, then ends; the floor it swept is the first pass's and more. In this room (seed
     3) one pass swept 97.3 % in 165 s (97.0 % in 207 s with 2 % encoder error), two 98.1 %
     in 323 s (98.6 % in 379 s)."""
-    once = sweep("cover: {}", MIDDLE, seed=3, timeout_s=900.0, odometry_error=odometry_error)
+    # the one pass of test_cover_sweeps_a_room_to_its_edges_and_ends and of
+    # test_cover_holds_up_with_the_encoders_error (the same episode, run once: its 600 s
+    # limit is far beyond the pass's 207 s, and its success is asserted below)
+    once = sweep("cover: {}", MIDDLE, seed=3, timeout_s=600.0, odometry_error=odometry_error)
     twice = sweep(
         "cover: {passes: 2}", MIDDLE, seed=3, timeout_s=900.0, odometry_error=odometry_error
     )
