@@ -62,6 +62,38 @@ def served_record(child: Callable[[Sequence[str]], subprocess.Popen[str]]) -> Se
     return serve
 
 
+@pytest.fixture
+def viewed_record(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> ServedRecord:
+    """``viewed_record(record, *options)``: ``roomba-bt monitor RECORD`` in this process, up to
+    the page it would serve (the record read and replayed, its world drawn or why not said):
+    its stdout and stderr (it must reach the page). What the command says of a record's world
+    is said before the page is served, so the world's tests need no child: the page served
+    until SIGTERM is :func:`served_record`'s tests'. A child's start is seconds of a loaded
+    machine (the interpreter, aiohttp, the replay): the world's three tests started nine,
+    30 to 77 s of waiting on a shared 2-core machine."""
+    from roomba_bt.cli import monitor_cmd
+
+    served: list[object] = []
+
+    def serve(feed: object, host: str, port: int, path: str) -> int:
+        served.append(feed)
+        return 0
+
+    monkeypatch.setattr(monitor_cmd, "_serve_record", serve)
+
+    def view(record: Path, *options: str) -> tuple[str, str]:
+        capsys.readouterr()
+        code = main(["monitor", str(record), "--monitor", "0", *options])
+        out, err = capsys.readouterr()
+        assert code == 0 and served, err
+        served.clear()
+        return out, err
+
+    return view
+
+
 def test_without_the_extra_monitor_says_how_to_install_it_and_exits_2(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -984,7 +1016,7 @@ def test_a_program_builds_a_live_monitor_from_typed_options(tmp_path: Path) -> N
 
 
 def test_a_recorded_view_draws_the_world_its_record_names_from_where_the_robot_started(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], served_record: ServedRecord
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], viewed_record: ServedRecord
 ) -> None:
     """The recorded page drew the bare odometry in its own frame (no rooms, no dock) though
     the record's header names the world: a shipped one by its name, a file by its path from
@@ -1022,7 +1054,7 @@ def test_a_recorded_view_draws_the_world_its_record_names_from_where_the_robot_s
     problem = recorded_world(load_record(by_path), mission)
     assert isinstance(problem, str) and problem.startswith("its world ../worlds/mine.yaml: ")
     assert problem.endswith("; the page draws the odometry alone")
-    _, err = served_record(by_path)
+    _, err = viewed_record(by_path)
     assert f"monitor: {by_path}: its world ../worlds/mine.yaml: " in err, err
 
     robot = load_record(shipped)
@@ -1031,7 +1063,7 @@ def test_a_recorded_view_draws_the_world_its_record_names_from_where_the_robot_s
 
 
 def test_a_records_world_outside_its_folder_is_not_read_and_its_header_texts_are_escaped(
-    tmp_path: Path, served_record: ServedRecord
+    tmp_path: Path, viewed_record: ServedRecord
 ) -> None:
     """A stranger's record named ``../home/.pgpass`` (or ``/etc/shadow``) as its world, and
     ``monitor RECORD`` opened it and quoted its lines in the world's errors: a user pasting
@@ -1059,18 +1091,18 @@ def test_a_records_world_outside_its_folder_is_not_read_and_its_header_texts_are
         problem = recorded_world(load_record(stranger), mission)
         assert isinstance(problem, str) and "S3cret" not in problem, problem
         assert f"its world {world} is outside the folder that holds the record" in problem
-        _, err = served_record(stranger)
+        _, err = viewed_record(stranger)
         assert "S3cret" not in err and "is outside the folder" in err, err
 
     header[SIMULATOR]["world"] = "W\x1b]0;PWNED\x07\u202e"
     stranger.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
-    _, err = served_record(stranger)
+    _, err = viewed_record(stranger)
     assert "\x1b" not in err and "\u202e" not in err, err
     assert "its world W\\x1b]0;PWNED\\x07\\u202e" in err, err
 
 
 def test_a_world_given_by_name_is_recorded_by_name_and_drawn_from_the_users_world_folders(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, served_record: ServedRecord
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, viewed_record: ServedRecord
 ) -> None:
     """A world of ``ROOMBA_BT_WORLDS``'s, given by name, was recorded as its path from the
     record's folder (``../../worlds/living.yaml``), and ``monitor RECORD`` refused it as
@@ -1098,7 +1130,7 @@ def test_a_world_given_by_name_is_recorded_by_name_and_drawn_from_the_users_worl
     assert load_record(record).header[SIMULATOR]["world"] == "living"
     drawn = recorded_world(load_record(record), mission)
     assert isinstance(drawn, tuple) and drawn[0] == world_drawing(load_world(own))
-    _, err = served_record(record)
+    _, err = viewed_record(record)
     assert "its world" not in err, err
 
     lines = record.read_text().splitlines()
@@ -1114,12 +1146,12 @@ def test_a_world_given_by_name_is_recorded_by_name_and_drawn_from_the_users_worl
         assert isinstance(problem, str) and said in problem, problem
         assert "monitor --world FILE_OR_NAME" in problem, problem
         assert isinstance(recorded_world(load_record(made), mission, load_world(own)), tuple)
-        _, err = served_record(made, "--world", str(own))
+        _, err = viewed_record(made, "--world", str(own))
         assert "its world" not in err, err
 
 
 def test_a_records_world_of_another_digest_is_said_and_not_drawn(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, served_record: ServedRecord
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, viewed_record: ServedRecord
 ) -> None:
     """The world a record names was found by name (or path) and drawn without its digest
     looked at: a world of that name in another folder, or the file edited since, was drawn as
@@ -1158,9 +1190,9 @@ def test_a_records_world_of_another_digest_is_said_and_not_drawn(
         "not drawn (monitor --world FILE_OR_NAME draws the one you give); the page draws the "
         "odometry alone"
     ), problem
-    _, err = served_record(record)
+    _, err = viewed_record(record)
     assert f"monitor: {record}: its world living (" in err and "not the file the run" in err
-    _, err = served_record(record, "--world", str(elsewhere / "living.yaml"))
+    _, err = viewed_record(record, "--world", str(elsewhere / "living.yaml"))
     assert "its world" not in err, err
 
     monkeypatch.setenv("ROOMBA_BT_WORLDS", str(worlds))  # the same name, the file edited
