@@ -1,7 +1,9 @@
 """``roomba-bt doctor`` against the simulator served on a pty and on RFC 2217, at both OI
 rates, awake and asleep, as three robot models; against a pty nobody answers; and
-``--baud auto`` for ``run`` and ``sensors``. Every run is a subprocess with a 10 s timeout:
-a doctor that hangs fails the test, and no test reads the wall clock."""
+``--baud auto`` for ``run`` and ``sensors``. Every run is a subprocess waited for until it
+ends (runtime/simrun.py's ``ended``: a doctor still running at :data:`COMMAND_WAIT_S` is sent
+SIGTERM and fails the test); the one wall-clock reading is the 10 s acceptance bar of a pty
+with nothing behind it, :data:`DOCTOR_TIMEOUT_S`."""
 
 from __future__ import annotations
 
