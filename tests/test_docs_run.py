@@ -360,9 +360,10 @@ def _run(
     return code, out, err
 
 
-#: The robot the docs' ``doctor`` commands find: asleep, at 19200, behind RFC 2217 (the
-#: endpoint that carries the BRC pulse), so every step up to the wake is taken.
-DOCTOR_SIM = ("sim", "--rfc2217", "127.0.0.1:0", "--asleep", "--baud", "19200")
+#: The robot the docs' ``doctor`` commands find, ``roomba-bt sim`` with these options: asleep,
+#: at 19200, behind RFC 2217 (the endpoint that carries the BRC pulse), so every step up to the
+#: wake is taken.
+DOCTOR_SIM = ("--rfc2217", "127.0.0.1:0", "--asleep", "--baud", "19200")
 
 
 def _doctor_on_a_simulator(argv: list[str], served_sim: Callable[..., Any]) -> tuple[int, str, str]:
@@ -370,6 +371,7 @@ def _doctor_on_a_simulator(argv: list[str], served_sim: Callable[..., Any]) -> t
     waits only for its event: the simulator's address printed, doctor's end, the
     simulator's end once told (a ceiling that stops a hung one, no fixed bet)."""
     sim = served_sim(*DOCTOR_SIM)
+    assert sim.address, f"the simulator printed no address: {sim.stop()}"
     try:
         done = finished([sys.executable, "-m", "roomba_bt.cli", *argv[1:], "--port", sim.address])
         assert "found: " in done.stdout, done.stdout
