@@ -43,7 +43,10 @@ from roomba_bt.oi.profiles import WHEEL_BASE_MM
 
 _OK, _RUN = Status.SUCCESS, Status.RUNNING
 #: at a lane's end: back off this far (mm) before turning (from a bump: room to turn and move
-#: over without touching; from a cliff: the cliff sensors back over the floor)
+#: over without touching; from a cliff: the cliff sensors back over the floor), and never
+#: further than the lane or shift it drove: a robot sees nothing behind it, and the floor
+#: behind a line begun after a turn in place is floor it has not driven (``cover`` keeps a
+#: trail for it: :mod:`.reversing`)
 _BACK_MM = {"bump": 30.0, "cliff": 60.0}
 #: turning in place: done within this angle of the target
 #: a lane or shift that makes no progress for this long (s) ends: something holds the robot
@@ -180,7 +183,8 @@ class Spiral(_Pattern):
 class Lanes(_Pattern):
     """Sweep the floor in parallel lanes, back and forth (boustrophedon), by odometry.
 
-    A lane runs until a bump or a cliff (then it backs off 3 or 6 cm), a virtual wall's beam or
+    A lane runs until a bump or a cliff (then it backs off 3 or 6 cm, at most as far as it
+    drove along it), a virtual wall's beam or
     ``max_lane``; the robot turns 90 degrees toward ``side``, moves over by the spacing, turns
     90 degrees again and runs the next lane the other way. SUCCESS when a move over is
     blocked before half its length (the sweep has reached the far side) or after ``lanes``
@@ -248,8 +252,8 @@ class Lanes(_Pattern):
                 speed = self.number("speed")
                 return self._steer(min(speed, 150.0) if driving.near_ahead(frame) else speed)
             self._achieved = along
-            if why in _BACK_MM:
-                self._back = _BACK_MM[why]
+            if why in _BACK_MM:  # no further than the line it drove: it sees nothing behind
+                self._back = min(_BACK_MM[why], max(along, 0.0))
                 self._begin_line("back", snap.odometry.theta_rad, then=phase)
                 continue
             if not self._end_of(phase, along):

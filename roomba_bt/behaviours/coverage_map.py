@@ -75,6 +75,7 @@ from roomba_bt.behaviours.docking.common import DockWatch
 from roomba_bt.behaviours.driving import WHEEL
 from roomba_bt.behaviours.drops import DROP, DropEdge, KnownDrops
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
+from roomba_bt.behaviours.reversing import Trail
 from roomba_bt.behaviours.units import DISTANCE, DURATION, INT
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import (
@@ -405,6 +406,8 @@ class Bearings:
         #: beams' cells are kept on the map; ``home_by_map`` ends on it)
         self.sees_dock = False
         self._dock = DockWatch()
+        #: where its centre has just been: how far it may back up (:mod:`.reversing`)
+        self.trail = Trail()
 
     def integrate(self, odo: Odometry) -> Odometry:
         """Its pose after this tick: the odometry's travel and turn since the last, from
@@ -418,6 +421,7 @@ class Bearings:
             y_mm=pose.y_mm + distance * math.sin(mid),
             theta_rad=pose.theta_rad + angle,
         )
+        self.trail.add(pose)
         return pose
 
     @staticmethod
@@ -488,6 +492,11 @@ class Bearings:
         if frame.virtual_wall:
             fmap.block_ahead(x, y, theta, _RADIUS_MM + 80.0, 0.5)
 
+    def reversible(self, wanted: float) -> float:
+        """How far (mm, up to ``wanted``) it may back up from its pose: over floor it has
+        just driven, no known drop behind (:meth:`.reversing.Trail.reversible`)."""
+        return self.trail.reversible(self.pose, wanted, self.map.drops)
+
     def blocked_ahead(self, heading: float) -> bool:
         """The map has something just ahead of the bumper along ``heading``."""
         odo = self.pose
@@ -530,6 +539,7 @@ class Bearings:
         error = driving.wrap(wall - axis - quarter * round(driving.wrap(wall - axis) / quarter))
         if abs(error) < _SNAP:
             self.pose = self.pose._replace(theta_rad=self.pose.theta_rad - error)
+            self.trail.turned(-error)
             self.anchored += 1
 
 
@@ -625,6 +635,8 @@ class Cover(Action):
 
     #: a drop to Passive ended it: started again, its phase meets the hazard (as in Full)
     _interrupted = False
+    #: how much (mm) of the last back-off the floor behind did not allow (:meth:`_back`)
+    _short = 0.0
     _progress: tuple[float, float] = (0.0, 0.0)  # along a line (mm), when it last grew
 
     def setup(self, **kwargs: Any) -> None:
@@ -724,8 +736,13 @@ class Cover(Action):
         return wheels
 
     def _back(self, distance: float) -> None:
+        """Back up ``distance`` mm, or as much of it as runs over floor it has just driven
+        with no known drop behind (:mod:`.reversing`: it sees nothing behind it); what it
+        could not is :attr:`_short`."""
         odo = self._pose
-        self._phase, self._back_to = "back", odo.distance_mm - distance
+        allowed = self._bearings.reversible(distance)
+        self._short = distance - allowed
+        self._phase, self._back_to = "back", odo.distance_mm - allowed
         self._since = self.snapshot.time
 
     def _backing(self) -> tuple[float, float] | None:
@@ -840,11 +857,12 @@ class Cover(Action):
         if why is not None and (recovery is None or recovery[0] == "turn"):
             # a bump, a drop or a beam: back off, turn left, go on along it
             recovery = self._edge_recovery = ("back", odo.distance_mm, snap.time, why)
+            self._edge_back = self._bearings.reversible(driving.BACK_OFF_MM[why])
             self._bearings.off_wall()
         if recovery is not None:
             phase, mark, since, cause = recovery
             if phase == "back":
-                if mark - odo.distance_mm < driving.BACK_OFF_MM[cause] and snap.time - since < 1.5:
+                if mark - odo.distance_mm < self._edge_back and snap.time - since < 1.5:
                     return (-150.0, -150.0)
                 recovery = self._edge_recovery = ("turn", odo.angle_rad, snap.time, cause)
                 phase, mark, since, cause = recovery
@@ -904,11 +922,19 @@ class Cover(Action):
     ) -> None:
         """Half a turn on an arc of ``shift`` wide toward ``side`` (+1 left, -1 right) onto
         the next lane, along ``heading`` through ``through``: a turn in place, a move over and
-        another turn took three times as long. An arc needs its radius clear ahead."""
+        another turn took three times as long. An arc needs its radius clear ahead: backed
+        up to it when the floor behind is floor just driven (:mod:`.reversing`), else the
+        turn in place, the move over and the turn (its back onto the stairs dropped a
+        wheel: a lane that ended where it began, after a turn in place)."""
         radius = shift / 2.0
-        room = radius + 20.0 - driving.BACK_OFF_MM.get(self._why, 0.0)
+        room = radius + 20.0 - driving.BACK_OFF_MM.get(self._why, 0.0) + self._short
         if self._why in ("swept", "limit", "stalled"):
             room = 0.0
+        if room > 0.0 and self._bearings.reversible(room) < room:
+            self._lane_heading = driving.wrap(heading + math.pi)  # the shift's end turns it
+            self._plan.insert(0, lambda: self._drive("shift", self._advance, shift))
+            self._turn_to(self._advance)
+            return
         self._lane_heading = heading
 
         def arc() -> None:

@@ -1,0 +1,123 @@
+"""How far ``cover`` may back up: only over floor it has just driven, never onto a known drop.
+
+Why: a Create 2 sees nothing behind it (no bumper, no cliff sensor behind the wheels), and
+``cover`` backs up in four places (off a bump, a cliff or a virtual wall's beam; off one
+along an edge; started again after the firmware's stop at a cliff; before the arc onto the
+next lane, up to 18 cm of room for its radius). Backing blind, the arc dropped a wheel
+down the apartment's stairs (living room, seed 8, 1.5 % encoder error, in both one and two
+passes, session 36): a lane that ended where it began, at a drop its drifted map had on the
+wrong side, after a turn in place, and the arc's 18 cm back went over the real edge behind.
+
+What a back-off may cover now::
+
+    the trail       the centre's poses over the last TRAIL_MM of driving, one every STEP_MM
+                    (forward or back); a turn in place adds none
+    a step back     of STEP_MM along the heading's opposite is floor driven when the line
+                    between two poses of the trail passes within NEAR_MM of it, both facing
+                    within TURN of the heading now (the wheels then go back over their own
+                    tracks, give or take the tolerance, never past where the trail begins);
+                    and no known drop (:class:`~.drops.KnownDrops`, guesses
+                    too) within the drops' MARGIN_MM behind the body there
+    the back-off    the steps in a row from the robot that are both, up to what was wanted:
+                    shortened, or none (turned in place since the last move: the floor
+                    behind is floor it never drove)
+
+What the map's cells say is not used: 10 cm cells in a frame the encoders' error drifts
+from the floor (the drop drawn on the wrong side was the map's); the trail is the last metre,
+where odometry is still exact enough. The cost: a comparison per tick (a pose added per
+STEP_MM driven), and a few thousand when a back-off starts.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import TYPE_CHECKING
+
+from roomba_bt.behaviours.drops import MARGIN_MM
+
+if TYPE_CHECKING:
+    from roomba_bt.behaviours.drops import KnownDrops
+    from roomba_bt.robot.interface import Odometry
+
+__all__ = ["NEAR_MM", "STEP_MM", "TRAIL_MM", "TURN", "Trail"]
+
+#: the trail keeps a pose every this many mm of driving, and a back-off is looked at in
+#: steps of this many mm
+STEP_MM = 10.0
+#: how much driving (mm) the trail keeps: more than the longest back-off (18 cm)
+TRAIL_MM = 600.0
+#: a step back is floor driven when a pose of the trail is this near (mm) ...
+NEAR_MM = 30.0
+#: ... and faced within this (rad) of the heading now
+TURN = math.radians(15.0)
+
+_NEAR_SQ = NEAR_MM * NEAR_MM
+
+
+class Trail:
+    """Where the robot's centre has just been (the module's table): the poses of the last
+    :data:`TRAIL_MM` of driving, in ``cover``'s own frame, and how far back it may go."""
+
+    def __init__(self) -> None:
+        self._poses: deque[tuple[float, float, float]] = deque(maxlen=int(TRAIL_MM / STEP_MM) + 1)
+
+    def add(self, pose: Odometry) -> None:
+        """The pose after this tick: kept when it is :data:`STEP_MM` from the last kept."""
+        poses = self._poses
+        x, y = pose.x_mm, pose.y_mm
+        if poses:
+            last = poses[-1]
+            dx, dy = x - last[0], y - last[1]
+            if dx * dx + dy * dy < STEP_MM * STEP_MM:
+                return
+        poses.append((x, y, pose.theta_rad))
+
+    def turned(self, by: float) -> None:
+        """The pose's heading was turned ``by`` (rad) where it stands (re-anchored on a
+        wall): the trail's headings with it, so that the floor behind is judged as before."""
+        turned = [(x, y, theta + by) for x, y, theta in self._poses]
+        self._poses.clear()
+        self._poses.extend(turned)
+
+    def reversible(self, pose: Odometry, wanted: float, drops: KnownDrops) -> float:
+        """How far (mm, up to ``wanted``) the robot at ``pose`` may back up straight: the
+        steps in a row over floor it has driven with no known drop behind (the module's
+        table); 0 when the first is not."""
+        if wanted <= 0.0:
+            return 0.0
+        heading = pose.theta_rad
+        back = heading + math.pi
+        c, s = math.cos(back), math.sin(back)
+        steps = math.ceil(wanted / STEP_MM)
+        for k in range(1, steps + 1):
+            d = min(wanted, k * STEP_MM)
+            x, y = pose.x_mm + d * c, pose.y_mm + d * s
+            if not self._driven(x, y, heading):
+                return (k - 1) * STEP_MM
+            there = pose._replace(x_mm=x, y_mm=y)
+            if drops.ahead(there, back, MARGIN_MM):
+                return (k - 1) * STEP_MM
+        return wanted
+
+    def _driven(self, x: float, y: float, heading: float) -> bool:
+        """Has the centre driven past (x, y), within :data:`NEAR_MM` of it, between two poses
+        of the trail facing within :data:`TURN` of ``heading``?"""
+        poses = self._poses
+        for k in range(1, len(poses)):
+            ax, ay, a_theta = poses[k - 1]
+            bx, by, b_theta = poses[k]
+            dx, dy = bx - ax, by - ay
+            length_sq = dx * dx + dy * dy
+            t = ((x - ax) * dx + (y - ay) * dy) / length_sq  # kept poses are STEP_MM apart
+            if not 0.0 <= t <= 1.0:
+                continue
+            ox, oy = ax + t * dx - x, ay + t * dy - y
+            if ox * ox + oy * oy > _NEAR_SQ:
+                continue
+            if (
+                abs(math.remainder(a_theta - heading, math.tau)) <= TURN
+                and abs(math.remainder(b_theta - heading, math.tau)) <= TURN
+            ):
+                return True
+        return False
