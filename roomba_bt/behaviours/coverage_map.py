@@ -67,7 +67,7 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours import driving
+from roomba_bt.behaviours import driving, reversing
 from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.blackboard import run_board
 from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
@@ -75,7 +75,6 @@ from roomba_bt.behaviours.docking.common import DockWatch
 from roomba_bt.behaviours.driving import WHEEL
 from roomba_bt.behaviours.drops import DROP, DropEdge, KnownDrops
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
-from roomba_bt.behaviours.reversing import Trail
 from roomba_bt.behaviours.units import DISTANCE, DURATION, INT
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import (
@@ -407,7 +406,7 @@ class Bearings:
         self.sees_dock = False
         self._dock = DockWatch()
         #: where its centre has just been: how far it may back up (:mod:`.reversing`)
-        self.trail = Trail()
+        self.trail = reversing.Trail()
 
     def integrate(self, odo: Odometry) -> Odometry:
         """Its pose after this tick: the odometry's travel and turn since the last, from
@@ -492,10 +491,11 @@ class Bearings:
         if frame.virtual_wall:
             fmap.block_ahead(x, y, theta, _RADIUS_MM + 80.0, 0.5)
 
-    def reversible(self, wanted: float) -> float:
+    def reversible(self, wanted: float, own: float = 0.0) -> float:
         """How far (mm, up to ``wanted``) it may back up from its pose: over floor it has
-        just driven, no known drop behind (:meth:`.reversing.Trail.reversible`)."""
-        return self.trail.reversible(self.pose, wanted, self.map.drops)
+        just driven (the first ``own`` mm aside), no known drop behind
+        (:meth:`.reversing.Trail.reversible`)."""
+        return self.trail.reversible(self.pose, wanted, self.map.drops, own)
 
     def blocked_ahead(self, heading: float) -> bool:
         """The map has something just ahead of the bumper along ``heading``."""
@@ -737,10 +737,11 @@ class Cover(Action):
 
     def _back(self, distance: float) -> None:
         """Back up ``distance`` mm, or as much of it as runs over floor it has just driven
-        with no known drop behind (:mod:`.reversing`: it sees nothing behind it); what it
-        could not is :attr:`_short`."""
+        (the first :data:`~.reversing.OWN_MM` aside: under its own body) with no known drop
+        behind (:mod:`.reversing`: it sees nothing behind it); what it could not is
+        :attr:`_short`."""
         odo = self._pose
-        allowed = self._bearings.reversible(distance)
+        allowed = self._bearings.reversible(distance, reversing.OWN_MM)
         self._short = distance - allowed
         self._phase, self._back_to = "back", odo.distance_mm - allowed
         self._since = self.snapshot.time
@@ -857,7 +858,7 @@ class Cover(Action):
         if why is not None and (recovery is None or recovery[0] == "turn"):
             # a bump, a drop or a beam: back off, turn left, go on along it
             recovery = self._edge_recovery = ("back", odo.distance_mm, snap.time, why)
-            self._edge_back = self._bearings.reversible(driving.BACK_OFF_MM[why])
+            self._edge_back = self._bearings.reversible(driving.BACK_OFF_MM[why], reversing.OWN_MM)
             self._bearings.off_wall()
         if recovery is not None:
             phase, mark, since, cause = recovery

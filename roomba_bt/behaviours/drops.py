@@ -106,6 +106,11 @@ _CLIFF_ANGLES = tuple(math.radians(a) for a in CLIFF_SENSOR_ANGLES_DEG)
 #: where a move looks for a known drop: the cliff sensors' angles and between them
 _AHEAD_ANGLES = tuple(math.radians(a) for a in (60.0, 40.0, 20.0, 0.0, -20.0, -40.0, -60.0))
 _RAY_ANGLES = tuple(math.radians(a) for a in LIGHT_BUMP_ANGLES_DEG)
+#: where a back-off looks for a known drop (:meth:`KnownDrops.behind`), from the heading's
+#: opposite: the body's back half, its wheels (90 deg) included
+_BEHIND_ANGLES = tuple(math.radians(a) for a in (90.0, 60.0, 30.0, 0.0, -30.0, -60.0, -90.0))
+#: ... as far as the body reaches and this much (mm) beyond
+BEHIND_MARGIN_MM = 20.0
 
 
 class KnownDrops:
@@ -226,6 +231,19 @@ class KnownDrops:
         x, y = pose.x_mm, pose.y_mm
         return bool(edges) and any(
             _ray(edges, x, y, heading + a, reach) < reach for a in _AHEAD_ANGLES
+        )
+
+    def behind(self, pose: Odometry) -> bool:
+        """Is a known drop (not a guess) under the back half of the body at ``pose``, or
+        within BEHIND_MARGIN_MM of it: where a back-off must not go (it has no sensor behind;
+        :mod:`~roomba_bt.behaviours.reversing`). A drop beside the robot, as along an edge
+        that follows one, is not: its rays of :meth:`ahead` at 60 deg either side of the
+        way back reached one 17 cm to the side and kept every back-off there from starting."""
+        edges = self._edges_near(pose, guessed=False)
+        reach = BODY_RADIUS_MM + BEHIND_MARGIN_MM
+        x, y, back = pose.x_mm, pose.y_mm, pose.theta_rad + math.pi
+        return bool(edges) and any(
+            _ray(edges, x, y, back + a, reach) < reach for a in _BEHIND_ANGLES
         )
 
     def speed(self, pose: Odometry, heading: float, speed: float) -> float:

@@ -11,7 +11,7 @@ import py_trees
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.actions import Mode
 from roomba_bt.behaviours.coverage_map import Cover, FloorMap
-from roomba_bt.behaviours.reversing import Trail
+from roomba_bt.behaviours.reversing import OWN_MM, Trail
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.interface import Odometry
 from roomba_bt.runtime.stack import RunStack, TreeMission
@@ -48,6 +48,30 @@ def test_after_a_turn_in_place_the_floor_behind_is_floor_it_never_drove() -> Non
     assert trail.reversible(Odometry(), 30.0, fmap.drops) == 0.0  # nothing driven yet
 
 
+def test_off_a_hazard_it_backs_under_its_own_body_unless_a_drop_is_known_there() -> None:
+    """In Safe mode a cliff showing stops every move but straight back: a back-off off a
+    hazard may go OWN_MM with no trail (the wheels stay under the body), never toward a
+    known drop."""
+    fmap = FloorMap()
+    trail = Trail()
+    pose = _driven(trail, 0.0, 300.0)._replace(theta_rad=math.pi / 2)  # turned in place
+    assert trail.reversible(pose, 180.0, fmap.drops, own=OWN_MM) == OWN_MM
+    assert trail.reversible(pose, 30.0, fmap.drops, own=OWN_MM) == 30.0
+    fmap.drops.mark(pose.x_mm, pose.y_mm - 180.0, 0.0, 0.0)  # 18 cm behind it now
+    assert trail.reversible(pose, 60.0, fmap.drops, own=OWN_MM) == 0.0
+
+
+def test_a_drop_beside_it_keeps_no_back_off_from_starting() -> None:
+    """Along an edge that follows a drop (on the right, 24 cm from the centre), backing
+    straight keeps the body off it: the look behind is the body's back half."""
+    fmap = FloorMap()
+    trail = Trail()
+    pose = _driven(trail, 0.0, 300.0)
+    fmap.drops.mark(0.0, -240.0, 0.0, 0.0)
+    fmap.drops.mark(400.0, -240.0, 0.0, 400.0)
+    assert trail.reversible(pose, 60.0, fmap.drops) == 60.0
+
+
 def test_never_onto_a_known_drop_even_over_floor_it_drove() -> None:
     """With the encoders' error a drop may lie on the map over floor the trail has: the drop
     wins."""
@@ -57,8 +81,8 @@ def test_never_onto_a_known_drop_even_over_floor_it_drove() -> None:
     fmap.drops.mark(100.0, 0.0, 0.0, 0.0)  # 30 cm behind the centre, on the line driven
     allowed = trail.reversible(pose, 180.0, fmap.drops)
     assert allowed < 180.0
-    # the body and the drops' margin stay short of it: 300 - 150 (a sensor) - 50 (margin)
-    assert allowed <= 300.0 - 150.0 - 50.0 + 10.0
+    # the body and the margin stay short of it: 300 - 170 (the body) - 20 (the margin)
+    assert allowed <= 300.0 - 170.0 - 20.0 + 10.0
 
 
 def test_a_heading_re_anchored_on_a_wall_turns_the_trail_with_it() -> None:
