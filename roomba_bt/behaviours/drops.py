@@ -234,11 +234,11 @@ class KnownDrops:
         )
 
     def behind(self, pose: Odometry) -> bool:
-        """Is a known drop (not a guess) under the back half of the body at ``pose``, or
-        within BEHIND_MARGIN_MM of it: where a back-off must not go (it has no sensor behind;
-        :mod:`~roomba_bt.behaviours.reversing`). A drop beside the robot, as along an edge
-        that follows one, is not: its rays of :meth:`ahead` at 60 deg either side of the
-        way back reached one 17 cm to the side and kept every back-off there from starting."""
+        """Is a known drop (not a guess: where an edge would go on is no drop met) under the
+        back half of the body at ``pose``, or within BEHIND_MARGIN_MM of it: where a
+        back-off must not go (it has no sensor behind;
+        :mod:`~roomba_bt.behaviours.reversing`). Looked for along its back half's rays, to
+        the sides (the wheels) too: a drop beside the body is clear of a straight back."""
         edges = self._edges_near(pose, guessed=False)
         reach = BODY_RADIUS_MM + BEHIND_MARGIN_MM
         x, y, back = pose.x_mm, pose.y_mm, pose.theta_rad + math.pi
