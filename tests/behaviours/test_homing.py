@@ -221,10 +221,12 @@ def _cover_then_homing(make: Make, wheels: _Wheels) -> tuple[Cover, HomeByMap]:
     raise AssertionError(f"home_by_map never drove its path: {home._phase}")
 
 
-def _backs_off(leaf: Cover | HomeByMap, wheels: _Wheels, hazard: int) -> tuple[float, set]:
-    """``leaf`` driving straight meets ``hazard`` (one frame): how far (mm) it then backed
-    off, and the wheel speeds it backed at."""
-    for _ in range(10):  # well under way
+def _backs_off(
+    leaf: Cover | HomeByMap, wheels: _Wheels, hazard: int, under_way: int = 10
+) -> tuple[float, set]:
+    """``leaf`` driving straight meets ``hazard`` (one frame) after ``under_way`` frames:
+    how far (mm) it then backed off, and the wheel speeds it backed at."""
+    for _ in range(under_way):  # well under way
         wheels.frame()
         leaf.tick_once()
     assert min(wheels.sent()) > 0
@@ -249,7 +251,9 @@ def test_the_way_home_backs_off_a_hazard_as_cover_does(
     wheels = _Wheels(robot)
     cover = make(Cover)
     assert isinstance(cover, Cover)
-    cleaning = _backs_off(cover, wheels, HAZARDS[why])
+    # cover backs off over floor it has driven (behaviours/reversing.py): 30 frames of its
+    # seek, some 13 cm, are more than the longest back-off (a beam's 10 cm)
+    cleaning = _backs_off(cover, wheels, HAZARDS[why], under_way=30)
     py_trees.blackboard.Blackboard.storage.clear()
     _, home = _cover_then_homing(make, wheels)
     homing = _backs_off(home, wheels, HAZARDS[why])
