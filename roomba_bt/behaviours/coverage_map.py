@@ -924,17 +924,23 @@ class Cover(Action):
         """Half a turn on an arc of ``shift`` wide toward ``side`` (+1 left, -1 right) onto
         the next lane, along ``heading`` through ``through``: a turn in place, a move over and
         another turn took three times as long. An arc needs its radius clear ahead: backed
-        up to it when the floor behind is floor just driven (:mod:`.reversing`), else the
-        turn in place, the move over and the turn (its back onto the stairs dropped a
-        wheel: a lane that ended where it began, after a turn in place)."""
+        up to it when the floor behind is floor just driven (:mod:`.reversing`), else back
+        as far as that floor goes (the turn's room from what ended the lane: a turn in
+        place with a cliff showing is the firmware's stop in Safe mode), the turn in place,
+        the move over and the turn (its blind back onto the stairs dropped a wheel: a lane
+        that ended where it began, after a turn in place)."""
         radius = shift / 2.0
         room = radius + 20.0 - driving.BACK_OFF_MM.get(self._why, 0.0) + self._short
         if self._why in ("swept", "limit", "stalled"):
             room = 0.0
-        if room > 0.0 and self._bearings.reversible(room) < room:
+        allowed = self._bearings.reversible(room) if room > 0.0 else 0.0
+        if allowed < room:  # back what it may (the turn's room from the edge), then over
             self._lane_heading = driving.wrap(heading + math.pi)  # the shift's end turns it
-            self._plan.insert(0, lambda: self._drive("shift", self._advance, shift))
-            self._turn_to(self._advance)
+            self._plan[:0] = (
+                lambda: self._turn_to(self._advance),
+                lambda: self._drive("shift", self._advance, shift),
+            )
+            self._back(allowed)
             return
         self._lane_heading = heading
 
