@@ -319,7 +319,7 @@ def test_clean_goes_home_by_its_map_before_searching_for_the_beams(
     the dock search. Seed 0 in the living room: 43 s from the end of cleaning to the dock by
     the search alone, 20 s by its map; with the encoders' error the search alone ran out of
     the run's time (347 s, not docked), by its map 81 s. With exact encoders, seed 6 since
-    session 36 (20 s home; 32 s before): seed 0's cleaning, its back-offs looking behind
+    session 36 (19 s home; 32 s before): seed 0's cleaning, its back-offs looking behind
     them now (behaviours/reversing.py), ends elsewhere, and its way home ends wedged against
     the dock's side, at (1.33, 0.17) m, heading 148 deg, where ``dock.yaml`` started on main
     stays wedged for its 10 minutes too (the approach's, not the cleaning's: not mended)."""
