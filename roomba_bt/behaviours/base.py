@@ -14,7 +14,9 @@ tick when its lifecycle is its own. How a behaviour declares itself is
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import inspect
 import logging
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
@@ -43,6 +45,12 @@ _log = logging.getLogger("roomba_bt.mission")
 
 _BUILTIN_CYCLE = Effect.BUILTIN_CYCLE  # read once: send() asks on every command
 _SILENCES = Effect.SILENCES
+#: what a halts_only leaf that set something going is told (:class:`UnkeptDeclaration`)
+_HALTS_ONLY = (
+    "halts_only=True (its commands only stop: Drive 0, Drive Direct 0 0, Motors 0), and this "
+    "one sets the wheels, a cycle or a motor going; the Full-mode warning passes a halts_only "
+    "leaf by: drop halts_only=True if it drives"
+)
 
 _RUNNING, _SUCCESS, _FAILURE = (
     py_trees.common.Status.RUNNING, py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
@@ -77,6 +85,27 @@ class UndeclaredCommand(TypeError):
             f"{declaration.name} sent {command.spec.name} ({command.spec.opcode}), which its "
             f"declaration does not list: add {command.spec.opcode} to @declare(sends=...) "
             f"(it lists {listed})"
+        )
+
+
+class UnkeptDeclaration(TypeError):
+    """A behaviour sent a command that breaks what its declaration says of it beyond
+    ``sends=``: ``halts_only=True`` and a command that sets something going (a turning
+    wheel, a built-in cycle, a running brush), or ``leads_to=`` one mode and a mode command
+    leading to another. The Full-mode warning reads ``halts_only`` and the static mode check
+    ``leads_to``, as both read ``sends``: a declaration taken on trust let a leaf drive in
+    Full unwarned (decided, session 36: the behaviour's error at that send, before the
+    command is queued, as :class:`UndeclaredCommand`)."""
+
+    def __init__(self, behaviour: RobotBehaviour, command: Command, broken: str) -> None:
+        cls = type(behaviour)
+        where = ""
+        with contextlib.suppress(OSError, TypeError):
+            where = f" (at {inspect.getsourcefile(cls)}:{inspect.getsourcelines(cls)[1]})"
+        spec = command.spec
+        super().__init__(
+            f"{behaviour.declaration.name} sent {spec.name} ({spec.opcode}) "
+            f"{command.data.hex(' ')}, but its @declare{where} says {broken}"
         )
 
 
@@ -147,8 +176,13 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
                 f"commands.drive(200, 32767)), not {type(command).__name__} {command!r:.60}"
             )
         spec = command.spec
-        if spec.opcode not in self.declaration.sends:  # the compile-time checks read sends=
+        declaration = self.declaration
+        if spec.opcode not in declaration.sends:  # the compile-time checks read sends=
             raise UndeclaredCommand(self, command)
+        if declaration.halts_only and sets_going(command):  # the Full-mode warning reads it
+            raise UnkeptDeclaration(self, command, _HALTS_ONLY)
+        if spec.leads_to is not None:  # the static mode check reads leads_to=
+            self._hold_to_leads_to(command)
         if spec.drives_wheels:  # what it set turning is stopped when it ends (terminate)
             self._started_motion = turns_wheels(command)
         elif spec.effect is _BUILTIN_CYCLE:  # ended when it is halted or fails (terminate)
@@ -166,6 +200,26 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             robot.outbox.send(halt(), self)
             robot.outbox.send(motors_off(), self)
         robot.outbox.send(command, self)
+
+    def _hold_to_leads_to(self, command: Command) -> None:
+        """Refuse a mode command leading elsewhere than the mode its declaration says it
+        leads to with its parameters (none said: the check took the mode as unchanged)."""
+        declared = self.declaration.mode_after(self._resolved)
+        sent = command.spec.leads_to
+        if sent is declared:
+            return
+        if declared is None:
+            broken = (
+                "it leaves the mode as it found it (its sends= lead to no one mode, and it "
+                f"gives no leads_to=): declare leads_to=OIMode.{sent.name} if it ends there"
+            )
+        else:
+            broken = (
+                f"leads_to={declared.label}, and {command.spec.name} leads to {sent.label}: the "
+                "mode check follows leads_to= to judge the leaves after it; declare the mode "
+                "it ends in (a function of its parameters where they decide)"
+            )
+        raise UnkeptDeclaration(self, command, broken)
 
     #: whether the last wheel command it sent set them turning (:meth:`send` notes it)
     _started_motion = False

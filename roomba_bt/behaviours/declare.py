@@ -471,6 +471,9 @@ class Declaration:
                 f"sends unknown opcodes {bad} (by name: sends=opcodes('drive', ...), from "
                 "roomba_bt.oi.opcodes)"
             )
+        problem = _powers_down(self.sends)
+        if problem is not None:
+            raise DeclarationError(problem)
         if self.kind == "condition" and self.sends:
             raise DeclarationError(
                 f"a condition only reads: it sends nothing (sends={self.sends!r}); a behaviour "
@@ -484,6 +487,25 @@ class Declaration:
         problem = self.cls.declaration_problem(self)
         if problem is not None:
             raise DeclarationError(problem)
+
+
+def _powers_down(sends: tuple[int, ...]) -> str | None:
+    """Why ``sends`` may not list a command that powers the robot down (Power, 133: the
+    opcode table's ``Effect.POWER_DOWN``), or None. The robot goes to sleep in Passive and
+    its stream stops: the run saw a lost cable (CONNECTION LOST, exit 8, "the robot may have
+    moved") where a leaf had sent it, and no leaf after it could run. roomba-bt never sends
+    Power (docs/protocol.md); decided in session 36: refused when declared, not said at the
+    run's end as Stop and Reset are: asleep, the robot answers nothing until it is woken (a
+    BRC pulse, its button), and no mission needs it (its safe stop ends in Passive)."""
+    for opcode in sends:
+        spec = COMMANDS.get(opcode)
+        if spec is not None and spec.effect is Effect.POWER_DOWN:
+            return (
+                f"sends {spec.name} ({opcode}), which roomba-bt never sends: the robot falls "
+                "asleep and its sensor stream stops, which a run cannot tell from a lost "
+                "cable; leave the robot in Passive with mode: passive, or by the run's end"
+            )
+    return None
 
 
 def _kind_problem(kind: str, cls: type) -> str | None:

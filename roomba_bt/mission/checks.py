@@ -33,7 +33,9 @@
   can run in Full, with no cliff sensor read on every tick it runs with a result that ends
   it (by itself, a guard around it, an earlier child of a reactive parent, a parallel branch
   ticked on every tick: :mod:`roomba_bt.mission.ticks`), drives down the stairs if it meets
-  them: compiled, with a warning (:func:`blind_in_full`).
+  them: compiled, with a warning (:func:`blind_in_full`). A leaf that sends Full itself
+  (its own ``sends``, by the opcode table's ``leads_to``) and a wheel command is such a
+  leaf in whatever mode it is entered.
 * **Two wheel branches (a warning).** Two branches of a ``parallel`` with a leaf that turns
   the wheels: the robot gets the last wheel command of a tick only (:func:`parallel_wheels`).
 * **Two writers of a key (a warning).** Two branches of a ``parallel`` writing the same
@@ -868,23 +870,39 @@ def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
             watched
             or decl is None
             or entered is None
-            or OIMode.FULL not in entered[1]
             or not decl.turns_wheels
             or reads_cliffs(node)
         ):
+            continue
+        enters_full = _enters_full(decl, node.params)
+        if OIMode.FULL not in entered[1] and not enters_full:
             continue
         where = (str(node.loc.file), node.loc.line, node.loc.column)
         if where in seen:
             continue
         seen.add(where)
+        how = (
+            "switches to Full mode itself and can turn the wheels there"
+            if enters_full
+            else ("can turn the wheels in Full mode")
+        )
         warnings.append(
             node.loc.at(
-                f"{decl.name} can turn the wheels in Full mode, where the robot does not stop "
-                "at a cliff or a wheel drop, and no cliff sensor (packets 9-12) is read while it "
-                "runs: use mode: safe, or end it on a cliff (until: {cliff: any})"
+                f"{decl.name} {how}, where the robot does not stop at a cliff or a wheel drop, "
+                "and no cliff sensor (packets 9-12) is read while it runs: use mode: safe, or "
+                "end it on a cliff (until: {cliff: any})"
             ).as_warning()
         )
     return warnings
+
+
+def _enters_full(decl: Declaration, params: Mapping[str, Any]) -> bool:
+    """Whether a leaf's own commands with ``params`` include Full (132, by the opcode
+    table's ``leads_to``): one that sends Full and then drives runs its drive in Full
+    whatever mode it was entered in, and the mode check's ``entered`` (the modes before it)
+    does not show it (session 36: a plugin's ``sends=opcodes("full", "drive")`` was not
+    warned; the same drive after ``mode: full`` was)."""
+    return any(COMMANDS[op].leads_to is OIMode.FULL for op in decl.sent(params))
 
 
 def profile_commands(

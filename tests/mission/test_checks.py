@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.mission import RUNTIME_PACKETS, CompiledMission
+from roomba_bt.mission import RUNTIME_PACKETS, CompiledMission, Permissions, load_mission
 from roomba_bt.mission.checks import check_stream
 
 Errors = Callable[..., list[str]]
@@ -416,6 +416,54 @@ def test_full_mode_without_wheels_is_no_warning(
 ) -> None:
     mission = compile_text("tree:\n  sequence:\n    - mode: full\n    - leds: {dock: true}\n")
     assert mission.warnings == ()
+
+
+FULL_ITSELF = """
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.opcodes import opcodes
+
+
+@declare("faster", kind="action", sends=opcodes({sends}), reads={reads})
+class Faster(Action):
+    \"\"\"Switches to Full to go faster, and drives.\"\"\"
+
+    def update(self):
+        self.send(commands.full())
+        self.send(commands.drive(300, 32768))
+        return Status.RUNNING
+"""
+
+
+@pytest.mark.parametrize(
+    ("sends", "reads", "warned"),
+    [
+        ('"full", "drive"', "()", True),  # not warned: entered in Safe, it drove 1 m in Full
+        ('"full", "drive"', "(9, 10, 11, 12)", False),  # it reads the cliffs itself
+        ('"safe", "drive"', "()", False),  # Safe stops at a cliff by itself
+        ('"full", "leds"', "()", False),  # Full, but no wheels
+    ],
+)
+def test_a_leaf_that_switches_to_full_itself_and_drives_is_warned(
+    mission_file: Callable[..., Path], sends: str, reads: str, warned: bool
+) -> None:
+    """The check asked only for the modes a leaf is entered in (stranger report, session 36:
+    ``declared_full`` entered in Safe sent Full and drove, with ``validate --strict`` ok)."""
+    mission_file(FULL_ITSELF.format(sends=sends, reads=reads), "faster.py")
+    path = mission_file("plugins: [./faster.py]\ntree:\n  sequence: [{mode: safe}, faster]\n")
+    mission = load_mission(path, permissions=Permissions(plugin_files=True))
+    assert [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings] == (
+        [
+            "3:28: faster switches to Full mode itself and can turn the wheels there, where "
+            "the robot does not stop at a cliff or a wheel drop, and no cliff sensor (packets "
+            "9-12) is read while it runs: use mode: safe, or end it on a cliff (until: "
+            "{cliff: any})"
+        ]
+        if warned
+        else []
+    )
 
 
 SENSOR_UNTIL = (

@@ -167,6 +167,18 @@ class KCondDrives(Condition):
         return True
 '''
 
+#: the stranger's halt_liar (session 36): says it only halts, drives; unwarned in Full
+HALT_LIAR = UNDECLARED.replace("sneaky", "halt_liar").replace("class Sneaky", "class HaltLiar")
+HALT_LIAR = HALT_LIAR.replace("sends=(139,))", "sends=(137,), halts_only=True)")
+
+#: the stranger's mode_liar: says it leads to Safe, sends Full; the drive after it ran in Full
+MODE_LIAR = UNDECLARED.replace("sneaky", "mode_liar").replace("class Sneaky", "class ModeLiar")
+MODE_LIAR = MODE_LIAR.replace(
+    '@declare("mode_liar", kind="action", sends=(139,))',
+    "from roomba_bt.oi.modes import OIMode\n"
+    '@declare("mode_liar", kind="action", sends=(131, 132), leads_to=OIMode.SAFE)',
+).replace("commands.drive(100, 32767)", "commands.full()")
+
 #: the stranger's boom_check: a packet that does not exist
 NO_SUCH_PACKET = UNREAD.replace("near", "far").replace("frame[27]", "frame[99]")
 
@@ -222,6 +234,12 @@ class Says(Condition):
         ("sneaky", UNDECLARED,
          "raised UndeclaredCommand: sneaky sent drive (137), which its declaration does not "
          "list: add 137 to @declare(sends=...) (it lists leds (139))", "at {plugin}:13"),
+        ("halt_liar", HALT_LIAR,  # believed: it drove 0.63 m in Full, unwarned
+         "raised UnkeptDeclaration: halt_liar sent drive (137) 89 00 64 7f ff, but its "
+         "@declare (at {plugin}:8) says halts_only=True", "at {plugin}:13"),
+        ("mode_liar", MODE_LIAR,  # believed: the drive after it ran in Full, exit 0
+         "raised UnkeptDeclaration: mode_liar sent full (132) 84, but its @declare (at "
+         "{plugin}:9) says leads_to=Safe, and full leads to Full", "at {plugin}:14"),
         ("near", UNREAD,  # the KeyError did not say where to declare it
          "raised MissingPacket: 'packet 27 (wall_signal) is not in this frame",
          "at {plugin}:10"),
@@ -256,7 +274,7 @@ def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
     mission.write_text(f"plugins: [./plugin.py]\ntree:\n  sequence: [{{mode: safe}}, {word}]\n")
     assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
     out, err = capsys.readouterr()
-    assert f"behaviour sequence / {word} {said}" in err
+    assert f"behaviour sequence / {word} {said.format(plugin=tmp_path / 'plugin.py')}" in err
     assert f"({where.format(plugin=tmp_path / 'plugin.py')})" in err
     if word == "near":
         assert "; add 27 to @declare(reads=...) of 'near' (it lists 7)" in err

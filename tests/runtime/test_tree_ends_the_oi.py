@@ -184,3 +184,41 @@ def test_a_tree_s_stop_while_the_wheels_turn_goes_after_drive_0_and_motors_off(
     stop = bytes(opcodes("stop"))
     assert written.endswith(C.halt().data + C.motors_off().data + stop)
     assert run.summary.final_mode is OIMode.OFF
+
+
+POWER_PLUGIN = '''
+from py_trees.common import Status
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.opcodes import opcodes
+
+@declare("do_power", kind="action", sends=opcodes("power"))
+class DoPower(Action):
+    """Power (133): the robot asleep."""
+    def update(self) -> Status:
+        self.send(commands.power())
+        return Status.SUCCESS
+'''
+
+
+def test_a_plugin_that_declares_power_is_refused_before_anything_is_sent(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The stranger's do_power (session 36): the robot fell asleep, its stream stopped, and
+    the run said CONNECTION LOST, exit 8 ("the robot may have moved"), for a command the tree
+    sent. Refused where it is declared: a mission error, exit 2, before the port is opened."""
+    (tmp_path / "modes.py").write_text(POWER_PLUGIN)
+    mission = tmp_path / "power.yaml"
+    mission.write_text(
+        "plugins: [./modes.py]\ntree:\n  sequence:\n    - mode: safe\n    - do_power\n"
+    )
+    code = main(["run", str(mission), "--fast", "--display", "none", "--allow-plugin-files"])
+    out, err = capsys.readouterr()
+    assert code == 2, out + err
+    assert (
+        "power.yaml:1:11: plugin " in err
+        and f"DoPower ({tmp_path / 'modes.py'}:7) declares itself wrongly: sends power (133), "
+        "which roomba-bt never sends: the robot falls asleep and its sensor stream stops"
+        in err
+    ), err
+    assert "CONNECTION LOST" not in out + err
