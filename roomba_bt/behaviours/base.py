@@ -182,7 +182,7 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         if declaration.halts_only and sets_going(command):  # the Full-mode warning reads it
             raise UnkeptDeclaration(self, command, _HALTS_ONLY)
         if spec.leads_to is not None:  # the static mode check reads leads_to=
-            self._hold_to_leads_to(command)
+            self._hold_to_leads_to(command, spec.leads_to)
         if spec.drives_wheels:  # what it set turning is stopped when it ends (terminate)
             self._started_motion = turns_wheels(command)
         elif spec.effect is _BUILTIN_CYCLE:  # ended when it is halted or fails (terminate)
@@ -201,11 +201,11 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             robot.outbox.send(motors_off(), self)
         robot.outbox.send(command, self)
 
-    def _hold_to_leads_to(self, command: Command) -> None:
-        """Refuse a mode command leading elsewhere than the mode its declaration says it
-        leads to with its parameters (none said: the check took the mode as unchanged)."""
+    def _hold_to_leads_to(self, command: Command, sent: OIMode) -> None:
+        """Refuse a mode command (leading to ``sent``) leading elsewhere than the mode its
+        declaration says it leads to with its parameters (none said: the check took the mode
+        as unchanged)."""
         declared = self.declaration.mode_after(self._resolved)
-        sent = command.spec.leads_to
         if sent is declared:
             return
         if declared is None:
