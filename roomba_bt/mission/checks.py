@@ -881,16 +881,16 @@ def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
         if where in seen:
             continue
         seen.add(where)
-        how = (
-            "switches to Full mode itself and can turn the wheels there"
-            if enters_full
-            else ("can turn the wheels in Full mode")
+        how, fix = (
+            ("switches to Full mode itself and can turn the wheels there", "")
+            if enters_full  # mode: safe before it changes nothing
+            else ("can turn the wheels in Full mode", "use mode: safe, or ")
         )
         warnings.append(
             node.loc.at(
                 f"{decl.name} {how}, where the robot does not stop at a cliff or a wheel drop, "
-                "and no cliff sensor (packets 9-12) is read while it runs: use mode: safe, or "
-                "end it on a cliff (until: {cliff: any})"
+                f"and no cliff sensor (packets 9-12) is read while it runs: {fix}end it on a "
+                "cliff (until: {cliff: any})"
             ).as_warning()
         )
     return warnings

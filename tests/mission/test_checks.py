@@ -458,8 +458,7 @@ def test_a_leaf_that_switches_to_full_itself_and_drives_is_warned(
         [
             "3:28: faster switches to Full mode itself and can turn the wheels there, where "
             "the robot does not stop at a cliff or a wheel drop, and no cliff sensor (packets "
-            "9-12) is read while it runs: use mode: safe, or end it on a cliff (until: "
-            "{cliff: any})"
+            "9-12) is read while it runs: end it on a cliff (until: {cliff: any})"
         ]
         if warned
         else []
