@@ -525,7 +525,7 @@ def interruption_by(interrupt: KeyboardInterrupt) -> Interruption:
     from roomba_bt.robot.safety import signal_reason
 
     signum = getattr(interrupt, "signum", signal.SIGINT)
-    said = "Ctrl-C (SIGINT)" if signum == signal.SIGINT else signal_reason(signum)
+    said = signal_reason(signum)
     return Interruption(signal.Signals(signum).name, f"by {said}")
 
 

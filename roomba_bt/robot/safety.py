@@ -95,11 +95,29 @@ def _taken(signals: tuple[int, ...]) -> tuple[int, ...]:
     return tuple(signum for signum in signals if signum not in IGNORED_AT_START)
 
 
+#: How a run's summary names SIGINT: a process cannot tell who sent it, a terminal's Ctrl-C or
+#: another process's ``kill -INT`` (a script's ``kill -INT $!``, ``timeout -s INT``), so the
+#: words are true of both; "Ctrl-C" first, as a run's reason has read since the start, so
+#: ``grep 'INTERRUPTED (Ctrl-C'`` finds such runs still (decided, session 36: it said
+#: ``Ctrl-C`` alone, of a script's ``kill -INT`` too)
+SIGINT_SAID = "Ctrl-C or kill -INT (SIGINT)"
+
+
+def interrupt_reason(interrupt: KeyboardInterrupt) -> str:
+    """How a run's summary names the signal whose interrupt ``interrupt`` is: a
+    :class:`Terminated`'s signal (:func:`signal_reason`), else SIGINT's
+    (:data:`SIGINT_SAID`)."""
+    if isinstance(interrupt, Terminated):
+        return signal_reason(interrupt.signum)
+    return SIGINT_SAID
+
+
 def signal_reason(signum: int, *, terminal: bool | None = None) -> str:
-    """How a run's summary names the signal that ended it. A SIGHUP is a terminal's hang-up
-    only where the process had one (``terminal``; :data:`HAD_A_TERMINAL` when not given):
-    under a service or cron it was sent by a program, and "the terminal was closed" sent
-    the reader of the evening's log after an SSH session that never was."""
+    """How a run's summary names the signal that ended it (SIGINT: :data:`SIGINT_SAID`). A
+    SIGHUP is a terminal's hang-up only where the process had one (``terminal``;
+    :data:`HAD_A_TERMINAL` when not given): under a service or cron it was sent by a program,
+    and "the terminal was closed" sent the reader of the evening's log after an SSH session
+    that never was."""
     if signum == getattr(signal, "SIGHUP", None):
         if HAD_A_TERMINAL if terminal is None else terminal:
             return "SIGHUP: the terminal was closed (an SSH session dropped?)"
@@ -107,6 +125,8 @@ def signal_reason(signum: int, *, terminal: bool | None = None) -> str:
             "SIGHUP, with no terminal to hang up: sent by a program (kill -HUP, a logrotate "
             "postrotate script, systemctl reload?)"
         )
+    if signum == signal.SIGINT:
+        return SIGINT_SAID
     if signum == getattr(signal, "SIGTSTP", None):
         return "Ctrl-Z (SIGTSTP): a suspended run could not stop its robot, so it ended"
     if signum == getattr(signal, "SIGQUIT", None):

@@ -66,7 +66,7 @@ from roomba_bt.robot.safety import (
     InterruptGuard,
     RunAborted,
     Terminated,
-    signal_reason,
+    interrupt_reason,
 )
 from roomba_bt.runtime.clock import (
     StreamClock,
@@ -778,7 +778,7 @@ def run_ended_by(
     KeyboardInterrupt`` too (:func:`behaviours_interrupt`), the node whose ``terminate``
     raised it returned (its ``terminate`` is not called again)."""
     if isinstance(exc, KeyboardInterrupt) and not behaviours_interrupt(exc):
-        why = signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C"
+        why = interrupt_reason(exc)
         cut = f" {summary.cut_short}" if summary.cut_short else ""
         summary.outcome, summary.reason = Outcome.INTERRUPTED, why + cut
         return exc, None

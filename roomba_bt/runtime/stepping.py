@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from roomba_bt.robot.interface import Snapshot
-from roomba_bt.robot.safety import Terminated, signal_reason, sigterm_raises
+from roomba_bt.robot.safety import interrupt_reason, sigterm_raises
 from roomba_bt.runtime.loop import (
     MissionRunner,
     TickObserver,
@@ -164,7 +164,7 @@ def ticks(stack: RunStack) -> Generator[Tick, None, None]:
                 yield handed
         except KeyboardInterrupt as exc:  # Ctrl-C, or Terminated, while the loop waited
             interrupt = exc
-            stack.stop(signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C")
+            stack.stop(interrupt_reason(exc))
         finally:
             if ended is None:  # a break, an exception, close(), Ctrl-C: the run stops
                 stack.stop(LOOP_LEFT)

@@ -36,11 +36,10 @@ from roomba_bt.oi.frames import SLOT_SECONDS, MissingPacket
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.robot.safety import (
     THE_SAFE_STOP,
-    Terminated,
     code_failure,
     failure_said,
+    interrupt_reason,
     signal_delivered,
-    signal_reason,
 )
 from roomba_bt.runtime.recording import UNDELIVERED_STOP
 from roomba_bt.runtime.summary import Outcome, RunSummary
@@ -366,7 +365,7 @@ def note_late_interrupt(
     start ``b`` after the operator's Ctrl-C; one that had ended otherwise (an error, a lost
     link, the monitor's stop) keeps its outcome and exit code, its reason followed by ``;
     then Ctrl-C during ...``."""
-    why = signal_reason(interrupt.signum) if isinstance(interrupt, Terminated) else "Ctrl-C"
+    why = interrupt_reason(interrupt)
     said = f"{why} during {came_during}"
     if summary.outcome in _CLEAN_ENDINGS:
         was = summary.outcome.value + (f": {summary.reason}" if summary.reason else "")

@@ -13,7 +13,13 @@ from collections.abc import Callable, Sequence
 
 import pytest
 
-from roomba_bt.robot.safety import InterruptGuard, Terminated, sigterm_raises
+from roomba_bt.robot.safety import (
+    InterruptGuard,
+    Terminated,
+    interrupt_reason,
+    signal_reason,
+    sigterm_raises,
+)
 from roomba_bt.sim.server import PtyEndpoint
 
 from .fake_robot import FakeRobot
@@ -215,3 +221,13 @@ def test_a_guard_where_nothing_drives_takes_ctrl_backslash_as_sigterm() -> None:
     with InterruptGuard(wall_clock=False):
         assert signal.getsignal(signal.SIGQUIT) is not before
     assert signal.getsignal(signal.SIGQUIT) is before
+
+
+def test_a_sigint_is_named_as_either_sender_would_have_sent_it() -> None:
+    """A process cannot tell a terminal's Ctrl-C from another process's ``kill -INT``: the
+    reason is true of both (it said ``Ctrl-C`` of a script's ``kill -INT $!``), and starts
+    with ``Ctrl-C``, as logs were searched for."""
+    said = signal_reason(signal.SIGINT)
+    assert said == "Ctrl-C or kill -INT (SIGINT)"
+    assert interrupt_reason(KeyboardInterrupt()) == said
+    assert interrupt_reason(Terminated(signal.SIGTERM)) == "SIGTERM"

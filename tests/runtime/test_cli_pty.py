@@ -191,7 +191,7 @@ def test_a_second_ctrl_c_waits_for_the_safe_stop_and_the_summary(
     proc.send_signal(signal.SIGINT)
     out, err = ended(proc)
     assert proc.returncode == 130, out + err
-    assert "outcome      INTERRUPTED (Ctrl-C)" in out
+    assert "outcome      INTERRUPTED (Ctrl-C or kill -INT (SIGINT))" in out
     # a spinning run on the wall clock: drive 0 and motors off went out before the tree's
     # stop; or, on a machine so loaded that the simulator's own process sent nothing for a
     # while before the stop, the stop honestly said unconfirmed (the record's bytes below

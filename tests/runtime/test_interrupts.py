@@ -22,7 +22,7 @@ from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.robot.safety import Terminated
+from roomba_bt.robot.safety import SIGINT_SAID, Terminated
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import Outcome
@@ -80,7 +80,7 @@ def test_the_cli_keeps_its_summary(tmp_path: Path) -> None:
     stack, link = _stack(tmp_path, 40, signal.SIGINT)
     summary = stack.run(raise_interrupts=False)
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
-    assert summary.reason == "Ctrl-C"
+    assert summary.reason == SIGINT_SAID
     assert link.written.endswith(SAFE_END)
 
 
@@ -181,7 +181,7 @@ def test_a_signal_during_the_stop_is_raised_once_the_stop_is_done(
     assert isinstance(caught.value, Terminated) == (signum == signal.SIGTERM)
     summary = caught.value.summary  # type: ignore[attr-defined]
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
-    why = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
+    why = SIGINT_SAID if signum == signal.SIGINT else "SIGTERM"
     assert summary.reason == f"{why} during {_SAID[during]} (the run had ended: success)"
     assert done == ["shut down"]  # the stop and the shutdown were finished first
     assert link.written.endswith(SAFE_END) and summary.safe_stop.startswith("sent ")
@@ -198,7 +198,7 @@ def test_the_cli_reports_a_signal_during_the_stop_as_interrupted(
     stack, _link = _late_stack(signal.SIGINT, during, done)
     summary = stack.run(raise_interrupts=False)
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
-    assert summary.reason == f"Ctrl-C during {_SAID[during]} (the run had ended: success)"
+    assert summary.reason == f"{SIGINT_SAID} during {_SAID[during]} (the run had ended: success)"
     assert done == ["shut down"]
     assert "waiting for it to end (the summary follows)" in capfd.readouterr().err
 
@@ -273,7 +273,7 @@ def test_a_signal_during_the_trees_stop_says_the_tree_is_stopping(
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
     line = _SignalsOnTerminate.terminate.__code__.co_firstlineno + 2  # its signal
     assert summary.reason == (
-        "Ctrl-C during the tree's stop, in slow_term (_SignalsOnTerminate.terminate at "
+        f"{SIGINT_SAID} during the tree's stop, in slow_term (_SignalsOnTerminate.terminate at "
         f"{__file__}:{line}) (the run had ended: timeout: the run's 0.3 s of mission time "
         "ran out in forward)"
     ), summary.reason  # it said "during the safe stop", which had not begun
@@ -318,7 +318,7 @@ def test_the_cli_says_a_ctrl_c_in_a_terminate_came_during_the_trees_stop(
     text = said.out + said.err
     line = CTRL_C_IN_TERMINATE.splitlines().index("            os.kill(os.getpid(), signal.SIGINT)")
     assert (
-        f"Ctrl-C during the tree's stop, in slow_term (SlowTerm.terminate at "
+        f"{SIGINT_SAID} during the tree's stop, in slow_term (SlowTerm.terminate at "
         f"{tmp_path / 'slowterm.py'}:{line + 1}) (the run had ended: timeout: "
     ) in text, text
     assert (

@@ -18,6 +18,7 @@ import pytest
 from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.safety import SIGINT_SAID
 from roomba_bt.robot.wording import COMMAND_LINE, spoken
 from roomba_bt.runtime.recording import RecordingTransport, ReplayTransport, load_record
 from roomba_bt.runtime.stack import Recording, RunStack, replay_record
@@ -581,7 +582,7 @@ def test_a_ctrl_c_inside_a_tick_is_noted_before_it_and_replays_byte_for_byte(
     monkeypatch.delenv("INTERRUPT_MID_TICK")
     ending = load_record(path).ending
     assert ending is not None
-    assert (ending["reason"], ending["tick"], ending["at"]) == ("Ctrl-C", 68, "before")
+    assert (ending["reason"], ending["tick"], ending["at"]) == (SIGINT_SAID, 68, "before")
     capsys.readouterr()
     # the record's own "allow_plugin_files": true is never honoured: the flag is the fix
     assert main(["replay", str(path)]) == 2
@@ -595,7 +596,7 @@ def test_a_ctrl_c_inside_a_tick_is_noted_before_it_and_replays_byte_for_byte(
     assert main(["replay", str(path), "--allow-plugin-files"]) == 0
     out = capsys.readouterr().out
     assert "replay: the tree wrote the same 38 bytes as the recorded run" in out, out
-    assert "replay: the recorded run was interrupted (Ctrl-C) at t=1.02 s" in out
+    assert f"replay: the recorded run was interrupted ({SIGINT_SAID}) at t=1.02 s" in out
 
 
 class _CtrlCBetweenFrames(SimLink):
@@ -630,7 +631,7 @@ def test_a_ctrl_c_between_frames_is_still_noted_after_the_last_tick(tmp_path: Pa
     link = _CtrlCBetweenFrames(Simulator(load_world("empty-room"), CREATE2, 0), after=80)
     path = _interrupted_record(tmp_path, SPIN, link)
     ending = load_record(path).ending
-    assert ending is not None and (ending["reason"], ending["at"]) == ("Ctrl-C", "after")
+    assert ending is not None and (ending["reason"], ending["at"]) == (SIGINT_SAID, "after")
     summary, difference, written = _replayed(path)
     assert difference is None and written == load_record(path).out_bytes
     assert summary.ticks > 1
@@ -1190,9 +1191,9 @@ def test_a_ctrl_c_between_two_writes_of_a_tick_replays_byte_for_byte(
     record = load_record(path)
     outbound = record.outbound
     assert f"replay: the tree wrote the same {len(outbound)} bytes as the recorded run" in out
-    assert "replay: the recorded run was interrupted (Ctrl-C) at t=0.01 s" in out
+    assert f"replay: the recorded run was interrupted ({SIGINT_SAID}) at t=0.01 s" in out
     ending = record.ending
-    assert ending is not None and (ending["reason"], ending["at"]) == ("Ctrl-C", "before")
+    assert ending is not None and (ending["reason"], ending["at"]) == (SIGINT_SAID, "before")
     motors = bytes.fromhex("8a04")
     assert outbound[ending["written"] - 2 : ending["written"]] == motors  # then the safe stop
     lines = path.read_text(encoding="utf-8").splitlines(keepends=True)

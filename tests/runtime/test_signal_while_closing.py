@@ -79,7 +79,7 @@ def test_a_second_ctrl_c_while_the_run_closes_leaves_the_port_free_and_the_recor
             proc.communicate()
     assert "hook: SIGINT" in err  # the second one was sent, where it was meant to be
     assert proc.returncode == 130, out + err
-    assert "outcome      INTERRUPTED (Ctrl-C)" in out  # the summary
+    assert "outcome      INTERRUPTED (Ctrl-C or kill -INT (SIGINT))" in out  # the summary
     assert CLOSING_UNDER_WAY in err  # what the second one waits for
     ran = load_record(record)
     assert ran.ending is not None  # the end note

@@ -17,6 +17,7 @@ from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot import wording
+from roomba_bt.robot.safety import SIGINT_SAID
 from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.runtime.wall_limit import WallLimit, WallLimitReached
@@ -76,7 +77,7 @@ def _stopped(stack: RunStack, summary: RunSummary) -> None:
 
 @pytest.mark.parametrize(
     ("signum", "said"),
-    [(signal.SIGINT, "Ctrl-C"), (signal.SIGTERM, "SIGTERM")],
+    [(signal.SIGINT, SIGINT_SAID), (signal.SIGTERM, "SIGTERM")],
     ids=["ctrl-c", "sigterm"],
 )
 def test_an_interrupt_in_a_stuck_tick_names_the_leaf_and_its_line(signum: int, said: str) -> None:
@@ -115,7 +116,7 @@ def test_an_ordinary_tick_s_interrupt_says_only_the_signal() -> None:
     link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
     with RunStack(TreeMission(root, "quick"), link, profile=CREATE2, timeout_s=5.0) as stack:
         summary = stack.run(raise_interrupts=False)
-    assert (summary.outcome, summary.reason) == (Outcome.INTERRUPTED, "Ctrl-C")
+    assert (summary.outcome, summary.reason) == (Outcome.INTERRUPTED, SIGINT_SAID)
 
 
 @pytest.mark.parametrize(
