@@ -71,6 +71,29 @@ class ClaimedFile:
         self._handed = True
         return self._fd
 
+    def make_room(self, size: int) -> None:
+        """Make sure the disk takes ``size`` bytes more before a file that holds an earlier
+        record is emptied (``run --require-record``, whose header is ``size`` bytes or fewer):
+        they are written after its end and cut off again, the file as it was either way, and
+        the disk's refusal (a full disk, a quota, a file size limit: an OSError) raised before
+        anything of it is lost. Emptied first, an earlier record was gone when the header
+        then failed and the run refused to start (session 36). Nothing for a file this claim
+        made or one that is empty (nothing to lose) or a device (never emptied)."""
+        held = os.fstat(self._fd)
+        if self._handed or not stat.S_ISREG(held.st_mode) or held.st_size == 0:
+            return
+        end = held.st_size
+        try:
+            written = self._write_at(b"\n" * size, end)
+            if written < size:  # a short write: the disk took what it had room for
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self.path))
+        finally:
+            os.ftruncate(self._fd, end)
+
+    def _write_at(self, data: bytes, offset: int) -> int:
+        """``data`` written at ``offset`` of the file; the bytes written."""
+        return os.pwrite(self._fd, data, offset)
+
     def release(self) -> None:
         """Let go of a file that was never written: as it was, or gone if the claim made it
         (a run refused at its start left an empty record behind). Nothing once written."""

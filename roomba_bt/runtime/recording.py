@@ -341,6 +341,12 @@ def _open_for_writing(claimed: ClaimedFile, path: str) -> LineFile:
     return claimed.open_text()
 
 
+#: the bytes a required record's header may take on disk beyond its line's (a compressed
+#: record's gzip header and deflate blocks: a short line compresses to more than itself),
+#: made room for before an earlier record in the file is emptied (``ClaimedFile.make_room``)
+HEADER_SLACK = 64
+
+
 class RecordNotStarted(OSError):
     """A record the run may not go without (``required``, ``run --require-record``) could
     not be started: its header was not written (``strerror``: why; a full disk)."""
@@ -384,7 +390,19 @@ class RecordingTransport:
         self.path = str(path)
         #: written gzip-compressed (the path ends in ``.gz``)
         self.compressed = compressed_name(path)
+        head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, MADE_BY: __version__, **header}
+        if self.wall_clock or self.loses_bytes:
+            head[STOP_LISTENED] = True
+        line = json.dumps(head) + "\n"
+        claiming = claimed is None
         claimed = claimed or ClaimedFile(path)
+        if required:  # an earlier record is emptied only once the disk takes the header
+            try:
+                claimed.make_room(len(line.encode()) + HEADER_SLACK)
+            except OSError as exc:
+                if claiming:  # a caller's claim is the caller's to let go of
+                    claimed.release()
+                raise RecordNotStarted(exc.errno, exc.strerror or str(exc), self.path) from None
         self._file: LineFile = _open_for_writing(claimed, self.path)
         self._t0: float | None = None
         #: why and when the recording stopped before the run's end (None: it did not)
@@ -397,14 +415,11 @@ class RecordingTransport:
         #: the run's mission time now (None before its first tick), for where the recording
         #: stopped: the run's stack gives its runner's; by itself, the record's own clock
         self.mission_time: Callable[[], float | None] = _no_mission_time
-        head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, MADE_BY: __version__, **header}
-        if self.wall_clock or self.loses_bytes:
-            head[STOP_LISTENED] = True
         self._flushed_at = -math.inf  # the header goes out at once, and the first chunk
         if required:
-            self._header_or_refuse(json.dumps(head) + "\n", claimed)
+            self._header_or_refuse(line, claimed)
         else:
-            self._put(json.dumps(head) + "\n", 0.0)
+            self._put(line, 0.0)
 
     def _header_or_refuse(self, line: str, claimed: ClaimedFile) -> None:
         """Write the header of a record the run may not go without, or refuse: the file

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import re
 import subprocess
 import sys
@@ -728,3 +729,33 @@ def test_a_long_lost_link_line_is_said_a_clause_a_line_for_the_journal() -> None
     )
     assert "; ".join(line.strip() for line in lines) == said
     assert run_cmd._journal_lines("connection lost: a; b") == ["connection lost: a; b"]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="a file size limit (RLIMIT_FSIZE)")
+def test_a_required_record_that_cannot_be_written_leaves_the_earlier_record_in_its_file(
+    tmp_path: Path,
+) -> None:
+    """``--require-record`` into a file that holds an earlier record, where the disk takes
+    no more (here a file size limit, as a quota or a full disk): refused, exit 2, and the
+    earlier record is as it was. It was emptied before the header failed (session 36)."""
+    import resource
+
+    earlier = '{"format": "roomba-bt-record", "version": 2}\n{"t": 0.0}\n'
+    record = tmp_path / "run.jsonl"
+    record.write_text(earlier, encoding="utf-8")
+    mission = write_mission(tmp_path, SPIN, "spin.yaml")
+    limit = len(earlier.encode())
+
+    def limited() -> None:  # in the child: no file of it grows past the earlier record
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    argv = ["run", str(mission), "--fast", "--display", "none", "--timeout", "1s"]
+    done = subprocess.run(
+        [sys.executable, "-m", "roomba_bt", *argv, "--record", str(record), "--require-record"],
+        capture_output=True, text=True, timeout=120, preexec_fn=limited,
+        env={**os.environ, "PYTHONPATH": str(Path(__file__).parents[2])},
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert "the record's header could not be written (File too large)" in done.stderr
+    assert "--require-record: not started, nothing sent" in done.stderr
+    assert record.read_text(encoding="utf-8") == earlier

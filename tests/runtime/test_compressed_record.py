@@ -243,6 +243,12 @@ class _ClaimedOnAFullDisk(ClaimedFile):
         raw = super().open_binary().detach()  # type: ignore[attr-defined]
         return io.BufferedWriter(_FillsUp(raw, self._room))
 
+    def _write_at(self, data: bytes, offset: int) -> int:
+        """What the disk takes of ``data`` past the file's end (``make_room``'s trial)."""
+        if self._room == 0:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return super()._write_at(data[: self._room], offset)
+
     def open_text(self, newline: str | None = None) -> IO[str]:
         return io.TextIOWrapper(self.open_binary(), encoding="utf-8", newline=newline)  # type: ignore[arg-type]
 
@@ -370,7 +376,8 @@ def test_a_required_record_on_a_full_disk_refuses_and_leaves_no_empty_file_it_ma
 ) -> None:
     """``run --require-record`` on a full disk: the header is not written, and the record
     refuses (the caller's "not started") without first warning that the run goes on, and
-    removes the 0-byte file it made; a file that was there before is not removed."""
+    removes the 0-byte file it made; a file that was there before is not removed, nor
+    emptied (it was: the file was emptied before its header failed, session 36)."""
     path = tmp_path / name
     if not made_here:
         path.write_text("an earlier record\n", encoding="utf-8")
@@ -379,8 +386,24 @@ def test_a_required_record_on_a_full_disk_refuses_and_leaves_no_empty_file_it_ma
         RecordingTransport(_Link(), path, HEADER, claimed, required=True)  # type: ignore[arg-type]
     assert "the run goes on" not in caplog.text
     assert path.exists() is not made_here
-    claimed.release()  # as run's end does: the file handed over, nothing more to do
+    claimed.release()  # as run's end does
     assert path.exists() is not made_here
+    if not made_here:
+        assert path.read_text(encoding="utf-8") == "an earlier record\n"
+
+
+@pytest.mark.parametrize("name", ["run.jsonl", "run.jsonl.gz"])
+def test_a_required_record_with_room_for_only_part_of_its_header_keeps_the_earlier_one(
+    tmp_path: Path, name: str
+) -> None:
+    """A disk that takes a few bytes more, not the header: the earlier record is as it was."""
+    path = tmp_path / name
+    path.write_text("an earlier record\n", encoding="utf-8")
+    claimed = _ClaimedOnAFullDisk(path, room=20)
+    with pytest.raises(RecordNotStarted, match="No space left on device"):
+        RecordingTransport(_Link(), path, HEADER, claimed, required=True)  # type: ignore[arg-type]
+    claimed.release()
+    assert path.read_text(encoding="utf-8") == "an earlier record\n"
 
 
 #: the run each record size limit's test makes: a plain record writes its 64 kB in about
