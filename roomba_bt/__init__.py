@@ -32,9 +32,11 @@ from roomba_bt._safe_path import drop_current_folder
 
 drop_current_folder()  # before any module not loaded yet: ``python -m`` added the cwd first
 
-from typing import TYPE_CHECKING  # noqa: E402  (after the cwd is dropped)
-
-from roomba_bt._lazy import lazy_exports  # noqa: E402
+# typing's TYPE_CHECKING without typing (3 to 30 ms, as loaded a machine is) or the lazy
+# names' module: every ``roomba-bt`` command imports this package before its entry point
+# (roomba_bt/_entry.py) can take the signals, and each millisecond here was one more in which
+# a script's ``kill -INT`` was lost (session 36). Type checkers take the name as typing's.
+TYPE_CHECKING = False
 
 __version__ = "0.2.0"
 
@@ -187,4 +189,18 @@ if TYPE_CHECKING:
     from roomba_bt.transport import SerialTransport, Transport, TransportError
 else:  # a type checker reads the imports instead, and a name not there is an error to it (a
     # module __getattr__ it could see made every name Any: roomba_bt.RunStak passed)
-    __getattr__, __dir__ = lazy_exports(__name__, _MODULE_OF)
+
+    def __getattr__(name):
+        """The first name asked for: the lazy names' own module (roomba_bt/_lazy.py) imported
+        only now, not as the package loads (above), and its functions put in this one's place."""
+        return _exports()[0](name)
+
+    def __dir__():
+        return _exports()[1]()
+
+    def _exports():
+        from roomba_bt._lazy import lazy_exports
+
+        global __getattr__, __dir__
+        __getattr__, __dir__ = lazy_exports(__name__, _MODULE_OF)
+        return __getattr__, __dir__

@@ -6,11 +6,15 @@ ms on an idle machine to a second on a loaded one to import, and its handlers we
 only once it had loaded: until then a SIGTERM ended the process with 143, a script's ``kill
 -INT $!`` (SIGINT ignored at start in a shell's background job) was lost and the whole
 mission ran, and a terminal's Ctrl-C printed Python's own traceback. This module imports
-only ``signal``, ``sys``, ``contextlib`` and names for its hints (the top package before it,
-which drops the current folder off ``sys.path``: ``_safe_path`` stays first), so its
-handlers are in some milliseconds after Python's own start-up; the CLI's
-(:func:`roomba_bt.cli._as_the_process`) take their place once it has loaded, and a signal
-before then is ``roomba-bt: interrupted``, exit 130, nothing sent.
+only ``sys`` and ``_signal`` (the C module under ``signal``, which Python itself loaded as it
+started: ``signal`` imports ``enum``, ``functools`` and ``collections``, 15 ms and more
+where nothing else had loaded them), and the top package before it, which drops the current
+folder off ``sys.path`` (``_safe_path`` stays first) and imports nothing else (session 36:
+it imported ``typing`` and the lazy names' module, and this module ``signal``,
+``contextlib`` and ``typing``, before a handler was in), so its handlers are in a fraction
+of a millisecond after Python's own start-up; ``signal`` itself is imported once they are.
+The CLI's handlers (:func:`roomba_bt.cli._as_the_process`) take their place once it has
+loaded, and a signal before then is ``roomba-bt: interrupted``, exit 130, nothing sent.
 
 It also holds what those handlers raise, :class:`Terminated` and the mark of a signal's
 interrupt (:func:`delivered`), which :mod:`roomba_bt.robot.safety` raises too: one class
@@ -20,11 +24,17 @@ only, below every layer.
 
 from __future__ import annotations
 
-import contextlib
-import signal
 import sys
-from types import FrameType
-from typing import TypeVar
+
+TYPE_CHECKING = False  # typing's, without importing typing (see above)
+if TYPE_CHECKING:
+    import signal as _signal
+    from types import FrameType
+    from typing import TypeVar
+
+    _Interrupt = TypeVar("_Interrupt", bound=KeyboardInterrupt)
+else:
+    import _signal  # the handlers' C module, loaded before any line of ours ran
 
 #: The signals that end the command from its first line, as they end a run: Ctrl-C, ``kill``
 #: and systemd, the terminal gone, and Ctrl-\ (SIGQUIT: an operator who presses it wants a
@@ -32,16 +42,14 @@ from typing import TypeVar
 #: session 35). SIGHUP and SIGQUIT exist on POSIX only. Ctrl-Z is not here: a command
 #: suspended in its start-up has sent nothing yet, and a run on the wall clock takes it.
 EARLY_SIGNALS: tuple[int, ...] = tuple(
-    getattr(signal, name)
+    getattr(_signal, name)
     for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
-    if hasattr(signal, name)
+    if hasattr(_signal, name)
 )
 
 #: the attribute a signal's interrupt carries (its signal's number), which one a plugin's
 #: code raised lacks (:func:`roomba_bt.robot.safety.signal_delivered`)
 DELIVERED_BY = "roomba_bt_signal"
-
-_Interrupt = TypeVar("_Interrupt", bound=KeyboardInterrupt)
 
 
 def delivered(interrupt: _Interrupt, signum: int) -> _Interrupt:
@@ -62,16 +70,16 @@ class Terminated(KeyboardInterrupt):
     it too, and ``except Exception`` does not swallow it.
     """
 
-    def __init__(self, signum: int = signal.SIGTERM) -> None:
+    def __init__(self, signum: int = _signal.SIGTERM) -> None:
         self.signum = signum
-        super().__init__(f"terminated by signal {signal.Signals(signum).name}")
+        super().__init__(f"terminated by signal {_name(signum)}")
 
 
 def interrupted_early(signum: int, frame: FrameType | None) -> None:
     """The handler of :data:`EARLY_SIGNALS` until the CLI's own are in: Ctrl-C's
     :class:`KeyboardInterrupt`, another signal's :class:`Terminated`, marked as the signal's.
     Nothing is written yet, so nothing waits for a safe point."""
-    interrupt = KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+    interrupt = KeyboardInterrupt() if signum == _signal.SIGINT else Terminated(signum)
     raise delivered(interrupt, signum)
 
 
@@ -83,14 +91,16 @@ def take_signals_early() -> None:
     SIGHUP on purpose (it stays ignored, and so the safety module reads it:
     :data:`~roomba_bt.robot.safety.IGNORED_AT_START`). A handler a program set is left as it
     is. Signal handlers are the main thread's: elsewhere nothing is set."""
-    hang_up = getattr(signal, "SIGHUP", None)
+    hang_up = getattr(_signal, "SIGHUP", None)
     for signum in EARLY_SIGNALS:
-        now = signal.getsignal(signum)
-        if now in (signal.SIG_DFL, signal.SIG_IGN, signal.default_int_handler) and not (
-            now is signal.SIG_IGN and signum == hang_up
+        now = _signal.getsignal(signum)
+        if now in (_signal.SIG_DFL, _signal.SIG_IGN, _signal.default_int_handler) and not (
+            now == _signal.SIG_IGN and signum == hang_up
         ):
-            with contextlib.suppress(ValueError):  # not the main thread
-                signal.signal(signum, interrupted_early)
+            try:  # noqa: SIM105  (contextlib is not imported here: see above)
+                _signal.signal(signum, interrupted_early)
+            except ValueError:  # not the main thread
+                pass
 
 
 def main() -> int:
@@ -116,14 +126,37 @@ def _interrupted(exc: KeyboardInterrupt) -> int:
     """``roomba-bt: interrupted [by SIGTERM]``, exit 130 (``ExitCode.INTERRUPTED``, whose
     module is not imported for it); a second signal now ends the process at once."""
     for signum in EARLY_SIGNALS:
-        if signal.getsignal(signum) is not signal.SIG_IGN:
-            signal.signal(signum, signal.SIG_DFL)
+        if _signal.getsignal(signum) != _signal.SIG_IGN:
+            _signal.signal(signum, _signal.SIG_DFL)
     ending = getattr(exc, "signum", None)
-    by = f" by {signal.Signals(ending).name}" if ending is not None else ""
-    with contextlib.suppress(OSError):  # stderr closed: the exit code says it all the same
+    by = f" by {_name(ending)}" if ending is not None else ""
+    try:  # noqa: SIM105  (contextlib is not imported here: see above)
         print(f"roomba-bt: interrupted{by}", file=sys.stderr)
+    except OSError:  # stderr closed: the exit code says it all the same
+        pass
     return INTERRUPTED
 
 
 #: ``ExitCode.INTERRUPTED`` (``tests/cli/test_entry.py`` checks the two agree)
 INTERRUPTED = 130
+
+
+def _name(signum: int) -> str:
+    """``SIGTERM``: the signal's name, for the signals a run ends on from a table of its own
+    (a handler names its signal, and ``signal``'s ``enum`` is what this module does without:
+    imported in a handler, it could meet ``signal`` half-imported by the interrupted line);
+    another from ``signal``."""
+    name = _NAMES.get(signum)
+    if name is not None:
+        return name
+    import signal
+
+    return signal.Signals(signum).name
+
+
+#: the names of the signals a run ends on (:func:`_name`), as ``signal.Signals`` says them
+_NAMES: dict[int, str] = {
+    getattr(_signal, name): name
+    for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT", "SIGTSTP")
+    if hasattr(_signal, name)
+}

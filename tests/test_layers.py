@@ -120,14 +120,15 @@ def test_imports_respect_the_layers(path: Path) -> None:
 
 def _runtime_imports(path: Path) -> set[str]:
     """The modules of ours ``path`` imports when it runs: those under ``if TYPE_CHECKING:``
-    (for type checkers only) left out."""
+    (for type checkers only) left out, not those of its ``else:``."""
     tree = ast.parse(path.read_text(), filename=str(path))
     checking = [
         node
         for node in ast.walk(tree)
         if isinstance(node, ast.If) and ast.unparse(node.test) == "TYPE_CHECKING"
     ]
-    skipped = {id(inner) for node in checking for inner in ast.walk(node)}
+    # the ``if`` body alone: its ``else`` runs (the top package's lazy names)
+    skipped = {id(inner) for node in checking for stmt in node.body for inner in ast.walk(stmt)}
     found = set()
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom) and node.module and id(node) not in skipped:

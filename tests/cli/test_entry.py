@@ -4,6 +4,8 @@ never Python's traceback, 143, or a script's ``kill -INT`` lost."""
 
 from __future__ import annotations
 
+import json
+import os
 import signal
 import subprocess
 import sys
@@ -48,6 +50,58 @@ def test_the_signals_are_taken_before_the_command_line_loads() -> None:
         capture_output=True, text=True, timeout=120, check=True,
     )  # fmt: skip
     assert done.stdout.splitlines()[-1] == str(["interrupted_early"] * 3)
+
+
+#: what ``roomba-bt`` has imported when its handlers go in: a fresh interpreter without
+#: ``site`` (-S: what an installed wheel's script has loaded, less the venv's editable-install
+#: finder, which loads ``re`` and ``enum`` itself), each module new since Python started
+MODULES_BEFORE_THE_HANDLERS = """
+import sys
+before = set(sys.modules)
+from roomba_bt._entry import take_signals_early
+take_signals_early()
+imported = sorted(set(sys.modules) - before)
+import json, signal
+handlers = [getattr(signal.getsignal(s), "__name__", "not ours") for s in
+            (signal.SIGINT, signal.SIGTERM, signal.SIGQUIT)]
+print(json.dumps([handlers, imported]))
+"""
+
+
+def test_the_handlers_go_in_before_any_module_they_do_not_need() -> None:
+    """Until session 36 the top package imported ``typing`` and the lazy names' module, and
+    the entry point ``signal`` (``enum``, ``functools``, ``collections`` with it),
+    ``contextlib`` and ``typing`` before a handler was in: 15 to 35 ms more in which a
+    script's ``kill -INT`` was lost. Only the package, its ``sys.path`` guard (and ``os``,
+    which ``site`` loads in every other start) and the entry point come first now."""
+    done = subprocess.run(
+        [sys.executable, "-S", "-c", MODULES_BEFORE_THE_HANDLERS],
+        capture_output=True, text=True, timeout=120, check=True,
+        env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
+    )  # fmt: skip
+    handlers, imported = json.loads(done.stdout.splitlines()[-1])
+    assert handlers == ["interrupted_early"] * 3
+    ours = {"roomba_bt", "roomba_bt._safe_path", "roomba_bt._entry", "__future__"}
+    assert set(imported) - ours <= OS_AND_ITS_OWN, imported
+    for heavy in ("typing", "signal", "enum", "contextlib", "functools", "roomba_bt._lazy"):
+        assert heavy not in imported
+
+
+#: ``os`` and what it imports, which ``site`` has loaded in every start but ``python -S``'s
+OS_AND_ITS_OWN = {"os", "stat", "_stat", "posixpath", "genericpath", "os.path", "_collections_abc"}
+
+
+def test_the_package_names_are_found_once_the_lazy_module_loads() -> None:
+    """The top package's names come through its lazy ``__getattr__``, whose module is now
+    imported at the first name asked for, not as the package loads."""
+    done = subprocess.run(
+        [sys.executable, "-c", "import sys, roomba_bt\n"
+         "print('roomba_bt._lazy' in sys.modules, roomba_bt.ExitCode.INTERRUPTED,\n"
+         "      'ExitCode' in dir(roomba_bt), 'roomba_bt._lazy' in sys.modules)"],
+        capture_output=True, text=True, timeout=120, check=True,
+        env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
+    )  # fmt: skip
+    assert done.stdout.split() == ["False", "130", "True", "True"]
 
 
 def test_the_entry_points_exit_code_is_the_tables() -> None:
