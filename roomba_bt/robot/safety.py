@@ -389,7 +389,33 @@ def signals_end_the_process() -> None:
     which no Python handler can."""
     for signum in _taken(ENDING_SIGNALS):
         with contextlib.suppress(ValueError):  # not the main thread
-            signal.signal(signum, signal.SIG_DFL)
+            if signal.getsignal(signum) is not _answer_stands:  # an answer given stays
+                signal.signal(signum, signal.SIG_DFL)
+
+
+def answer_given() -> None:
+    """The command's answer is known and nothing is left to stop (a run that never started:
+    no connection, exit 3, nothing of the mission sent): from now on an ending signal
+    (:data:`~roomba_bt._entry.EARLY_SIGNALS`, those :data:`IGNORED_AT_START` aside) does not
+    change it. The first lets the answer be written and the command exit with its own
+    code; it puts the signals' default actions back, so a second ends the process at once
+    (a summary blocked on a pipe nobody reads). Kept to the process's exit:
+    :func:`signals_end_the_process` leaves it.
+
+    Decided, session 36: a SIGTERM as a run that never started printed its summary exited
+    130 (``interrupted by SIGTERM`` under a summary that said NO CONNECTION) or, from the
+    command's answer on, 143; either told a service or a script that a run was stopped,
+    where none had started and a retry is safe, which is what exit 3 says."""
+    for signum in _taken(EARLY_SIGNALS):
+        with contextlib.suppress(ValueError):  # not the main thread
+            signal.signal(signum, _answer_stands)
+
+
+def _answer_stands(signum: int, frame: FrameType | None) -> None:
+    """:func:`answer_given`'s handler: the signal noted, the answer written on, the next
+    signal the process's end."""
+    for taken in _taken(EARLY_SIGNALS):
+        signal.signal(taken, signal.SIG_DFL)
 
 
 class InterruptGuard:

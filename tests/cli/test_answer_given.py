@@ -1,0 +1,96 @@
+"""A signal once a run's answer is NO CONNECTION (exit 3: not started, nothing of the mission
+sent, a retry safe) leaves that answer and its exit code as they are (``answer_given`` in
+``roomba_bt/robot/safety.py``; docs/runtime.md). It was 130, ``interrupted by SIGTERM``
+under a summary that said NO CONNECTION, or 143 from the command's answer on.
+
+Each child brings the signal to itself at a set point of the answer (no timing): as the
+summary is made, as the stderr lines after it are written, or once ``main`` has returned."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: ``roomba-bt run dock --port PORT`` through the entry point, the signal ``SIGNUM`` brought
+#: at ``WHEN``: "summary" (the port never opened: as the summary is made), "report" (the
+#: port opened, the robot silent: as the report's stderr lines are written), "exit" (once
+#: ``main`` returned, before the process exits); ``TWICE``: a second one after the first
+CHILD = """
+import os, signal, sys
+from roomba_bt.cli import run_cmd
+from roomba_bt._entry import main
+
+port, when, signum, twice = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4] == "1"
+
+def bring():
+    os.kill(os.getpid(), signum)
+    for _ in range(1000):  # a Python handler runs between bytecodes, here at the latest
+        pass
+    if twice:
+        os.kill(os.getpid(), signum)
+        for _ in range(1000):
+            pass
+
+if when == "summary":
+    said = run_cmd.RunSummary.__str__
+    def summary(self):
+        bring()
+        return said(self)
+    run_cmd.RunSummary.__str__ = summary
+elif when == "report":
+    reported = run_cmd._report_on_stderr
+    def report(*args):
+        bring()
+        return reported(*args)
+    run_cmd._report_on_stderr = report
+
+sys.argv = ["roomba-bt", "run", "dock", "--port", port, "--display", "none"]
+code = main()
+if when == "exit":
+    bring()
+sys.exit(code)
+"""
+
+
+def _answer(
+    port: str, when: str, signum: int, twice: bool = False
+) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-c", CHILD, port, when, str(int(signum)), "1" if twice else "0"],
+        capture_output=True, text=True, timeout=120, env={"PYTHONPATH": str(ROOT), "PATH": ""},
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+@pytest.mark.parametrize("when", ["summary", "exit"])
+def test_a_signal_after_a_port_that_never_opened_leaves_exit_3(
+    tmp_path: Path, when: str, signum: int
+) -> None:
+    done = _answer(str(tmp_path / "ttyUSB9"), when, signum)
+    assert done.returncode == 3, (done.returncode, done.stderr)
+    assert "outcome      NO CONNECTION" in done.stdout
+    assert "interrupted" not in done.stderr and "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize("when", ["report", "exit"])
+def test_a_sigterm_after_a_robot_that_never_answered_leaves_exit_3(
+    silent_port: str, when: str
+) -> None:
+    """The port opened, nothing answered the start-up: the run's own ending, exit 3."""
+    done = _answer(silent_port, when, signal.SIGTERM)
+    assert done.returncode == 3, (done.returncode, done.stderr)
+    assert "outcome      NO CONNECTION" in done.stdout
+    assert "interrupted" not in done.stderr and "Traceback" not in done.stderr
+
+
+def test_a_second_signal_ends_the_process_at_once(tmp_path: Path) -> None:
+    """A summary blocked on a pipe nobody reads is still ended: the second signal's default
+    action, as after every run's report."""
+    done = _answer(str(tmp_path / "ttyUSB9"), "summary", signal.SIGTERM, twice=True)
+    assert done.returncode == -signal.SIGTERM
