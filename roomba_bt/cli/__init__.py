@@ -193,6 +193,9 @@ def _command(argv: Sequence[str] | None) -> int:
         given = sys.argv[1:] if argv is None else argv
         return _cannot_run(exc, sum(1 for a in given if re.fullmatch(r"-v+|--verbose", a)))
     args = parser.parse_args(argv)
+    # the process itself (``roomba-bt``), whose signals a command may set to its exit: a
+    # program's call keeps its own handlers (run_cmd's answer_given)
+    args.as_the_process = argv is None
     args.verbose += getattr(args, "verbose_after", 0)
     args.quiet += getattr(args, "quiet_after", 0)
     setup_logging(args.verbose, args.quiet)

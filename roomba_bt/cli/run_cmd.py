@@ -478,7 +478,8 @@ def _not_started(args: argparse.Namespace, exc: Exception, sent: str) -> int:
     CONNECTION, exit 3 (nothing of the mission sent: safe to retry). It was one line on
     stderr: a cron job's evening log had no ``outcome`` line to look for, and the hint said
     ``doctor --port URL``, not the port."""
-    answer_given()  # the port is closed: a signal now changes nothing (exit 3)
+    if getattr(args, "as_the_process", False):
+        answer_given()  # the port is closed: a signal now changes nothing (exit 3)
     summary = RunSummary(Path(args.mission).stem, Outcome.NO_CONNECTION, reason=str(exc))
     summary.profile = "" if args.profile == AUTO_PROFILE else profile_line(args)
     summary.robot = robot_label(args.port, None)
@@ -744,10 +745,13 @@ def _run_and_report(
         # the record's end note is out, the monitor shut down, the port closed (its exclusive
         # mode cleared) and an undelivered stop tried again: a signal now ends the process,
         # so that a report blocked on a pipe nobody reads can still be ended; a run that
-        # never started keeps its exit 3 (answer_given). The run's handlers go first: given
-        # back after the report, they made a signal then "interrupted by SIGTERM", exit 130
-        stack.runner.release_interrupts()
-        if summary.outcome is Outcome.NO_CONNECTION:
+        # never started keeps its exit 3 (answer_given). The process's run handlers go
+        # first: given back after the report, they made a signal then "interrupted by
+        # SIGTERM", exit 130 (a program's call gets its own back after the report, as ever)
+        process = getattr(args, "as_the_process", False)
+        if process:
+            stack.runner.release_interrupts()
+        if process and summary.outcome is Outcome.NO_CONNECTION:
             answer_given()
         else:
             signals_end_the_process()

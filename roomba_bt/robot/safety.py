@@ -400,7 +400,8 @@ def answer_given() -> None:
     change it. The first lets the answer be written and the command exit with its own
     code; it puts the signals' default actions back, so a second ends the process at once
     (a summary blocked on a pipe nobody reads). Kept to the process's exit:
-    :func:`signals_end_the_process` leaves it.
+    :func:`signals_end_the_process` leaves it. The process's own (the CLI as ``roomba-bt``):
+    a program that calls the CLI's ``main(argv)`` keeps its handlers.
 
     Decided, session 36: a SIGTERM as a run that never started printed its summary exited
     130 (``interrupted by SIGTERM`` under a summary that said NO CONNECTION) or, from the

@@ -94,3 +94,14 @@ def test_a_second_signal_ends_the_process_at_once(tmp_path: Path) -> None:
     action, as after every run's report."""
     done = _answer(str(tmp_path / "ttyUSB9"), "summary", signal.SIGTERM, twice=True)
     assert done.returncode == -signal.SIGTERM
+
+
+def test_a_programs_call_keeps_its_own_handlers(tmp_path: Path) -> None:
+    """``main(argv)`` from a program: exit 3 all the same, and its handlers as they were (the
+    answer's handler is the process's alone)."""
+    from roomba_bt.cli import main
+
+    before = [signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)]
+    argv = ["run", "dock", "--port", str(tmp_path / "ttyUSB9"), "--display", "none"]
+    assert main(argv) == 3
+    assert [signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)] == before
