@@ -168,8 +168,16 @@ class Answers:
 
 
 #: what a composite that ticks every child on every tick needs to succeed: every child's
-#: success, any one's, or the ``selected`` ones' (their places in the option ``selected_at``)
+#: success, any one's, or the chosen ones' (the children its :attr:`Combines.chosen` option
+#: names, by their places: :func:`places_option`)
 ALL, ONE, SELECTED = "all", "one", "selected"
+
+
+def places_option(option: str) -> str:
+    """The option the compiler leaves the places of the children an option of child names
+    picks in (``selected`` -> ``selected_at``, :mod:`roomba_bt.mission.control`): the
+    builder and the checks read them by place, since ``show`` renames the nodes it reviews."""
+    return f"{option}_at"
 
 
 @dataclass(frozen=True, slots=True)
@@ -177,7 +185,10 @@ class Combines:
     """How a composite's answer follows its children's: the facts the static checks read
     (:mod:`roomba_bt.mission.ticks`, :mod:`roomba_bt.mission.checks`,
     :mod:`roomba_bt.mission.deadends`), so that a new composite is judged by what it
-    declares, never by a list of words.
+    declares, never by a list of words, nor by the names of a word's options: the options
+    that change how it combines (a parallel's ``policy``, ``selected`` and ``synchronise``)
+    are named here, and the checks ask :meth:`waits`, :meth:`waited_for` and
+    :meth:`synchronised` of a node's options rather than read them by name.
 
     Whether one that ticks its children in turn remembers a RUNNING child is its ``memory``
     option (each declares one; a reactive word defaults it to false and refuses true): read
@@ -190,8 +201,21 @@ class Combines:
     #: successes it waits for)
     goes_on: str | None
     #: (every child on every tick) which successes it waits for (:data:`ALL`, :data:`ONE`,
-    #: :data:`SELECTED`) when the node has no ``policy`` option saying so
+    #: :data:`SELECTED`) when the node has no :attr:`policy` option saying so
     needs: str = ALL
+    #: the option whose value (:data:`ALL`, :data:`ONE`, :data:`SELECTED`) says which
+    #: successes the node waits for, where a node may say so (``parallel``'s ``policy``)
+    policy: str | None = None
+    #: the option of child names whose successes :data:`SELECTED` waits for
+    #: (``parallel``'s ``selected``); without it, or not given, every child's
+    chosen: str | None = None
+    #: whether a child that has succeeded is left unticked while the others run (py_trees'
+    #: synchronise), when the node has no :attr:`synchronise` option saying so; without it
+    #: a success is ticked again, and a node ticked after it finished starts over
+    synchronised_by_default: bool = True
+    #: the option (a boolean) that says per node whether it is synchronised
+    #: (``parallel``'s ``synchronise``)
+    synchronise: str | None = None
 
     @property
     def stops(self) -> str | None:
@@ -201,13 +225,41 @@ class Combines:
             return None
         return FAILURE if self.goes_on == SUCCESS else SUCCESS
 
+    @property
+    def options(self) -> tuple[str, ...]:
+        """The options it names, which its word must declare (:class:`NodeKind` checks)."""
+        named = (self.policy, self.chosen, self.synchronise)
+        return tuple(option for option in named if option is not None)
+
+    def waits(self, options: Mapping[str, Any]) -> str:
+        """Which successes a node with ``options`` waits for: :data:`ALL`, :data:`ONE` or
+        :data:`SELECTED`, as its :attr:`policy` option says, else :attr:`needs`."""
+        if self.policy is None:
+            return self.needs
+        return str(options.get(self.policy, self.needs))
+
+    def waited_for(self, options: Mapping[str, Any], count: int) -> list[int]:
+        """The places of the children whose successes a node with ``options`` and ``count``
+        children waits for: every child's but under :data:`SELECTED`, where it is those its
+        :attr:`chosen` option picks (all of them when it names none)."""
+        if self.waits(options) == SELECTED and self.chosen is not None:
+            return list(options.get(places_option(self.chosen), range(count)))
+        return list(range(count))
+
+    def synchronised(self, options: Mapping[str, Any]) -> bool:
+        """Whether a node with ``options`` leaves a child that has succeeded unticked while
+        the others run (its :attr:`synchronise` option, else the word's default)."""
+        if self.synchronise is None:
+            return self.synchronised_by_default
+        return bool(options.get(self.synchronise, self.synchronised_by_default))
+
 
 #: ``sequence`` and its kin: children in turn, each after the previous one's success
 IN_TURN_ALL = Combines(SUCCESS)
 #: ``fallback`` and its kin: children in turn, each after the previous one's failure
 IN_TURN_FIRST = Combines(FAILURE)
-#: ``parallel``: every child on every tick
-EVERY_TICK = Combines(None)
+#: ``parallel``: every child on every tick, waiting for the successes its options say
+EVERY_TICK = Combines(None, policy="policy", chosen="selected", synchronise="synchronise")
 
 
 @dataclass(frozen=True, slots=True)
@@ -273,6 +325,24 @@ class NodeKind:
             raise TypeError(
                 f"NodeKind {self.word!r} takes no combines=: only a composite (children:) has it"
             )
+        if self.combines is not None:
+            self._combines_options(self.combines)
+
+    def _combines_options(self, combines: Combines) -> None:
+        """An option :class:`Combines` names that the word does not declare (or declares with
+        another type) would never be read: the checks would judge every node by the default."""
+        wanted = {combines.policy: None, combines.chosen: CHILD_NAMES,
+                  combines.synchronise: BOOL}  # fmt: skip
+        for name, kind in wanted.items():
+            if name is None:
+                continue
+            param = self.option(name)
+            if param is None or (kind is not None and param.type is not kind):
+                said = "an option" if kind is None else f"a {kind.name} option"
+                raise TypeError(
+                    f"NodeKind {self.word!r}: its Combines name {name!r}, which must be "
+                    f"{said} of the word"
+                )
 
     def option(self, name: str) -> Param | None:
         for p in self.options:
@@ -299,11 +369,12 @@ def _selector(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Beh
 
 def _parallel(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Behaviour:
     policy: py_trees.common.ParallelPolicy.Base
-    synchronise = bool(o["synchronise"])
-    if o["policy"] == "one":
+    synchronise = EVERY_TICK.synchronised(o)
+    waits = EVERY_TICK.waits(o)
+    if waits == ONE:
         policy = py_trees.common.ParallelPolicy.SuccessOnOne()
-    elif o["policy"] == "selected":
-        chosen = [kids[i] for i in o["selected_at"]]  # by place: mission.control
+    elif waits == SELECTED:
+        chosen = [kids[i] for i in EVERY_TICK.waited_for(o, len(kids))]  # by place
         policy = py_trees.common.ParallelPolicy.SuccessOnSelected(chosen, synchronise)
     else:
         policy = py_trees.common.ParallelPolicy.SuccessOnAll(synchronise)

@@ -41,11 +41,12 @@
 * **Two writers of a key (a warning).** Two branches of a ``parallel`` writing the same
   blackboard key (``set``, ``mark``, a plugin's key, a ``for_each``): the last write of a
   tick wins (:func:`parallel_keys`).
-* **A parallel's restarted branches.** With ``synchronise: false`` (policies ``all`` and
-  ``selected``) a branch that succeeded is ticked again and starts over: one that can
-  succeed and would start an action or a clock again is an error when another branch the
-  parallel waits for may still be RUNNING on the tick it succeeds (beside conditions alone
-  the parallel ends on that tick: :func:`restarted_branches`).
+* **A parallel's restarted branches.** Not synchronised (``synchronise: false``, policies
+  ``all`` and ``selected``: the options its word's ``Combines`` names) a branch that
+  succeeded is ticked again and starts over: one that can succeed and would start an
+  action or a clock again is an error when another branch the parallel waits for may
+  still be RUNNING on the tick it succeeds (beside conditions alone the parallel ends on
+  that tick: :func:`restarted_branches`).
 * **A reactive sequence's restarts (a warning).** A child that is not the last and may be
   RUNNING starts again after it succeeded, stopping a later running child each time
   (:func:`restarted_runs`).
@@ -88,6 +89,8 @@ from roomba_bt.mission.ticks import (
     reads_cliffs,
     runs_again,
     succeeds_at_once,
+    synchronised,
+    waited_for,
     watched_children,
 )
 from roomba_bt.mission.wording import PYTHON, Wording
@@ -626,16 +629,8 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
     return errors
 
 
-#: the parallel policies that wait for more than one success, where ``synchronise`` counts
+#: the policies that wait for more than one success, where being synchronised counts
 _WAITING_POLICIES = frozenset({ALL, SELECTED})
-
-
-def _waited_for(parallel: Node) -> list[int]:
-    """The places of the branches whose successes a ``policy: all`` or ``selected``
-    parallel waits for: every branch, or the ``selected`` ones (by place: mission.control)."""
-    if needs(parallel) == SELECTED:
-        return list(parallel.options.get("selected_at", range(len(parallel.children))))
-    return list(range(len(parallel.children)))
 
 
 def _still_running(parallel: Node, index: int) -> list[Node]:
@@ -643,8 +638,8 @@ def _still_running(parallel: Node, index: int) -> list[Node]:
     it succeeds and so keep the parallel running into the next tick, where it starts over.
 
     The parallel ends on any tick where a branch fails, or where every branch it waits for
-    (:func:`_waited_for`) succeeds. A branch that ends on every tick it is ticked
-    (:func:`~roomba_bt.mission.ticks.at_once`: a condition, ``held``, ``stop``, a
+    (:func:`~roomba_bt.mission.ticks.waited_for`) succeeds. A branch that ends on every
+    tick it is ticked (:func:`~roomba_bt.mission.ticks.at_once`: a condition, ``held``, ``stop``, a
     composite or decorator of such) has ended on that tick too, one way or the other: so
     when every other branch waited for is one, the parallel ends on the very tick this one
     succeeds (all succeeded) or has failed before, and nothing is started over
@@ -653,7 +648,7 @@ def _still_running(parallel: Node, index: int) -> list[Node]:
     and one that could not be built is not known to: its own error is said."""
     return [
         parallel.children[i]
-        for i in _waited_for(parallel)
+        for i in waited_for(parallel)
         if i != index
         and not at_once(parallel.children[i])
         and not any(n.kind == "unbuilt" for n in parallel.children[i].walk())
@@ -674,11 +669,7 @@ def restarted_branches(root: Node) -> list[Diagnostic]:
     (``repeat``). A subtree used twice is one place."""
     errors: list[Diagnostic] = []
     for node in root.walk():
-        if (
-            not every_tick(node)
-            or node.options.get("synchronise") is not False
-            or needs(node) not in _WAITING_POLICIES
-        ):
+        if not every_tick(node) or synchronised(node) or needs(node) not in _WAITING_POLICIES:
             continue
         for index, branch in enumerate(node.children):
             if (
@@ -692,22 +683,35 @@ def restarted_branches(root: Node) -> list[Diagnostic]:
                 continue
             named = _guarded(branch)
             keeper = _guarded(running[0])
+            unsynchronised, synchronise = _synchronise_said(node)
             errors.append(
                 named.loc.at(
-                    f"{named.name} can succeed, and the parallel ({node.loc.line}:"
-                    f"{node.loc.column}) has synchronise: false and waits for {keeper.name} "
+                    f"{named.name} can succeed, and the {node.kind} ({node.loc.line}:"
+                    f"{node.loc.column}) {unsynchronised} and waits for {keeper.name} "
                     f"({_line_of(keeper.loc, named.loc)}), which may still be RUNNING then: "
                     "it ticks every branch on every tick, so once this one succeeds it starts "
                     "again (a drive drives its distance again, a wait waits again), and the "
                     "parallel succeeds only on a tick where every branch it waits for succeeds; "
-                    "write "
-                    "synchronise: true (the default) to run it once, put it under oneshot to "
+                    f"{synchronise} to run it once, put it under oneshot to "
                     "run it once and keep its success while the other branches are ticked on "
                     "every tick, or under repeat (no times or for) if it should run again and "
                     "again"
                 )
             )
     return list(dict.fromkeys(errors))  # a subtree used twice is one place
+
+
+def _synchronise_said(node: Node) -> tuple[str, str]:
+    """How a composite that ticks a succeeded child again is said to (``has synchronise:
+    false``), and the fix (``write synchronise: true (the default)``): by the option its
+    word's :class:`~roomba_bt.behaviours.language.Combines` names, none for a word that
+    always does."""
+    combination = combines(node)
+    option = None if combination is None else combination.synchronise
+    if combination is None or option is None:
+        return "ticks a succeeded branch again", f"use another word than {node.kind}"
+    default = " (the default)" if combination.synchronised_by_default else ""
+    return f"has {option}: false", f"write {option}: true{default}"
 
 
 def _guarded(branch: Node) -> Node:

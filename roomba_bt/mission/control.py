@@ -14,7 +14,15 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from roomba_bt.behaviours.declare import Param
-from roomba_bt.behaviours.language import CHILD_NAMES, KEY_ITEMS, TEXT, WORDS, NodeKind, Shape
+from roomba_bt.behaviours.language import (
+    CHILD_NAMES,
+    KEY_ITEMS,
+    TEXT,
+    WORDS,
+    NodeKind,
+    Shape,
+    places_option,
+)
 from roomba_bt.behaviours.units import ValueType, list_of
 from roomba_bt.mission.leaves import written_text
 from roomba_bt.mission.plan import Node
@@ -217,9 +225,9 @@ def _child_as_key(parser: NodeParser, word: str, key: str) -> str:
 def _chosen(ctx: Context, what: str, options: dict[str, Any], children: list[Node],
             places: list[Loc]) -> None:  # fmt: skip
     """The children an option of child names (``parallel.selected``) picks, by place in
-    ``options[<option>_at]``: the builder picks them by place, since show renames the nodes
-    it reviews (build.CompiledMission.reviewed). A name no child answers to is an error,
-    and so is one that two answer to (two ``name: timer``, or two guards ``until
+    ``options[places_option(option)]``: the builder picks them by place, since show renames
+    the nodes it reviews (build.CompiledMission.reviewed). A name no child answers to is an
+    error, and so is one that two answer to (two ``name: timer``, or two guards ``until
     bump(any)``): it picked both."""
     option = what.rsplit(".", 1)[1]
     where: Loc = options[f"{option}_loc"]
@@ -238,7 +246,7 @@ def _chosen(ctx: Context, what: str, options: dict[str, Any], children: list[Nod
                                "give each its own name (name: ...)"))  # fmt: skip
         for nodes in answers:
             _picked_by_parameter(ctx, what, where, chosen, nodes)
-    options[f"{option}_at"] = [
+    options[places_option(option)] = [
         i for i, nodes in enumerate(answers) if {n.name for n in nodes} & set(options[option])
     ]
 

@@ -36,7 +36,6 @@ from roomba_bt.behaviours.language import (
     FAILURE,
     ONE,
     RUNNING,
-    SELECTED,
     SUCCEEDS,
     SUCCESS,
     Answers,
@@ -47,10 +46,12 @@ from roomba_bt.mission.plan import Node
 from roomba_bt.mission.ticks import (
     answers,
     at_once,
+    combines,
     every_tick,
     goes_on,
     needs,
     reactive,
+    waited_for,
 )
 
 _BOTH: Outcomes = frozenset({SUCCESS, FAILURE})
@@ -132,9 +133,7 @@ def _parallel_outcomes(node: Node) -> Outcomes:
     if policy == ONE:
         succeeds = any(SUCCESS in r for r in results)
     else:
-        chosen = node.options.get("selected_at") if policy == SELECTED else None
-        needed = results if chosen is None else [results[i] for i in chosen]
-        succeeds = all(SUCCESS in r for r in needed)
+        succeeds = all(SUCCESS in results[i] for i in waited_for(node))
     success = {SUCCESS} if succeeds else set()
     return frozenset(failure | success)
 
@@ -387,9 +386,12 @@ def _parallel_never_succeeds(node: Node) -> list[Diagnostic]:
     a step after it is said by :func:`_blocked_children`."""
     if not every_tick(node) or needs(node) != ALL or not _contradicts(node.children):
         return []
+    combination = combines(node)
+    policy = None if combination is None else combination.policy
+    said = "" if policy is None else f" ({policy}: {ALL})"
     return [
         node.loc.at(
-            f"the {node.kind} can never succeed: it waits for every branch (policy: all), its "
+            f"the {node.kind} can never succeed: it waits for every branch{said}, its "
             "branches are all read on the tick it starts, and one is the inverter of another, "
             "so one of them fails on that tick; use a fallback to take either answer, or "
             "remove one of them"

@@ -8,11 +8,13 @@ counted). The facts it rests on:
 
 * A sequence or fallback *with* memory resumes a RUNNING child without ticking the ones
   before it; one without (reactive) ticks them all again, from the first, every tick.
-* A ``parallel`` ticks its children in order, every tick, but with ``synchronise: true`` (the
-  default, policies ``all`` and ``selected``) not a child that has already succeeded: a
-  branch that succeeded on the first tick is never ticked again while the others run. With
-  ``synchronise: false`` it is ticked again, and a node ticked after it finished starts
-  over (py_trees initialises it again): a drive drives its distance again.
+* A ``parallel`` ticks its children in order, every tick, but synchronised (``synchronise:
+  true``, the default, policies ``all`` and ``selected``) not a child that has already
+  succeeded: a branch that succeeded on the first tick is never ticked again while the
+  others run. Not synchronised it is ticked again, and a node ticked after it finished
+  starts over (py_trees initialises it again): a drive drives its distance again. Which
+  options say so is the word's :class:`~roomba_bt.behaviours.language.Combines`' to name
+  (:func:`needs`, :func:`waited_for`, :func:`synchronised`).
 * ``oneshot`` ticks its child only until it succeeds (or completes); ``force_success`` and
   ``force_failure`` answer the same whatever the child said.
 * A guard (``while:``/``until:``) ticks its condition before its child on every tick.
@@ -91,10 +93,29 @@ def reactive(node: Node) -> bool:
 
 def needs(node: Node) -> str:
     """Which of its children's successes a composite that ticks every child on every tick
-    waits for (``ALL``, ``ONE``, ``SELECTED``): its ``policy`` option, else its word's."""
+    waits for (``ALL``, ``ONE``, ``SELECTED``): as the option its word's :class:`Combines`
+    names says (a parallel's ``policy``), else its word's."""
     combination = combines(node)
     assert combination is not None, f"{node.kind} is not a composite"
-    return str(node.options.get("policy", combination.needs))
+    return combination.waits(node.options)
+
+
+def waited_for(node: Node) -> list[int]:
+    """The places of the children whose successes a composite that ticks every child on
+    every tick waits for: every child, or those the option its word's :class:`Combines`
+    names picks (a parallel's ``selected``, under ``policy: selected``)."""
+    combination = combines(node)
+    assert combination is not None, f"{node.kind} is not a composite"
+    return combination.waited_for(node.options, len(node.children))
+
+
+def synchronised(node: Node) -> bool:
+    """Whether a composite that ticks every child on every tick leaves a child that has
+    succeeded unticked while the others run (a parallel's ``synchronise``, as its word's
+    :class:`Combines` says where to read it)."""
+    combination = combines(node)
+    assert combination is not None, f"{node.kind} is not a composite"
+    return combination.synchronised(node.options)
 
 
 def at_once(node: Node) -> bool:
@@ -293,10 +314,10 @@ def _chain_ends(node: Node, stops: str) -> Outcomes:
 def branch_ends(parallel: Node, branch: Node) -> Outcomes:
     """What a cliff read in ``branch`` ends ``parallel`` with, if the branch is ticked on
     every tick the parallel runs: a failure always ends it, a success with ``policy:
-    one``. With ``synchronise: true`` (policies ``all`` and ``selected``) a branch that
-    succeeded is not ticked again, so it counts only if it never succeeds."""
+    one``. Synchronised (:func:`synchronised`; policies ``all`` and ``selected``) a branch
+    that succeeded is not ticked again, so it counts only if it never succeeds."""
     one = needs(parallel) == ONE
-    ticked = one or not parallel.options.get("synchronise", True) or never_succeeds(branch)
+    ticked = one or not synchronised(parallel) or never_succeeds(branch)
     if not ticked:
         return _NONE
     return cliff_ends(branch) & (_BOTH if one else {FAILURE})

@@ -20,9 +20,12 @@ from roomba_bt.behaviours import lean
 from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.decorators import _MissionClock
 from roomba_bt.behaviours.language import (
+    ALL,
+    CHILD_NAMES,
     FAILS,
     FAILURE,
     ONE,
+    SELECTED,
     SUCCEEDS,
     TEXT,
     WORDS,
@@ -33,9 +36,11 @@ from roomba_bt.behaviours.language import (
 )
 from roomba_bt.behaviours.lean import DONE, DecoratorTick
 from roomba_bt.behaviours.registry import builtin_registry
-from roomba_bt.behaviours.units import DURATION
+from roomba_bt.behaviours.units import BOOL, DURATION
+from roomba_bt.behaviours.units import enum as enum_type
 from roomba_bt.mission import checks, deadends, ticks
 from roomba_bt.mission.checks import KeyCheck, ModeCheck
+from roomba_bt.mission.compiler import compile_mission
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Loc
 from roomba_bt.oi.modes import OIMode
@@ -237,7 +242,10 @@ def test_each_answer_comes_from_the_declared_combination_not_the_word(
         options = {**WORDS[other].defaults, "synchronise": False}
         expected = {name: _combined(other, options, make()) for name, make in ORDERS.items()}
         with monkeypatch.context() as patch:
-            patch.setitem(WORDS, word, replace(WORDS[word], combines=WORDS[other].combines))
+            # its options too: the Combines name them (a parallel's policy, synchronise)
+            given = replace(WORDS[word], combines=WORDS[other].combines,
+                            options=WORDS[other].options)  # fmt: skip
+            patch.setitem(WORDS, word, given)
             got = {name: _combined(word, options, make()) for name, make in ORDERS.items()}
         assert got == expected, f"{word} given {other}'s combination"
 
@@ -296,3 +304,116 @@ def test_a_made_up_word_validates_shows_and_runs(
     out = capsys.readouterr().out
     assert code == 0, out
     assert "outcome      SUCCESS" in out and "distance     0.20 m" in out, out
+
+
+# ----------------------------------------------- a parallel-like composite, options its own
+
+
+def _together(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Behaviour:
+    """A parallel whose options are named otherwise: ``wait_for``, ``picks``, ``hold``."""
+    policy: py_trees.common.ParallelPolicy.Base
+    hold = TOGETHER_COMBINES.synchronised(o)
+    if TOGETHER_COMBINES.waits(o) == ONE:
+        policy = py_trees.common.ParallelPolicy.SuccessOnOne()
+    elif TOGETHER_COMBINES.waits(o) == SELECTED:
+        chosen = [kids[i] for i in TOGETHER_COMBINES.waited_for(o, len(kids))]
+        policy = py_trees.common.ParallelPolicy.SuccessOnSelected(chosen, hold)
+    else:
+        policy = py_trees.common.ParallelPolicy.SuccessOnAll(hold)
+    return lean.Parallel(name, policy, list(kids))
+
+
+TOGETHER_COMBINES = Combines(None, policy="wait_for", chosen="picks", synchronise="hold")
+
+#: every child on every tick, as a parallel, with options of its own names: the checks know
+#: them from its Combines alone (session 36: they read ``synchronise`` and ``selected_at``)
+TOGETHER = NodeKind(
+    "together",
+    Shape.CHILDREN,
+    _together,
+    (
+        Param("name", TEXT, doc="the node's name"),
+        Param("wait_for", enum_type(ALL, ONE, SELECTED), default=ALL, doc="whose successes"),
+        Param("picks", CHILD_NAMES, doc="child names, for wait_for: selected"),
+        Param("hold", BOOL, default=True, doc="do not re-tick a child that succeeded"),
+    ),
+    doc="every child on every tick",
+    required_if=(("picks", "wait_for", SELECTED),),
+    only_if=(("picks", "wait_for", SELECTED),),
+    combines=TOGETHER_COMBINES,
+)
+
+#: a drive beside a wait, the drive ticked again once it succeeded: it drives again
+TOGETHER_RERUN = """\
+tree:
+  sequence:
+    - mode: safe
+    - together:
+        hold: false
+        children:
+          - drive: {velocity: 100 mm/s, distance: 20cm}
+          - wait: 3s
+"""
+
+#: waiting for the drive alone (picked by name), the wait beside it never waited for
+TOGETHER_PICKS = """\
+tree:
+  sequence:
+    - mode: safe
+    - together:
+        wait_for: selected
+        picks: [leg]
+        children:
+          - drive: {velocity: 100 mm/s, distance: 20cm}
+            name: leg
+          - wait: 30s
+"""
+
+
+def test_a_made_up_parallel_is_judged_by_the_options_its_combines_names(
+    monkeypatch: pytest.MonkeyPatch, errors_of: Callable[..., list[str]]
+) -> None:
+    """Its ``hold: false`` is a parallel's ``synchronise: false``: the drive that would
+    drive again is refused, said by the word's own option; ``hold: true`` is not."""
+    monkeypatch.setitem(WORDS, "together", TOGETHER)
+    errors = errors_of(TOGETHER_RERUN)
+    assert [error.split(" can succeed")[0] for error in errors] == [
+        "7:13: drive(velocity=100 mm/s, distance=20cm)",
+        "8:13: wait(3s)",
+    ], errors
+    assert "the together (4:7) has hold: false and waits for wait(3s)" in errors[0]
+    for error in errors:
+        assert "write hold: true (the default) to run it once" in error
+    assert errors_of(TOGETHER_RERUN.replace("hold: false", "hold: true")) == []
+
+
+def test_a_made_up_parallel_waits_for_the_children_its_own_option_picks(
+    monkeypatch: pytest.MonkeyPatch,
+    mission_file: Callable[..., Path],
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``wait_for: selected, picks: [leg]``: the checks (``waited_for``) and the builder
+    read the picked places from the option the Combines names; the run ends with the
+    drive, not the 30 s wait."""
+    from roomba_bt.cli import main
+
+    monkeypatch.setitem(WORDS, "together", TOGETHER)
+    path = mission_file(TOGETHER_PICKS)
+    assert main(["validate", str(path)]) == 0
+    assert "warning" not in capsys.readouterr().out
+    node = compile_mission(path)[0]
+    assert node is not None
+    together = node.plan.children[1]
+    assert ticks.needs(together) == SELECTED and ticks.waited_for(together) == [0]
+    code = main(["run", str(path), "--fast", "--display", "none", "--timeout", "10s"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "outcome      SUCCESS" in out and "distance     0.20 m" in out, out
+
+
+def test_combines_naming_an_option_the_word_lacks_is_refused_when_it_is_declared() -> None:
+    """A ``Combines(synchronise="hold")`` on a word without ``hold`` would judge every node
+    as synchronised, whatever it wrote."""
+    with pytest.raises(TypeError, match=r"'race': its Combines name 'hold'"):
+        NodeKind("race", Shape.CHILDREN, lambda n, k, o: k[0], (),
+                 combines=Combines(None, synchronise="hold"))  # fmt: skip
