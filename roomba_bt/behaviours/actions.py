@@ -504,7 +504,8 @@ class Drive(Action):
     kind="action",
     params=(
         Param("angle", ANGLE, required=True, minimum=-3600, maximum=3600,
-              doc="heading change; positive turns left (counter-clockwise)"),
+              doc="heading change; positive turns left (counter-clockwise)",
+              signs=("left", "right")),
         Param("speed", SPEED, default="100 mm/s", minimum=moving_minimum(),
               maximum=_VELOCITY.maximum,
               doc="wheel speed while spinning in place (slower than 15 mm/s, the wheels stand "

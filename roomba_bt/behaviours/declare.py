@@ -157,6 +157,10 @@ class Param:
     #: the spec's name for it where other than ``name`` (the dock LED is the 600 spec's
     #: "Home"): a mission that writes the spec's word is pointed to ``name``
     spec_name: str = ""
+    #: ``(positive, negative)``: which way a value of each sign goes, said after the value
+    #: in the leaf's name (``turn``'s angle: ``turn(-45deg right)``), so that a negative
+    #: value reads without the convention at hand; empty: the sign says enough
+    signs: tuple[str, str] = ()
 
     def check_range(self, value: Any, written: str = "") -> str | None:
         """An error message if ``value`` is outside the range, else None. ``written``: the

@@ -12,7 +12,7 @@ from typing import Any
 
 import yaml
 
-from roomba_bt.behaviours.declare import Declaration, key_not_read, key_role
+from roomba_bt.behaviours.declare import Declaration, Param, key_not_read, key_role
 from roomba_bt.behaviours.units import MARK, ValueType, percent_sign_kept
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, mapping
@@ -98,8 +98,9 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     # may depend on it (`mode: "${m}"`), and reading them from it was an internal error.
     if not ok or not known:  # kept in its place, unbuilt: the checks still judge around it
         return _unbuilt(ctx, decl, key_loc, params)
-    return Node("leaf", key_loc, leaf_name(decl.name, given, env, types), decl=decl, params=params,
-                options=options, parameter_in_name=_parameter_in(given))  # fmt: skip
+    name = leaf_name(decl, given, env, types, params)
+    return Node("leaf", key_loc, name, decl=decl, params=params, options=options,
+                parameter_in_name=_parameter_in(given))  # fmt: skip
 
 
 def _unbuilt(ctx: Context, decl: Declaration, key_loc: Loc, params: dict[str, Any]) -> Node:
@@ -260,28 +261,51 @@ def _key_type(ctx: Context, key: str, where: Loc, *, reads: bool, who: str) -> V
 
 
 def leaf_name(
-    behaviour: str,
+    decl: Declaration,
     given: list[tuple[str, yaml.Node, Loc, Loc]],
     env: Mapping[str, Bound],
     types: Mapping[str, ValueType],
+    params: Mapping[str, Any],
 ) -> str:
-    """``drive(velocity=100 mm/s, radius=-500 mm)``: what ``show`` prints for a leaf, with
+    """``drive(velocity=100 mm/s, radius=-500 mm)``: what ``show`` prints for a leaf, and
+    its name in the run's tree, the log, the outcome, a record and the monitor, with
     ``${parameters}`` shown as their values; a value of a percent (``types``: each
     parameter's, a key-typed one's its key's) written as a bare zero is ``0%``, as a
-    parameter's is."""
+    parameter's is.
+
+    One name for one meaning, however the file wrote it: the parameters in the order the
+    declaration gives them (not the file's), and the primary one alone in the short form
+    (``turn: {angle: 45deg}`` is ``turn(45deg)``, as ``turn: 45deg``; until session 36 the
+    one was ``turn(angle=45deg)``). A parameter that declares which way each sign goes
+    (:attr:`Param.signs`) says it after the value (``params``, the values read): ``turn(
+    -45deg right)``, ``turn(90deg left)``, so a negative angle reads without the convention
+    at hand."""
     if not given:
-        return behaviour
+        return decl.name
+    place = {p.name: i for i, p in enumerate(decl.params)}
+    written = sorted(given, key=lambda g: place.get(g[0], len(place)))
+    short = len(written) == 1 and written[0][0] == decl.primary
     parts = []
-    for pname, node, key_loc, value_loc in given:
+    for pname, node, _, _ in written:
         text = written_text(node, env)
         if pname in types:
             text = percent_sign_kept(types[pname], text)
-        if key_loc is value_loc:
-            parts.append(text)
-        else:  # check's op, "==", was op===: a text holding = or , is quoted, and < or >
-            # with it, so that every op reads alike (op="<" as op="<="; op=> read as an arrow)
-            parts.append(f"{pname}={_quoted(text) if any(c in text for c in '=,<>') else text}")
-    return f"{behaviour}({', '.join(parts)})"
+        if not short:  # check's op, "==", was op===: a text holding = or , is quoted, and <
+            # or > with it, so that every op reads alike (op="<" as op="<="; op=> an arrow)
+            text = f"{pname}={_quoted(text) if any(c in text for c in '=,<>') else text}"
+        parts.append(text + _sign_said(decl.param(pname), params.get(pname)))
+    return f"{decl.name}({', '.join(parts)})"
+
+
+def _sign_said(param: Param | None, value: object) -> str:
+    """`` left`` or `` right`` after a value whose parameter says which way each sign goes
+    (:attr:`Param.signs`); nothing for zero, for a value read at run time (``@key``), or for
+    a parameter whose sign says enough."""
+    if param is None or not param.signs or isinstance(value, bool):
+        return ""
+    if not isinstance(value, int | float) or value == 0:
+        return ""
+    return " " + (param.signs[0] if value > 0 else param.signs[1])
 
 
 def _quoted(text: str) -> str:

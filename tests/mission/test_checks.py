@@ -674,7 +674,7 @@ def test_two_branches_of_a_parallel_that_claim_one_thing_are_warned_of(
         ("[{wait: 300ms}, {drive: {velocity: 200 mm/s, distance: 30cm}}]",
          ["wait(300ms) ... stops drive(velocity=200 mm/s, distance=30cm) (line 4)"]),
         ("[{inverter: {bump: any}}, {turn: 90deg}, {wait: 1s}, wall]",
-         ["turn(90deg) ... stops wait(1s) (line 4)"]),
+         ["turn(90deg left) ... stops wait(1s) (line 4)"]),
         # conditions, stop, a mode already entered, a oneshot end at once when ticked again;
         # a running child whose later ones all end at once ends the sequence with them
         ("[{inverter: {bump: any}}, {drive: {velocity: 200 mm/s, distance: 30cm}}]", []),
@@ -749,7 +749,7 @@ RERUN = "can succeed, and the parallel (4:7) has synchronise: false"
          ["8:14 drive(velocity=200 mm/s, distance=20cm)"]),
         ("all", ["{log: hi}", "{sequence: [{bump: any}, {wait: 1s}]}"], ["8:14 log(hi)"]),
         ("all", ["{turn: 90deg}", "{drive: {velocity: 100 mm/s}, while: {inverter: {bump: any}}}"],
-         ["8:14 turn(90deg)"]),
+         ["8:14 turn(90deg left)"]),
         # policy selected waits for the selected branches only: one not selected keeps
         # nothing running, and is itself started over while a selected one runs
         ("selected\n        selected: [w]", ["{wait: 1s, name: w}", "{repeat: {do: {wait: 1s}}}"],

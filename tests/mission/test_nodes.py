@@ -624,6 +624,62 @@ def test_a_percent_written_as_a_bare_zero_shows_its_sign_everywhere(compile_text
     ], names
 
 
+SAME_TURNS = """
+parameters:
+  back: {type: angle, default: -45deg}
+tree:
+  sequence:
+    - mode: {to: safe}
+    - turn: -45deg
+    - turn: {angle: -45deg}
+    - turn: "${back}"
+    - turn: 45deg
+    - turn: {angle: 0.125turn}
+    - turn: {speed: 50 mm/s, angle: -90deg}
+    - turn: {angle: -90deg, speed: 50 mm/s}
+    - turn: 0deg
+    - drive: {distance: 20cm, velocity: 100 mm/s}
+"""
+
+
+def test_a_leaf_is_named_alike_however_the_file_writes_the_same_value(
+    compile_text: Compile,
+) -> None:
+    """``turn: -45deg`` was ``turn(-45deg)`` and ``turn: {angle: -45deg}`` was
+    ``turn(angle=-45deg)``; the parameters were said in the file's order. One name now
+    (the primary parameter alone in the short form, the others in the declaration's order),
+    and a turn's angle says which way it goes (docs/missions.md: positive turns left)."""
+    names = [node.name for node in compile_text(SAME_TURNS).root.iterate() if not node.children]
+    assert names == [
+        "mode(safe)",
+        "turn(-45deg right)",
+        "turn(-45deg right)",
+        "turn(-45deg right)",
+        "turn(45deg left)",
+        "turn(0.125turn left)",
+        "turn(angle=-90deg right, speed=50 mm/s)",
+        "turn(angle=-90deg right, speed=50 mm/s)",
+        "turn(0deg)",
+        "drive(velocity=100 mm/s, distance=20cm)",
+    ], names
+
+
+def test_show_draws_the_names_the_run_uses(
+    mission_file: Callable[..., Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``show`` and the run's tree, log and outcome say a leaf by the one name."""
+    from roomba_bt.cli import main
+
+    path = mission_file(SAME_TURNS)
+    assert main(["show", str(path)]) == 0
+    shown = capsys.readouterr().out
+    assert shown.count("--> turn(-45deg right)\n") == 3, shown
+    assert "turn(angle=" not in shown.replace("turn(angle=-90deg right, speed=50 mm/s)", "")
+    assert main(["run", str(path), "--fast", "--display", "tree", "--timeout", "1min"]) == 0
+    ran = capsys.readouterr().out
+    assert "turn(-45deg right)" in ran and "turn(angle=-90deg right, speed=50 mm/s)" in ran
+
+
 @pytest.mark.parametrize(("given", "percent"), [("20", "20%"), ("1e1", "10%"), ("1.50", "1.5%")])
 def test_a_bare_percent_of_one_or_more_is_refused_with_both_ways_to_write_it(
     errors_of: Callable[..., list[str]], given: str, percent: str

@@ -120,7 +120,7 @@ def test_a_200_kb_name_is_cut_with_its_length_said_wherever_it_is_printed(
     assert max(len(line) for line in lines) < 200
     cut = "N" * 80 + "... (200,000 characters)"
     assert shown.startswith(cut + "\n")
-    assert f"wait(duration=30ms) named '{cut}'" in shown
+    assert f"wait(30ms) named '{cut}'" in shown
     assert f"mission      {cut}" in ran.out
     assert f"{cut} -> SUCCESS" in caplog.messages
 

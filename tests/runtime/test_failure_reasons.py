@@ -34,7 +34,7 @@ FAILED_NODES = [
      "inverter: wait(15ms) succeeded (inverted)"),
     # an inverted action ran and succeeded (it did not "hold"); an inverted condition held
     ("[{log: hello}, {inverter: {wait: 15ms}}]", "inverter: wait(15ms) succeeded (inverted)"),
-    ("[{log: hello}, {inverter: {ir: {sees: dock}}}]", "ir(sees=dock) held"),
+    ("[{log: hello}, {inverter: {ir: {sees: dock}}}]", "ir(dock) held"),
     # a condition that failed, a time limit that ran out
     ("[{log: hello}, {bump: any}]", "bump(any)"),
     ("[{log: hello}, {timeout: {after: 100ms, do: {wait: 1s}}}]",

@@ -57,7 +57,8 @@ def test_a_turn_started_in_passive_after_a_wheel_drop_fails_at_once(
     assert fell_at == next(t for t, placed in seen if placed is not None)
     assert 0.9 <= fell_at < 1.1  # mission time begins after the start-up
     assert summary.reason == (
-        f"turn(90deg): the robot is in Passive since t={fell_at:.3f} (wheel drop and cliff): {FIX}"
+        f"turn(90deg left): the robot is in Passive since t={fell_at:.3f} (wheel drop and "
+        f"cliff): {FIX}"
     )
     assert 3.0 <= summary.mission_time_s < 3.05  # the turn's first tick, not the timeout
     assert oi.spin(100, clockwise=False).data not in run.link.written
