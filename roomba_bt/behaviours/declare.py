@@ -160,7 +160,7 @@ class Param:
     #: ``(positive, negative)``: which way a value of each sign goes, said after the value
     #: in the leaf's name (``turn``'s angle: ``turn(-45deg right)``), so that a negative
     #: value reads without the convention at hand; empty: the sign says enough
-    signs: tuple[str, str] = ()
+    signs: tuple[str, str] | tuple[()] = ()
 
     def check_range(self, value: Any, written: str = "") -> str | None:
         """An error message if ``value`` is outside the range, else None. ``written``: the
