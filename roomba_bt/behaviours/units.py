@@ -461,6 +461,9 @@ class ValueType:
             return "one of " + ", ".join(self.choices)
         if self.item is not None:
             return f"list of {self.item.describe()}"
+        if self.fields:  # two records are told apart by their fields (waypoints)
+            said = ", ".join(f"{name}: {ftype.name}" for name, ftype in self.fields)
+            return f"{self.name} {{{said}}}"
         return f"{self.name} ({self.unit})" if self.unit else self.name
 
     def schema(self) -> dict[str, Any]:
@@ -767,7 +770,7 @@ def compatible(source: ValueType, target: ValueType, *, as_stored: bool = False)
             and compatible(source.item, target.item, as_stored=as_stored)
         )
     if source.name == target.name and source.choices == target.choices:
-        return source.fields == target.fields
+        return dict(source.fields) == dict(target.fields)  # a record's, in any order
     if source.choices:
         return not enum_misfits(source, target, as_stored=as_stored)
     return source.name in target.takes

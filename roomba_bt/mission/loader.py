@@ -776,6 +776,12 @@ def _declared_type(name: str, fields: Mapping[str, tuple[yaml.Node, Loc, Loc]]) 
         return enum(*_choices(*fields["choices"][::2]))
     if written == "list":
         inode, _, iloc = fields["items"]
+        if isinstance(inode, yaml.MappingNode):  # records: items: {fields: {...}}
+            record = known_fields(inode, iloc, f"parameter {name!r} items", ("fields",))
+            if "fields" not in record:
+                raise Bad(iloc.at(f"parameter {name!r}: items of records need fields: "
+                                  "{NAME: TYPE, ...}, as a blackboard key's"))  # fmt: skip
+            return list_of(record_declared(*record["fields"]))
         return list_of(_type_named(inode, iloc, LIST_ITEM_TYPES, "item type"))
     return _type_named(tnode, tloc, PARAMETER_TYPES, "type", also=("enum", "list"))
 
@@ -783,7 +789,8 @@ def _declared_type(name: str, fields: Mapping[str, tuple[yaml.Node, Loc, Loc]]) 
 #: what each option of :data:`PARAMETER_TYPE_OPTIONS` is said to need when it is missing
 _OPTION_SAID = {
     "choices": "[...], the words it may take",
-    "items": f"TYPE, the type of each item (one of {', '.join(LIST_ITEM_TYPES)})",
+    "items": f"TYPE, the type of each item (one of {', '.join(LIST_ITEM_TYPES)}), or "
+    "{fields: {NAME: TYPE, ...}} for records",
 }
 
 
@@ -889,12 +896,7 @@ def key_decl(
         allowed = ("type", "fields", "initial", "doc")
         fields = known_fields(node, loc, f"blackboard key {name!r}", allowed)
         if "fields" in fields:
-            fnode, _, floc = fields["fields"]
-            ftypes = {
-                fname: parse_type_name(fvalue, fvloc)
-                for fname, fvalue, _, fvloc in mapping(fnode, floc, "fields")
-            }
-            vtype = record_type(ftypes)
+            vtype = record_declared(*fields["fields"])
         elif "type" in fields:
             vtype = parse_type_name(fields["type"][0], fields["type"][2], allow_mark=True)
         else:
@@ -929,6 +931,16 @@ def _scalars(node: yaml.Node) -> list[str]:
     if isinstance(node, yaml.MappingNode):
         return [text for _, value in node.value for text in _scalars(value)]
     return []
+
+
+def record_declared(node: yaml.Node, _key_loc: Loc, loc: Loc) -> ValueType:
+    """A record's ``fields: {distance: distance, turn: angle}``, each field a value type:
+    one reading for a blackboard key's and a list parameter's items (``{type: list, items:
+    {fields: {...}}}``: waypoints given with ``-p``). Raises :class:`Bad`."""
+    return record_type(
+        {fname: parse_type_name(fvalue, fvloc) for fname, fvalue, _, fvloc in
+         mapping(node, loc, "fields")}
+    )  # fmt: skip
 
 
 def _not_allowed(text: str, wording: Wording) -> str:
@@ -1244,9 +1256,19 @@ def _default_text(vtype: ValueType, declaration: yaml.Node, default: Any) -> str
 
 def _flow_list(node: yaml.SequenceNode) -> str:
     """A list as YAML's flow style writes it, its items as written: ``[1m, 2m]`` (a list
-    parameter's default, as ``-p legs=[1m, 2m]`` gives one)."""
-    items = (str(item.value) if isinstance(item, yaml.ScalarNode) else "..." for item in node.value)
-    return f"[{', '.join(items)}]"
+    parameter's default, as ``-p legs=[1m, 2m]`` gives one), a record's fields too:
+    ``[{distance: 1m, turn: 90deg}]``."""
+    return f"[{', '.join(_flow_item(item) for item in node.value)}]"
+
+
+def _flow_item(node: yaml.Node) -> str:
+    """One item of :func:`_flow_list`: a scalar as written, a record as its fields."""
+    if isinstance(node, yaml.ScalarNode):
+        return str(node.value)
+    if isinstance(node, yaml.MappingNode):
+        fields = (f"{_flow_item(key)}: {_flow_item(value)}" for key, value in node.value)
+        return "{" + ", ".join(fields) + "}"
+    return "..."
 
 
 def _cli_percent(text: str) -> str:

@@ -263,6 +263,14 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
 def _declarations() -> tuple[dict[str, Any], dict[str, Any]]:
     """A parameter declaration and a blackboard key declaration."""
     type_names = [n for n in VALUE_TYPES if n != "mark"]
+    fields = {"type": "object", "additionalProperties": {"enum": type_names}}
+    # a list's items: a value type, or records as a key's (waypoints: {fields: {...}})
+    records = {
+        "type": "object",
+        "properties": {"fields": fields},
+        "required": ["fields"],
+        "additionalProperties": False,
+    }
     parameter = {
         "type": "object",
         "properties": {
@@ -270,7 +278,7 @@ def _declarations() -> tuple[dict[str, Any], dict[str, Any]]:
             "default": {},
             "doc": {"type": "string"},
             "choices": {"type": "array", "items": {"type": "string"}},
-            "items": {"enum": list(LIST_ITEM_TYPES)},
+            "items": {"anyOf": [{"enum": list(LIST_ITEM_TYPES)}, records]},
         },
         "required": ["type"],
         "additionalProperties": False,
@@ -292,7 +300,7 @@ def _declarations() -> tuple[dict[str, Any], dict[str, Any]]:
                 "type": "object",
                 "properties": {
                     "type": {"enum": [*type_names, "mark"]},
-                    "fields": {"type": "object", "additionalProperties": {"enum": type_names}},
+                    "fields": fields,
                     "initial": {},
                     "doc": {"type": "string"},
                 },

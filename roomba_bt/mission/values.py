@@ -494,7 +494,7 @@ def record_type(fields: dict[str, ValueType]) -> ValueType:
             )
         missing = [k for k in fields if k not in value]
         if missing:
-            raise UnitError(f"missing field {missing[0]!r}")
+            raise UnitError(f"missing field {missing[0]!r}; fields: {', '.join(fields)}")
         out = {}
         for k, t in fields.items():
             try:
@@ -640,6 +640,10 @@ def _list_declared(target: ValueType) -> str:
         return "declare the parameter {type: notes}"
     item = target.item
     assert item is not None  # a list's slot, or NOTES
+    fields = record_fields(item)
+    if fields is not None:  # waypoints: the key's record, field by field
+        said = ", ".join(f"{name}: {ftype.name}" for name, ftype in fields.items())
+        return f"declare the parameter {{type: list, items: {{fields: {{{said}}}}}}}"
     if LIST_ITEM_TYPES.get(item.name) is not item:
         return f"no list parameter holds items of {item.describe()}: write the list here"
     return f"declare the parameter {{type: list, items: {item.name}}}"
@@ -753,7 +757,7 @@ def _record(
         raise Bad(loc.at(f"{what}: " + unknown("field", name, list(fields))))
     missing = [k for k in fields if k not in given]
     if missing:
-        raise Bad(loc.at(f"{what}: missing field {missing[0]!r}"))
+        raise Bad(loc.at(f"{what}: missing field {missing[0]!r}; fields: {', '.join(fields)}"))
     return {
         k: resolve(ctx, given[k][0], given[k][1], t, env, f"{what}.{k}") for k, t in fields.items()
     }

@@ -98,7 +98,8 @@ def test_show_says_the_list_as_written(compile_text: Compile) -> None:
         ]),
         ("{type: list, default: [1]}", [
             "2:13: parameter 'p' of type list needs items: TYPE, the type of each item (one of "
-            "duration, speed, distance, angle, percent, int, float, bool, str, radius)",
+            "duration, speed, distance, angle, percent, int, float, bool, str, radius), or "
+            "{fields: {NAME: TYPE, ...}} for records",
         ]),
         ("{type: int, items: int, default: 1}", [
             "2:25: parameter 'p': items only goes with type: list (a list of values of one "
@@ -170,7 +171,8 @@ def test_a_bad_list_given_with_p_is_said_with_what_to_write(
 
 def test_a_text_parameter_in_a_list_slot_says_how_to_declare_a_list(errors_of: Errors) -> None:
     """The report's ``legs: {type: str, default: "[1m, 2m]"}``: a text is never read as a
-    list, and the error says what to declare (or that no list parameter holds records)."""
+    list, and the error says what to declare (for a record key, the list of records: until
+    session 36 "no list parameter holds items of record")."""
     text = """
     parameters: {t: {type: str, default: x}}
     blackboard:
@@ -186,8 +188,161 @@ def test_a_text_parameter_in_a_list_slot_says_how_to_declare_a_list(errors_of: E
     assert errors_of(text) == [
         f"7:32: for_each.in: {said} for_each.in takes a list, never read from a text: declare "
         "the parameter {type: list, items: distance}",
-        f"8:31: for_each.in: {said} for_each.in takes a list, never read from a text: no list "
-        "parameter holds items of record: write the list here",
+        f"8:31: for_each.in: {said} for_each.in takes a list, never read from a text: declare "
+        "the parameter {type: list, items: {fields: {distance: distance, turn: angle}}}",
         f"9:32: song.notes: {said} song.notes takes a list, never read from a text: declare the "
         "parameter {type: notes}",
     ]
+
+
+# ------------------------------------------------------------ a list of records (waypoints)
+
+#: a patrol of waypoints as a parameter: each item a record, as the key ``wp`` holds
+WAYPOINTS = """
+parameters:
+  route:
+    type: list
+    items: {fields: {distance: distance, turn: angle}}
+    default: [{distance: 30cm, turn: 90deg}, {distance: 20cm, turn: -90deg}]
+blackboard:
+  wp: {fields: {distance: distance, turn: angle}}
+tree:
+  sequence:
+    - mode: safe
+    - for_each:
+        key: wp
+        in: "${route}"
+        do:
+          sequence:
+            - drive: {velocity: 100 mm/s, distance: "@wp.distance"}
+            - turn: "@wp.turn"
+"""
+
+
+def test_a_list_of_records_fills_for_each_over_a_record_key(compile_text: Compile) -> None:
+    """Session 35's lists held one value each: a patrol of waypoints could not be a
+    parameter ("no list parameter holds items of record")."""
+    [items] = _option(compile_text(WAYPOINTS), "ForEach", "items")
+    assert list(items) == [{"distance": 300.0, "turn": 90.0}, {"distance": 200.0, "turn": -90.0}]
+
+
+def test_a_list_of_records_given_with_p_is_read_by_the_one_parser(compile_text: Compile) -> None:
+    """``-p 'route=[{distance: 1m, turn: 45deg}]'``: YAML's flow list of flow mappings, each
+    field read by its type; a parameter's fields may be listed in another order than the
+    key's (the same record)."""
+    given = {"route": "[{distance: 1m, turn: 45deg}, {turn: 0.5turn, distance: 5cm}]"}
+    [items] = _option(compile_text(WAYPOINTS, given), "ForEach", "items")
+    assert list(items) == [{"distance": 1000.0, "turn": 45.0}, {"distance": 50.0, "turn": 180.0}]
+    reordered = WAYPOINTS.replace(
+        "items: {fields: {distance: distance, turn: angle}}",
+        "items: {fields: {turn: angle, distance: distance}}",
+    )
+    [items] = _option(compile_text(reordered), "ForEach", "items")
+    assert items[0] == {"distance": 300.0, "turn": 90.0}
+
+
+def test_show_says_the_records_as_written(compile_text: Compile) -> None:
+    names = [node.name for node in compile_text(WAYPOINTS).reviewed().iterate()]
+    assert (
+        "for_each(key=wp, in=[{distance: 30cm, turn: 90deg}, {distance: 20cm, turn: -90deg}])"
+        in names
+    ), names
+
+
+@pytest.mark.parametrize(
+    ("default", "said"),
+    [
+        ("[{distance: 30cm, turn: 90m}]", [
+            "5:38: parameter route.turn: unknown angle unit 'm' in '90m'; use one of: deg, °, "
+            "rad, turn, turns",
+        ]),
+        ("[{distance: 30cm, turn: 1deg}, {distance: 1m}]", [
+            "5:45: parameter route: missing field 'turn'; fields: distance, turn",
+        ]),
+        ("[{distance: 30cm, turn: 1deg, speed: 1m/s}]", [
+            "5:15: parameter route: unknown field 'speed'; known: distance, turn",
+        ]),
+        ("[30cm]", [
+            "5:15: parameter route: expected a mapping with distance, turn",
+        ]),
+    ],
+)  # fmt: skip
+def test_each_bad_record_in_a_default_is_said_at_its_place(
+    errors_of: Errors, default: str, said: list[str]
+) -> None:
+    text = WAYPOINTS.replace(
+        "default: [{distance: 30cm, turn: 90deg}, {distance: 20cm, turn: -90deg}]",
+        f"default: {default}",
+    )
+    assert errors_of(text) == said
+
+
+@pytest.mark.parametrize(
+    ("given", "said"),
+    [
+        ("[{distance: 1m}]", "missing field 'turn'; fields: distance, turn"),
+        ("[{distance: 1m, turn: 1deg, speed: 1m/s}]",
+         "unknown field 'speed'; fields: distance, turn"),
+        ("[{distance: 1m, turn: 1deg}, {distance: 1m, turn: 4m}]",
+         "item 2 of 2: field turn: unknown angle unit 'm' in '4m'; use one of: deg, °, rad, "
+         "turn, turns"),
+        ("[1m]", "expected a mapping with distance, turn"),
+    ],
+)  # fmt: skip
+def test_a_bad_record_given_with_p_is_said_with_its_item_and_field(
+    errors_of: Errors, given: str, said: str
+) -> None:
+    [error] = errors_of(WAYPOINTS, {"route": given})
+    assert error.startswith(f"2:3: parameter route={given} (")
+    assert error.endswith(f"): {said}")
+
+
+@pytest.mark.parametrize(
+    ("items", "said"),
+    [
+        ("{fields: {distance: distanse}}", "4:32: unknown type 'distanse' (did you mean "
+         "'distance'?); known types: duration, speed, distance, angle, percent, int, float, "
+         "bool, str, radius"),
+        ("{field: {distance: distance}}", "4:13: parameter 'route' items: unknown key 'field' "
+         "(did you mean 'fields'?); known: fields"),
+        ("{}", "4:12: parameter 'route': items of records need fields: {NAME: TYPE, ...}, as "
+         "a blackboard key's"),
+    ],
+)  # fmt: skip
+def test_a_bad_declaration_of_records_is_said_at_its_place(
+    errors_of: Errors, items: str, said: str
+) -> None:
+    text = WAYPOINTS.replace(
+        "items: {fields: {distance: distance, turn: angle}}", f"items: {items}"
+    )
+    assert errors_of(text)[0] == said
+
+
+def test_records_of_other_fields_do_not_fill_the_key(errors_of: Errors) -> None:
+    """A waypoint with a speed is not the key's record: said with both records' fields."""
+    text = (
+        WAYPOINTS.replace(
+            "items: {fields: {distance: distance, turn: angle}}",
+            "items: {fields: {distance: distance, turn: angle, speed: speed}}",
+        )
+        .replace("turn: 90deg}", "turn: 90deg, speed: 1m/s}")
+        .replace("-90deg}", "-90deg, speed: 1m/s}")
+    )
+    assert errors_of(text) == [
+        "13:13: for_each.in: parameter ${route} is a list of record {distance: distance, turn: "
+        "angle, speed: speed}, but for_each.in needs list of record {distance: distance, turn: "
+        "angle}"
+    ]
+
+
+def test_the_schema_takes_a_list_of_records_as_validate_does() -> None:
+    """``items: {fields: {...}}`` is in the JSON Schema too (an editor's check agrees)."""
+    import jsonschema
+    import yaml
+
+    from roomba_bt.mission.schema import mission_schema
+
+    validator = jsonschema.Draft202012Validator(mission_schema())
+    assert validator.is_valid(yaml.safe_load(WAYPOINTS))
+    wrong = WAYPOINTS.replace("items: {fields:", "items: {field:")
+    assert not validator.is_valid(yaml.safe_load(wrong))
