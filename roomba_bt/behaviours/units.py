@@ -461,9 +461,6 @@ class ValueType:
             return "one of " + ", ".join(self.choices)
         if self.item is not None:
             return f"list of {self.item.describe()}"
-        if self.fields:  # two records are told apart by their fields (waypoints)
-            said = ", ".join(f"{name}: {ftype.name}" for name, ftype in self.fields)
-            return f"{self.name} {{{said}}}"
         return f"{self.name} ({self.unit})" if self.unit else self.name
 
     def schema(self) -> dict[str, Any]:

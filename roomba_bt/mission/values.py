@@ -649,15 +649,27 @@ def _list_declared(target: ValueType) -> str:
     return f"declare the parameter {{type: list, items: {item.name}}}"
 
 
+def _type_said(vtype: ValueType) -> str:
+    """A type as a misfit says it: a record (a list's items too) with its fields, since two
+    records are told apart by them alone (``list of record {distance: distance, turn:
+    angle}``: waypoints with a speed do not fill a key without one)."""
+    if vtype.item is not None:
+        return f"list of {_type_said(vtype.item)}"
+    fields = record_fields(vtype)
+    if fields is None:
+        return vtype.describe()
+    return f"record {{{', '.join(f'{name}: {ftype.name}' for name, ftype in fields.items())}}}"
+
+
 def _misfit(pname: str, source: ValueType, target: ValueType, what: str) -> str:
     """Why parameter ``pname`` of type ``source`` cannot fill ``what`` (of type ``target``):
     the types, and for an enum the words the slot does not read, with why the first is not."""
-    said = f"parameter ${{{pname}}} is {with_article(source.describe())}, but {what}"
+    said = f"parameter ${{{pname}}} is {with_article(_type_said(source))}, but {what}"
     if source is STR and (target.item is not None or target is NOTES):
         return f"{said} takes a list, never read from a text: {_list_declared(target)}"
     misfits = enum_misfits(source, target) if source.choices else []
     if not misfits:
-        return f"{said} needs {target.describe()}"
+        return f"{said} needs {_type_said(target)}"
     words = ", ".join(repr(word) for word, _ in misfits)
     return (
         f"{said} does not take {words} ({misfits[0][1]}): an enum fills a slot when each of "
