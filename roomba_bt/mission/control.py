@@ -99,8 +99,8 @@ def _child_names(what: str, names: list[str], loc: Loc) -> list[str]:
                 loc.at(
                     f"{what}: {name!r}: child names are matched as written, and ${{"
                     f"{used[0]}}} is not replaced here: a name made with a parameter "
-                    "changes with its value, so selected: cannot pick it; give the child a "
-                    f"fixed name (name: ...) and select that; {ESCAPE_HINT}"
+                    f"changes with its value, so {what.rsplit('.', 1)[-1]}: cannot pick it; "
+                    f"give the child a fixed name (name: ...) and pick that; {ESCAPE_HINT}"
                 )
             )
     return [substituted(name, lambda _: None) for name in names]
@@ -263,7 +263,7 @@ def _picked_by_parameter(
                     f"{what} (at {where.line}:{where.column}) picks this child by its name "
                     f"{chosen!r}, which is made with a parameter: another value would name "
                     "another child, or none; give the child a fixed name (name: ...) for "
-                    f"selected: to pick; {ESCAPE_HINT}"
+                    f"{what.rsplit('.', 1)[-1]}: to pick; {ESCAPE_HINT}"
                 )
             )
 

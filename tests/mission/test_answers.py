@@ -417,3 +417,16 @@ def test_combines_naming_an_option_the_word_lacks_is_refused_when_it_is_declared
     with pytest.raises(TypeError, match=r"'race': its Combines name 'hold'"):
         NodeKind("race", Shape.CHILDREN, lambda n, k, o: k[0], (),
                  combines=Combines(None, synchronise="hold"))  # fmt: skip
+
+
+def test_a_made_up_parallel_s_pick_errors_name_its_own_option(
+    monkeypatch: pytest.MonkeyPatch, errors_of: Callable[..., list[str]]
+) -> None:
+    """A pick made with a parameter is refused, said by the word's option (it said
+    ``selected:`` whatever the word)."""
+    monkeypatch.setitem(WORDS, "together", TOGETHER)
+    text = "parameters: {x: {type: str, default: leg}}\n" + TOGETHER_PICKS.replace(
+        "picks: [leg]", 'picks: ["${x}"]'
+    )
+    [error] = errors_of(text)
+    assert "together.picks: '${x}'" in error and "so picks: cannot pick it" in error, error
