@@ -189,6 +189,19 @@ def test_a_tick_the_host_kept_from_running_is_said_so_not_blamed_on_its_behaviou
     assert "wall_follow" not in str(watch.summary)
 
 
+def test_a_wait_counted_from_before_the_window_never_says_more_than_its_time() -> None:
+    """The kernel counts a wait when the thread gets its CPU, so a wait that began before
+    the looks' window is counted in it: a watcher saw "0.46 ms of CPU in 25.13 ms, 29.96 ms
+    of it waiting for a CPU". The time said holds what it says was spent in it."""
+    watch = _watched_tick(cpu_share=0.02, waiting_share=1.4)
+    said = watch.host_kept_it()
+    cpu, _, rest = said.partition(" ms of CPU in ")
+    window, _, rest = rest.partition(" ms, ")
+    waiting = rest.partition(" ms")[0]
+    assert float(cpu) + float(waiting) <= float(window) + 0.01, said
+    assert said == "27.50 ms of CPU in 202.50 ms, 175.00 ms of it waiting for a CPU"
+
+
 @pytest.mark.parametrize(
     ("cpu_share", "waiting_share"), [(0.95, 0.0), (0.0, 0.0), (0.6, 0.4)],
     ids=["computed", "blocked (time.sleep)", "computed, some waiting"],
