@@ -405,17 +405,20 @@ def run_board() -> RunBoard:
 
 
 @contextlib.contextmanager
-def running_on(board: RunBoard) -> Iterator[RunBoard]:
+def running_on(board: RunBoard, *, ends_run: bool = True) -> Iterator[RunBoard]:
     """``board`` this thread's run's board while the block runs (a run's set-up, ticks and
     ending), the one before it afterwards; the block's end, however it ends, is the run's
-    (:meth:`RunBoard.ended`)."""
+    (:meth:`RunBoard.ended`), unless ``ends_run`` is False: a thread lent the run's board for
+    a part of its ending (the tree's stop, ``runtime/ending.py``), whose ``terminate()``
+    calls read and write keys as they would in the run's own thread."""
     before = _RUNNING.board
     _RUNNING.board = board
     try:
         yield board
     finally:
         _RUNNING.board = before
-        board.ended()
+        if ends_run:
+            board.ended()
 
 
 class SharedBlackboard(RuntimeError, RoombaBtError):

@@ -12,15 +12,19 @@ from __future__ import annotations
 
 import logging
 import sys
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from types import FrameType
 
 import py_trees
 
 from roomba_bt.behaviours.actions import last_said
+from roomba_bt.behaviours.blackboard import run_board, running_on
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.printable import duration_said
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import STOP_RESYNC_ZEROS, SafeStop
 from roomba_bt.robot.hazards import sets_going
@@ -29,7 +33,9 @@ from roomba_bt.robot.safety import SAFE_STOP_UNDER_WAY, InterruptGuard
 from roomba_bt.runtime.long_run import RobotCycleWatch
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.runtime.teardown import (
+    behaviour_at,
     during,
+    note_stop_abandoned,
     note_stop_failures,
     note_undelivered_stop,
     shutdown_nodes,
@@ -49,11 +55,19 @@ TAKEN_AGAIN_IN_SUMMARY = (
     "and the stop again, heard at write {times})"
 )
 #: what a Ctrl-C says while the run's tree is stopped (each running node's ``terminate()``),
-#: after what the wheels do meanwhile
+#: after what the wheels do meanwhile, and how long the run's end waits for it
 STOPPING_THE_TREE = (
     "the run is ending: {wheels}; its tree is being stopped (each running behaviour's "
-    "terminate()), the safe stop after it"
+    "terminate(), for at most {limit}), the safe stop after it"
 )
+#: How long the run's end waits for its tree's stop (decided, session 36): a plugin's
+#: ``terminate()`` that never returned held the run's end for ever, so the robot was left in
+#: Safe with its stream going, no summary was printed and no signal ended the process (each
+#: was held for the stop to end). Past this the end goes on without it: the safe stop, the
+#: summary (HUNG, the terminate and its line named), the exit code. A few seconds: a
+#: terminate that closes a file or a socket has ample time, an operator's Ctrl-C meanwhile
+#: waits no longer; ``run --wall-limit`` below it caps it (:func:`tree_stop_limit`).
+TREE_STOP_LIMIT_S = 5.0
 #: ... and while the nodes' ``shutdown()`` runs
 SHUTTING_DOWN = "the robot is stopped; the behaviours' shutdown() is under way"
 #: what the run's reason says a late signal came during (``Ctrl-C during the tree's stop, in
@@ -91,17 +105,42 @@ class RunEnding:
         tick_guard: TickGuardLike | None,
         guard: InterruptGuard,
         raised_in: py_trees.behaviour.Behaviour | None,
+        limit_s: float = TREE_STOP_LIMIT_S,
     ) -> bool:
         """The tree's stop at the run's end (:meth:`stop_tree`, its failures in the
         summary), drive 0 and motors off before it if the wheels move (:meth:`wheels_first`:
-        True if they were sent), and a warning if it blocked (:meth:`_said_slow_stop`)."""
+        True if they were sent), and a warning if it blocked (:meth:`_said_slow_stop`). The
+        stop runs in a thread of its own, waited for ``limit_s`` at most
+        (:data:`TREE_STOP_LIMIT_S`): past it the run's end goes on without it
+        (:meth:`_abandoned`), in this thread, which is not stuck."""
         # the mission's last words, whatever ended it (the summary's "mission said")
         self.summary.said = last_said(root) or ""
-        first = self.wheels_first(root, tick_guard, guard)
+        stopper = _TreeStop(self, root, raised_in)
+        first = self.wheels_first(root, tick_guard, guard, stopper, limit_s)
         began = time.monotonic()
-        note_stop_failures(self.summary, self.stop_tree(root, raised_in))
+        failures = stopper.within(limit_s)
+        if failures is None:  # a terminate that has not returned: the end goes on without it
+            self._abandoned(stopper, limit_s, late=guard.late is not None)
+            return first
+        note_stop_failures(self.summary, failures)
         self._said_slow_stop(tick_guard, time.monotonic() - began, first)
         return first
+
+    def _abandoned(self, stopper: _TreeStop, limit_s: float, late: bool) -> None:
+        """The tree's stop ran past ``limit_s`` (:class:`_TreeStop`): said in the summary,
+        naming the method it is stuck in and its line (``term_hang (TermHang.terminate at
+        plugin.py:17)``, as the tick guard names a blocked ``update``), and warned; what its
+        nodes queued is dropped, and the writer still holds what would set the robot going
+        (its thread may write yet). ``late``: a signal came meanwhile, whose interrupt the
+        run's reason says (:func:`note_stop_abandoned`)."""
+        where = stopper.where() or "a behaviour's terminate()"
+        said = (
+            f"the tree's stop did not end within {duration_said(limit_s)}: {where} had not "
+            "returned; the run's end went on without it (the safe stop, the summary)"
+        )
+        log.warning("%s", said)
+        note_stop_abandoned(self.summary, said, interrupted=late)
+        self.outbox.clear()
 
     def safe_stop(
         self,
@@ -147,13 +186,15 @@ class RunEnding:
         root: py_trees.behaviour.Behaviour,
         tick_guard: TickGuardLike | None,
         guard: InterruptGuard,
+        stopper: _TreeStop | None = None,
+        limit_s: float = TREE_STOP_LIMIT_S,
     ) -> bool:
         """Before the tree's stop, whose ``terminate()`` calls may block (a plugin's
         ``time.sleep``): drive 0 and motors off, the first half of the safe stop, through the
         run's tick guard (a run on the wall clock; a replay's, as its record says), when a
         node still runs and the wheels move or the tree's last Motors runs a brush or the
         vacuum. True if they were sent. ``guard`` is told what the run does meanwhile, for a
-        Ctrl-C then."""
+        Ctrl-C then, and where the stop (``stopper``'s thread) is when it comes."""
         motors = self.outbox.standing.get("motors")
         first = (
             tick_guard is not None
@@ -165,7 +206,12 @@ class RunEnding:
             if first
             else f"the robot keeps its last wheel command ({self.connection.activity()})"
         )
-        guard.stopping(STOPPING_THE_TREE.format(wheels=wheels), during(THE_TREES_STOP))
+        doing = STOPPING_THE_TREE.format(wheels=wheels, limit=duration_said(limit_s))
+        where = during(THE_TREES_STOP)
+        if stopper is None:
+            guard.stopping(doing, where)
+        else:  # the stop's own thread's frame, not this one's, which waits for it
+            guard.stopping(doing, lambda _frame: where(stopper.frame()))
         return first
 
     def _said_slow_stop(
@@ -256,6 +302,69 @@ class RunEnding:
             now = self.clock(0.0)  # the last tick's time
             when = f"t={now:.3f} " if now is not None else ""
             summary.first_dropped = f"{when}{who} {how} {what}"
+
+
+class _TreeStop:
+    """The tree's stop at a run's end (:meth:`RunEnding.stop_tree`) in a daemon thread of its
+    own, lent the run's blackboard (a ``terminate()`` reads and writes keys as it would in
+    the run's thread), so that the thread that waits for it is never stuck in a plugin's
+    ``terminate()`` that does not return: it goes on to the safe stop and the summary, and
+    the process exits with the thread still in it (a daemon thread: nothing waits for it at
+    the interpreter's exit; decided over ``os._exit``, which would skip the record's and the
+    streams' own closing, and over an exception raised in the stuck thread, which a
+    ``threading.Event().wait()`` in C never sees)."""
+
+    def __init__(
+        self,
+        ending: RunEnding,
+        root: py_trees.behaviour.Behaviour,
+        raised_in: py_trees.behaviour.Behaviour | None,
+    ) -> None:
+        self.ending, self.root, self.raised_in = ending, root, raised_in
+        self.board = run_board()  # the run's, read in the run's thread
+        self.failures: list[str] = []
+        #: what the thread raised that was not a terminate's failure (a signal's interrupt
+        #: raised in it is not: signals go to the main thread), raised again in the waiter
+        self.raised: BaseException | None = None
+        self.done = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="roomba-bt tree stop", daemon=True)
+
+    def _run(self) -> None:
+        try:
+            with running_on(self.board, ends_run=False):
+                self.failures = self.ending.stop_tree(self.root, self.raised_in)
+        except BaseException as exc:  # carried to the waiting thread, raised there
+            self.raised = exc
+        finally:
+            self.done.set()
+
+    def within(self, limit_s: float) -> list[str] | None:
+        """Start the stop and wait for it ``limit_s`` at most: what each ``terminate`` that
+        raised says, or None if it has not ended by then. A signal's handler runs in this
+        (the main) thread meanwhile: the guard holds it (:class:`InterruptGuard`)."""
+        self.thread.start()
+        if not self.done.wait(limit_s):
+            return None
+        if self.raised is not None:
+            raise self.raised
+        return self.failures
+
+    def frame(self) -> FrameType | None:
+        """The stop's thread's innermost frame now (None: not started, or ended)."""
+        ident = self.thread.ident
+        return None if ident is None else sys._current_frames().get(ident)
+
+    def where(self) -> str:
+        """The behaviour's method the stop is in now, at its line (:func:`behaviour_at`)."""
+        return behaviour_at(self.frame())
+
+
+def tree_stop_limit(wall_limit_s: float | None) -> float:
+    """How long a run's end waits for its tree's stop: :data:`TREE_STOP_LIMIT_S`, or less
+    under a shorter ``run --wall-limit`` (the run was given no more than that in all)."""
+    if wall_limit_s is None or wall_limit_s <= 0.0:
+        return TREE_STOP_LIMIT_S
+    return min(TREE_STOP_LIMIT_S, wall_limit_s)
 
 
 def stop_robot(connection: Connection, summary: RunSummary, first: bool = False) -> None:

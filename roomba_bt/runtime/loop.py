@@ -74,7 +74,7 @@ from roomba_bt.runtime.clock import (
     interrupted_at,
     mission_time_after,
 )
-from roomba_bt.runtime.ending import RunEnding
+from roomba_bt.runtime.ending import RunEnding, tree_stop_limit
 from roomba_bt.runtime.long_run import MissionTimeChecks
 from roomba_bt.runtime.motion_watch import MotionWatch
 from roomba_bt.runtime.refusals import Refusals
@@ -486,7 +486,8 @@ class MissionRunner(BaseHandle):
         summary.ended_at = ended_at(self, summary.ended_at)  # for the record's end note
         guard = cast(InterruptGuard, self._guard)  # run()'s: told what the stop does
         ending = self._ending
-        first = ending.end_tree(self.mission.root, self.tick_guard, guard, raised_in)
+        limit = tree_stop_limit(self.wall_limit_s)  # a terminate that never returns: no hang
+        first = ending.end_tree(self.mission.root, self.tick_guard, guard, raised_in, limit)
         self.count_written()  # the safe stop's are said apart
         set_up = self._sent_at_start is not None  # what its setup() opened, closed
         last = self.snapshot if self.has_snapshot else None

@@ -150,6 +150,8 @@ class StallRide:
         if not summary.tick_halt_first:
             summary.tick_halt_first = summary.tick_halt_last
         motors_off = self._motors_off()
+        if motors_off is not None:
+            summary.tick_halts_motors += 1
         log.warning(
             "a tick ran over %g s (%s): the tick guard sent drive 0%s",
             tick_guard.limit_s if tick_guard else 0.0, where or "where: unknown",

@@ -271,6 +271,9 @@ class RunSummary:
     #: guard (runtime/tick_guard.py); where the first and the last were (the behaviour, its
     #: line)
     tick_halts: int = 0
+    #: of :attr:`tick_halts`, those whose drive 0 went out with motors off (a brush or the
+    #: vacuum ran): the summary says what was sent
+    tick_halts_motors: int = 0
     tick_halt_first: str = ""
     tick_halt_last: str = ""
     commands_written: int = 0
@@ -547,8 +550,8 @@ class RunSummary:
             ),
             *(
                 [
-                    f"tick guard   {self.tick_halts} slow tick(s): drive 0 sent while the tree "
-                    f"was busy; the first in {self.tick_halt_first}"
+                    f"tick guard   {self.tick_halts} slow tick(s): {self.tick_halts_said()} "
+                    f"while the tree was busy; the first in {self.tick_halt_first}"
                 ]
                 if self.tick_halts
                 else []
@@ -605,6 +608,17 @@ class RunSummary:
         if self.steps:
             parts.append(f"{self.steps} step{'' if self.steps == 1 else 's'}")
         return f"{self.paused_s:.2f} s in {', '.join(parts)}, left out of mission time"
+
+    def tick_halts_said(self) -> str:
+        """What the tick guard sent in its halts: ``drive 0 and motors off sent``, ``drive 0
+        sent``, or both counted (it said ``drive 0 sent`` of a halt whose motors off went
+        out in the same write)."""
+        motors, halts = self.tick_halts_motors, self.tick_halts
+        if motors <= 0:
+            return "drive 0 sent"
+        if motors >= halts:
+            return "drive 0 and motors off sent"
+        return f"drive 0 sent, with motors off in {motors} of them"
 
     def stall_text(self) -> str:
         """The watchdog's trips: how many sent drive 0 (a trip with the wheels at rest, on

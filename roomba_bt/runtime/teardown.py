@@ -342,6 +342,21 @@ def note_stop_failures(summary: RunSummary, failures: list[str]) -> None:
         summary.reason = f"{summary.reason}; then {said}" if summary.reason else said
 
 
+def note_stop_abandoned(summary: RunSummary, said: str, *, interrupted: bool = False) -> None:
+    """The tree's stop did not end in time and the run's end went on without it
+    (``runtime/ending.py``, ``said`` what): a run that had gone well so far (success,
+    failure, timeout, a replay's end) is HUNG, exit 4, as a tick stuck past ``--wall-limit``
+    is, its reason saying how the run had ended; one that had ended otherwise keeps its
+    outcome, its reason followed by ``; then ...``. ``interrupted``: a signal came while the
+    stop was waited for, whose interrupt the run's reason gives (:func:`note_late_interrupt`,
+    exit 130 or 143): it is only followed by this."""
+    if summary.outcome in _CLEAN_ENDINGS and not interrupted:
+        was = summary.outcome.value + (f": {summary.reason}" if summary.reason else "")
+        summary.outcome, summary.reason = Outcome.HUNG, f"{said} (the run had ended: {was})"
+    else:
+        summary.reason = f"{summary.reason}; then {said}" if summary.reason else said
+
+
 def note_undelivered_stop(summary: RunSummary) -> None:
     """The safe stop did not reach the robot (or is unconfirmed): a run that had ended well
     (success, failure, timeout, a replay's end) is a lost connection, exit 3, its reason
