@@ -11,6 +11,8 @@ retires a tree with it too), then the safe stop (:func:`stop_robot`, the connect
 from __future__ import annotations
 
 import logging
+import os
+import signal
 import sys
 import threading
 import time
@@ -207,11 +209,8 @@ class RunEnding:
             else f"the robot keeps its last wheel command ({self.connection.activity()})"
         )
         doing = STOPPING_THE_TREE.format(wheels=wheels, limit=duration_said(limit_s))
-        where = during(THE_TREES_STOP)
-        if stopper is None:
-            guard.stopping(doing, where)
-        else:  # the stop's own thread's frame, not this one's, which waits for it
-            guard.stopping(doing, lambda _frame: where(stopper.frame()))
+        # the stop's own thread's frame, not this one's, which waits for it
+        guard.stopping(doing, during(THE_TREES_STOP) if stopper is None else stopper.during)
         return first
 
     def _said_slow_stop(
@@ -327,16 +326,27 @@ class _TreeStop:
         #: raised in it is not: signals go to the main thread), raised again in the waiter
         self.raised: BaseException | None = None
         self.done = threading.Event()
+        #: where this thread signalled its own process (:meth:`_called`), "" if it did not
+        self.signalled = ""
         self.thread = threading.Thread(target=self._run, name="roomba-bt tree stop", daemon=True)
 
     def _run(self) -> None:
+        sys.setprofile(self._called)  # this thread's alone, for as long as it stops the tree
         try:
             with running_on(self.board, ends_run=False):
                 self.failures = self.ending.stop_tree(self.root, self.raised_in)
         except BaseException as exc:  # carried to the waiting thread, raised there
             self.raised = exc
         finally:
+            sys.setprofile(None)
             self.done.set()
+
+    def _called(self, frame: FrameType, event: str, arg: object) -> None:
+        """A signal this thread sends its own process (``os.kill(os.getpid(), ...)`` in a
+        terminate): where it was sent from, kept (:attr:`signalled`). Its handler runs in the
+        main thread, and this one may have run on, or ended, by then."""
+        if event == "c_call" and arg in _SIGNALLING and not self.signalled:
+            self.signalled = behaviour_at(frame)
 
     def within(self, limit_s: float) -> list[str] | None:
         """Start the stop and wait for it ``limit_s`` at most: what each ``terminate`` that
@@ -349,14 +359,25 @@ class _TreeStop:
             raise self.raised
         return self.failures
 
-    def frame(self) -> FrameType | None:
-        """The stop's thread's innermost frame now (None: not started, or ended)."""
-        ident = self.thread.ident
-        return None if ident is None else sys._current_frames().get(ident)
-
     def where(self) -> str:
         """The behaviour's method the stop is in now, at its line (:func:`behaviour_at`)."""
-        return behaviour_at(self.frame())
+        ident = self.thread.ident
+        return behaviour_at(None if ident is None else sys._current_frames().get(ident))
+
+    def during(self, _frame: FrameType | None) -> str:
+        """What a signal that came during the stop came during (``InterruptGuard.stopping``'s
+        ``during``, given the main thread's frame, which only waits): the tree's stop, in
+        the behaviour's method this thread is in, or sent the signal from."""
+        where = self.signalled or self.where()
+        return f"{THE_TREES_STOP}, in {where}" if where else THE_TREES_STOP
+
+
+#: the calls by which a thread signals its own process (:meth:`_TreeStop._called`)
+_SIGNALLING = tuple(
+    call
+    for call in (os.kill, getattr(signal, "pthread_kill", None), signal.raise_signal)
+    if call is not None
+)
 
 
 def tree_stop_limit(wall_limit_s: float | None) -> float:

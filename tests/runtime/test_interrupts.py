@@ -283,8 +283,8 @@ def test_a_signal_during_the_trees_stop_says_the_tree_is_stopping(
     err = capfd.readouterr().err
     assert (
         "roomba-bt: the run is ending: drive 0 and motors off were sent; its tree is being "
-        "stopped (each running behaviour's terminate()), the safe stop after it; waiting for "
-        "it to end (the summary follows)"
+        "stopped (each running behaviour's terminate(), for at most 5 s), the safe stop "
+        "after it; waiting for it to end (the summary follows)"
     ) in err, err
     assert "the safe stop is under way" not in err
     assert link.written.endswith(oi.halt().data + oi.motors_off().data + SAFE_END)

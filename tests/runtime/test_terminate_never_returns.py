@@ -85,9 +85,7 @@ def mission(tmp_path: Path) -> Iterator[Path]:
 
 
 def _plugin_modules(path: Path) -> list[ModuleType]:
-    return [
-        m for m in list(sys.modules.values()) if getattr(m, "__file__", None) == str(path)
-    ]
+    return [m for m in list(sys.modules.values()) if getattr(m, "__file__", None) == str(path)]
 
 
 def _outbound(record: Path) -> bytes:
@@ -170,7 +168,8 @@ def test_ctrl_c_while_the_run_waits_for_a_terminate_that_never_returns_is_exit_1
     assert proc.returncode == 130, out + err
     where = f"hang_on_stop (HangOnStop.terminate at {tmp_path / 'hang.py'}:{WAIT_LINE})"
     assert f"outcome      INTERRUPTED (Ctrl-C during the tree's stop, in {where} (" in out, out
-    assert f"the tree's stop did not end within {ending.TREE_STOP_LIMIT_S:g} s: {where} had not returned" in out, out
+    limit = f"{ending.TREE_STOP_LIMIT_S:g} s"
+    assert f"the tree's stop did not end within {limit}: {where} had not returned" in out, out
     assert "waiting for it to end (the summary follows)" in err, err
     assert (
         "safe stop    drive 0, motors off before the tree's stop, then sent drive, motors, "
