@@ -167,7 +167,9 @@ def test_ctrl_c_while_the_run_waits_for_a_terminate_that_never_returns_is_exit_1
     out, err = proc.communicate(timeout=GIVE_UP_S)
     assert proc.returncode == 130, out + err
     where = f"hang_on_stop (HangOnStop.terminate at {tmp_path / 'hang.py'}:{WAIT_LINE})"
-    assert f"outcome      INTERRUPTED (Ctrl-C during the tree's stop, in {where} (" in out, out
+    # the signal's name as the run's reason gives it ("Ctrl-C", or longer), then where
+    assert "outcome      INTERRUPTED (Ctrl-C" in out, out
+    assert f" during the tree's stop, in {where} (the run had ended: timeout: " in out, out
     limit = f"{ending.TREE_STOP_LIMIT_S:g} s"
     assert f"the tree's stop did not end within {limit}: {where} had not returned" in out, out
     assert "waiting for it to end (the summary follows)" in err, err
