@@ -54,12 +54,14 @@ class HangOnStop(Action):
 
     def terminate(self, new_status):
         super().terminate(new_status)
-        print("terminate entered", file=sys.stderr, flush=True)
-        RELEASE.wait()
+        # one line: the signal the test sends once it reads this finds the thread on it
+        print("terminate entered", file=sys.stderr, flush=True); RELEASE.wait()
 '''
 
 #: the line of its wait, which the summary names
-WAIT_LINE = HANG_ON_STOP.splitlines().index("        RELEASE.wait()") + 1
+WAIT_LINE = next(
+    i for i, line in enumerate(HANG_ON_STOP.splitlines(), 1) if "RELEASE.wait()" in line
+)
 
 MISSION = (
     "mission: hang_on_stop\n"
