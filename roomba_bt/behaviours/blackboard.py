@@ -95,13 +95,31 @@ class KeyRange(ValueError, RoombaBtError):
     """A behaviour started with a parameter ``@key`` whose key holds a value out of the
     parameter's declared range (written by a plugin, which the validator cannot see; it
     checks ``initial`` and ``set`` values and ``for_each`` items). It would otherwise
-    reach the robot, or a command's encoder, as the behaviour's own bug."""
+    reach the robot, or a command's encoder, as the behaviour's own bug.
+
+    The fault is the writer's, not the reader's, which only refused the value: the
+    message names the key's last writer and the line that wrote it (:func:`last_write`;
+    ``written_at``, ``"at keys.py:9"``, what the runtime's error points to in place of the
+    reader's ``read_parameters``), when :func:`write_key` wrote it. A run's error pointed
+    at roomba-bt's own ``base.py`` and the user went looking for a bug in ``drive``."""
 
     def __init__(self, node: RobotBehaviour, pname: str, ref: BlackboardRef, problem: str):
         self.node, self.param, self.ref = node, pname, ref
+        write = last_write(ref.key)
+        #: who wrote the value last (``write_key``'s ``writer``), None when unknown
+        self.writer: str | None = write[0] if write is not None else None
+        #: ``at file:line`` of the ``write_key`` call, "" when unknown
+        self.written_at = f"at {write[1]}:{write[2]}" if write is not None else ""
+        blamed = ""
+        if write is not None:
+            by = "" if write[0] == _MISSION_WRITER_NAME else f" by {write[0]!r}"
+            blamed = (
+                f"; the value was written last{by} ({self.written_at}): the fault is that "
+                f"writer's, {node.declaration.name} only refused the value"
+            )
         super().__init__(
             f"{node.declaration.name} {node.name!r}: {pname} is {ref}, and blackboard key "
-            f"{str(ref)[1:]!r} holds a value out of its range: {problem}"
+            f"{str(ref)[1:]!r} holds a value out of its range: {problem}{blamed}"
         )
 
 
@@ -135,6 +153,7 @@ class RunBoard:
         "snapshot_key",
         "types_key",
         "writer",
+        "written",
     )
 
     def __init__(self, prefix: str) -> None:
@@ -149,6 +168,9 @@ class RunBoard:
         #: the runtime's py_trees client, the snapshot's writer (:meth:`write_snapshot`),
         #: from the run's claim (:meth:`started`) to its end
         self.writer: py_trees.blackboard.Client | None = None
+        #: each key's last writer by :func:`write_key` and the line that called it
+        #: (``("set_speed(key=v)", "/home/me/keys.py", 9)``): what :class:`KeyRange` names
+        self.written: dict[str, tuple[str, str, int]] = {}
 
     def _named(self, prefix: str) -> None:
         """Its names from ``prefix`` on; the prefix set last, the names it makes first (a
@@ -313,6 +335,7 @@ class RunBoard:
         for name in self.names():
             storage.pop(name, None)
         self.said.clear()
+        self.written.clear()
 
 
 def _unregister(client: py_trees.blackboard.Client | None) -> None:
@@ -481,6 +504,7 @@ def declare_keys(types: Mapping[str, ValueType]) -> None:
     board = _RUNNING.board
     py_trees.blackboard.Blackboard.storage[board.types_key] = dict(types)  # {}: still said
     board.said.clear()
+    board.written.clear()
     board.replace_client(types)
 
 
@@ -548,6 +572,14 @@ def unwrite_keys(keys: Iterable[str]) -> None:
     storage = py_trees.blackboard.Blackboard.storage
     for key in keys:
         storage.pop(board.mission + key, None)
+        board.written.pop(key, None)
+
+
+def last_write(key: str) -> tuple[str, str, int] | None:
+    """Who wrote ``key`` (``key.field``: the record) last this run, by :func:`write_key`,
+    and the file and line that called it: ``("set_speed(key=v)", "/home/me/keys.py", 9)``;
+    None when nothing wrote it through :func:`write_key` (a py_trees client's own write)."""
+    return _RUNNING.board.written.get(key.partition(".")[0])
 
 
 def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
@@ -569,6 +601,8 @@ def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
             raise KeyType(key, vtype, value, problem, writer)
     elif types is not None and key not in board.said:
         _said_undeclared(board, key, writer, types)
+    caller = sys._getframe(1)  # the line a KeyRange names, should a reader refuse the value
+    board.written[key] = (writer, caller.f_code.co_filename, caller.f_lineno)
     name = board.mission + key
     stream = blackboard.activity_stream
     if stream is not None:

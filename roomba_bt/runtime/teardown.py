@@ -30,6 +30,7 @@ from typing import Any
 
 import py_trees
 
+from roomba_bt.behaviours.blackboard import KeyRange
 from roomba_bt.behaviours.lean import InvalidStatus
 from roomba_bt.behaviours.returned import returned_from
 from roomba_bt.oi.frames import SLOT_SECONDS, MissingPacket
@@ -69,6 +70,10 @@ def behaviour_error(exc: BaseException, *, method: bool = True) -> str:
         with contextlib.suppress(TypeError, OSError, SyntaxError):
             where = returned_from(update, exc.status)
         method = False
+    if isinstance(exc, KeyRange) and exc.written_at:
+        # the reader refused a value: the line to look at is the writer's (the message
+        # names it), not roomba-bt's read_parameters that raised
+        return f"behaviour {tree_path(behaviour or exc.node)} raised {what}"
     if behaviour is None:
         return f"{what} ({where})" if where else what
     came_out_of = _method_of(behaviour, frames) if method else None

@@ -102,7 +102,11 @@ def test_a_key_out_of_the_parameter_s_range_is_refused_when_the_leaf_starts() ->
         drive.initialise()
     assert str(caught.value) == (
         "drive 'fast': velocity is @v, and blackboard key 'v' holds a value out of its range: "
-        "velocity 900 mm/s is out of range: allowed -500..500 mm/s"
+        "velocity 900 mm/s is out of range: allowed -500..500 mm/s; the value was written "
+        f"last (at {__file__}:100): the fault is that writer's, drive only refused the value"
+    )
+    assert (caught.value.writer, caught.value.written_at) == (
+        "roomba-bt mission", f"at {__file__}:100"
     )
     write_key("v", 300.0)
     drive.initialise()

@@ -165,6 +165,29 @@ def test_a_plugin_s_write_out_of_range_ends_the_run_naming_the_reader(
     ), err
 
 
+def test_a_plugin_s_write_out_of_range_is_blamed_on_the_writer_not_the_reader(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The error pointed at roomba-bt's own ``base.py`` (the reader's ``read_parameters``)
+    and never named the plugin that wrote the value (session 36, a stranger's finding): the
+    last writer, its line, and whose fault it is are said, roomba-bt's file is not."""
+    mission = _written_then_driven(tmp_path, "900.0")
+    plugin = tmp_path / "fast.py"
+    plugin.write_text(WRITER.replace("VALUE)", "900.0, self.name)"))
+    assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
+    err = capsys.readouterr().err
+    assert (
+        f"allowed -500..500 mm/s; the value was written last by 'fast(key=v)' (at {plugin}:12)"
+        ": the fault is that writer's, drive only refused the value" in err
+    ), err
+    assert "base.py" not in err and "read_parameters" not in err, err
+    # a writer that does not name itself: its line all the same
+    plugin.write_text(WRITER.replace("VALUE", "900.0"))
+    assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
+    err = capsys.readouterr().err
+    assert f"the value was written last (at {plugin}:12): the fault is that writer's" in err
+
+
 def _written_then_driven(folder: Path, value: str) -> Path:
     """A mission whose plugin writes ``value`` (Python) to a speed key a drive reads."""
     (folder / "fast.py").write_text(WRITER.replace("VALUE", value))
