@@ -873,8 +873,8 @@ def _report_on_stdout(
         if stack.runner.has_snapshot:
             observer.render(stack.runner)
         observer.close()  # the last screen drawn before the report is printed under it
-    if args.display != "none":
-        print(_render_tree(stack.mission, status=True))
+    if args.display != "none":  # as the run left it: its stop marks every node INVALID
+        print(_render_tree(stack.mission, status=True, as_ticked=stack.runner.tree_as_left))
     print(summary)
     if simulator is not None and simulator.swept is not None and simulator.swept.cleaning_time:
         print(_coverage_line(simulator, sys.stdout))
@@ -929,7 +929,7 @@ def _render_tree(mission: Any, status: bool = False, as_ticked: Any = None) -> s
     ``feedback_message`` reached the terminal raw: :func:`~roomba_bt.runtime.display.text_tree`),
     in the symbols and colours stdout can show (:func:`~roomba_bt.runtime.display.tree_symbols`:
     ``[ok]`` on an ASCII stdout, no colour with ``NO_COLOR``); ``as_ticked``: the statuses
-    of the run's last tick (a :class:`~roomba_bt.runtime.display.TreeAsTicked`)."""
+    as the run left them (a :class:`~roomba_bt.runtime.display.TreeStatuses`)."""
     from roomba_bt.runtime.display import text_tree, tree_symbols
 
     symbols = tree_symbols(sys.stdout)

@@ -253,7 +253,7 @@ def text_tree(
     *,
     show_status: bool = False,
     symbols: dict[object, str] | None = None,
-    as_ticked: TreeAsTicked | None = None,
+    as_ticked: TreeStatuses | None = None,
 ) -> str:
     """The tree as ``py_trees.display.unicode_tree`` draws it (the run's tree before it
     starts, and with ``show_status`` each node's status and message at its end), each
@@ -640,7 +640,37 @@ class StatusChangeLogger:
         )  # fmt: skip
 
 
-class TreeAsTicked:
+class TreeStatuses:
+    """Each node's status and message, and the tip, as a tree stood at one moment: what a
+    tree printed after the run draws (``text_tree``'s ``as_ticked``). The tree's stop
+    marks every node INVALID, so a run ended by a behaviour's exception printed every node
+    ``[-]``, even a ``mode(safe)`` that had succeeded: the runner keeps the tree as it
+    stood before its stop (``MissionRunner.tree_as_left``)."""
+
+    def __init__(self) -> None:
+        #: each node's (status, feedback message); empty: none taken
+        self.nodes: dict[UUID, tuple[py_trees.common.Status, str]] = {}
+        #: the node the tree's last tick ended at (drawn bold), None where none ran
+        self.tip_id: UUID | None = None
+
+    def take(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        raised: tuple[py_trees.behaviour.Behaviour, str] | None = None,
+    ) -> None:
+        """The tree's statuses, messages and tip as they are now. ``raised``: the node whose
+        exception ended the run and what it raised (``RuntimeError``), said as its message
+        and made the tip: it never returned a status, so its mark alone told nothing."""
+        self.nodes = {node.id: (node.status, node.feedback_message) for node in root.iterate()}
+        tip = root.tip()
+        self.tip_id = tip.id if tip is not None else None
+        if raised is not None and raised[0].id in self.nodes:
+            node, what = raised
+            self.nodes[node.id] = (node.status, f"raised {what}")
+            self.tip_id = node.id
+
+
+class TreeAsTicked(TreeStatuses):
     """The tree's statuses and messages as each tick leaves them (an observer), for a tree
     printed after the run (``replay --display tree``, :func:`text_tree`'s ``as_ticked``).
 
@@ -649,17 +679,8 @@ class TreeAsTicked:
     every node ``[-]``, even ``mode(safe)`` which had run. Kept per tick, not drawn: the
     drawing is done once, at the end."""
 
-    def __init__(self) -> None:
-        #: each node's (status, feedback message) after the last tick; empty before one
-        self.nodes: dict[UUID, tuple[py_trees.common.Status, str]] = {}
-        #: the node the last tick ended at (drawn bold), None where none ran
-        self.tip_id: UUID | None = None
-
     def __call__(self, runner: MissionRunner) -> None:
-        root = runner.mission.root
-        self.nodes = {node.id: (node.status, node.feedback_message) for node in root.iterate()}
-        tip = root.tip()
-        self.tip_id = tip.id if tip is not None else None
+        self.take(runner.mission.root)
 
 
 def observer_for(

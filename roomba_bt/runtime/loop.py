@@ -74,6 +74,7 @@ from roomba_bt.runtime.clock import (
     interrupted_at,
     mission_time_after,
 )
+from roomba_bt.runtime.display import TreeStatuses
 from roomba_bt.runtime.ending import RunEnding, tree_stop_limit
 from roomba_bt.runtime.long_run import MissionTimeChecks
 from roomba_bt.runtime.motion_watch import MotionWatch
@@ -92,6 +93,7 @@ from roomba_bt.runtime.teardown import (
     behaviours_interrupt,
     cut_short,
     note_late_interrupt,
+    raised_in_tree,
     setup_tree,
     terminate_raised,
 )
@@ -343,6 +345,11 @@ class MissionRunner(BaseHandle):
         #: this run's part of py_trees' blackboard, claimed when it starts (None before):
         #: ``runner.blackboard.values()``, its mission's keys; ``.read("leg")``, one of them
         self.blackboard: RunBoard | None = None
+        #: the tree as it stood when the run ended, before its stop marked every node
+        #: INVALID: each node's last status and message (``run``'s tree after the run)
+        self.tree_as_left = TreeStatuses()
+        #: the behaviour whose exception ended a tick, and the exception's name (None: none)
+        self._raised: tuple[py_trees.behaviour.Behaviour, str] | None = None
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
         self._fallback_seen: object = None
@@ -450,6 +457,8 @@ class MissionRunner(BaseHandle):
                 summary.outcome, summary.reason = Outcome.HUNG, limit.said(exc)
             except BaseException as exc:  # Ctrl-C; a stop, a lost link, a bug, sys.exit()
                 interrupt, raised_in = run_ended_by(exc, summary, answered=self.has_snapshot)
+                if interrupt is None:
+                    self._observe_failed_tick(exc)
             finally:
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
@@ -480,12 +489,33 @@ class MissionRunner(BaseHandle):
         <roomba_bt.runtime.ending.RunEnding.stop_tree>`): the run's end, a reload."""
         return self._ending.stop_tree(self.mission.root, raised_in)
 
+    def _observe_failed_tick(self, exc: BaseException) -> None:
+        """The behaviour whose exception ended a tick kept (the tree after the run says it),
+        and the observer called once more when a behaviour's exception ended a tick (or the
+        tree's set-up, after the first frame), before the tree is stopped: the status log's
+        lines of that tick (``pre -> SUCCESS``) and the live tree as the exception left
+        it. The run's log stopped at the tick before, and neither it nor the tree showed how
+        far the run had got. An observer that raises now is logged, not let replace the
+        behaviour's error."""
+        raiser = raised_in_tree(exc)
+        if raiser is None or not self.has_snapshot:
+            return
+        self._raised = (raiser, type(exc).__name__)
+        if self.observer is None:
+            return
+        try:
+            self.observer(self)
+        except Exception:  # the behaviour's error is the run's; this one only logged
+            log.debug("the observer raised after a behaviour's exception", exc_info=True)
+
     def _finish(
         self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
     ) -> None:
         summary.ended_at = ended_at(self, summary.ended_at)  # for the record's end note
         guard = cast(InterruptGuard, self._guard)  # run()'s: told what the stop does
         ending = self._ending
+        # before the stop marks every node INVALID
+        self.tree_as_left.take(self.mission.root, self._raised)
         limit = tree_stop_limit(self.wall_limit_s)  # a terminate that never returns: no hang
         first = ending.end_tree(self.mission.root, self.tick_guard, guard, raised_in, limit)
         self.count_written()  # the safe stop's are said apart

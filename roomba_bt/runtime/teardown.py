@@ -100,6 +100,15 @@ def _method_of(
     return own[-1].f_code.co_name
 
 
+def raised_in_tree(exc: BaseException) -> py_trees.behaviour.Behaviour | None:
+    """The behaviour ``exc`` came out of (the innermost on its traceback): raised in a tick
+    (or a behaviour's ``setup``); None when raised by the link, the runtime or a program's
+    observer. A refused ``@key`` value (``KeyRange``): the behaviour that read it."""
+    if isinstance(exc, KeyRange):
+        return exc.node
+    return innermost_behaviour(list(traceback.walk_tb(exc.__traceback__)))[0]
+
+
 def behaviours_interrupt(exc: BaseException) -> bool:
     """Whether ``exc``, which ended a run, is a ``KeyboardInterrupt`` a behaviour's code
     raised itself, no signal having come (:func:`~roomba_bt.robot.safety.signal_delivered`):

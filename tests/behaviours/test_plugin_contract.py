@@ -106,7 +106,8 @@ def test_a_key_out_of_the_parameter_s_range_is_refused_when_the_leaf_starts() ->
         f"last (at {__file__}:100): the fault is that writer's, drive only refused the value"
     )
     assert (caught.value.writer, caught.value.written_at) == (
-        "roomba-bt mission", f"at {__file__}:100"
+        "roomba-bt mission",
+        f"at {__file__}:100",
     )
     write_key("v", 300.0)
     drive.initialise()

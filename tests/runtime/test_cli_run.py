@@ -759,3 +759,55 @@ def test_a_required_record_that_cannot_be_written_leaves_the_earlier_record_in_i
     assert "the record's header could not be written (File too large)" in done.stderr
     assert "--require-record: not started, nothing sent" in done.stderr
     assert record.read_text(encoding="utf-8") == earlier
+
+
+#: a plugin's action that raises on its first tick
+BOOM_PLUGIN = """
+from py_trees.common import Status
+from roomba_bt.behaviours import Action, declare
+
+
+@declare("boom", kind="action", params=(), reads=())
+class Boom(Action):
+    \"\"\"Raises in its update.\"\"\"
+
+    def update(self):
+        raise RuntimeError("sensor calibration lost")
+"""
+
+BOOM = """\
+plugins: [./boom.py]
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s, duration: 0.1s}
+      name: pre
+    - motors: {main_brush: on}
+    - timeout: {after: 3s, do: {boom: {}}}
+"""
+
+
+@pytest.mark.parametrize("display", ["log", "tree"])
+def test_after_a_behaviour_s_exception_the_tree_and_the_log_show_how_far_the_run_got(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    caplog: pytest.LogCaptureFixture,
+    display: str,
+) -> None:
+    """After a behaviour raised, the tree printed at the end showed every node ``[-]``, even
+    ``mode(safe)``, which had succeeded (the tree's stop marks them INVALID), and the log
+    never printed the failing tick's lines (``motors -> SUCCESS``): neither told how far the
+    run had got (session 36, a stranger's finding). The tree shows each node's last status,
+    the raising leaf says what it raised, and the failing tick's lines are logged."""
+    caplog.set_level(logging.INFO, logger="roomba_bt.run")
+    options = ("--display", display, "--allow-plugin-files")
+    assert _run_file(tmp_path, "boom.yaml", BOOM, *options, plugins={"boom.py": BOOM_PLUGIN}) == 4
+    out = capsys.readouterr().out
+    tree = out[out.index("{-} sequence [") : out.index("mission ")]
+    assert "--> mode(safe) [✓]" in tree, tree
+    assert "--> pre [✓]" in tree, tree
+    assert "--> motors(main_brush=on) [✓]" in tree, tree
+    assert "--> boom [-] -- raised RuntimeError" in tree, tree
+    if display == "log":
+        logged = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.run"]
+        assert logged[-2:] == ["pre -> SUCCESS", "motors(main_brush=on) -> SUCCESS"], logged
