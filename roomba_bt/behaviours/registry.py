@@ -338,7 +338,13 @@ class Registry:
         try:
             classes = _provided(provider)
         except DeclarationError as exc:
-            self._errors.append(PluginError(said, f"declares itself wrongly: {exc}", names=named))
+            # refused whole: the names its good classes declare are lost with it, and an
+            # unknown node of one of them gets this error as its note
+            lost = _declared_names(provider)
+            cause = f"declares itself wrongly: {exc}"
+            if lost:
+                cause += f" (the entry refused whole: {', '.join(map(repr, lost))} with it)"
+            self._errors.append(PluginError(said, cause, names=(*lost, *named)))
             return []
         registered: list[Declaration] = []
         for cls in classes:
@@ -516,6 +522,17 @@ class Registry:
         return copy
 
     # ------------------------------------------------------------------ queries
+    def may_have_meant(self, word: str) -> tuple[list[PluginError], bool]:
+        """The plugins that did not load whose behaviour ``word`` may have been, and whether
+        one declares it: those that declare the name (a class refused; a list refused
+        whole, its good classes' names with it), else those that did not import at all (any
+        name could have been theirs; one that imported and declared nothing had no name to
+        give). A mission's "unknown node" and ``behaviours NAME`` note them; not every
+        broken plugin on the machine, nor one whose error merely contains the word."""
+        errors = self.errors
+        named = [e for e in errors if word in e.names]
+        return (named, True) if named else ([e for e in errors if not e.imported], False)
+
     def get(self, name: str) -> Declaration | None:
         """The declaration a mission's word names: a behaviour's name alone, or
         ``package:name`` (:meth:`_qualified`)."""
@@ -809,6 +826,14 @@ def _provided(provider: object) -> list[type]:
     if not classes:
         raise DeclarationError("it provides no behaviour class (decorated with @declare)")
     return classes
+
+
+def _declared_names(provider: object) -> tuple[str, ...]:
+    """The names the classes of a refused list (or tuple) declare: what a mission calls
+    the behaviours lost with it."""
+    items = provider if isinstance(provider, list | tuple) else ()
+    declared = [getattr(item, "__dict__", {}).get("declaration") for item in items]
+    return tuple(d.name for d in declared if isinstance(d, Declaration))
 
 
 def _classes_of(provider: object) -> Iterable[type]:

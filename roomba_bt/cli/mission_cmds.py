@@ -669,13 +669,10 @@ def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -
         from roomba_bt.behaviours.units import closest
 
         for name in unknown:
-            hint = closest(name, registry.names())
-            print(
-                f"roomba-bt behaviours: unknown behaviour {name!r}{hint}; a plugin file's "
-                "are listed with --plugin-file FILE",
-                file=sys.stderr,
-            )
-        _plugin_warnings(installed)  # it may be one of a plugin that did not load
+            print(f"roomba-bt behaviours: {_unknown_behaviour(name, registry)}", file=sys.stderr)
+        # it may be one of a plugin that did not load: said as `behaviours` says them when
+        # it lists (errors, then what is not listed), not as warnings of another command's
+        _plugins_broken("behaviours", installed, args.skip_broken_plugins, "not listed: {lost}")
         return ExitCode.INVALID
     if words and len(words) == len(args.names):  # only words: every behaviour would bury them
         if args.json:
@@ -705,6 +702,27 @@ def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -
     if _plugins_broken("behaviours", installed, args.skip_broken_plugins, "not listed: {lost}"):
         return ExitCode.INVALID
     return said
+
+
+def _unknown_behaviour(name: str, registry: Registry) -> str:
+    """What ``behaviours NAME`` says of a name no behaviour has: the plugin that declares it
+    and did not load (its error follows), else the plugins none of whose behaviours loaded,
+    else a did-you-mean and where a plugin file's behaviours are listed. It said "a plugin
+    file's are listed with --plugin-file FILE" of a name an installed plugin declares in a
+    list refused whole, as if the name were in a file."""
+    from roomba_bt.behaviours.units import closest
+
+    likely, declares = registry.may_have_meant(name)
+    said = f"unknown behaviour {escaped(repr(name), ANY_CONTROL)}"
+    plugins = escaped(", ".join(error.plugin for error in likely[:3]), ANY_CONTROL)
+    if len(likely) > 3:
+        plugins += f" and {len(likely) - 3} more"
+    if declares:
+        return f"{said}: it is declared by plugin {plugins}, which did not load (below)"
+    hint = closest(name, registry.names())
+    if likely:
+        return f"{said}{hint}; perhaps of a plugin that did not load (below): {plugins}"
+    return f"{said}{hint}; a plugin file's are listed with --plugin-file FILE"
 
 
 def _print_behaviour(entry: dict[str, Any]) -> None:
@@ -774,12 +792,6 @@ def schema_command(args: argparse.Namespace) -> int:
         return ExitCode.INVALID
     print(json.dumps(mission_schema(registry), indent=2))
     return ExitCode.OK
-
-
-def _plugin_warnings(registry: Registry) -> None:
-    """The plugins that did not load, or not whole, each a warning on stderr."""
-    for error in registry.errors:
-        print(f"roomba-bt: warning: {escaped(str(error), ANY_CONTROL)}", file=sys.stderr)
 
 
 def _plugins_broken(command: str, registry: Registry, skip: bool, consequence: str) -> bool:

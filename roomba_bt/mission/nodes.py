@@ -315,13 +315,11 @@ class NodeParser:
         unread = self.ctx.unread_include_note(at)
         if unread is not None and self.ctx.registry.why_unknown(word) is None:
             return f"unknown node {word!r}{where} ({unread})"  # its plugins: were not read
-        errors = self.ctx.registry.errors
         # the plugins that may have meant this word: one that declares it (a class refused
-        # for its declaration: the cause, not a misspelling), else those that did not import
-        # at all (any name could have been theirs); a few, not every broken plugin on the
-        # machine (one line of more than 1,000 characters), nor one whose error merely
-        # contains the word (u_metres in u_metres_nodefault's)
-        named = [e for e in errors if word in e.names]
+        # for its declaration, or a list refused whole: the cause, not a misspelling), else
+        # those that did not import at all (any name could have been theirs); a few, not
+        # every broken plugin on the machine (one line of more than 1,000 characters)
+        likely, declares = self.ctx.registry.may_have_meant(word)
         message = f"unknown node {word!r}{where}"
         unspaced = _missing_space(word, self.ctx.registry)
         if unspaced is not None:  # before "no plugin package 'mode'": the likelier cause
@@ -330,11 +328,10 @@ class NodeParser:
         if qualified is not None:
             return f"{message}: {qualified}"
         absent = self.ctx.registry.absent  # plugins the mission was made with, not here
-        if absent and not named:  # theirs, most likely: no "did you mean" a built-in
+        if absent and not declares:  # theirs, most likely: no "did you mean" a built-in
             return f"{message} (perhaps of {'; '.join(absent)})"
-        if not named:  # a misspelling, perhaps: not when a plugin is known to declare it
+        if not declares:  # a misspelling, perhaps: not when a plugin is known to declare it
             message += suggestion(word, [*WORDS, *self.ctx.registry.names(), *MODIFIERS])
-        likely = named or [e for e in errors if not e.imported]
         if likely:
             failed = "; ".join(str(e) for e in likely[: self._PLUGIN_NOTES])
             more = len(likely) - self._PLUGIN_NOTES

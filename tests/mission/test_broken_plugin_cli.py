@@ -180,3 +180,62 @@ def test_a_plugin_file_that_raises_keyboard_interrupt_is_a_mission_error(
         f"came) (at {tmp_path / 'rude.py'}:1)"
     ) in out, out + err
     assert "interrupted" not in err
+
+
+#: an entry point to a list holding a good class and a string: refused whole (s36)
+LISTED = (
+    conditions_module(("s36_ok", "Ok", "Always true: in a list refused whole.", True))
+    + "\n\nLIST = [Ok, 'not a class']\n"
+)
+
+
+@pytest.fixture
+def listed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``bt-s36-list``, whose entry point ``lst`` names ``s36_list:LIST``, the registry
+    every command reads (``validate``'s compiler asks the registry module for it)."""
+    import roomba_bt.behaviours as behaviours
+    import roomba_bt.behaviours.registry as registries
+
+    registry = installed_registry(tmp_path, monkeypatch, ("bt-s36-list", "s36_list", LISTED))
+    [info] = (tmp_path / "site").glob("bt_s36_list-*.dist-info")
+    (info / "entry_points.txt").write_text("[roomba_bt.behaviours]\nlst = s36_list:LIST\n")
+    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+    monkeypatch.setattr(registries, "_DEFAULT", registry)
+
+
+@pytest.mark.usefixtures("listed")
+def test_an_unknown_node_of_an_entry_point_refused_whole_notes_that_plugin(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """A list refused whole (one item no class) took its good class with it, and the
+    mission's ``unknown node 's36_ok'`` had no note: one was given only for a plugin that
+    did not import (session 36, a stranger's finding)."""
+    mission = tmp_path / "m.yaml"
+    mission.write_text("tree:\n  s36_ok\n")
+    assert main(["validate", str(mission)]) == 2
+    out, err = capsys.readouterr()
+    assert (
+        "m.yaml:2:3: unknown node 's36_ok' (note: plugin 'lst' (s36_list:LIST, from "
+        "bt-s36-list): declares itself wrongly: 'not a class' is not a RobotBehaviour "
+        "subclass (the entry refused whole: 's36_ok' with it)) [tree]" in out + err
+    ), out + err
+
+
+@pytest.mark.usefixtures("listed")
+def test_behaviours_of_a_name_a_plugin_that_did_not_load_declares_says_so_as_errors(
+    capsys: Capsys,
+) -> None:
+    """``behaviours s36_ok`` said "a plugin file's are listed with --plugin-file FILE" (the
+    name is an installed plugin's) and then the plugin's error as ``roomba-bt: warning:``,
+    where ``behaviours`` of a name that loads says it as ``roomba-bt behaviours: error:``."""
+    assert main(["behaviours", "s36_ok"]) == 2
+    err = capsys.readouterr().err
+    lines = err.splitlines()
+    assert lines[0] == (
+        "roomba-bt behaviours: unknown behaviour 's36_ok': it is declared by plugin 'lst' "
+        "(s36_list:LIST, from bt-s36-list), which did not load (below)"
+    ), err
+    assert lines[1].startswith("roomba-bt behaviours: error: plugin 'lst' (s36_list:LIST"), err
+    assert "--plugin-file" not in err and "roomba-bt: warning" not in err, err
+    assert main(["behaviours", "s36_ok", "--skip-broken-plugins"]) == 2  # still unknown
+    assert "roomba-bt behaviours: warning: plugin 'lst'" in capsys.readouterr().err

@@ -367,7 +367,10 @@ def test_a_plugin_that_did_not_load_is_said_by_behaviours_name_and_by_schema(
     err = capsys.readouterr().err
     assert "unknown behaviour 'typo_cond'" in err
     missing = "plugin 'typo' (typo_mdo): the entry point names typo_mdo, but there is no module"
-    assert f"warning: {missing} 'typo_mdo' (written in its distribution's metadata: " in err
+    # said as `behaviours` says it when it lists (session 36: `roomba-bt: warning:` here)
+    said = f"roomba-bt behaviours: error: {missing} 'typo_mdo' (written in its distribution's"
+    assert said in err, err
+    assert "perhaps of a plugin that did not load (below): 'typo' (typo_mdo)" in err, err
     # it does not import: no schema without its behaviours (tests/mission/test_broken_plugin_cli.py)
     assert main(["schema"]) == 2
     out, err = capsys.readouterr()
