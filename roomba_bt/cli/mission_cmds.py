@@ -666,8 +666,6 @@ def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -
         print(f"{word}\n    ({EVERY_WORD})")
     unknown = [n for n in args.names if n not in registry and language_word(n) is None]
     if unknown:
-        from roomba_bt.behaviours.units import closest
-
         for name in unknown:
             print(f"roomba-bt behaviours: {_unknown_behaviour(name, registry)}", file=sys.stderr)
         # it may be one of a plugin that did not load: said as `behaviours` says them when
