@@ -254,16 +254,23 @@ def validate_command(args: argparse.Namespace) -> int:
                 checked[index] = _checked(one.file, found, own, args)
     from roomba_bt.behaviours import default_registry
 
-    warn_of_broken_plugins("roomba-bt validate", default_registry())
+    registry = default_registry()
+    warn_of_broken_plugins("roomba-bt validate", registry)
+    # in the report too: a program reading the JSON, or the Actions page, saw none of them
+    unloaded = [
+        report.UnloadedPlugin(escaped(e.plugin, ANY_CONTROL), escaped(e.cause, ANY_CONTROL),
+                              escaped(e.lost, ANY_CONTROL))
+        for e in (registry.broken if registry.plugins_loaded else ())
+    ]  # fmt: skip
     if args.format != "text":
         for one in checked:  # said on stderr too, as in text: a reader of the log sees it
             if one.problem is not None:
                 problem = escaped(one.problem, ANY_CONTROL)
                 print(f"roomba-bt validate: {problem}", file=sys.stderr)
     if args.format == "json":
-        report.print_json(checked, strict=args.strict)
+        report.print_json(checked, strict=args.strict, plugins=unloaded)
     elif args.format == "github":
-        report.print_github(checked, strict=args.strict, quiet=bool(args.quiet))
+        report.print_github(checked, strict=args.strict, quiet=bool(args.quiet), plugins=unloaded)
     else:
         report.print_text(checked, strict=args.strict, quiet=bool(args.quiet))
     return report.exit_code(checked, args.strict)

@@ -35,6 +35,29 @@ FORMATS = ("text", "json", "github")
 ANNOTATION_TITLE = "roomba-bt validate"
 
 
+@dataclass(frozen=True)
+class UnloadedPlugin:
+    """An installed plugin whose behaviours a mission cannot use (it did not import, or a
+    class was refused), as ``validate`` reports it beside the files: a warning, which fails
+    no file (a mission that uses one of its behaviours gets its own error). It was said
+    only as a plain stderr line, which ``--format json`` and ``--format github`` readers
+    (a bot, the Actions page) never saw."""
+
+    #: the plugin as its errors name it: ``'dirt' (roomba_bt_dirt, from roomba-bt-dirt)``
+    plugin: str
+    #: why it did not load, on one line
+    error: str
+    #: what no mission has for it: ``the behaviours of plugin 'dirt' (...)``, or the one
+    #: refused behaviour of a half-loaded plugin
+    lost: str
+
+    @property
+    def message(self) -> str:
+        """The warning as stderr says it: ``plugin 'dirt' (...): ...; a mission cannot use
+        the behaviours of plugin 'dirt' (...)``."""
+        return f"plugin {self.plugin}: {self.error}; a mission cannot use {self.lost}"
+
+
 @dataclass
 class Checked:
     """One file argument of ``validate`` and what its check found: its diagnostics (errors
@@ -174,11 +197,13 @@ def _unseen(diagnostics: list[Diagnostic], seen: set[Diagnostic]) -> list[Diagno
     return fresh
 
 
-def print_json(checked: list[Checked], *, strict: bool) -> None:
+def print_json(
+    checked: list[Checked], *, strict: bool, plugins: Sequence[UnloadedPlugin] = ()
+) -> None:
     """One JSON document: ``files`` (each file's verdict, counts and includes) and ``diagnostics``
     (every one of every file, with ``checked_file``, the file argument that found it; the
     first :data:`~roomba_bt.mission.diagnostics.MAX_REPORTED` of a file, the rest counted
-    in its ``diagnostics_omitted``)."""
+    in its ``diagnostics_omitted``), and ``plugins_not_loaded``, each of ``plugins``."""
     from roomba_bt.mission.diagnostics import MAX_REPORTED
 
     files: list[dict[str, Any]] = []
@@ -210,6 +235,11 @@ def print_json(checked: list[Checked], *, strict: bool) -> None:
                             strict=True)),
         "files": files,
         "diagnostics": diagnostics,
+        "plugins_not_loaded": [
+            {"plugin": p.plugin, "error": p.error, "lost": p.lost, "message": p.message,
+             "severity": "warning"}
+            for p in plugins
+        ],
     }  # fmt: skip
     print(json.dumps(document, indent=2))
 
@@ -298,13 +328,19 @@ def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
     }
 
 
-def print_github(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
+def print_github(
+    checked: list[Checked], *, strict: bool, quiet: bool, plugins: Sequence[UnloadedPlugin] = ()
+) -> None:
     """GitHub Actions workflow commands: ``::error file=F,line=L,col=C,title=...::message``
     (``::warning`` for a warning), each diagnostic once per place; a file that failed
     through an include gets one more at that include, so the mission is marked too; the
-    verdicts follow as plain lines of the job's log."""
+    verdicts follow as plain lines of the job's log. Each of ``plugins`` first, a
+    ``::warning`` with no file (it is the machine's, no mission's)."""
     from roomba_bt.mission.diagnostics import MAX_REPORTED
 
+    title = command_property(ANNOTATION_TITLE)
+    for plugin in plugins:
+        print(f"::warning title={title}::{command_data(plugin.message)}")
     seen: set[Diagnostic] = set()
     for one in checked:
         if one.problem is not None:

@@ -32,14 +32,22 @@ WORKING = conditions_module(
 
 
 def _installed(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, *distributions: tuple[str, str, str]
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    *distributions: tuple[str, str, str],
+    compiler_too: bool = False,
 ) -> None:
     """``distributions`` (name, module, source) installed; the commands' registry reads the
-    entry points afresh."""
+    entry points afresh; ``compiler_too``: the mission compiler's as well (``validate``'s,
+    which asks the registry module for it)."""
     import roomba_bt.behaviours as behaviours
+    import roomba_bt.behaviours.registry as registries
 
     registry = installed_registry(tmp_path, monkeypatch, *distributions)
     monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+    # the compiler's is put back after the test, whichever: one made meanwhile (a validate
+    # of the test's) found the test's plugins, and later tests' reports said them
+    monkeypatch.setattr(registries, "_DEFAULT", registry if compiler_too else registries._DEFAULT)
 
 
 @pytest.fixture
@@ -191,16 +199,10 @@ LISTED = (
 
 @pytest.fixture
 def listed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """``bt-s36-list``, whose entry point ``lst`` names ``s36_list:LIST``, the registry
-    every command reads (``validate``'s compiler asks the registry module for it)."""
-    import roomba_bt.behaviours as behaviours
-    import roomba_bt.behaviours.registry as registries
-
-    registry = installed_registry(tmp_path, monkeypatch, ("bt-s36-list", "s36_list", LISTED))
+    """``bt-s36-list``, whose entry point ``lst`` names ``s36_list:LIST``."""
+    _installed(tmp_path, monkeypatch, ("bt-s36-list", "s36_list", LISTED), compiler_too=True)
     [info] = (tmp_path / "site").glob("bt_s36_list-*.dist-info")
     (info / "entry_points.txt").write_text("[roomba_bt.behaviours]\nlst = s36_list:LIST\n")
-    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
-    monkeypatch.setattr(registries, "_DEFAULT", registry)
 
 
 @pytest.mark.usefixtures("listed")
@@ -239,3 +241,39 @@ def test_behaviours_of_a_name_a_plugin_that_did_not_load_declares_says_so_as_err
     assert "--plugin-file" not in err and "roomba-bt: warning" not in err, err
     assert main(["behaviours", "s36_ok", "--skip-broken-plugins"]) == 2  # still unknown
     assert "roomba-bt behaviours: warning: plugin 'lst'" in capsys.readouterr().err
+
+
+def test_validate_s_json_and_github_formats_say_a_plugin_that_did_not_load(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """With a broken plugin installed, ``validate --format json`` had no field for it and
+    ``--format github`` no annotation: a plain stderr line was all (session 36, a
+    stranger's finding). A warning in each: the mission, which does not use it, passes."""
+    broken = ("bt-s29-broken", "s29_broken", BROKEN)
+    _installed(tmp_path, monkeypatch, broken, compiler_too=True)
+    mission = tmp_path / "plain.yaml"
+    mission.write_text(PLAIN)
+    assert main(["validate", "--format", "json", str(mission)]) == 0
+    [plugin] = json.loads(capsys.readouterr().out)["plugins_not_loaded"]
+    assert plugin["plugin"] == "'s29_broken' (s29_broken, from bt-s29-broken)"
+    assert plugin["error"].startswith(
+        "failed to import: RuntimeError: the lab's calibration file is missing see README (at "
+    )
+    assert (
+        plugin["lost"] == "the behaviours of plugin 's29_broken' (s29_broken, from bt-s29-broken)"
+    )
+    assert (
+        plugin["message"]
+        == f"plugin {plugin['plugin']}: {plugin['error']}; a mission cannot use {plugin['lost']}"
+    )
+    assert plugin["severity"] == "warning"
+    assert main(["validate", "--format", "github", str(mission)]) == 0
+    [annotation] = [line for line in capsys.readouterr().out.splitlines() if "s29_broken" in line]
+    assert annotation.startswith(
+        "::warning title=roomba-bt validate::plugin 's29_broken' (s29_broken, from "
+        "bt-s29-broken): failed to import: RuntimeError: "
+    ), annotation
+    assert annotation.endswith(
+        "; a mission cannot use the behaviours of plugin 's29_broken' "
+        "(s29_broken, from bt-s29-broken)"
+    ), annotation
