@@ -345,11 +345,6 @@ class MissionRunner(BaseHandle):
         #: this run's part of py_trees' blackboard, claimed when it starts (None before):
         #: ``runner.blackboard.values()``, its mission's keys; ``.read("leg")``, one of them
         self.blackboard: RunBoard | None = None
-        #: the tree as it stood when the run ended, before its stop marked every node
-        #: INVALID: each node's last status and message (``run``'s tree after the run)
-        self.tree_as_left = TreeStatuses()
-        #: the behaviour whose exception ended a tick, and the exception's name (None: none)
-        self._raised: tuple[py_trees.behaviour.Behaviour, str] | None = None
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
         self._fallback_seen: object = None
@@ -382,6 +377,7 @@ class MissionRunner(BaseHandle):
     #: its parent's, which ends the workers)
     guards_signals: bool = True
     names_slow_ticks: bool = False  #: the slowest tick's behaviour named (runtime/tick_watch.py)
+    tree_as_left: TreeStatuses | None = None  #: the tree as the run left it (tree_left)
     #: wall-clock seconds after which the run ends as an ERROR saying where it was stuck
     #: (``run --wall-limit``: runtime/wall_limit.py); None: none. Set as ``tick_guard`` is
     wall_limit_s: float | None = None
@@ -457,8 +453,6 @@ class MissionRunner(BaseHandle):
                 summary.outcome, summary.reason = Outcome.HUNG, limit.said(exc)
             except BaseException as exc:  # Ctrl-C; a stop, a lost link, a bug, sys.exit()
                 interrupt, raised_in = run_ended_by(exc, summary, answered=self.has_snapshot)
-                if interrupt is None:
-                    self._observe_failed_tick(exc)
             finally:
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
@@ -489,33 +483,12 @@ class MissionRunner(BaseHandle):
         <roomba_bt.runtime.ending.RunEnding.stop_tree>`): the run's end, a reload."""
         return self._ending.stop_tree(self.mission.root, raised_in)
 
-    def _observe_failed_tick(self, exc: BaseException) -> None:
-        """The behaviour whose exception ended a tick kept (the tree after the run says it),
-        and the observer called once more when a behaviour's exception ended a tick (or the
-        tree's set-up, after the first frame), before the tree is stopped: the status log's
-        lines of that tick (``pre -> SUCCESS``) and the live tree as the exception left
-        it. The run's log stopped at the tick before, and neither it nor the tree showed how
-        far the run had got. An observer that raises now is logged, not let replace the
-        behaviour's error."""
-        raiser = raised_in_tree(exc)
-        if raiser is None or not self.has_snapshot:
-            return
-        self._raised = (raiser, type(exc).__name__)
-        if self.observer is None:
-            return
-        try:
-            self.observer(self)
-        except Exception:  # the behaviour's error is the run's; this one only logged
-            log.debug("the observer raised after a behaviour's exception", exc_info=True)
-
     def _finish(
         self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
     ) -> None:
         summary.ended_at = ended_at(self, summary.ended_at)  # for the record's end note
-        guard = cast(InterruptGuard, self._guard)  # run()'s: told what the stop does
-        ending = self._ending
-        # before the stop marks every node INVALID
-        self.tree_as_left.take(self.mission.root, self._raised)
+        guard, ending = cast(InterruptGuard, self._guard), self._ending  # told what stops
+        self.tree_as_left = tree_left(self, summary.exception)  # before the stop: INVALID
         limit = tree_stop_limit(self.wall_limit_s)  # a terminate that never returns: no hang
         first = ending.end_tree(self.mission.root, self.tick_guard, guard, raised_in, limit)
         self.count_written()  # the safe stop's are said apart
@@ -844,6 +817,27 @@ def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None
         summary.outcome, summary.reason = Outcome.ERROR, behaviour_error(exc)
         summary.traceback = "".join(traceback.format_exception(exc))
         summary.exception = exc  # the program's own exception object: RunFailed's cause
+
+
+def tree_left(runner: MissionRunner, exc: BaseException | None) -> TreeStatuses:
+    """Each node's last status and message as the run left its tree, before the stop marks
+    every node INVALID (``run``'s tree after the run: it showed every node ``[-]`` after a
+    behaviour's exception, even a ``mode(safe)`` that had succeeded); ``exc``, the run's
+    exception (``summary.exception``: a behaviour's error). When it came out of a behaviour
+    in a tick (or the tree's set-up, after the first frame), that behaviour says what it
+    raised, and the observer is called once more, so that the status log prints the lines
+    of that tick (``pre -> SUCCESS``; the log stopped at the tick before) and the live tree
+    shows it; an observer that raises then is logged, not let replace the behaviour's
+    error. A class attribute set at the end, as ``tick_guard``: see ``__init__``'s note."""
+    raiser = raised_in_tree(exc) if exc is not None and runner.has_snapshot else None
+    if raiser is not None and runner.observer is not None:
+        try:
+            runner.observer(runner)
+        except Exception:  # the behaviour's error is the run's; this one only logged
+            log.debug("the observer raised after a behaviour's exception", exc_info=True)
+    left = TreeStatuses()
+    left.take(runner.mission.root, (raiser, type(exc).__name__) if raiser is not None else None)
+    return left
 
 
 def guarded_tick(runner: MissionRunner, root: py_trees.behaviour.Behaviour) -> Callable[[], object]:
