@@ -487,15 +487,14 @@ class MissionRunner(BaseHandle):
         self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
     ) -> None:
         summary.ended_at = ended_at(self, summary.ended_at)  # for the record's end note
-        guard, ending = cast(InterruptGuard, self._guard), self._ending  # told what stops
+        guard, limit = cast(InterruptGuard, self._guard), tree_stop_limit(self.wall_limit_s)
         self.tree_as_left = tree_left(self, summary.exception)  # before the stop: INVALID
-        limit = tree_stop_limit(self.wall_limit_s)  # a terminate that never returns: no hang
-        first = ending.end_tree(self.mission.root, self.tick_guard, guard, raised_in, limit)
+        first = self._ending.end_tree(self.mission.root, self.tick_guard, guard, raised_in, limit)
         self.count_written()  # the safe stop's are said apart
         set_up = self._sent_at_start is not None  # what its setup() opened, closed
         last = self.snapshot if self.has_snapshot else None
-        ending.safe_stop(guard, first, self.mission.root if set_up else None, last)
-        ending.sum_up(time.perf_counter() - wall_start, last, self._hazards.unconfirmed)
+        self._ending.safe_stop(guard, first, self.mission.root if set_up else None, last)
+        self._ending.sum_up(time.perf_counter() - wall_start, last, self._hazards.unconfirmed)
 
     # Long on purpose: every frame's path, written out in one loop (a call less a frame),
     # and the try around it that places a Ctrl-C in its frame (interrupted_at)
