@@ -307,6 +307,7 @@ class MonitorSession:
             else:
                 summary.pauses += 1
         runner.clock_held = True  # mission time stands still until the resume
+        runner.hold_wall_limit(True)  # and --wall-limit's count: a pause is no stuck tick
         sleeps = self.WARN_OF_SLEEP and _sleeps_in_passive(connection) and runner.has_snapshot
         began = runner.snapshot.tick if sleeps else 0
         self._sleep_warn_tick = began + round(SLEEP_WARNING_S / SLOT_SECONDS) if sleeps else None
@@ -346,6 +347,7 @@ class MonitorSession:
 
     def _resume(self, runner: MissionRunner, why: str) -> None:
         _note(runner, {"resume": why, "at": "before"})
+        runner.hold_wall_limit(False)
         self._tally_pause(runner)
         self._paused_before_s = runner.summary.paused_s
         self.state.paused_tick = None
@@ -486,6 +488,7 @@ class MonitorSession:
             self._sleep_warn_tick = self._sleep_tick = None
             self.state.sleep_note = ""
         runner.clock_held = was_paused
+        runner.hold_wall_limit(was_paused)
         self._skip_tick = True
         # the new tree sets its own modes, from Passive: now, or when a paused run resumes
         # (which sends nothing back: neither the old tree's mode nor its wheel commands)

@@ -9,12 +9,17 @@ interpreter's asynchronous exception), so a loop in Python ends where it is, the
 safe stop still runs on the way out, and the stack it was raised on says where it was stuck
 (:func:`ran_out`). A loop in C code, or a blocking call (``time.sleep``), sees it only when
 it returns to Python; one that catches ``BaseException`` swallows it.
+
+The monitor's pause holds the limit (:meth:`WallLimit.hold`): the time an operator keeps a
+run paused is no behaviour stuck, and a pause longer than ``--wall-limit`` ended the run as
+HUNG (exit 4, "a bug") at wherever the paused loop happened to be reading the link.
 """
 
 from __future__ import annotations
 
 import ctypes
 import threading
+import time
 import traceback
 from types import FrameType, TracebackType
 
@@ -46,14 +51,37 @@ class WallLimit:
         self._lock = threading.Lock()
         self._left = False
         self._timer: threading.Timer | None = None
+        #: the wall-clock time the limit runs out at while it counts (``time.monotonic``)
+        self._due = 0.0
+        #: the seconds left when :meth:`hold` stopped the count; None: counting
+        self._held_left: float | None = None
 
     def __enter__(self) -> WallLimit:
         if self.limit_s is not None:
             self._thread = threading.get_ident()
-            self._timer = threading.Timer(self.limit_s, self._expire)
-            self._timer.daemon = True
-            self._timer.start()
+            self._start(self.limit_s)
         return self
+
+    def _start(self, seconds: float) -> None:
+        self._due = time.monotonic() + seconds
+        self._timer = threading.Timer(seconds, self._expire)
+        self._timer.daemon = True
+        self._timer.start()
+
+    def hold(self, held: bool) -> None:
+        """Stop counting (``held``: the monitor's pause) or go on from where the count
+        stopped; a second hold or release in a row does nothing. The time held is not the
+        block's: an operator's pause is no behaviour stuck."""
+        with self._lock:
+            if self.limit_s is None or self._left or self.reached:
+                return
+            if held and self._held_left is None:
+                if self._timer is not None:
+                    self._timer.cancel()
+                self._held_left = max(0.0, self._due - time.monotonic())
+            elif not held and self._held_left is not None:
+                left, self._held_left = self._held_left, None
+                self._start(left)
 
     def __exit__(
         self,
@@ -79,7 +107,8 @@ class WallLimit:
 
     def _expire(self) -> None:
         with self._lock:
-            if not self._left:
+            # a timer cancelled by a hold as it fired: the count is held, not run out
+            if not self._left and self._held_left is None:
                 self.reached = True
                 _set_async_exc(self._thread, WallLimitReached)
 

@@ -1102,3 +1102,25 @@ def test_replay_does_the_operators_pauses_steps_and_forces_again(
         "replay: the recorded run holds operator acts replay cannot do again (reload at "
         "2.50 s): a reload (the record has no copy of the new mission)" in out
     ), out
+
+
+def test_a_pause_longer_than_the_wall_limit_is_no_hung_run(until: Callable[..., None]) -> None:
+    """``--wall-limit`` is for a behaviour stuck in a tick: the time an operator holds the run
+    paused does not count (a pause longer than the limit ended the run as HUNG, exit 4,
+    blaming the simulator's link where the paused loop was reading)."""
+    rig = Rig()
+    rig.runner.wall_limit_s = 2.0
+    rig.session.request("pause")  # at the first frame: none of the limit spent on driving
+    paused_at: list[float] = []
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.session.state.paused)
+        paused_at.append(time.monotonic())
+        # wall time past the limit, the run held paused all along
+        until(lambda: time.monotonic() - paused_at[0] > 3.0)
+        rig.session.request("stop")
+
+    summary = rig.run_with(operator)
+    assert summary.outcome is Outcome.INTERRUPTED, summary.reason
+    assert summary.reason == "stopped by the operator"
+    assert summary.exit_code == 130
