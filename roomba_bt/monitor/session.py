@@ -63,6 +63,21 @@ class ControlRefused(ValueError):
     """A request that cannot be carried out as asked (the page gets HTTP 409 with this text)."""
 
 
+#: the requests that change whether the run goes on, pauses or ends (:meth:`MonitorSession._ahead`)
+_CONTROLS = ("pause", "resume", "step", "stop")
+
+
+@dataclass
+class _Ahead:
+    """The run's state as its queued requests will leave it: what :func:`_check_request`
+    checks a new one against."""
+
+    paused: bool
+    stepping: bool
+    stopping: bool
+    forced: set[int] = field(default_factory=set)
+
+
 @dataclass
 class Request:
     action: str
@@ -132,6 +147,13 @@ class MonitorSession:
         self.stream_packets = frozenset(stream_packets)
         self.state = SessionState()
         self._requests: queue.SimpleQueue[Request] = queue.SimpleQueue()
+        #: held by :meth:`request` while it checks and queues, and by the tick thread while
+        #: it applies requests or pauses by itself (a breakpoint, a step's end): a request is
+        #: checked against the state it will meet (two pauses pressed at once both got 202,
+        #: and one did nothing; a pause after a stop got 202 and was never applied)
+        self._lock = threading.RLock()
+        #: the pause, resume, step and stop requests queued and not applied yet, in order
+        self._queued: list[str] = []
         self._wake = threading.Event()
         self._mode_before_pause: OIMode | None = None
         #: a built-in cycle (Seek Dock, Clean) driving the robot in Passive when it paused:
@@ -170,9 +192,27 @@ class MonitorSession:
         infos = self.feed.infos
         if isinstance(node, str):
             node = find_node(infos, node)
-        _check_request(self.state, infos, self.allow_force, action, node, value)
-        self._requests.put(Request(action, node, value, by=by))
+        with self._lock:
+            _check_request(self._ahead(), infos, self.allow_force, action, node, value)
+            if action in _CONTROLS:
+                self._queued.append(action)
+            self._requests.put(Request(action, node, value, by=by))
         self._wake.set()
+
+    def _ahead(self) -> _Ahead:
+        """The run's state as the requests queued will leave it (under :attr:`_lock`): what a
+        new request is checked against, so that a 202 is a request the run will apply."""
+        state = self.state
+        ahead = _Ahead(state.paused, self._steps_left is not None, self._stop is not None)
+        ahead.forced = set(state.forced)
+        for action in self._queued:
+            if action == "stop":
+                ahead.stopping = True
+            elif action == "pause":
+                ahead.paused, ahead.stepping = True, False
+            else:  # resume, step
+                ahead.paused, ahead.stepping = False, action == "step"
+        return ahead
 
     def reload(self, mission: Any) -> None:
         """A new, valid mission to run from its root at the next safe point."""
@@ -182,6 +222,14 @@ class MonitorSession:
     # ---------------------------------------------------------------- tick thread
     def before_tick(self, runner: MissionRunner) -> bool:
         """Apply requests; False when the tree must not tick this frame (paused)."""
+        with self._lock:
+            go = self._before_tick(runner)
+        if not go and self.paced and self.state.paused:
+            self._wake.wait(SLOT_SECONDS)
+            self._wake.clear()
+        return go
+
+    def _before_tick(self, runner: MissionRunner) -> bool:
         if not self._requests.empty():
             self._apply(runner)
         if self._stop is not None:
@@ -206,9 +254,6 @@ class MonitorSession:
                 self.state.sleep_note = sleep_countdown(self._sleep_tick - runner.snapshot.tick)
             if self._sleep_warn_tick is not None and runner.snapshot.tick >= self._sleep_warn_tick:
                 self._warn_of_sleep(runner)
-            if self.paced:
-                self._wake.wait(SLOT_SECONDS)
-                self._wake.clear()
             return False
         return True
 
@@ -226,7 +271,8 @@ class MonitorSession:
             runner.clock_held = True  # whose 15 ms the tree does not run (one step, one frame)
         changed = self.feed.observe(runner)
         if changed and self.state.breakpoints:
-            self._check_breakpoints(runner, changed)
+            with self._lock:  # its pause is one a request is checked against
+                self._check_breakpoints(runner, changed)
 
     def holds(self, runner: MissionRunner) -> bool:
         """The tree's root has just ended: True while the run is held there, paused by a
@@ -249,6 +295,8 @@ class MonitorSession:
                 req = self._requests.get_nowait()
             except queue.Empty:
                 return
+            if req.action in _CONTROLS and self._queued:
+                self._queued.pop(0)
             self._asker = req.by
             try:
                 self._apply_one(runner, req)
@@ -522,7 +570,7 @@ def _forced_success(runner: MissionRunner, feed: RunFeed, forced_nodes: dict[int
 
 
 def _check_request(
-    state: SessionState,
+    state: _Ahead,
     infos: list[Any],
     allow_force: bool,
     action: str,
@@ -530,10 +578,17 @@ def _check_request(
     value: str | None,
 ) -> None:
     """:meth:`MonitorSession.request`'s check: :class:`ControlRefused` for a request the
-    run's state refuses, ValueError for a bad one; nothing when it may be queued."""
-    if action in ("pause", "resume", "step", "stop"):
+    run's state (as the requests queued before it leave it) refuses, ValueError for a bad
+    one; nothing when it may be queued."""
+    if action in _CONTROLS:
+        if state.stopping:
+            raise ControlRefused(
+                "the run is already stopping" if action == "stop" else "the run is stopping"
+            )
         if action == "pause" and state.paused:
             raise ControlRefused("the run is already paused")
+        if action in ("resume", "step") and state.stepping:
+            raise ControlRefused(f"a step is under way: {action} when it has paused again")
         if action == "resume" and not state.paused:
             raise ControlRefused("the run is not paused")
         if action == "step" and not state.paused:

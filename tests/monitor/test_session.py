@@ -1124,3 +1124,42 @@ def test_a_pause_longer_than_the_wall_limit_is_no_hung_run(until: Callable[..., 
     assert summary.outcome is Outcome.INTERRUPTED, summary.reason
     assert summary.reason == "stopped by the operator"
     assert summary.exit_code == 130
+
+
+def test_a_control_the_run_will_not_apply_is_refused_though_the_one_before_is_still_queued(
+    until: Callable[..., None],
+) -> None:
+    """Requests are checked against the state the queued ones leave, not the state the tick
+    thread has got to: two pauses pressed at once both got 202 and one did nothing, three
+    steps got 202 and the run stepped once, a pause after a stop got 202."""
+    rig = Rig()
+    rig.session.request("pause")  # queued: the run has not started
+    with pytest.raises(ControlRefused, match="already paused"):
+        rig.session.request("pause")
+    steps: list[str] = []
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.session.state.paused)
+        with rig.session._lock:  # both arrive before the tick thread applies the first
+            rig.session.request("step")
+            for _ in range(2):
+                try:
+                    rig.session.request("step")
+                except ControlRefused as exc:
+                    steps.append(str(exc))
+        until(lambda: rig.runner.summary.steps == 1 and rig.session.state.paused)
+        with rig.session._lock:
+            rig.session.request("stop")
+            with pytest.raises(ControlRefused, match="already stopping"):
+                rig.session.request("stop")
+            with pytest.raises(ControlRefused, match="the run is stopping"):
+                rig.session.request("pause")
+            with pytest.raises(ControlRefused, match="the run is stopping"):
+                rig.session.request("resume")
+
+    summary = rig.run_with(operator)
+    assert steps == ["a step is under way: step when it has paused again"] * 2
+    assert (summary.pauses, summary.steps) == (1, 1)
+    assert summary.reason == "stopped by the operator"
+    controls = [e.text.split(" ")[0] for e in rig.feed.events if e.kind == "control"]
+    assert controls == ["pause", "resume", "pause", "stop:"]
