@@ -1204,6 +1204,7 @@ def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dic
     written = _CHUNK_LINE.fullmatch(line)
     if written is not None:
         return float(written[1]), written[2], bytes.fromhex(written[3])
+    problem: str | None = None
     try:
         item = json.loads(line)
         if not isinstance(item, dict):
@@ -1214,9 +1215,13 @@ def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dic
         if item.get("d") == "note":
             if isinstance(item.get("note"), dict):
                 item["t"] = float(item["t"])  # checked here, once
-                return item
-            raise TypeError("a note's 'note' must be an object")
-        t, d, b = float(item["t"]), str(item["d"]), bytes.fromhex(item["b"])
+                problem = _tick_problem(item["note"])
+                if problem is None:
+                    return item
+            else:
+                raise TypeError("a note's 'note' must be an object")
+        else:
+            t, d, b = float(item["t"]), str(item["d"]), bytes.fromhex(item["b"])
     except RecursionError:
         raise RecordError(f"{path}:{number}: a chunk nested too deeply to be one") from None
     except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
@@ -1224,9 +1229,26 @@ def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dic
             f"{path}:{number}: malformed chunk ({type(exc).__name__}: {exc}); expected "
             '{"t": seconds, "d": "in"|"out", "b": hex}'
         ) from None
+    if problem is not None:
+        raise RecordError(f"{path}:{number}: {problem}")
     if d not in ("in", "out"):
         raise RecordError(f"{path}:{number}: direction {d!r}; allowed: in, out, note, end")
     return t, d, b
+
+
+def _tick_problem(note: dict[str, Any]) -> str | None:
+    """What is wrong with a note's ``tick`` (the stream's tick an act was done at, where a
+    replay does it again), or None: a hand-edited ``"tick": -5`` was taken, the replay
+    paused at tick 0 and said it diverged there."""
+    if "tick" not in note:
+        return None
+    tick = note["tick"]
+    if type(tick) is int and tick >= 0:
+        return None
+    return (
+        f"a note's tick is {json.dumps(tick)}; expected the stream's tick it was done at, "
+        "a whole number from 0"
+    )
 
 
 def header_problem(header: dict[str, Any]) -> str | None:

@@ -1203,3 +1203,19 @@ def test_a_ctrl_c_between_two_writes_of_a_tick_replays_byte_for_byte(
     )
     assert main(["replay", str(made_before)]) == 1
     assert "expected Motors (138) 8a 04" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("tick", [-5, 2.5, True, "40"])
+def test_a_note_whose_tick_is_no_stream_tick_is_refused_at_its_line(
+    tick: object, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A hand-edited ``"tick": -5`` was taken: the replay paused at tick 0 and said the run
+    diverged there."""
+    lines = _recorded_run(tmp_path, capsys)
+    note = {"t": 0.5, "d": "note", "note": {"pause": "paused by the operator", "at": "before",
+                                           "tick": tick}}  # fmt: skip
+    edited = tmp_path / "edited.jsonl"
+    edited.write_text("".join([*lines[:40], json.dumps(note) + "\n", *lines[40:]]), "utf-8")
+    assert main(["replay", str(edited)]) == 2
+    err = capsys.readouterr().err
+    assert f"{edited}:41: a note's tick is {json.dumps(tick)}; expected the stream's tick" in err
