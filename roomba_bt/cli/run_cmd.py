@@ -1241,7 +1241,7 @@ def _replay_verdict(summary: RunSummary, transport: ReplayTransport, recorded: R
     drift = drift_line(record.header, sources, plugins, same_bytes=difference is None)
     if drift is not None:
         print(f"replay: {drift}")
-    compared, same = _compared(summary, transport, record, record.unended())
+    compared, same = _compared(summary, transport, record, record.end_said())
     if compared is not None:
         print(compared)
     if difference is None:
@@ -1298,7 +1298,9 @@ def _compared(
 ) -> tuple[str | None, str]:
     """What ``replay`` says of how far it compared (None: the whole record), and its verdict
     where the tree wrote the same bytes: up to ``--to`` (the transport ``ended_early``), up to
-    where a record without its run's end (``unended``: why) ends, or the whole run."""
+    where a record without its run's end ends (``unended``: :meth:`Record.end_said
+    <roomba_bt.runtime.recording.Record.end_said>`, which the monitor's view says too), or
+    the whole run."""
     if transport.ended_early:
         return (
             f"replay: compared up to mission time {summary.mission_time_s:.3f} s (--to); the "
@@ -1307,7 +1309,7 @@ def _compared(
         )
     if unended is not None:
         return (
-            f"replay: the record ends at {record.last_t:.3f} s without the run's end: {unended}",
+            f"replay: {unended}",
             f"replay: the tree wrote the same {record.out_bytes} bytes up to there",
         )
     return None, f"replay: the tree wrote the same {transport.written} bytes as the recorded run"

@@ -252,7 +252,9 @@ def how_the_replay_ended(
     what was sent; the timeline ends there, as ``replay`` says it: it said only "input
     ended"), else where its window ended (``ended_early``: ``--to``), else how the recorded
     run ended (its end note: "the recorded run was stopped by the operator at t=44.17 s"),
-    else the replay's outcome (an older record)."""
+    else that the record ends without its run's end (as ``replay`` says it:
+    :meth:`Record.end_said <roomba_bt.runtime.recording.Record.end_said>`), else the
+    replay's outcome."""
     ticks = f"recorded run, {summary.ticks} ticks"
     if difference is not None:
         feed.event("warning", difference)
@@ -277,6 +279,10 @@ def how_the_replay_ended(
         text = ending_text(ending)
         feed.event("control", text)
         return f"{text} ({ticks})"
+    unended = record.end_said()  # replay's words: it said "input ended" of a killed run
+    if unended is not None:
+        feed.event("warning", unended)
+        return f"{unended} ({ticks})"
     return f"{summary.outcome.value} ({ticks})"
 
 

@@ -889,6 +889,9 @@ class Record:
     #: :class:`~roomba_bt.runtime.claimed.ClaimedFile`), or, where no lock can be asked for,
     #: the file changed in the last :data:`STILL_WRITTEN_S` seconds: a run writes it still
     being_written: bool = False
+    #: the number of its last line, dropped as cut short (no newline at its end: the run
+    #: killed, a full disk); None: none was
+    cut_line: int | None = None
 
     @property
     def label(self) -> str:
@@ -926,6 +929,20 @@ class Record:
         if self.header.get("version") == 1:
             return "version 1 records have no end line, or the run was killed"
         return UNENDED
+
+    def end_said(self) -> str | None:
+        """How a record without its run's end ends, as ``replay`` and the monitor's recorded
+        run both say it (one text: the monitor said "input ended" of a killed run's record,
+        where ``replay`` said it was killed), or None when it holds its run's end: ``the
+        record ends at 5.055 s without the run's end: the run was killed, ...`` and, for a
+        last line cut short, which line was dropped."""
+        unended = self.unended()
+        if unended is None:
+            return None
+        said = f"the record ends at {self.last_t:.3f} s without the run's end: {unended}"
+        if self.cut_line is not None:
+            said += f"; its last line ({self.cut_line}) was cut short and is left out"
+        return said
 
     @property
     def recording_stopped(self) -> str | None:
@@ -1017,6 +1034,7 @@ def load_record(path: str | Path) -> Record:
                 "or the disk full?); dropped, the record is read up to line %d",
                 path, number, number - 1,
             )  # fmt: skip
+            record.cut_line = number
             break
         record.size = end
         if isinstance(item, dict):  # an operator's act (a note), or the run's end

@@ -208,6 +208,31 @@ def test_a_record_still_being_written_is_shown_as_such(
     ), out
 
 
+@pytest.mark.parametrize("torn", [False, True])
+def test_a_killed_run_s_record_is_shown_as_such_as_replay_says_it(
+    torn: bool, tmp_path: Path, capsys: pytest.CaptureFixture[str], served_record: ServedRecord
+) -> None:
+    """A record without its run's end (``kill -9``; a last line cut short too) was shown as
+    'input ended (recorded run, 335 ticks)' on the page and the first line, where ``replay``
+    said the run was killed: both say it in one text (``Record.end_said``)."""
+    record = tmp_path / "killed.jsonl"
+    _record_the_shuttle(record)
+    capsys.readouterr()
+    text = record.read_text(encoding="utf-8")
+    lines = text.splitlines(keepends=True)
+    kept = "".join(lines[: len(lines) // 2])
+    record.write_text(kept + (lines[len(lines) // 2][:20] if torn else ""), encoding="utf-8")
+    out, _ = served_record(record)
+    said = (
+        rf"{re.escape(str(record))}: the record ends at \d+\.\d{{3}} s without the run's end: "
+        r"the run was killed, or writing its record failed \(.*\)"
+    )
+    if torn:
+        said += rf"; its last line \({len(lines) // 2 + 1}\) was cut short and is left out"
+    assert re.search(said + r" \(recorded run, \d+ ticks\)", out), out
+    assert "input ended" not in out
+
+
 def test_a_compressed_record_is_shown_as_a_plain_one_is(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], served_record: ServedRecord
 ) -> None:
