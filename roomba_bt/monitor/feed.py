@@ -47,7 +47,13 @@ from roomba_bt.behaviours.blackboard import RunBoard, run_board
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.monitor.board_text import board_text
-from roomba_bt.oi.frames import SLOT_SECONDS, FrameLayout, SensorFrame
+from roomba_bt.oi.frames import (
+    REQUESTED_DRIVE_PACKETS,
+    REQUESTED_WHEELS_PACKETS,
+    SLOT_SECONDS,
+    FrameLayout,
+    SensorFrame,
+)
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.interface import Odometry, Snapshot
@@ -91,6 +97,9 @@ TEXT_KEYS = "\x00kept as text"
 #: pause filled the 20 000 ticks and pushed the whole run out of the page (24 m driven,
 #: 0.5 m of path shown)
 PAUSED_ROW_TICKS = round(1.0 / SLOT_SECONDS)
+#: the packets of the wheels' requested speeds (Requested Velocity, Requested Right and Left
+#: Velocity), where the stream carries them: a paused frame still reporting one is kept
+_REQUESTED_SPEEDS = (*REQUESTED_DRIVE_PACKETS[:1], *REQUESTED_WHEELS_PACKETS)
 
 
 def _fixed(value: object) -> bool:
@@ -344,6 +353,10 @@ class RunFeed:
         self.thin_pauses = thin_pauses and source != "record"
         #: the stream's tick of the last paused frame kept (None: not paused)
         self._paused_kept: int | None = None
+        #: the encoders of the last paused frame, and whether the robot moved in it
+        #: (:meth:`_motion`)
+        self._paused_counts: tuple[int | None, int | None] | None = None
+        self._paused_moving = True
         self.source = source  # simulator, robot or record
         self.truth, self.world = truth, world
         self.mission_name = mission_name
@@ -420,10 +433,11 @@ class RunFeed:
             self._tick_halted(summary, snapshot)
         self._watch_board(runner.blackboard or run_board())
         if not ticked and self.thin_pauses and snapshot is not None:
-            if self._thins(snapshot.tick, changed or mode_changed):
+            if self._thins(snapshot.tick, changed or mode_changed or self._motion(snapshot)):
                 return changed
         else:
             self._paused_kept = None
+            self._paused_counts, self._paused_moving = None, True
         truth = self.truth() if self.truth is not None else None
         if truth is not None and self.truth_start is None:
             self.truth_start = truth
@@ -467,6 +481,22 @@ class RunFeed:
                                 ticked, motor_bytes)  # fmt: skip
         ring.append(record)
         return changed
+
+    def _motion(self, snapshot: Snapshot) -> bool:
+        """Whether this paused frame shows the robot moving (its encoders moved since the
+        last paused frame, or it reports a wheel speed requested) or the first one still
+        after that: news a thinned pause keeps. The frame a pause comes in, and the next,
+        carry the speed from before the stop; the page showed PAUSED, Passive and the wheels
+        turning for a second, until the next frame a second kept."""
+        odometry = snapshot.odometry
+        counts = (odometry.left_counts, odometry.right_counts)
+        before, self._paused_counts = self._paused_counts, counts
+        frame = snapshot.frame
+        moving = (before is not None and counts != before) or any(
+            frame.get(packet) for packet in _REQUESTED_SPEEDS
+        )
+        was, self._paused_moving = self._paused_moving, moving
+        return moving or was
 
     def _thins(self, tick: int, news: object) -> bool:
         """Whether this paused frame is left out of the ring: kept are the pause's first

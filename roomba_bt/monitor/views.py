@@ -82,11 +82,17 @@ def motors_view(command: bytes | None, mode: OIMode, ticked: bool) -> dict[str, 
     if not command:
         for name in ("main_brush", "side_brush", "vacuum"):
             out[name] = _motor(0, None)
-        out["note"] = (
-            "off: no motor command stands"
-            if mode in DRIVING_MODES
-            else "off: the robot is in Passive (a built-in cycle runs its own)"
-        )
+        # said as it is: "(a built-in cycle runs its own)" was said of every paused robot,
+        # though the pause ends a cycle and none ran
+        if mode in DRIVING_MODES:
+            out["note"] = "off: no motor command stands"
+        elif not ticked:
+            out["note"] = "off: paused in Passive (the pause's safe stop); no motor command stands"
+        else:
+            out["note"] = (
+                "off: no motor command stands, and the robot is in Passive (only a built-in "
+                "cycle, Clean or Spot, runs them there)"
+            )
         return out
     out["command"] = f"{COMMANDS[command[0]].title} ({command[0]})"
     if command[0] == _MOTORS:

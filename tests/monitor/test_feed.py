@@ -144,6 +144,15 @@ def test_pwm_motors_show_each_motor_s_power_and_a_pause_shows_them_off() -> None
     assert motors_view(None, OIMode.SAFE, ticked=True)["note"].startswith("off: no motor")
 
 
+def test_no_motor_command_in_passive_says_no_cycle_runs_them_unless_one_does() -> None:
+    """Paused with no motor command standing, the panel said "off: the robot is in Passive (a
+    built-in cycle runs its own)", though the pause ends a cycle and none ran."""
+    paused = motors_view(None, OIMode.PASSIVE, ticked=False)["note"]
+    assert paused == "off: paused in Passive (the pause's safe stop); no motor command stands"
+    passive = motors_view(None, OIMode.PASSIVE, ticked=True)["note"]
+    assert "runs its own" not in passive and passive.startswith("off: no motor command stands")
+
+
 def _motors_after(
     halt: Callable[[MissionRunner, MonitorSession], None],
 ) -> list[bytes | None]:

@@ -84,13 +84,14 @@ class Rig:
         world: str | Path = "empty-room",
         keep_awake: bool | None = None,
         thin_pauses: bool = False,
+        link: Callable[[Simulator], SimLink] = SimLink,
     ) -> None:
         self.mission = load_mission(mission, {}, profile=CREATE2)
         self.sim = Simulator(load_world(world), CREATE2, 0)
         recording = Recording(record, str(SHUTTLE)) if record is not None else None
         self.stack = RunStack(
             self.mission,
-            SimLink(self.sim),
+            link(self.sim),
             profile=CREATE2,
             watchdog=0.5,
             timeout_s=60.0,
@@ -1163,3 +1164,58 @@ def test_a_control_the_run_will_not_apply_is_refused_though_the_one_before_is_st
     assert summary.reason == "stopped by the operator"
     controls = [e.text.split(" ")[0] for e in rig.feed.events if e.kind == "control"]
     assert controls == ["pause", "resume", "pause", "stop:"]
+
+
+class OneFrameLate(SimLink):
+    """Once :attr:`late`, each read gives the bytes of the read before: a frame the robot
+    sent before a command it then heard arrives after the command was written, as a
+    real-time link's (a USB adapter's latency, a busy host's backlog) does."""
+
+    late = False
+    _held = b""
+    #: the frames given late so far
+    given_late = 0
+
+    def read(self, timeout: float) -> bytes:
+        data = super().read(timeout)
+        if not self.late:
+            return data
+        out, self._held = self._held, data
+        self.given_late += bool(out)
+        return out
+
+
+def test_a_thinned_pause_keeps_the_frame_that_shows_the_wheels_stopped(
+    until: Callable[..., None],
+) -> None:
+    """The frames a pause comes in carry the wheels' speed from before the stop; a live page
+    kept the pause's first frame, the next that brought news (Passive: its encoders' step
+    from the first taking in the frames left out between) and then a frame a second, so it
+    showed PAUSED, Passive and the wheels turning for a second. A paused frame that shows
+    the robot moving is kept, and so is the first one that shows it still."""
+    from roomba_bt.monitor.views import state_view
+
+    rig = Rig(thin_pauses=True, link=OneFrameLate)
+    link = rig.connection.transport
+    assert isinstance(link, OneFrameLate)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 30 and rig.sim.left_speed and rig.sim.right_speed)
+        link.late = True
+        until(lambda: link.given_late > 2)  # the pause's frame is one sent before it
+        rig.session.request("pause")
+        until(lambda: rig.runner.summary.paused_s > 2.0)
+        rig.session.request("stop")
+
+    rig.run_with(operator)
+    records = rig.feed.since(0)[0]
+    paused = [r for r in records if not r.ticked]
+    began = paused[0].tick
+    shown = []
+    for r in paused[:5]:
+        _, earlier = rig.feed.at(r.tick)  # as the server shows a tick: with the one before it
+        view = state_view(rig.feed, r, earlier)["robot"]
+        shown.append((r.tick - began, view["mode"], view["wheels"]["left"], view["wheels"]["right"]))
+    assert shown[1][1] == "Passive" and shown[1][2] != 0, shown  # sent before the stop: moving
+    still = next(d for d, mode, left, right in shown if (left, right) == (0, 0))
+    assert still <= 4, shown  # the stop shown a frame or two later, not a second
