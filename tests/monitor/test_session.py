@@ -1215,7 +1215,8 @@ def test_a_thinned_pause_keeps_the_frame_that_shows_the_wheels_stopped(
     for r in paused[:5]:
         _, earlier = rig.feed.at(r.tick)  # as the server shows a tick: with the one before it
         view = state_view(rig.feed, r, earlier)["robot"]
-        shown.append((r.tick - began, view["mode"], view["wheels"]["left"], view["wheels"]["right"]))
+        wheels = view["wheels"]
+        shown.append((r.tick - began, view["mode"], wheels["left"], wheels["right"]))
     assert shown[1][1] == "Passive" and shown[1][2] != 0, shown  # sent before the stop: moving
     still = next(d for d, mode, left, right in shown if (left, right) == (0, 0))
     assert still <= 4, shown  # the stop shown a frame or two later, not a second
