@@ -162,6 +162,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             problem = stdout_problem()
             if problem is not None:
                 print(f"roomba-bt: {problem}", file=sys.stderr)
+            _the_exit()
 
 
 def _interrupted(exc: KeyboardInterrupt, process: bool) -> int:
@@ -277,6 +278,20 @@ def _signals_end_the_process() -> None:
     from roomba_bt.robot.safety import signals_end_the_process
 
     signals_end_the_process()
+
+
+def _the_exit() -> None:
+    """The last words flushed (a signal meanwhile ends the process within
+    :data:`~roomba_bt.robot.safety.LAST_WORDS_S`), then the ending signals ignored up to the
+    process's end (:func:`~roomba_bt.robot.safety.signals_wait_for_the_exit`): one in
+    Python's finalization was its default action, the process killed by SIGINT after it had
+    said exit 130."""
+    from roomba_bt.robot.safety import signals_wait_for_the_exit
+
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError, AttributeError):  # closed, or None
+            stream.flush()
+    signals_wait_for_the_exit()
 
 
 def _by_signal(exc: KeyboardInterrupt) -> str:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import select
 import signal
@@ -375,22 +376,36 @@ def _waiting(doing: str, raises: bool) -> bytes:
     return f"roomba-bt: {doing}; waiting for it to end ({then})\n".encode()
 
 
+#: how long the command's last writes may take after a signal that came during them before
+#: the process ends by itself (:func:`signals_end_the_process`)
+LAST_WORDS_S = 2.0
+
+
 def signals_end_the_process() -> None:
-    """From now on the ending signals (:data:`ENDING_SIGNALS`) end the process at once, with
-    their default action (exit 128 + the signal's number), those :data:`IGNORED_AT_START`
-    aside; the terminal's stops are left as they are.
+    """From now on the ending signals (:data:`ENDING_SIGNALS`) end the process, those
+    :data:`IGNORED_AT_START` aside; the terminal's stops are left as they are.
 
     The CLI's, for its last writes alone, once nothing a robot or the next run needs is left
     (after a run: the record's end note written, the monitor shut down, the port closed and
     its exclusive mode cleared, the stop tried again if it was not delivered). A report
     written to a stdout nobody reads (a ``less`` left unscrolled, a frozen SSH session)
-    blocks, and signals held then left a process only SIGKILL could end; a signal's default
-    action ends it even while another thread holds the stream's lock in a blocked write,
-    which no Python handler can."""
-    for signum in _taken(ENDING_SIGNALS):
+    blocks, and signals held then left a process only SIGKILL could end. So a signal now
+    lets the last writes finish and the command exit with its own code, as it was going to,
+    but no longer than :data:`LAST_WORDS_S`: a thread then ends the process,
+    ``os._exit(128 + signal)``, even while a blocked write holds the stream's lock, which no
+    handler in the main thread can get past. Decided, session 36: the signals' default
+    action here killed the process by SIGINT (status -2, "killed by signal INT" in systemd's
+    log), and sometimes before the summary was printed, when an operator's Ctrl-C pressed a
+    few times 0.3 s apart reached the command after its run."""
+    ending = _taken(ENDING_SIGNALS)
+    for signum in ending:
         with contextlib.suppress(ValueError):  # not the main thread
-            if signal.getsignal(signum) is not _answer_stands:  # an answer given stays
+            if signal.getsignal(signum) is _answer_stands:  # an answer given stays
+                continue
+            if signum in WALL_CLOCK_SIGNALS:  # Ctrl-Z: suspends, as ever
                 signal.signal(signum, signal.SIG_DFL)
+            else:
+                signal.signal(signum, _ends_after_the_last_words)
 
 
 def answer_given() -> None:
@@ -417,6 +432,39 @@ def _answer_stands(signum: int, frame: FrameType | None) -> None:
     signal the process's end."""
     for taken in _taken(EARLY_SIGNALS):
         signal.signal(taken, signal.SIG_DFL)
+
+
+def _ends_after_the_last_words(signum: int, frame: FrameType | None) -> None:
+    """:func:`signals_end_the_process`'s handler: the first signal sets the process's end
+    :data:`LAST_WORDS_S` later, by a thread; the others change nothing."""
+    with _LAST_WORDS_LOCK:
+        if _LAST_WORDS:
+            return
+        ender = threading.Timer(LAST_WORDS_S, os._exit, (128 + signum,))
+        ender.daemon = True  # the process's own exit ends it first
+        ender.start()
+        _LAST_WORDS.append(ender)
+
+
+def signals_wait_for_the_exit() -> None:
+    """The command's last words are written and flushed, its exit code decided: the ending
+    signals (:data:`~roomba_bt._entry.EARLY_SIGNALS`, those :data:`IGNORED_AT_START` aside)
+    are ignored from here to the process's end, and the kernel's alarm (SIGALRM, whose
+    default action ends the process) set for :data:`LAST_WORDS_S` in case the exit itself
+    hangs. Python's finalization puts its own handlers back to their default action, so a
+    Ctrl-C in it (the third of three pressed 0.3 s apart, after the run's summary) killed
+    the process by SIGINT, status -2 where the command said 130; an ignored one is not
+    Python's to put back."""
+    for signum in _taken(EARLY_SIGNALS):
+        with contextlib.suppress(ValueError):  # not the main thread
+            signal.signal(signum, signal.SIG_IGN)
+    if hasattr(signal, "alarm"):  # POSIX
+        signal.alarm(math.ceil(LAST_WORDS_S))
+
+
+#: the timer :func:`_ends_after_the_last_words` set going (one at most)
+_LAST_WORDS: list[threading.Timer] = []
+_LAST_WORDS_LOCK = threading.Lock()
 
 
 class InterruptGuard:

@@ -1,0 +1,58 @@
+"""A signal after a run's answer is out (its summary, the exit code decided) ends the process
+with that code: three Ctrl-Cs 0.3 s apart after a monitored run killed it by SIGINT (status
+-2, "killed by signal INT" in systemd's log), the summary sometimes not printed, where the
+command had said 130 (``robot/safety.py``: ``signals_end_the_process``,
+``signals_wait_for_the_exit``)."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+
+#: the command run as the process (``roomba-bt validate dock``), then a Ctrl-C as it exits:
+#: Python's finalization put its handlers back to the default action, which killed it
+CTRL_C_AS_IT_EXITS = """
+import os, signal, sys
+sys.argv = ["roomba-bt", "validate", "dock"]
+from roomba_bt._entry import main
+code = main()
+os.kill(os.getpid(), signal.SIGINT)
+sys.exit(code)
+"""
+
+#: a Ctrl-C while the last words are written (a run's summary), and one whose last words
+#: never end (a stdout nobody reads: here a sleep)
+CTRL_C_IN_THE_LAST_WORDS = """
+import os, signal, sys, time
+from roomba_bt.robot.safety import signals_end_the_process
+signals_end_the_process()
+os.kill(os.getpid(), signal.SIGINT)
+print("the summary", flush=True)
+if sys.argv[1] == "stuck":
+    time.sleep(60)
+sys.exit(130)
+"""
+
+
+def _run(script: str, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-c", script, *args], capture_output=True, text=True, timeout=60
+    )
+
+
+def test_a_ctrl_c_as_the_command_exits_leaves_its_exit_code() -> None:
+    done = _run(CTRL_C_AS_IT_EXITS)
+    assert done.returncode == 0, (done.returncode, done.stderr)
+
+
+def test_a_ctrl_c_in_the_last_words_lets_them_finish_with_the_command_s_code() -> None:
+    done = _run(CTRL_C_IN_THE_LAST_WORDS, "ends")
+    assert (done.returncode, done.stdout) == (130, "the summary\n"), done.stderr
+
+
+def test_last_words_that_never_end_are_ended_by_the_signal_all_the_same() -> None:
+    """A write blocked on a pipe nobody reads is why the signals end the process here: a
+    thread ends it :data:`LAST_WORDS_S` after the signal, ``128 + SIGINT``."""
+    done = _run(CTRL_C_IN_THE_LAST_WORDS, "stuck")
+    assert done.returncode == 128 + signal.SIGINT, done.stderr
