@@ -446,12 +446,17 @@ def _ends_after_the_last_words(signum: int, frame: FrameType | None) -> None:
         _LAST_WORDS.append(ender)
 
 
+#: the most the process's exit may take once its last words are out
+#: (:func:`signals_wait_for_the_exit`): far more than Python's finalization takes
+EXIT_BOUND_S = 10.0
+
+
 def signals_wait_for_the_exit() -> None:
     """The command's last words are written and flushed, its exit code decided: the ending
     signals (:data:`~roomba_bt._entry.EARLY_SIGNALS`, those :data:`IGNORED_AT_START` aside)
     are ignored from here to the process's end, and the kernel's alarm (SIGALRM, whose
-    default action ends the process) set for :data:`LAST_WORDS_S` in case the exit itself
-    hangs. Python's finalization puts its own handlers back to their default action, so a
+    default action ends the process) set for :data:`EXIT_BOUND_S` in case the exit itself
+    hangs (a thread that never ends: nothing else could end it then but SIGKILL). Python's finalization puts its own handlers back to their default action, so a
     Ctrl-C in it (the third of three pressed 0.3 s apart, after the run's summary) killed
     the process by SIGINT, status -2 where the command said 130; an ignored one is not
     Python's to put back."""
@@ -459,7 +464,7 @@ def signals_wait_for_the_exit() -> None:
         with contextlib.suppress(ValueError):  # not the main thread
             signal.signal(signum, signal.SIG_IGN)
     if hasattr(signal, "alarm"):  # POSIX
-        signal.alarm(math.ceil(LAST_WORDS_S))
+        signal.alarm(math.ceil(EXIT_BOUND_S))
 
 
 #: the timer :func:`_ends_after_the_last_words` set going (one at most)
