@@ -456,7 +456,8 @@ def signals_wait_for_the_exit() -> None:
     signals (:data:`~roomba_bt._entry.EARLY_SIGNALS`, those :data:`IGNORED_AT_START` aside)
     are ignored from here to the process's end, and the kernel's alarm (SIGALRM, whose
     default action ends the process) set for :data:`EXIT_BOUND_S` in case the exit itself
-    hangs (a thread that never ends: nothing else could end it then but SIGKILL). Python's finalization puts its own handlers back to their default action, so a
+    hangs (a thread that never ends: nothing else could end it then but SIGKILL).
+    Python's finalization puts its own handlers back to their default action, so a
     Ctrl-C in it (the third of three pressed 0.3 s apart, after the run's summary) killed
     the process by SIGINT, status -2 where the command said 130; an ignored one is not
     Python's to put back."""
