@@ -308,6 +308,29 @@ class Ring:
         return self.newest()
 
 
+class PausedMotion:
+    """Whether each frame of a pause shows the robot moving (its encoders moved since the
+    pause's last frame, or it reports a wheel speed requested) or is the first still one
+    after that: news a thinned pause keeps (:meth:`RunFeed.observe`). The frames a pause
+    comes in carry the speed from before the stop; the page showed PAUSED, Passive and the
+    wheels turning for a second, until the next frame a second kept."""
+
+    def __init__(self) -> None:
+        self._counts: tuple[int | None, int | None] | None = None
+        self._moving = True
+
+    def seen(self, snapshot: Snapshot) -> bool:
+        odometry = snapshot.odometry
+        counts = (odometry.left_counts, odometry.right_counts)
+        before, self._counts = self._counts, counts
+        frame = snapshot.frame
+        moving = (before is not None and counts != before) or any(
+            frame.get(packet) for packet in _REQUESTED_SPEEDS
+        )
+        was, self._moving = self._moving, moving
+        return moving or was
+
+
 class RunFeed:
     """Everything the page shows, appended by the tick thread, read by the server thread.
     ``packed_from``: None, the last ``history`` ticks are kept (a live run's; a pause's
@@ -353,10 +376,7 @@ class RunFeed:
         self.thin_pauses = thin_pauses and source != "record"
         #: the stream's tick of the last paused frame kept (None: not paused)
         self._paused_kept: int | None = None
-        #: the encoders of the last paused frame, and whether the robot moved in it
-        #: (:meth:`_motion`)
-        self._paused_counts: tuple[int | None, int | None] | None = None
-        self._paused_moving = True
+        self._motion = PausedMotion()  # whether a paused frame shows the robot moving
         self.source = source  # simulator, robot or record
         self.truth, self.world = truth, world
         self.mission_name = mission_name
@@ -433,11 +453,11 @@ class RunFeed:
             self._tick_halted(summary, snapshot)
         self._watch_board(runner.blackboard or run_board())
         if not ticked and self.thin_pauses and snapshot is not None:
-            if self._thins(snapshot.tick, changed or mode_changed or self._motion(snapshot)):
+            if self._thins(snapshot.tick, changed or mode_changed or self._motion.seen(snapshot)):
                 return changed
         else:
             self._paused_kept = None
-            self._paused_counts, self._paused_moving = None, True
+            self._motion = PausedMotion()
         truth = self.truth() if self.truth is not None else None
         if truth is not None and self.truth_start is None:
             self.truth_start = truth
@@ -481,22 +501,6 @@ class RunFeed:
                                 ticked, motor_bytes)  # fmt: skip
         ring.append(record)
         return changed
-
-    def _motion(self, snapshot: Snapshot) -> bool:
-        """Whether this paused frame shows the robot moving (its encoders moved since the
-        last paused frame, or it reports a wheel speed requested) or the first one still
-        after that: news a thinned pause keeps. The frame a pause comes in, and the next,
-        carry the speed from before the stop; the page showed PAUSED, Passive and the wheels
-        turning for a second, until the next frame a second kept."""
-        odometry = snapshot.odometry
-        counts = (odometry.left_counts, odometry.right_counts)
-        before, self._paused_counts = self._paused_counts, counts
-        frame = snapshot.frame
-        moving = (before is not None and counts != before) or any(
-            frame.get(packet) for packet in _REQUESTED_SPEEDS
-        )
-        was, self._paused_moving = self._paused_moving, moving
-        return moving or was
 
     def _thins(self, tick: int, news: object) -> bool:
         """Whether this paused frame is left out of the ring: kept are the pause's first

@@ -120,6 +120,9 @@ def pause_sequence(connection: Any) -> list[Command]:
     return out
 
 
+# long on purpose (about 430 lines): the one place an operator's request meets the run, its
+# check against the queued ones, its application between two ticks and the state each act
+# leaves (pause, resume, step, breakpoints, forces, reload) together, under one lock
 class MonitorSession:
     """The tick gate the runner calls around each tick (see the module docstring)."""
 
@@ -355,7 +358,7 @@ class MonitorSession:
             else:
                 summary.pauses += 1
         runner.clock_held = True  # mission time stands still until the resume
-        runner.hold_wall_limit(True)  # and --wall-limit's count: a pause is no stuck tick
+        runner.wall_limit.hold(True)  # and --wall-limit's count: a pause is no stuck tick
         sleeps = self.WARN_OF_SLEEP and _sleeps_in_passive(connection) and runner.has_snapshot
         began = runner.snapshot.tick if sleeps else 0
         self._sleep_warn_tick = began + round(SLEEP_WARNING_S / SLOT_SECONDS) if sleeps else None
@@ -395,7 +398,7 @@ class MonitorSession:
 
     def _resume(self, runner: MissionRunner, why: str) -> None:
         _note(runner, {"resume": why, "at": "before"})
-        runner.hold_wall_limit(False)
+        runner.wall_limit.hold(False)
         self._tally_pause(runner)
         self._paused_before_s = runner.summary.paused_s
         self.state.paused_tick = None
@@ -536,7 +539,7 @@ class MonitorSession:
             self._sleep_warn_tick = self._sleep_tick = None
             self.state.sleep_note = ""
         runner.clock_held = was_paused
-        runner.hold_wall_limit(was_paused)
+        runner.wall_limit.hold(was_paused)
         self._skip_tick = True
         # the new tree sets its own modes, from Passive: now, or when a paused run resumes
         # (which sends nothing back: neither the old tree's mode nor its wheel commands)

@@ -386,8 +386,6 @@ class MissionRunner(BaseHandle):
     visitors: tuple[VisitorLike, ...] = ()
     #: the writer's count of commands when the start-up was done (see :meth:`count_written`)
     _sent_at_start: int | None = None
-    #: the run's wall-clock limit while it runs (:meth:`hold_wall_limit`); None: not yet
-    _wall_limit: WallLimit | None = None
 
     @property
     def last_sent(self) -> Mapping[str, Command]:
@@ -431,7 +429,7 @@ class MissionRunner(BaseHandle):
         tick_guard = self.tick_guard
         interrupt: KeyboardInterrupt | None = None
         raised_in: py_trees.behaviour.Behaviour | None = None  # its terminate raised: said
-        limit = self._wall_limit = WallLimit(self.wall_limit_s)
+        limit = self.wall_limit = WallLimit(self.wall_limit_s)  # the monitor's pause holds it
         # this thread's while it runs: its keys are no other run's in the process
         board = self.blackboard = claim_board()
         with guard, running_on(board):
@@ -467,14 +465,6 @@ class MissionRunner(BaseHandle):
         if interrupt is not None and raise_interrupts:  # the robot is stopped: now the caller
             raise interrupted(interrupt, summary) from None
         return summary
-
-    def hold_wall_limit(self, held: bool) -> None:
-        """Stop or go on counting the run's wall-clock limit (``wall_limit_s``): the
-        monitor's pause holds it, as it holds mission time (the operator's pause is no
-        behaviour stuck: it ended the run as HUNG, exit 4). Called by the tick thread."""
-        limit = self._wall_limit
-        if limit is not None:
-            limit.hold(held)
 
     def request_stop(self, reason: str = "stopped by the program") -> None:
         """End the run as the monitor's stop does: at the next frame (or empty read) the tree
