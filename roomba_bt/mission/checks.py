@@ -411,9 +411,9 @@ class KeyCheck:
         self._reported: set[tuple[int, str]] = set()
         #: how a message names a key
         self._shown = shown
-        #: the keys judged (a subtree's own, in its body: ``OwnKeys.checked``), the bodies
-        #: of the subtrees used in it passed by; None: every key but a use's own, which its
-        #: body alone judges (nothing outside it reads or writes them)
+        #: the keys judged (a subtree's own at one use, in its body and where a body it uses
+        #: was given one by name: ``OwnKeys.checked``); None: every key but a use's own,
+        #: which its body alone judges (nothing outside it reads or writes them)
         self._judged: frozenset[str] | None = None
 
     def run(
@@ -436,8 +436,6 @@ class KeyCheck:
     def visit(self, node: Node, written: frozenset[str]) -> frozenset[str]:
         """Keys certainly written after ``node`` succeeds."""
         kind = node.kind
-        if self._judged is not None and node.use:  # a body used in it: sees none of them
-            return written
         if kind == "unbuilt":  # writes only the keys it names (run); its reads are not known
             return written | frozenset(node.params.values())
         if kind == "leaf":

@@ -34,6 +34,7 @@ from roomba_bt.mission.values import (
     Bound,
     Context,
     Written,
+    key_written_in,
     name_text,
     parameters_used,
     resolve,
@@ -438,15 +439,18 @@ def _amount(param: Param, value: float) -> str:
 
 def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fields,
                env: Mapping[str, Bound]) -> None:  # fmt: skip
-    """``for_each.in``: every item a value of the type of the key the node writes."""
+    """``for_each.in``: every item a value of the type of the key the node writes (a key
+    named by a parameter: one of the body that gave it, :func:`key_written_in`)."""
     assert kind.writes_key is not None
     key_option = kind.writes_key
-    key, (_, key_value_loc) = options[key_option], fields[key_option]
-    decl = ctx.keys.get(key)
+    key, (key_node, key_value_loc) = options[key_option], fields[key_option]
+    keys, scope = key_written_in(ctx, key_node, env)
+    if scope is not None:
+        options[f"scope:{key_option}"] = scope
+    decl = keys.get(key)
     if decl is None:
-        raise Bad(
-            key_value_loc.at(f"{kind.word}.{key_option}: " + ctx.unknown_key(key, key_value_loc))
-        )
+        said = ctx.unknown_key(key, key_value_loc, None if scope is None else keys)
+        raise Bad(key_value_loc.at(f"{kind.word}.{key_option}{said_origin(key_node, env)}: {said}"))
     for param in kind.options:
         if param.type is not KEY_ITEMS:
             continue

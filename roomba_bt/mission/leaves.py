@@ -14,13 +14,14 @@ import yaml
 
 from roomba_bt.behaviours.declare import Declaration, Param, key_not_read, key_role
 from roomba_bt.behaviours.units import MARK, ValueType, percent_sign_kept
-from roomba_bt.mission.plan import Node
+from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.source import Bad, Loc, mapping
 from roomba_bt.mission.values import (
     UNKNOWN,
     Bound,
     Context,
     Written,
+    key_written_in,
     parameters_used,
     record_fields,
     resolve,
@@ -97,22 +98,23 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     # resolve: reported there) is unbuilt too: what the leaf sends and the mode it leads to
     # may depend on it (`mode: "${m}"`), and reading them from it was an internal error.
     if not ok or not known:  # kept in its place, unbuilt: the checks still judge around it
-        return _unbuilt(ctx, decl, key_loc, params)
+        return _unbuilt(decl, key_loc, params, options)
     name = leaf_name(decl, given, env, types, params)
+    options = {k: v for k, v in options.items() if not k.startswith("found:")}
     return Node("leaf", key_loc, name, decl=decl, params=params, options=options,
                 parameter_in_name=_parameter_in(given))  # fmt: skip
 
 
-def _unbuilt(ctx: Context, decl: Declaration, key_loc: Loc, params: dict[str, Any]) -> Node:
+def _unbuilt(
+    decl: Declaration, key_loc: Loc, params: dict[str, Any], options: dict[str, Any]
+) -> Node:
     """A leaf whose parameters were wrong, kept in its place with the keys it writes where
-    they name a declared key (a ``set`` whose value alone is wrong): the read-before-write
-    check judges the other keys' readers in the same pass."""
-    writes = {
-        p: params[p]
-        for p in decl.writes_keys
-        if isinstance(params.get(p), str) and params[p] in ctx.keys
-    }
-    return Node("unbuilt", key_loc, decl.name, params=writes, partial=decl)
+    they name a declared key (a ``set`` whose value alone is wrong; ``options``, where each
+    was found: :func:`_key_params`): the read-before-write check judges the other keys'
+    readers in the same pass."""
+    writes = {p: params[p] for p in decl.writes_keys if f"found:{p}" in options}
+    scopes = {f"scope:{p}": options[f"scope:{p}"] for p in writes if f"scope:{p}" in options}
+    return Node("unbuilt", key_loc, decl.name, params=writes, partial=decl, options=scopes)
 
 
 def _parameter_in(given: list[tuple[str, yaml.Node, Loc, Loc]]) -> Loc | None:
@@ -155,7 +157,8 @@ def _key_params(
     the type of the key (``set: {key: leg, value: 2 m}``), written into the types of
     ``typed_by_key`` (the values to type, and every parameter's type). ``scope``: the
     parameters in scope and the values as written (a key given as a subtree's ``${out}``
-    names its use)."""
+    names its use, and is a key of the body that gave it: :func:`key_written_in`, marked
+    ``scope:PARAMETER`` in ``options`` for that use to rename)."""
     key_typed, types = typed_by_key
     env, written = scope
     ok = True
@@ -167,12 +170,18 @@ def _key_params(
         where = options.get(f"loc:{pname}")
         assert isinstance(where, Loc)
         said = f"{decl.name}.{pname}{said_origin(written[pname], env)}: "
+        keys, written_in = key_written_in(ctx, written[pname], env)
+        if written_in is not None:
+            options[f"scope:{pname}"] = written_in
+        reads = pname in decl.reads_keys
         try:
-            found = _key_type(ctx, key, where, reads=pname in decl.reads_keys, who=decl.name)
+            found = _key_type(ctx, (key, keys, written_in), where, reads=reads, who=decl.name)
         except LookupError as problem:
             ctx.error(where.at(said + str(problem.args[0])))
             ok = False
             continue
+        if key in keys:  # a declared key, not a field: what a leaf left unbuilt writes
+            options[f"found:{pname}"] = True
         mismatch = _key_type_problem(decl, pname, key, found)
         if mismatch is not None:
             ctx.error(where.at(said + mismatch))
@@ -230,19 +239,28 @@ def _shape(vtype: ValueType) -> tuple[Any, ...]:
     return vtype.name, vtype.unit, vtype.choices, fields
 
 
-def _key_type(ctx: Context, key: str, where: Loc, *, reads: bool, who: str) -> ValueType:
-    """The type of the blackboard value ``key`` names: a declared key, or, read (``check:
-    {key: wp.distance}``), a field of a record key, as ``@wp.distance`` reads one (py_trees'
-    own ``key.attribute``); ``check`` refused it as an unknown key. LookupError says what
-    is wrong and what is allowed: a field is never written alone (``set`` writes the whole
+def _key_type(
+    ctx: Context,
+    named: tuple[str, Mapping[str, KeyDecl], object],
+    where: Loc,
+    *,
+    reads: bool,
+    who: str,
+) -> ValueType:
+    """The type of the blackboard value ``key`` names among ``keys`` (``named``, with the
+    scope it was written in, None: this body's): a declared key, or, read (``check: {key:
+    wp.distance}``), a field of a record key, as ``@wp.distance`` reads one (py_trees' own
+    ``key.attribute``); ``check`` refused it as an unknown key. LookupError says what is
+    wrong and what is allowed: a field is never written alone (``set`` writes the whole
     record)."""
-    found = ctx.keys.get(key)
+    key, keys, scope = named
+    found = keys.get(key)
     if found is not None:
         return found.type
     name, dot, field = key.partition(".")
-    record = ctx.keys.get(name) if dot else None
+    record = keys.get(name) if dot else None
     if record is None:
-        raise LookupError(ctx.unknown_key(key, where))
+        raise LookupError(ctx.unknown_key(key, where, None if scope is None else keys))
     fields = record_fields(record.type)
     if fields is None:
         raise LookupError(

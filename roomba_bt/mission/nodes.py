@@ -40,6 +40,7 @@ from roomba_bt.mission.values import (
     origin_of,
     parameters_used,
     resolve,
+    scope_of_argument,
     unknown,
     warn_escaped,
 )
@@ -415,7 +416,7 @@ class NodeParser:
         if body.name == body.kind and body.kind != "leaf":
             body.name = name
         if sub.keys:
-            body.own_keys = self.own_keys.at_use(sub, body, sub_env, use)
+            body.own_keys = self.own_keys.at_use(sub, sub_env, use)
         self.uses.add(body, use, outermost=not self._uses)
         # show draws the use with what it was given, whatever the body
         given = ", ".join(f"{p}={written_text(n, env, lists=True)}" for p, n, _, _ in args)
@@ -434,9 +435,9 @@ class NodeParser:
         self._use_stack.append(sub.name)
         self._uses.append(key_loc)
         try:
-            with self.ctx.collecting() as (errors, warnings), self.own_keys.seen_in(sub):
+            with self.ctx.collecting() as (errors, warnings), self.own_keys.seen_in(sub) as scope:
                 body = self.node(sub.body, sub.body_loc, env)
-                self.own_keys.checked(sub, body)
+                self.own_keys.checked(sub, body, scope, self.own_keys.next_number(sub))
         finally:
             self._use_stack.pop()
             self._uses.pop()
@@ -474,9 +475,9 @@ class NodeParser:
         assert sub.body is not None  # a use found something in it, or it is unused
         self._use_stack.append(sub.name)
         try:
-            with self.own_keys.seen_in(sub):
+            with self.own_keys.seen_in(sub) as scope:
                 env = _alone_env(sub, mission, self.ctx.wording)
-                self.own_keys.checked(sub, self.node(sub.body, sub.body_loc, env))
+                self.own_keys.checked(sub, self.node(sub.body, sub.body_loc, env), scope, 0)
         finally:
             self._use_stack.pop()
 
@@ -512,6 +513,7 @@ class NodeParser:
                 resolved,
                 as_written(vtype, resolved, pvalue, env) if resolved is not UNKNOWN else "?",
                 origin_of(pvalue, env) or given_to(pvalue, pvloc, name),
+                scope=scope_of_argument(self.ctx, pvalue, env, self.own_keys.mission),
             )
         for warning in _shadowed(sub, self.global_env, key_loc):
             if warning not in self.ctx.warnings:

@@ -33,7 +33,7 @@ from roomba_bt.mission.checks import KeyCheck
 from roomba_bt.mission.diagnostics import SubtreeUse
 from roomba_bt.mission.plan import KeyDecl, Node, own_key_name
 from roomba_bt.mission.source import Bad, Loc
-from roomba_bt.mission.values import UNKNOWN, Bound, Context, SubtreeDef, resolve
+from roomba_bt.mission.values import UNKNOWN, Bound, Context, KeyScope, SubtreeDef, resolve
 
 
 class OwnKeys:
@@ -46,25 +46,42 @@ class OwnKeys:
         self._outside: dict[str, KeyDecl] | None = None
         #: the uses of each subtree with keys of its own so far, which number them
         self._uses: dict[str, int] = {}
+        self._mission: KeyScope | None = None
 
     @property
     def outside(self) -> dict[str, KeyDecl]:
         """The keys outside every body: where a use's own are declared, once renamed."""
         return self.ctx.keys if self._outside is None else self._outside
 
+    @property
+    def mission(self) -> KeyScope:
+        """The mission's tree as a scope: where a key name a use there gives is looked up."""
+        if self._mission is None:
+            self._mission = KeyScope("", self.outside, frozenset(), self.outside)
+        return self._mission
+
+    def next_number(self, sub: SubtreeDef) -> int:
+        """The number ``sub``'s use being parsed will have (:meth:`at_use` takes it): known
+        before its body is, since no body uses its own subtree (recursion is refused)."""
+        return self._uses.get(sub.name, 0) + 1
+
     @contextmanager
-    def seen_in(self, sub: SubtreeDef) -> Iterator[None]:
-        """The keys ``sub``'s body sees while it is parsed (``ctx.keys``): those outside
-        every body (the mission's), then its own by the names it writes, hiding a mission
-        key of the same name; not the own keys of a body it is used in."""
-        before, outside = self.ctx.keys, self._outside
+    def seen_in(self, sub: SubtreeDef) -> Iterator[KeyScope]:
+        """The keys ``sub``'s body sees while it is parsed (``ctx.keys``, ``ctx.scope``):
+        those outside every body (the mission's), then its own by the names it writes,
+        hiding a mission key of the same name; not the own keys of a body it is used in,
+        except by a name passed down as a parameter (:func:`~roomba_bt.mission.values.
+        key_written_in`)."""
+        before, outside, scope = self.ctx.keys, self._outside, self.ctx.scope
         base = self.outside
         self._outside = base
         self.ctx.keys = {**base, **sub.keys} if sub.keys else base
+        parent = scope or self.mission
+        self.ctx.scope = KeyScope(sub.name, self.ctx.keys, frozenset(sub.keys), base, parent)
         try:
-            yield
+            yield self.ctx.scope
         finally:
-            self.ctx.keys, self._outside = before, outside
+            self.ctx.keys, self._outside, self.ctx.scope = before, outside, scope
 
     def hidden(self, sub: SubtreeDef, use: Loc) -> None:
         """A warning at ``use`` for each of ``sub``'s own keys that hides a mission key of
@@ -84,27 +101,29 @@ class OwnKeys:
             if warning not in self.ctx.warnings:
                 self.ctx.warnings.append(warning)
 
-    def checked(self, sub: SubtreeDef, body: Node | None) -> None:
-        """Each of ``sub``'s own keys read in ``body`` (parsed, not yet renamed) before
-        anything there writes it on some path, reported as an error of the body: its own
-        keys are read and written nowhere else (a body it uses does not see them), and
-        their ``initial:`` values are written before the run."""
+    def checked(self, sub: SubtreeDef, body: Node | None, scope: KeyScope, number: int) -> None:
+        """``sub``'s own keys in ``body`` (parsed in ``scope``) given the names of its
+        ``number``-th use (0: parsed alone, no use), there and where a body it uses was
+        given one by name; then each read there before anything writes it on some path,
+        reported as an error of the body: its own keys are read and written nowhere else,
+        and their ``initial:`` values are written before the run. Said by the names the
+        body writes (``'here' (subtree leg's own)``), alike at every use."""
         if body is None or not sub.keys:
             return
-        check = KeyCheck(shown=lambda key: f"{key!r} (subtree {sub.name}'s own)")
-        written = frozenset(key for key, decl in sub.keys.items() if decl.has_initial)
-        check.run(body, written, judged=frozenset(sub.keys))
-        for error in check.errors:
-            self.ctx.error(error)
+        names = {key: own_key_name(sub.name, number, key) for key in sub.keys}
+        renamed(body, names, scope)
+        check = KeyCheck()
+        written = frozenset(names[key] for key, decl in sub.keys.items() if decl.has_initial)
+        check.run(body, written, judged=frozenset(names.values()))
+        for error in check.errors:  # one read in a body it uses: marked with that use
+            self.ctx.error(replace(error, used_in=()))  # alone, not at one: the body's own
 
-    def at_use(
-        self, sub: SubtreeDef, body: Node, env: Mapping[str, Bound], use: SubtreeUse
-    ) -> tuple[str, ...]:
-        """``sub``'s own keys at this use, parsed into ``body``: each given the use's name,
-        renamed so in the body and declared beside the mission's, where the checks and the
-        run find them; an initial value that uses the subtree's parameters is the one
-        ``env``, the use's, gives (and a finding about it names the use)."""
-        number = self._uses[sub.name] = self._uses.get(sub.name, 0) + 1
+    def at_use(self, sub: SubtreeDef, env: Mapping[str, Bound], use: SubtreeUse) -> tuple[str, ...]:
+        """``sub``'s own keys at this use (its body renamed by :meth:`checked`), each
+        declared by the use's name beside the mission's, where the checks and the run find
+        them; an initial value that uses the subtree's parameters is the one ``env``, the
+        use's, gives (and a finding about it names the use)."""
+        number = self._uses[sub.name] = self.next_number(sub)
         names = {key: own_key_name(sub.name, number, key) for key in sub.keys}
         outside = self.outside
         for key, full in names.items():
@@ -120,28 +139,38 @@ class OwnKeys:
                     value = UNKNOWN
                 decl = replace(decl, initial=value, initial_loc=iloc.used_at(use))
             outside[full] = decl
-        renamed(body, names)
         return tuple(names.values())
 
 
-def renamed(body: Node, names: Mapping[str, str]) -> None:
-    """Each reference to a key of ``names`` in ``body`` renamed as it says: ``@here``,
-    ``set: {key: here}``, ``check: {key: here.x}``, ``for_each.key``, a plugin's key
-    parameter. The bodies of subtrees used in it (a node with ``use``) are left as they
-    are: they were parsed, and their own keys renamed, where they are used."""
-    stack = [body]
+def renamed(body: Node, names: Mapping[str, str], scope: KeyScope) -> None:
+    """Each reference to a key of ``names`` in ``body`` (parsed in ``scope``) renamed as it
+    says: ``@here``, ``set: {key: here}``, ``check: {key: here.x}``, ``for_each.key``, a
+    plugin's key parameter. In the bodies of subtrees used in it (a node with ``use``:
+    parsed, and their own keys renamed, where they are used) only the names given them by
+    a parameter from this body (marked with ``scope``); here, none marked with another's
+    (a name the mission's tree, or a body this one is used in, gave it)."""
+    stack = [(body, False)]
     while stack:
-        node = stack.pop()
-        _rename_node(node, names)
-        stack.extend(child for child in node.children if not child.use)
+        node, nested = stack.pop()
+        _rename_node(node, names, scope, nested)
+        stack.extend((child, nested or bool(child.use)) for child in node.children)
 
 
-def _rename_node(node: Node, names: Mapping[str, str]) -> None:
+def _rename_node(node: Node, names: Mapping[str, str], scope: KeyScope, nested: bool) -> None:
+    """``node``'s key references renamed by ``names``, each written in ``scope``: marked
+    so (the node's ``scope:PARAMETER`` option), or unmarked (its body wrote the name) in
+    a node of that body, not ``nested`` in a body it uses."""
+
+    def ours(mark: object) -> bool:
+        return mark is scope or (mark is None and not nested)
+
     declared = node.declared
     key_params = (
         set(declared.writes_keys) | set(declared.reads_keys) if declared is not None else set()
     )
     for pname, value in node.params.items():
+        if not ours(node.options.get(f"scope:{pname}")):
+            continue
         if isinstance(value, BlackboardRef) and value.key in names:
             node.params[pname] = BlackboardRef(names[value.key], value.field)
         elif isinstance(value, str) and pname in key_params:
@@ -151,5 +180,6 @@ def _rename_node(node: Node, names: Mapping[str, str]) -> None:
     word = WORDS.get(node.kind)
     if word is not None and word.writes_key is not None:
         written = node.options.get(word.writes_key)
-        if isinstance(written, str) and written in names:
+        ours_too = ours(node.options.get(f"scope:{word.writes_key}"))
+        if ours_too and isinstance(written, str) and written in names:
             node.options[word.writes_key] = names[written]

@@ -290,6 +290,83 @@ class Bound:
     default_at: Loc | None = None
     #: how the caller gives a parameter another value (said with ``default_at``)
     wording: Wording = PYTHON
+    #: the blackboard keys seen where a subtree argument's value was written (the body
+    #: that gives it, or the mission): a key name passed down is that body's key, not one
+    #: the body it reaches sees (:func:`key_written_in`); None: the body it is used in
+    scope: KeyScope | None = None
+
+
+@dataclass(eq=False)
+class KeyScope:
+    """The blackboard keys one subtree body sees by the names it writes while it is parsed:
+    the mission's (``outside``), its own hiding them (``own``). A key name passed into a
+    body it uses (``measure: {out: here}``, read there as ``key: "${out}"``) is looked up
+    here, where it was written, as BT.CPP's SubTree remaps a port to the caller's key
+    (docs/missions.md, A subtree's own keys). Compared by identity: one per body parsed."""
+
+    subtree: str  # "" for the mission's
+    keys: Mapping[str, KeyDecl]
+    own: frozenset[str]
+    outside: Mapping[str, KeyDecl]
+    #: the body this one is used in (None: the mission's tree)
+    parent: KeyScope | None = None
+
+
+#: a node's mark for a key name written in the mission's tree, not the body it is in
+MISSION_SCOPE = "mission"
+
+#: a whole ``${name}``, or ``${name}.field``: a key name a parameter passes
+_PASSED_KEY = re.compile(r"^\s*\$\{([A-Za-z_][A-Za-z0-9_]*)\}(\.[A-Za-z_][A-Za-z0-9_]*)?\s*$")
+
+
+def key_written_in(
+    ctx: Context, node: yaml.Node | None, env: Mapping[str, Bound]
+) -> tuple[Mapping[str, KeyDecl], KeyScope | str | None]:
+    """The keys a key name written as ``node`` is looked up in, and the scope it names a
+    key of when that is not the body being parsed (the mark the use that renames its keys
+    reads: :func:`roomba_bt.mission.own_keys.renamed`), else None. A name that is a text
+    parameter's value alone (``"${out}"``, ``"${out}.x"``) is one of the keys seen where
+    that value was written (:attr:`Bound.scope`); any other is this body's."""
+    here = ctx.scope
+    text = getattr(node, "value", None)
+    passed = _PASSED_KEY.match(text) if isinstance(text, str) else None
+    bound = None if passed is None else env.get(passed.group(1))
+    if here is None or bound is None or bound.type is not STR or bound.scope in (None, here):
+        return ctx.keys, None
+    if not bound.scope.subtree:  # the mission's tree wrote it: its keys, none of a body's
+        return here.outside, MISSION_SCOPE
+    return bound.scope.keys, bound.scope
+
+
+def scope_of_argument(
+    ctx: Context, node: yaml.Node, env: Mapping[str, Bound], outside: KeyScope
+) -> KeyScope:
+    """Where a subtree argument's value was written, for a key name it may be: the body
+    (or the mission's tree, ``outside``) that gives it, or, passed on as a whole
+    ``${name}``, where that parameter's value was written (a default, or a mission
+    parameter: the body passing it on)."""
+    here = ctx.scope or outside
+    text = getattr(node, "value", None)
+    passed = _FULL_SUBSTITUTION.match(text) if isinstance(text, str) else None
+    bound = None if passed is None else env.get(passed.group(2))
+    return bound.scope if bound is not None and bound.scope is not None else here
+
+
+def unseen_own_key(ctx: Context, key: str) -> str:
+    """After "unknown blackboard key 'here'" in a subtree's body: that a body it is used in
+    declares one of its own of that name, which its subtrees do not see, and how to pass it
+    (a text parameter); "" when none does."""
+    name = key.partition(".")[0]
+    scope = ctx.scope.parent if ctx.scope is not None else None
+    while scope is not None and name not in scope.own:
+        scope = scope.parent
+    if scope is None or ctx.scope is None:
+        return ""
+    return (
+        f" (subtree {scope.subtree}'s own key {name!r} is not seen in the subtrees it uses: "
+        f"give its name as a text parameter, {{id: {ctx.scope.subtree}, out: {name}}}, "
+        f'and write key: "${{out}}" here)'
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -339,6 +416,9 @@ class Context:
     #: how the messages say what the caller grants and sets (``Permissions.wording``)
     wording: Wording = PYTHON
     keys: dict[str, KeyDecl] = field(default_factory=dict)
+    #: the keys of the subtree body being parsed by the names it writes, with those of the
+    #: bodies it is used in (:class:`KeyScope`); None: the mission's tree
+    scope: KeyScope | None = None
     subtrees: dict[str, SubtreeDef] = field(default_factory=dict)
     #: plugin files named but not loaded (no --allow-plugin-files, or not found): an unknown
     #: word may be one of theirs
@@ -374,14 +454,20 @@ class Context:
     #: at most this many unread includes are named in one note
     _UNREAD_NAMED = 2
 
-    def unknown_key(self, key: str, at: Loc) -> str:
+    def unknown_key(self, key: str, at: Loc, keys: Mapping[str, KeyDecl] | None = None) -> str:
         """``unknown blackboard key 'legs' ...``: after a failed include, that it may be
-        one of the include's; else a close name and the keys known."""
+        one of the include's; else that a body this one is used in has its own of that
+        name (:func:`unseen_own_key`); else a close name and the keys known (``keys``, where
+        the name was written: ``ctx.keys`` unless a parameter passed it)."""
         note = self.unread_include_note(at)
         if note is not None:
             return f"unknown blackboard key {key!r} ({note})"
+        unseen = unseen_own_key(self, key) if keys is None else ""
+        if unseen:
+            return f"unknown blackboard key {key!r}{unseen}"
         # a use's own keys (``go#1/here``) are no name a file writes: not offered
-        return unknown("blackboard key", key, [k for k in self.keys if not is_own_key(k)])
+        known = self.keys if keys is None else keys
+        return unknown("blackboard key", key, [k for k in known if not is_own_key(k)])
 
     def unread_include_note(self, at: Loc) -> str | None:
         """What an unknown name at ``at`` follows from when an include was not read, instead
@@ -990,7 +1076,8 @@ def _reference(
     decl = ctx.keys.get(key)
     if decl is None:
         note = ctx.unread_include_note(loc)
-        hint = f" ({note})" if note is not None else closest(key, list(ctx.keys))
+        hint = f" ({note})" if note is not None else unseen_own_key(ctx, key)
+        hint = hint or closest(key, list(ctx.keys))
         raise Bad(loc.at(f"{what}: unknown blackboard key {key!r}{hint}"))  # no list: @key
     ktype = decl.type
     if fname is not None:

@@ -70,11 +70,11 @@ def test_each_use_has_keys_of_its_own(compile_text: Callable[..., CompiledMissio
         (node.name, node.params.get("key") or node.params.get("since")) for node in leaves(mission)
     ]
     assert [k for k in keys if k[1] is not None] == [
-        ("mark(key=here)", "leg#1/here"),
+        ("mark(here)", "leg#1/here"),
         ("odometry(since=here, distance=5cm)", "leg#1/here"),
         ("set(key=n, value=1)", "leg#1/n"),
         ("check(key=here, value=7)", "here"),  # the mission's, outside the body
-        ("mark(key=here)", "leg#2/here"),
+        ("mark(here)", "leg#2/here"),
         ("odometry(since=here, distance=5cm)", "leg#2/here"),
         ("set(key=n, value=1)", "leg#2/n"),
     ]
