@@ -362,10 +362,12 @@ def unseen_own_key(ctx: Context, key: str) -> str:
         scope = scope.parent
     if scope is None or ctx.scope is None:
         return ""
+    sub = ctx.scope.subtree
     return (
         f" (subtree {scope.subtree}'s own key {name!r} is not seen in the subtrees it uses: "
-        f"give its name as a text parameter, {{id: {ctx.scope.subtree}, out: {name}}}, "
-        f'and write key: "${{out}}" here)'
+        f"pass its name down as a text parameter, parameters: {{out: {{type: str}}}} in "
+        f"{sub}, subtree: {{id: {sub}, out: {name}}} at the use, and name the key "
+        f'"${{out}}" in {sub})'
     )
 
 

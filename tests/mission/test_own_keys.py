@@ -194,7 +194,12 @@ def test_a_body_does_not_see_the_own_keys_of_the_body_it_is_used_in(errors_of: E
           sequence: [{check: {key: here, value: 1}}, {subtree: inner}]
     tree: {subtree: outer}
     """
-    assert errors_of(text) == ["4:25: check.key: unknown blackboard key 'here'; known: none"]
+    assert errors_of(text) == [
+        "4:25: check.key: unknown blackboard key 'here' (subtree outer's own key 'here' is not "
+        "seen in the subtrees it uses: pass its name down as a text parameter, parameters: "
+        "{out: {type: str}} in inner, subtree: {id: inner, out: here} at the use, and name the "
+        'key "${out}" in inner)'
+    ]
 
 
 def test_a_library_of_two_subtrees_each_with_a_key_here_and_two_such_libraries(
