@@ -87,3 +87,40 @@ def test_two_uses_of_a_subtree_each_keep_their_own_mark() -> None:
         assert shown["/mission/here"] == 5 and shown["/mission/legs"] == 0
         assert shown["/mission/leg#1/legs"] == 1 and shown["/mission/leg#2/legs"] == 1
     assert not py_trees.blackboard.Blackboard.storage  # closed: the uses' keys are gone too
+
+
+#: ``measure`` writes the key its parameter names; each ``leg`` passes its own ``here``
+#: down by name and drives the distance ``measure`` put there
+PASSED = """
+mission: passed
+subtrees:
+  measure:
+    parameters: {out: {type: str}, length: {type: distance}}
+    tree:
+      set: {key: "${out}", value: "${length}"}
+  leg:
+    blackboard: {here: distance}
+    parameters: {length: {type: distance}}
+    tree:
+      sequence:
+        - subtree: {id: measure, out: here, length: "${length}"}
+        - drive: {distance: "@here"}
+tree:
+  sequence:
+    - mode: safe
+    - subtree: {id: leg, length: 10cm}
+    - subtree: {id: leg, length: 20cm}
+"""
+
+
+def test_a_key_passed_down_by_name_is_the_uses_own_at_run_time() -> None:
+    mission = load_mission_text(PASSED.lstrip(), name="passed.yaml")
+    simulator = Simulator(load_world("empty-room"), CREATE2, seed=1, trace=False)
+    with RunStack(mission, SimLink(simulator), profile=CREATE2, timeout_s=20) as stack:
+        summary = stack.run()
+        assert summary.outcome is Outcome.SUCCESS, summary.exception
+        board = stack.runner.blackboard
+        assert board is not None
+        assert board.read("leg#1/here") == 100 and board.read("leg#2/here") == 200
+        assert summary.distance_mm == pytest.approx(300, abs=15)
+    assert not py_trees.blackboard.Blackboard.storage
