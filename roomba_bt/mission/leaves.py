@@ -12,6 +12,7 @@ from typing import Any
 
 import yaml
 
+from roomba_bt.behaviours.blackboard import BlackboardRef
 from roomba_bt.behaviours.declare import Declaration, Param, key_not_read, key_role
 from roomba_bt.behaviours.units import MARK, ValueType, percent_sign_kept
 from roomba_bt.mission.plan import KeyDecl, Node
@@ -63,12 +64,16 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
         if param.type.name == "any":
             key_typed[pname] = (pnode, pvloc)
             continue
+        keys, written_in = key_written_in(ctx, pnode, env)  # "@${out}": the giver's key
         try:
             params[pname] = resolve(
                 ctx, pnode, pvloc, param.type, env, f"{decl.name}.{pname}",
                 param=param, allow_ref=decl.takes_blackboard_value(param),
                 no_ref=key_not_read(decl, pname) if key_role(decl, pname) else "",
+                keys=None if written_in is None else keys,
             )  # fmt: skip
+            if written_in is not None and isinstance(params[pname], BlackboardRef):
+                options[f"scope:{pname}"] = written_in
         except Bad as bad:
             ctx.report(bad)
             ok = False

@@ -326,10 +326,12 @@ def key_written_in(
     key of when that is not the body being parsed (the mark the use that renames its keys
     reads: :func:`roomba_bt.mission.own_keys.renamed`), else None. A name that is a text
     parameter's value alone (``"${out}"``, ``"${out}.x"``) is one of the keys seen where
-    that value was written (:attr:`Bound.scope`); any other is this body's."""
+    that value was written (:attr:`Bound.scope`), as is ``"@${out}"``'s; any other is
+    this body's."""
     here = ctx.scope
     text = getattr(node, "value", None)
-    passed = _PASSED_KEY.match(text) if isinstance(text, str) else None
+    text = text.strip().removeprefix("@") if isinstance(text, str) else None
+    passed = _PASSED_KEY.match(text) if text is not None else None
     bound = None if passed is None else env.get(passed.group(1))
     if here is None or bound is None or bound.type is not STR or bound.scope in (None, here):
         return ctx.keys, None
@@ -617,10 +619,13 @@ def resolve(
     param: Param | None = None,
     allow_ref: bool = False,
     no_ref: str = "",
+    keys: Mapping[str, KeyDecl] | None = None,
 ) -> Any:
     """One value of type ``vtype``: ``${param}`` substituted, ``@key`` resolved to a
     :class:`BlackboardRef` (where allowed), units parsed, range checked. Raises :class:`Bad`.
-    ``no_ref``: why a blackboard value is not allowed here, said when one is written."""
+    ``no_ref``: why a blackboard value is not allowed here, said when one is written.
+    ``keys``: those an ``@key`` names one of, where not ``ctx.keys`` (a key name passed
+    down, :func:`key_written_in`)."""
     fields = record_fields(vtype)
     if fields is not None and isinstance(node, yaml.MappingNode):
         return _record(ctx, node, loc, fields, env, what)
@@ -650,7 +655,7 @@ def resolve(
             if raw is UNKNOWN:
                 return UNKNOWN
         if raw.startswith("@") or (port_remapping(raw) and vtype.name not in ("str", "any")):
-            return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref))
+            return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref), keys)
     if passed_on is not None:
         return _text_parameter_read(raw, vtype, (loc, what, param, node), passed_on)
     parsed = _parsed(vtype, raw, loc, what, param, node)
@@ -1059,7 +1064,13 @@ def given_to(node: yaml.Node, loc: Loc, subtree: str) -> str:
 
 
 def _reference(
-    ctx: Context, raw: str, loc: Loc, vtype: ValueType, what: str, allowed: tuple[bool, str]
+    ctx: Context,
+    raw: str,
+    loc: Loc,
+    vtype: ValueType,
+    what: str,
+    allowed: tuple[bool, str],
+    keys: Mapping[str, KeyDecl] | None = None,
 ) -> BlackboardRef:
     """``@key`` (or ``@key.field``) checked against the key's declaration; ``allowed``:
     whether a blackboard value may be written here, and if not, why. BT.CPP's ``{key}``
@@ -1075,11 +1086,13 @@ def _reference(
     if match is None:
         raise Bad(loc.at(f"{what}: {raw!r} is not a blackboard reference (@key or @key.field)"))
     key, fname = match.groups()
-    decl = ctx.keys.get(key)
+    decl = (ctx.keys if keys is None else keys).get(key)
     if decl is None:
         note = ctx.unread_include_note(loc)
-        hint = f" ({note})" if note is not None else unseen_own_key(ctx, key)
-        hint = hint or closest(key, list(ctx.keys))
+        hint = f" ({note})" if note is not None else ""
+        if keys is None:  # written here, not passed down: a caller's own, not seen here?
+            hint = hint or unseen_own_key(ctx, key)
+        hint = hint or closest(key, list(ctx.keys if keys is None else keys))
         raise Bad(loc.at(f"{what}: unknown blackboard key {key!r}{hint}"))  # no list: @key
     ktype = decl.type
     if fname is not None:

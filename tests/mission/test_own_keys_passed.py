@@ -201,3 +201,24 @@ def test_at_key_in_a_nested_body_hints_at_passing_it(errors_of: Errors) -> None:
     (error,) = [e for e in errors_of(text) if "blackboard" in e]
     assert "unknown blackboard key 'here' (subtree outer's own key 'here' is not seen" in error
     assert "subtree: {id: inner, out: here} at the use" in error
+
+
+def test_a_blackboard_value_of_a_key_passed_down(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    """``"@${out}"`` reads the key of the body that gave the name, as ``key: "${out}"``."""
+    mission = compile_text(
+        """
+        mission: read_passed
+        subtrees:
+          go:
+            parameters: {out: {type: str}}
+            tree: {drive: {distance: "@${out}"}}
+          leg:
+            blackboard: {here: {type: distance, initial: 5cm}}
+            tree: {subtree: {id: go, out: here}}
+        tree: {sequence: [{mode: safe}, {subtree: leg}, {subtree: leg}]}
+        """
+    )
+    read = [n.params["distance"] for n in leaves(mission) if "distance" in n.params]
+    assert read == [BlackboardRef("leg#1/here"), BlackboardRef("leg#2/here")]
