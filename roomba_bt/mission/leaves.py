@@ -64,16 +64,8 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
         if param.type.name == "any":
             key_typed[pname] = (pnode, pvloc)
             continue
-        keys, written_in = key_written_in(ctx, pnode, env)  # "@${out}": the giver's key
         try:
-            params[pname] = resolve(
-                ctx, pnode, pvloc, param.type, env, f"{decl.name}.{pname}",
-                param=param, allow_ref=decl.takes_blackboard_value(param),
-                no_ref=key_not_read(decl, pname) if key_role(decl, pname) else "",
-                keys=None if written_in is None else keys,
-            )  # fmt: skip
-            if written_in is not None and isinstance(params[pname], BlackboardRef):
-                options[f"scope:{pname}"] = written_in
+            params[pname] = _value(ctx, (decl, param), (pnode, pvloc), env, options)
         except Bad as bad:
             ctx.report(bad)
             ok = False
@@ -108,6 +100,31 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     options = {k: v for k, v in options.items() if not k.startswith("found:")}
     return Node("leaf", key_loc, name, decl=decl, params=params, options=options,
                 parameter_in_name=_parameter_in(given))  # fmt: skip
+
+
+def _value(
+    ctx: Context,
+    declared: tuple[Declaration, Param],
+    written: tuple[yaml.Node, Loc],
+    env: Mapping[str, Bound],
+    options: dict[str, Any],
+) -> Any:
+    """The value of a leaf's parameter as written (its node and place), :class:`Bad` when
+    wrong. An ``"@${out}"`` names a key of the body that gave the name (the key's scope
+    kept in ``options`` as ``scope:PARAMETER``, for that body's use to rename it)."""
+    decl, param = declared
+    pnode, pvloc = written
+    pname = param.name
+    keys, written_in = key_written_in(ctx, pnode, env)
+    value = resolve(
+        ctx, pnode, pvloc, param.type, env, f"{decl.name}.{pname}",
+        param=param, allow_ref=decl.takes_blackboard_value(param),
+        no_ref=key_not_read(decl, pname) if key_role(decl, pname) else "",
+        keys=None if written_in is None else keys,
+    )  # fmt: skip
+    if written_in is not None and isinstance(value, BlackboardRef):
+        options[f"scope:{pname}"] = written_in
+    return value
 
 
 def _unbuilt(
