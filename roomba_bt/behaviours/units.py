@@ -24,6 +24,7 @@ import math
 import numbers
 import re
 import sys
+import unicodedata
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -802,18 +803,51 @@ def convert(source: ValueType, target: ValueType, value: Any) -> Any:
 
 
 def closest(word: str, candidates: Sequence[str]) -> str:
-    """ " (did you mean 'x'?)" or ""; the difflib suggestion every unknown name gets."""
+    """ " (did you mean 'x'?)" or ""; the difflib suggestion every unknown name gets. A
+    word with a letter that is not ASCII among names that all are has it named, with the
+    ASCII letter it stands for where the suggestion shows it (:func:`lookalike_letter`):
+    ``dr\u0456ve`` (a Cyrillic i) read on screen "unknown node 'drive' (did you mean
+    'drive'?)"."""
     found = closest_name(word, candidates)
-    return f" (did you mean {found!r}?)" if found is not None else ""
+    odd = lookalike_letter(word, found, candidates)
+    if found is None:
+        return f" ({odd})" if odd else ""
+    return f" (did you mean {found!r}?{' ' + odd if odd else ''})"
 
 
 def closest_name(word: str, candidates: Sequence[str]) -> str | None:
     """The candidate :func:`closest` suggests, or None: for a caller that goes on as if it
-    had been written (a misspelt ``paramaters:`` read as ``parameters:``)."""
+    had been written (a misspelt ``paramaters:`` read as ``parameters:``). The word is
+    compared NFKC-folded: a fullwidth ``\uff44\uff52\uff49\uff56\uff45`` is ``drive``."""
     import difflib
 
-    found = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.6)
+    folded = unicodedata.normalize("NFKC", word) if not word.isascii() else word
+    if folded != word and folded in candidates:
+        return folded
+    found = difflib.get_close_matches(folded, list(candidates), n=1, cutoff=0.6)
     return found[0] if found else None
+
+
+def lookalike_letter(word: str, meant: str | None, candidates: Sequence[str]) -> str:
+    """``'\u0456' (U+0456 CYRILLIC SMALL LETTER BYELORUSSIAN-UKRAINIAN I) is not the ASCII
+    letter 'i'``: the first letter or digit of ``word`` that is not ASCII, where the names
+    it may be (``candidates``) all are; the ASCII letter it is not, from its NFKC form
+    (fullwidth ``\uff44``: 'd') or the suggestion ``meant`` at its place (same length);
+    "" for an ASCII word, or names that are not ASCII themselves."""
+    if word.isascii() or not all(name.isascii() for name in candidates):
+        return ""
+    for index, char in enumerate(word):
+        if char.isascii() or not char.isalnum():
+            continue
+        shown = named_character(char)
+        folded = unicodedata.normalize("NFKC", char)
+        if folded.isascii() and len(folded) == 1:
+            kind = "digit" if folded.isdigit() else "letter"
+            return f"{shown} is not the ASCII {kind} {folded!r}"
+        if meant is not None and len(meant) == len(word) and meant[index] != char:
+            return f"{shown} is not the ASCII letter {meant[index]!r}"
+        return f"{shown} is not an ASCII letter"
+    return ""
 
 
 def _parse_any(value: object) -> object:

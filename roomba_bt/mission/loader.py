@@ -40,6 +40,7 @@ from __future__ import annotations
 import itertools
 import os
 import re
+import unicodedata
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
@@ -117,6 +118,7 @@ from roomba_bt.mission.wording import COMMAND_LINE, PYTHON, Wording
 from roomba_bt.printable import path_written
 from roomba_bt.yamlsource import (
     holds_some_of,
+    named_character,
     not_a_file_of,
     too_many_digits,
     yaml11_number_problem,
@@ -419,6 +421,11 @@ class Loader:
 
     def _plugins(self, path: Path, node: yaml.Node, loc: Loc) -> None:
         for text, target, iloc in self._files(path, node, loc, "plugins", "a plugin"):
+            module = None if target.exists() else _module_named(text)
+            if module is not None:  # said with or without --allow-plugin-files: no file
+                self.ctx.unloaded_plugins.append(text)
+                self.ctx.error(iloc.at(module))
+                continue
             if self._refused(text, target, iloc, "plugin file", self.permissions.plugin_files):
                 self.ctx.unloaded_plugins.append(text)
                 continue
@@ -730,7 +737,7 @@ def param_decl(
     has one: the third item) and doc; ``name_loc``, where its name is written. Raises
     :class:`Bad`."""
     if not _IDENT.match(name):
-        raise Bad(name_loc.at(f"parameter name {name!r} must be snake_case{_snake_hint(name)}"))
+        raise Bad(name_loc.at(f"parameter name {name!r} must be {_snake_rule(name)}"))
     fields = known_fields(
         node, loc, f"parameter {name!r}", ("type", "default", "doc", "choices", "items")
     )
@@ -1159,6 +1166,27 @@ def _not_a_plugin_file(path: Path, text: str, target: Path) -> str | None:
     )
 
 
+#: ``json.decoder``, ``rbt_good``: a dotted Python name, no path (no ``/``, no ``.py``)
+_MODULE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*")
+
+
+def _module_named(text: str) -> str | None:
+    """What a ``plugins:`` entry not found says when it reads as a Python module's name
+    (``plugins: [mypkg.behaviours]``): the list takes files only, and an installed package's
+    behaviours come by its entry point with no entry here (docs/plugins.md, Package it).
+    "plugin file 'json.decoder' not found" left the writer looking for a file. None for
+    anything that reads as a path."""
+    if text.endswith(".py") or _MODULE_NAME.fullmatch(text) is None:
+        return None
+    return (
+        f"plugin file {path_written(text)} not found: {path_written(text)} looks like a "
+        "module name, and plugins: takes files (a path to a .py file, relative to the file "
+        "naming it); an installed package's behaviours are found by its entry point in the "
+        "group roomba_bt.behaviours, with no plugins: entry (docs/plugins.md, Package it; "
+        "roomba-bt behaviours lists them)"
+    )
+
+
 def _unreadable(target: Path) -> str | None:
     """Why the file system will not say what ``target`` is (a folder on the way the user
     cannot enter: ``stat`` fails with "Permission denied"), None when it answers."""
@@ -1202,10 +1230,30 @@ def _new_name(
 ) -> None:
     """A name a file declares: snake_case, and not declared before (here or in an include)."""
     if not _IDENT.match(name):
-        raise Bad(key_loc.at(f"{called} {name!r} must be snake_case{_snake_hint(name)}"))
+        raise Bad(key_loc.at(f"{called} {name!r} must be {_snake_rule(name)}"))
     if name in taken:
         first = taken[name].loc
         raise Bad(key_loc.at(f"{what} {name!r} {verb} twice (first at {first.file}:{first.line})"))
+
+
+def _snake_rule(name: str) -> str:
+    """What a name refused by :data:`_IDENT` must be, as its error says it: ``snake_case``,
+    with the spelling meant (:func:`_snake_hint`); for a name with a letter that is not
+    ASCII (``vitesse_\u00e9``, snake_case by any reading), that the letters must be ASCII,
+    the first other one named: "must be snake_case" said nothing of what was wrong."""
+    odd = next((char for char in name if not char.isascii()), None)
+    if odd is None:
+        return f"snake_case{_snake_hint(name)}"
+    plain = "".join(
+        char for char in unicodedata.normalize("NFKD", name) if not unicodedata.combining(char)
+    )
+    hint = _snake_hint(plain) if plain != name else ""
+    if not hint and plain != name and _IDENT.match(plain):
+        hint = f" (write {plain!r})"
+    return (
+        f"ASCII snake_case (a-z, 0-9 and _, not starting with a digit): {named_character(odd)} "
+        f"is not ASCII{hint}"
+    )
 
 
 def _snake_hint(name: str) -> str:

@@ -130,8 +130,8 @@ def read_literal(ctx: Context, node: yaml.Node, loc: Loc) -> None:
         if _BRACED_NAME.fullmatch(f"{{{name}}}") is None:
             ctx.error(
                 iloc.at(
-                    f"literal: {name!r} is no parameter name (a letter or _, then "
-                    "letters, digits or _): list the names of ${name} meant as text"
+                    f"literal: {name!r} is no parameter name (an ASCII letter or _, then "
+                    "ASCII letters, digits or _): list the names of ${name} meant as text"
                 )
             )
             continue
@@ -937,7 +937,8 @@ def _parameters_used(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) ->
         raise Bad(
             loc.at(
                 f'{what}: "${{" at character {stray + 1} of {raw!r} starts no parameter (a '
-                f"parameter is ${{name}}: a letter or _, then letters, digits or _, then }}); "
+                f"parameter is ${{name}}: an ASCII letter or _, then ASCII letters, digits or _, "
+                f"then }}); "
                 f"{ESCAPE_HINT}"
             )
         )
