@@ -621,7 +621,9 @@ def reading_notice(path: str) -> str | None:
 
 
 def _usage_error(message: str) -> int:
-    print(f"roomba-bt: {message}", file=sys.stderr)
+    """``roomba-bt monitor: MESSAGE``, exit 2: the command named, as every command's usage
+    errors name theirs (run_cmd._error)."""
+    print(f"roomba-bt monitor: {message}", file=sys.stderr)
     return ExitCode.INVALID
 
 

@@ -271,8 +271,10 @@ def _add_replay_parser(sub: Any) -> None:
     add_display_option(replay, live=False)
 
 
-def _error(message: str) -> int:
-    print(f"roomba-bt: {message}", file=sys.stderr)
+def _error(message: str, command: str) -> int:
+    """``roomba-bt run: MESSAGE`` (``replay``, ``monitor``) on stderr, exit 2: the command
+    named as ``show``, ``validate`` and ``eval`` name theirs (``run DIR`` said "roomba-bt:")."""
+    print(f"roomba-bt {command}: {message}", file=sys.stderr)
     return ExitCode.INVALID
 
 
@@ -350,7 +352,7 @@ def _claimed_record(path: str | None) -> ClaimedFile | int | None:
     try:
         return ClaimedFile(path)
     except OSError as exc:
-        return _error(f"--record {path}: {exc.strerror or exc}")
+        return _error(f"--record {path}: {exc.strerror or exc}", "run")
 
 
 def _claimed_run(
@@ -399,7 +401,7 @@ def _claimed_run(
         if monitor is not None:
             monitor.finish(None)
         if isinstance(exc, OSError):  # the record cannot be written
-            return _error(_record_refused(args, exc))
+            return _error(_record_refused(args, exc), args.command)
         raise  # a bug (main() says it, exit 70), or Ctrl-C
     if monitor is not None:
         monitor.start()  # the port is open: its URL now, not one a busy port never serves
@@ -440,7 +442,7 @@ def _mission_at_its_rate(
     ending = None if opened is None else end_in_problem(args.end_in, profile)
     if opened is not None and ending is not None:
         opened.close()  # the identification's Start left the robot in Passive
-        return _error(ending)
+        return _error(ending, args.command)
     warned = baud_warning(args.baud, profile, simulated=not args.port)
     if warned is not None:
         print(f"roomba-bt run: {warned}", file=sys.stderr)
@@ -455,7 +457,7 @@ def _mission_at_its_rate(
     try:
         packets = stream_packets(mission, args.baud)
     except BandwidthError as exc:
-        return _error(f"{args.mission}: {exc}")
+        return _error(f"{args.mission}: {exc}", args.command)
     if args.strict and mission.warnings:  # printed by load(), above; errors were exit 2
         # not started, as validate --strict fails it in CI: it started, and --strict judged
         # only what the run did, so such a mission ran under run --strict and could exit 0
@@ -569,52 +571,54 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
     wrong (the mission's path is resolved into ``args.mission``)."""
     params = parse_params(args.param)
     if isinstance(params, str):
-        return _error(params)
+        return _error(params, args.command)
     timeout = _time_limit(args)
     if isinstance(timeout, str):
-        return _error(timeout)
+        return _error(timeout, args.command)
     if _fast_limit(args):
         timeout = FAST_TIMEOUT_S
     limit = None if args.wall_limit is None else limit_seconds(args.wall_limit, "--wall-limit")
     if isinstance(limit, str):
-        return _error(limit)
+        return _error(limit, args.command)
     args.wall_limit_s = limit
     heartbeat = limit_seconds(args.heartbeat, "--heartbeat")
     if isinstance(heartbeat, str):
-        return _error(heartbeat)
+        return _error(heartbeat, args.command)
     args.heartbeat_s = heartbeat
     simulated = (args.world, args.plot, args.fast, args.battery is not None, args.odometry_error)
     if args.port and any(simulated):
         return _error(
             "--world, --plot, --fast, --battery and --odometry-error are for the simulator: "
-            "drop them or --port"
+            "drop them or --port",
+            args.command,
         )
     faults = fault_options_set(args)
     if args.port and faults:
         return _error(
             f"{', '.join(faults)}: the simulator's faults, and --port is a real robot: drop "
-            "them or --port (rehearse a bad cable on the simulator: no --port)"
+            "them or --port (rehearse a bad cable on the simulator: no --port)",
+            args.command,
         )
     args.faults = faults_given(args, odometry_error=args.odometry_error)
     if isinstance(args.faults, str):
-        return _error(args.faults)
+        return _error(args.faults, args.command)
     token = chosen_token(args)
     if token:
-        return _error(token)
+        return _error(token, args.command)
     if args.record_max is not None and not args.record:
-        return _error("--record-max limits the --record file: give --record FILE too")
+        return _error("--record-max limits the --record file: give --record FILE too", args.command)
     epoch = epoch_problem() if args.record else None
     if epoch is not None:  # the convention: stop rather than write the current time
-        return _error(epoch)
+        return _error(epoch, args.command)
     found = mission_file(args.mission)
     if isinstance(found, tuple):
-        return _error(found[0])
+        return _error(found[0], args.command)
     problem = chosen_profile(args, "run", mission_near(args.mission, found))
     args.mission = found
     if problem is None and args.profile != AUTO_PROFILE:  # auto: once it is identified
         problem = end_in_problem(args.end_in, get_profile(args.profile))
     if problem is not None:
-        return _error(problem)
+        return _error(problem, args.command)
     return params, timeout
 
 
@@ -1002,13 +1006,15 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     try:
         record = load_record(args.record)  # its header's fields checked there
     except RecordError as exc:
-        return _error(str(exc))
+        return _error(str(exc), args.command)
     header = record.header
     profile = get_profile(header.get("profile", "create2"))
     mission_path = args.mission or header.get("mission")
     if not args.mission:
         mission_path = _from_the_record(args.record, header)
-    found = _recorded_mission(args.record, mission_path, given=bool(args.mission))
+    found = _recorded_mission(
+        args.record, mission_path, given=bool(args.mission), command=args.command
+    )
     if isinstance(found, str) and not args.mission:
         which = _shipped_file_replayed(args.record, header, mission_path, found)
         if which is not None:
@@ -1018,7 +1024,7 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     params = {name: str(value) for name, value in (header.get("parameters") or {}).items()}
     extra = parse_params(args.param)
     if isinstance(extra, str):
-        return _error(extra)
+        return _error(extra, args.command)
     params.update(extra)
     baud: int = header.get("baud", 115200)
     granted = permissions(args, found)
@@ -1036,7 +1042,7 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
         return mission
     packets = _recorded_packets(args.record, header, mission, found)
     if isinstance(packets, str):
-        return _error(packets)
+        return _error(packets, args.command)
     return Recorded(record, mission, profile, baud, packets)
 
 
@@ -1073,7 +1079,9 @@ def _refused_recorded_mission(header: dict[str, Any], found: str, plugins_allowe
     )
 
 
-def _recorded_mission(record_path: str, mission_path: object, *, given: bool) -> str | int:
+def _recorded_mission(
+    record_path: str, mission_path: object, *, given: bool, command: str
+) -> str | int:
     """The mission file a replay compiles: ``--mission`` (``given``), else the record's own,
     a path or a shipped mission's name (``roomba-bt:dock.yaml``, what a record of ``run
     dock`` holds since session 29). A record made before holds a shipped mission's path in the
@@ -1100,7 +1108,9 @@ def _recorded_mission(record_path: str, mission_path: object, *, given: bool) ->
     gone = ""
     if isinstance(mission_path, str) and mission_path.startswith(SHIPPED_PREFIX) and not given:
         gone = f" (shipped with the roomba-bt that made the record, not with {__version__})"
-    return _error(f"{record_path}: mission {mission_path!r} not found{gone}; pass --mission FILE")
+    return _error(
+        f"{record_path}: mission {mission_path!r} not found{gone}; pass --mission FILE", command
+    )
 
 
 def _shipped_file_replayed(
@@ -1194,7 +1204,7 @@ def replay_command(args: argparse.Namespace) -> int:
 
     window = parse_window(args)
     if isinstance(window, str):
-        return _error(window)
+        return _error(window, args.command)
     recorded = load_recorded(args)
     if isinstance(recorded, int):
         return recorded

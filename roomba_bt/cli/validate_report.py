@@ -305,7 +305,7 @@ def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
         "line": d.line,
         "column": d.column,
         "severity": d.severity,
-        "message": d.message,
+        "message": d.shown().message,
         "yaml_path": d.yaml_path,
         "included_from": [
             {"file": s.file, "line": s.line, "column": s.column} for s in d.included_from
@@ -350,7 +350,7 @@ def print_github(
             print(f"{escaped(one.file, ANY_CONTROL)}: {one.verdict(strict)}")
             continue
         for d in _unseen(one.diagnostics[:MAX_REPORTED], seen):
-            message = d.message + d.uses_said()
+            message = d.shown().message + d.uses_said()
             where = f"{message} [{d.yaml_path}]" if d.yaml_path else message
             severity = d.severity
             if strict and severity == "warning":  # it fails the job: marked as what fails it

@@ -45,6 +45,7 @@ from roomba_bt.mission.checks import (
 )
 from roomba_bt.mission.deadends import dead_ends
 from roomba_bt.mission.diagnostics import (
+    MAX_REPORTED,
     Diagnostic,
     IncludeSite,
     MissionError,
@@ -239,7 +240,10 @@ def _said(*found: Iterable[Diagnostic]) -> tuple[Diagnostic, ...]:
     that use (:func:`said_at_use`); a finding at several uses of a subtree written in their
     own file once, naming each (:func:`merged_uses`)."""
     every = itertools.chain.from_iterable(found)
-    return tuple(sorted(merged_uses(itertools.chain.from_iterable(map(said_at_use, every)))))
+    said = sorted(merged_uses(itertools.chain.from_iterable(map(said_at_use, every))))
+    # the messages a command prints whole; those past them keep their "did you mean" for
+    # str() to work out (Diagnostic.later): thousands of them cost seconds
+    return (*(d.shown() for d in said[:MAX_REPORTED]), *said[MAX_REPORTED:])
 
 
 def _tree_warnings(

@@ -42,6 +42,7 @@ from roomba_bt.mission.values import (
     said_origin,
     substituted,
     unknown,
+    unknown_later,
     warn_escaped,
 )
 
@@ -168,7 +169,8 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         _children_as_keys(parser, word, [(k, kl) for k, _, kl, _ in items if k not in allowed])
         for k, v, kl, vl in items:
             if k not in allowed:
-                ctx.error(kl.at(f"{word}: " + unknown("option", k, allowed, word)))
+                message, later = unknown_later("option", k, allowed, word)
+                ctx.error(kl.at(f"{word}: {message}", later))
                 continue
             fields[k] = (v, vl)
         for param in kind.options:

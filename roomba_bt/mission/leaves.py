@@ -15,6 +15,7 @@ import yaml
 from roomba_bt.behaviours.blackboard import BlackboardRef
 from roomba_bt.behaviours.declare import Declaration, Param, key_not_read, key_role
 from roomba_bt.behaviours.units import MARK, ValueType, percent_sign_kept
+from roomba_bt.mission.diagnostics import Later
 from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.source import Bad, Loc, mapping
 from roomba_bt.mission.values import (
@@ -30,19 +31,21 @@ from roomba_bt.mission.values import (
     said_origin,
     substituted,
     unknown,
+    unknown_later,
 )
 from roomba_bt.printable import shortened
 
 
-def _unknown_parameter(decl: Declaration, pname: str) -> str:
+def _unknown_parameter(decl: Declaration, pname: str) -> tuple[str, Later | None]:
     """``unknown parameter 'home'``, with the parameter the spec calls so where one does
-    (``(did you mean 'dock'? the spec's Home LED)``), else the closest name."""
+    (``(did you mean 'dock'? the spec's Home LED)``), else the closest name, worked out
+    when the error is shown (:func:`unknown_later`: a file may hold thousands)."""
     pnames = [p.name for p in decl.params]
     for param in decl.params:
         if param.spec_name and param.spec_name.lower() == pname.lower():
             hint = f" (did you mean {param.name!r}? {param.spec_name} is the spec's name for it)"
-            return unknown("parameter", pname, pnames, hint=hint)
-    return unknown("parameter", pname, pnames, decl.name)
+            return unknown("parameter", pname, pnames, hint=hint), None
+    return unknown_later("parameter", pname, pnames, decl.name)
 
 
 def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
@@ -57,7 +60,8 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     for pname, pnode, pkloc, pvloc in given:
         param = decl.param(pname)
         if param is None:
-            ctx.error(pkloc.at(f"{decl.name}: " + _unknown_parameter(decl, pname)))
+            message, later = _unknown_parameter(decl, pname)
+            ctx.error(pkloc.at(f"{decl.name}: {message}", later))
             ok = False
             continue
         options[f"loc:{pname}"] = pvloc

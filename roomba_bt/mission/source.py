@@ -16,7 +16,7 @@ from typing import Any
 import yaml
 
 from roomba_bt import yamlsource
-from roomba_bt.mission.diagnostics import Diagnostic, SubtreeUse, UseChain
+from roomba_bt.mission.diagnostics import Diagnostic, Later, SubtreeUse, UseChain
 from roomba_bt.printable import path_written
 
 _CORE = yamlsource.CORE
@@ -39,9 +39,13 @@ class Loc:
     #: is the same place in the file
     used_in: UseChain = field(default=(), compare=False)
 
-    def at(self, message: str) -> Diagnostic:
+    def at(self, message: str, later: Later | None = None) -> Diagnostic:
+        """A diagnostic here; ``later``, a part of ``message`` worked out when it is shown
+        (:class:`~roomba_bt.mission.diagnostics.Later`)."""
         used_in = (self.used_in,) if self.used_in else ()
-        return Diagnostic(self.file, self.line, self.column, message, self.path, used_in=used_in)
+        return Diagnostic(
+            self.file, self.line, self.column, message, self.path, used_in=used_in, later=later
+        )
 
     def used_at(self, *uses: SubtreeUse) -> Loc:
         """This place as the subtree use ``uses`` expand it, innermost first (outside the

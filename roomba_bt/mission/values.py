@@ -37,7 +37,7 @@ from roomba_bt.behaviours.units import (
     shown,
     with_article,
 )
-from roomba_bt.mission.diagnostics import Diagnostic
+from roomba_bt.mission.diagnostics import Diagnostic, Later
 from roomba_bt.mission.foreign import port_remapping, suggestion
 from roomba_bt.mission.plan import KeyDecl, is_own_key
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text, sequence
@@ -261,6 +261,21 @@ def unknown(
     if hint is None:
         hint = closest(name, known) if owner is None else suggestion(name, known, owner)
     return f"unknown {what} {name!r}{hint}; known: {listing}"
+
+
+def unknown_later(
+    what: str, name: str, known: list[str], owner: str | None = None
+) -> tuple[str, Later]:
+    """:func:`unknown`'s message with its "did you mean" left for when it is shown
+    (:class:`~roomba_bt.mission.diagnostics.Later`; give both to ``Loc.at``): for the names
+    a file may hold thousands of, each unknown (a leaf's parameters, a word's options)."""
+    listing = ", ".join(known) if known else "none"
+    said = f"unknown {what} {name!r}"
+
+    def part() -> str:
+        return closest(name, known) if owner is None else suggestion(name, known, owner)
+
+    return f"{said}; known: {listing}", Later(said, part)
 
 
 class _Unknown:

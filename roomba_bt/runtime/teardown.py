@@ -62,7 +62,9 @@ def behaviour_error(exc: BaseException, *, method: bool = True) -> str:
     names its method), the ``return`` that gave it when its source tells
     (:func:`returned_from`), else where the method is defined, said so."""
     frames = list(traceback.walk_tb(exc.__traceback__))
-    what = f"{type(exc).__name__}: {exc}" if isinstance(exc, Exception) else failure_said(exc)
+    what = failure_said(exc)
+    if isinstance(exc, Exception) and str(exc):  # its lines as they are; an empty one by name
+        what = f"{type(exc).__name__}: {exc}"  # ("MemoryError:  in its update()" had two spaces)
     behaviour, where = innermost_behaviour(frames)
     if isinstance(exc, InvalidStatus):  # raised after its update (check) returned: where it is
         behaviour, where = exc.node, _top_line(frames)

@@ -845,7 +845,7 @@ def test_a_chosen_token_that_will_not_do_is_a_usage_error_that_does_not_repeat_i
     monkeypatch.setenv("ROOMBA_BT_MONITOR_TOKEN", token)
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert f"roomba-bt: ROOMBA_BT_MONITOR_TOKEN: {said}" in err and token not in err
+    assert f"roomba-bt run: ROOMBA_BT_MONITOR_TOKEN: {said}" in err and token not in err
     assert "secrets.token_urlsafe(18)" in err
 
 
@@ -869,7 +869,7 @@ def test_a_monitor_option_without_a_page_is_said(
     """``--monitor-readonly`` and ``--monitor-force`` alone were ignored without a word
     (the run served no page) while a token alone was this error."""
     assert main(["run", str(SHUTTLE), "--fast", "--display", "none", *option]) == 2
-    assert f"roomba-bt: {option[0]} is for --monitor: add it" in capsys.readouterr().err
+    assert f"roomba-bt run: {option[0]} is for --monitor: add it" in capsys.readouterr().err
 
 
 def _probe_the_view_link(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:

@@ -87,5 +87,5 @@ def test_a_window_that_will_not_do_is_said_exit_2(
         options = [*options, "--monitor", "0"]
     assert main([command, str(shuttle_record), *options]) == 2
     err = capsys.readouterr().err
-    assert f"roomba-bt: {said}" in err, err
+    assert f"roomba-bt {command}: {said}" in err, err
     assert "Traceback" not in err

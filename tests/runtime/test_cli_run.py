@@ -314,8 +314,8 @@ def test_a_record_with_a_byte_that_is_not_utf8_is_placed_not_a_traceback(
     record.write_bytes(json.dumps(HEADER).encode() + b'\n{"t": 0.0, \xff}\n')
     assert main([command, str(record)]) == 2
     assert capsys.readouterr().err.strip() == (
-        f"roomba-bt: {record}:2:12: byte 0xff, not UTF-8 text; expected the JSON lines of a "
-        "roomba-bt-record file (run --record)"
+        f"roomba-bt {command}: {record}:2:12: byte 0xff, not UTF-8 text; expected the JSON "
+        "lines of a roomba-bt-record file (run --record)"
     )
 
 
@@ -335,9 +335,9 @@ def test_a_record_is_read_a_line_at_a_time_and_a_device_refused(
     assert main(["replay", str(zeros)]) == 2
     assert main(["replay", "/dev/zero"]) == 2
     assert capsys.readouterr().err.splitlines() == [
-        f"roomba-bt: {zeros}:1: a line of more than 1,000 bytes; a roomba-bt-record file's "
+        f"roomba-bt replay: {zeros}:1: a line of more than 1,000 bytes; a roomba-bt-record file's "
         "lines are a few KB (run --record writes them)",
-        "roomba-bt: /dev/zero: not a regular file; a record is a file run --record wrote",
+        "roomba-bt replay: /dev/zero: not a regular file; a record is a file run --record wrote",
     ]
 
 

@@ -120,7 +120,7 @@ def test_damaged_compressed_data_is_an_error_naming_the_file_not_a_traceback(
     record.write_bytes(bytes(data))
     assert main(["replay", str(record)]) == 2
     err = capsys.readouterr().err
-    assert f"roomba-bt: {record}:" in err and "damaged compressed data" in err, err
+    assert f"roomba-bt replay: {record}:" in err and "damaged compressed data" in err, err
     assert "Traceback" not in err
 
 

@@ -79,7 +79,7 @@ def test_a_record_another_run_writes_is_refused_before_the_robot_is_opened(
     code = main(["run", BUMP, "--port", NO_PORT, "--record", str(held_elsewhere)])
     assert code == 2
     err = capsys.readouterr().err
-    assert f"roomba-bt: --record {held_elsewhere}: {SAID}" in err
+    assert f"roomba-bt run: --record {held_elsewhere}: {SAID}" in err
     assert "give this one another file" in err
     assert NO_PORT not in err
     assert held_elsewhere.read_text() == EARLIER
