@@ -421,11 +421,6 @@ class Loader:
 
     def _plugins(self, path: Path, node: yaml.Node, loc: Loc) -> None:
         for text, target, iloc in self._files(path, node, loc, "plugins", "a plugin"):
-            module = None if target.exists() else _module_named(text)
-            if module is not None:  # said with or without --allow-plugin-files: no file
-                self.ctx.unloaded_plugins.append(text)
-                self.ctx.error(iloc.at(module))
-                continue
             if self._refused(text, target, iloc, "plugin file", self.permissions.plugin_files):
                 self.ctx.unloaded_plugins.append(text)
                 continue
@@ -485,7 +480,7 @@ class Loader:
         if allowed and any(target.is_relative_to(root) for root in roots):
             return False
         said = _outside_message(what, text, target, roots, wording) if allowed else None
-        self.ctx.error(iloc.at(said or _not_allowed(text, wording)))
+        self.ctx.error(iloc.at(said or _not_allowed(text, wording, target)))
         return True
 
     def _again(self, target: Path, text: str, iloc: Loc) -> bool:
@@ -950,9 +945,11 @@ def record_declared(node: yaml.Node, _key_loc: Loc, loc: Loc) -> ValueType:
     )  # fmt: skip
 
 
-def _not_allowed(text: str, wording: Wording) -> str:
-    """Why a plugin file is not imported without the caller's permission, and how to give it."""
-    return (
+def _not_allowed(text: str, wording: Wording, target: Path) -> str:
+    """Why a plugin file is not imported without the caller's permission, and how to give it;
+    for a module's name, which no permission would import, that it is none
+    (:func:`_module_named`)."""
+    return _module_named(text, target) or (
         f"plugin file {path_written(text)} not loaded: a mission file cannot run code on its "
         f"own; allow its plugin files with {wording.allow_plugin_files} (or install the plugin "
         "as a package)"
@@ -1161,8 +1158,10 @@ def _not_a_plugin_file(path: Path, text: str, target: Path) -> str | None:
             f"plugin file {path_written(text)} is not a regular file (a device or a pipe); name "
             "a .py file"
         )
-    return _written_with_backslashes("plugin file", path.parent, text) or (
-        f"plugin file {path_written(text)} not found (paths are relative to the file naming it)"
+    return (
+        _written_with_backslashes("plugin file", path.parent, text)
+        or _module_named(text, target)
+        or f"plugin file {path_written(text)} not found (paths are relative to the file naming it)"
     )
 
 
@@ -1170,13 +1169,13 @@ def _not_a_plugin_file(path: Path, text: str, target: Path) -> str | None:
 _MODULE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*")
 
 
-def _module_named(text: str) -> str | None:
+def _module_named(text: str, target: Path) -> str | None:
     """What a ``plugins:`` entry not found says when it reads as a Python module's name
     (``plugins: [mypkg.behaviours]``): the list takes files only, and an installed package's
     behaviours come by its entry point with no entry here (docs/plugins.md, Package it).
     "plugin file 'json.decoder' not found" left the writer looking for a file. None for
-    anything that reads as a path."""
-    if text.endswith(".py") or _MODULE_NAME.fullmatch(text) is None:
+    anything that reads as a path, or names a file (``target``, where it resolves)."""
+    if text.endswith(".py") or _MODULE_NAME.fullmatch(text) is None or target.exists():
         return None
     return (
         f"plugin file {path_written(text)} not found: {path_written(text)} looks like a "
