@@ -7,6 +7,7 @@ The approach is a state machine (:class:`ApproachState`)::
       ├──(outside the force field)──> CLOSER ──(in it)──> FACE
       └──(no progress)──> RETREAT ──> FACE
     CLOSER, CROSS, ORBIT ──(bump, cliff)──> BACK ──> FACE
+    CROSS ──(backing, held behind)──> FACE ──> RETREAT
 
 SUCCESS in FACE, facing the dock on its axis. A state's method returns the tick's status, or
 None after handing over to a later state of the list FACE, CLOSER, TURN_AWAY, RETREAT,
@@ -83,6 +84,14 @@ CENTRE_GAIN_PER_S = 1.5
 CENTRE_MIN_MM_S = 30.0
 NEAR_EDGE_SHARE = 0.6
 NEAR_EDGE_MAX_MM = 400.0
+#: A drive backwards (CROSS to the near edge or toward the axis, RETREAT) that gets no
+#: BACK_STALL_MM further in BACK_STALL_S is held: something behind the robot, which no
+#: sensor of a Create 2 reports (the bumper is in front). Beside the dock, against the wall
+#: it stands on, the crossing's way back runs into that wall: the wheels stall, the
+#: odometry stands still, and the robot backed at nothing until the stage's timeout,
+#: attempt after attempt (at least 10.8 mm/s backwards, the slowest: 5 mm is half that).
+BACK_STALL_S = 1.0
+BACK_STALL_MM = 5.0
 #: Turns in place, as shares of ``turn_speed`` (each wheel, mm/s): toward the crossing line
 #: (TURN_AWAY) and, facing the dock, spinning while a receiver sees it (FACE_SEEN) and while
 #: none does (FACE_SEARCH); turning to a computed heading (FACE_TURN). At 200 mm/s the robot
@@ -115,6 +124,8 @@ TURN_SPEED_SHARES = (
 FRINGE_RAD = math.radians(60.0)
 #: spun this far without facing: forget the heading where the dock was seen, start again
 FACE_RESTART_RAD = math.radians(540.0)
+#: read on a retreat's ticks as a global (``common`` says why)
+_BUMP = Hazard.BUMP
 
 
 class ApproachState(IdentityEnum):
@@ -176,8 +187,8 @@ class DockApproach(DockingAction):
         "_back_until", "_band_seen", "_before_at", "_centred", "_cross_angle", "_cross_path",
         "_cross_side", "_crossings", "_face_target", "_face_turn", "_guesses", "_hazard",
         "_last_seen", "_last_side", "_last_side_time", "_lead_theta", "_lost_after", "_orbit",
-        "_past_at", "_retreat", "_run", "_side_guess", "_speed", "_spin_dir", "_starts", "_sweep",
-        "_turn_speed", "_view", "state",
+        "_past_at", "_retreat", "_run", "_side_guess", "_speed", "_spin_dir", "_stall",
+        "_starts", "_sweep", "_turn_speed", "_view", "state",
     )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
@@ -193,6 +204,8 @@ class DockApproach(DockingAction):
         self._band_seen = self._orbit = False
         self._cross_path, self._sweep, self._cross_side = 0.0, 1, 1
         self._last_side_time = self._back_until = 0.0
+        # a drive backwards: where (mm, signed odometry distance) and when it last got on
+        self._stall = (0.0, 0.0)
         # the rest is set before any tick reads it: by :meth:`start` (the parameters, the
         # guesses, the facing), by :meth:`read` (the view, the hazard)
 
@@ -323,15 +336,24 @@ class DockApproach(DockingAction):
         self._cross_path = snap.odometry.path_mm
         self._last_seen = snap.time  # turning away may hide the beams for a while
         self.mark_distance()
+        self._stall = (self._distance_mark, snap.time)
         return None
 
     def _retreat_state(
         self, snap: Snapshot, view: DockView, hazard: Hazard | None
     ) -> Status | None:
         """Out of the force field while a buoy is still in sight, but never out of every
-        beam: that would leave the search to find the dock again."""
+        beam: that would leave the search to find the dock again. A bump does not end it:
+        the bumper is in front, and backing away is what frees it (facing the dock pressed
+        against the wall beside it, the retreat ended on its first tick and the approach
+        turned back into the same crossing). Held from behind, it ends."""
         travelled = abs(snap.odometry.distance_mm - self._distance_mark)  # self.travelled()
-        if hazard is not None or not view.omni.from_dock or travelled > RETREAT_MAX_MM:
+        if (
+            (hazard is not None and hazard is not _BUMP)
+            or not view.omni.from_dock
+            or travelled > RETREAT_MAX_MM
+            or self._held_behind(snap)
+        ):
             self._centred = False
             self._start_facing(self._spin_dir)
             self.halt()
@@ -359,7 +381,20 @@ class DockApproach(DockingAction):
         self._crossings = 0
         self.state = ApproachState.RETREAT
         self.mark_distance()
+        self._stall = (self._distance_mark, self.snapshot.time)
         return RUNNING
+
+    def _held_behind(self, snap: Snapshot) -> bool:
+        """Driving backwards, the odometry has not got :data:`BACK_STALL_MM` further for
+        :data:`BACK_STALL_S`: something holds the robot from behind. Call it on each tick of
+        a drive backwards; a tick of any other motion must restart the watch
+        (``_stall = (distance, now)``)."""
+        at, since = self._stall
+        distance = snap.odometry.distance_mm
+        if distance < at - BACK_STALL_MM:
+            self._stall = (distance, snap.time)
+            return False
+        return snap.time - since >= BACK_STALL_S
 
     def _omni_state(self, view: DockView) -> int | None:
         """Where the omni receiver is relative to the axis, seen from the side the robot
@@ -456,6 +491,17 @@ class DockApproach(DockingAction):
             v = -NEAR_EDGE_SHARE * speed * slow
         else:
             v = speed * slow
+        if v >= 0.0:
+            self._stall = (snap.odometry.distance_mm, snap.time)
+        elif self._held_behind(snap):
+            # backing toward the axis against something behind (the wall beside the dock):
+            # the next crossing from here would back into it again. Face the dock, back
+            # straight away from it (the wall the dock stands on is then ahead, not behind)
+            # and come in again along the beams
+            self._retreat = True
+            self._start_facing(-float(self._cross_side))
+            self.halt()
+            return RUNNING
         self.wheels(v, v)
         return RUNNING
 
