@@ -352,7 +352,7 @@ class DockApproach(DockingAction):
             (hazard is not None and hazard is not _BUMP)
             or not view.omni.from_dock
             or travelled > RETREAT_MAX_MM
-            or self._held_behind(snap)
+            or self._held_behind(snap, backing=True)
         ):
             self._centred = False
             self._start_facing(self._spin_dir)
@@ -384,17 +384,26 @@ class DockApproach(DockingAction):
         self._stall = (self._distance_mark, self.snapshot.time)
         return RUNNING
 
-    def _held_behind(self, snap: Snapshot) -> bool:
+    def _held_behind(self, snap: Snapshot, *, backing: bool) -> bool:
         """Driving backwards, the odometry has not got :data:`BACK_STALL_MM` further for
-        :data:`BACK_STALL_S`: something holds the robot from behind. Call it on each tick of
-        a drive backwards; a tick of any other motion must restart the watch
-        (``_stall = (distance, now)``)."""
+        :data:`BACK_STALL_S`: something holds the robot from behind. A tick not
+        ``backing`` restarts the watch."""
         at, since = self._stall
         distance = snap.odometry.distance_mm
-        if distance < at - BACK_STALL_MM:
+        if not backing or distance < at - BACK_STALL_MM:
             self._stall = (distance, snap.time)
             return False
         return snap.time - since >= BACK_STALL_S
+
+    def _leave_held_crossing(self) -> Status:
+        """Backing toward the axis against something behind (the wall beside the dock): the
+        next crossing from here would back into it again. Face the dock, back straight away
+        from it (the wall the dock stands on is then ahead, not behind) and come in again
+        along the beams."""
+        self._retreat = True
+        self._start_facing(-float(self._cross_side))
+        self.halt()
+        return RUNNING
 
     def _omni_state(self, view: DockView) -> int | None:
         """Where the omni receiver is relative to the axis, seen from the side the robot
@@ -491,17 +500,8 @@ class DockApproach(DockingAction):
             v = -NEAR_EDGE_SHARE * speed * slow
         else:
             v = speed * slow
-        if v >= 0.0:
-            self._stall = (snap.odometry.distance_mm, snap.time)
-        elif self._held_behind(snap):
-            # backing toward the axis against something behind (the wall beside the dock):
-            # the next crossing from here would back into it again. Face the dock, back
-            # straight away from it (the wall the dock stands on is then ahead, not behind)
-            # and come in again along the beams
-            self._retreat = True
-            self._start_facing(-float(self._cross_side))
-            self.halt()
-            return RUNNING
+        if self._held_behind(snap, backing=v < 0.0):
+            return self._leave_held_crossing()
         self.wheels(v, v)
         return RUNNING
 
