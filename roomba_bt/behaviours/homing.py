@@ -20,6 +20,9 @@ the path's straight legs (``FloorMap.waypoints``)::
             out of that leg's cell (``FloorMap.avoid``, as ``cover`` does) and plan again;
             no progress for ``driving.STALL_S`` (wedged with no bump shown: a stand's side
             beyond the bumper): the same, backing off :data:`_WEDGED_BACK_MM`
+    back:   as ``cover`` backs (:mod:`.reversing`): only over floor it has just driven (the
+            first 6 cm, under its own body, aside), never onto a known drop; shortened,
+            or none, where that floor ends (a leg begins with a turn in place)
 
 It keeps the map and pose up to date as ``cover`` does (the same :class:`Bearings`), so what
 it meets is mapped for the next plan. With no path that keeps off blocked cells (a drifted
@@ -50,7 +53,7 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours import driving
+from roomba_bt.behaviours import driving, reversing
 from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.blackboard import run_board
 from roomba_bt.behaviours.coverage_map import (
@@ -288,7 +291,15 @@ class HomeByMap(Action):
         return driving.steer_along(self._line, pose.x_mm, pose.y_mm, pose.theta_rad, speed)
 
     def _back(self, distance: float) -> None:
-        self._phase, self._back_to = "back", self._pose.distance_mm - distance
+        """Back up ``distance`` mm, or as much of it as runs over floor it has just driven
+        (the first :data:`~.reversing.OWN_MM` aside: under its own body) with no known drop
+        behind, as ``cover`` does (:mod:`.reversing`: it sees nothing behind it). Every
+        back-off here is off something ahead (a hazard, or a leg it is wedged on), and a
+        leg starts after a turn in place: backed blind, a beam's or a wedge's 10 cm went
+        over floor it had not driven, a known drop's edge too."""
+        assert self._bearings is not None
+        allowed = self._bearings.reversible(distance, reversing.OWN_MM)
+        self._phase, self._back_to = "back", self._pose.distance_mm - allowed
         self._since = self.snapshot.time
 
     def _backing(self) -> tuple[float, float] | None:

@@ -13,6 +13,7 @@ import pytest
 from py_trees.common import Status
 
 from roomba_bt.behaviours import coverage_map, driving
+from roomba_bt.behaviours.actions import Mode
 from roomba_bt.behaviours.coverage_map import (
     SWEPT,
     VISITED,
@@ -23,14 +24,19 @@ from roomba_bt.behaviours.coverage_map import (
 )
 from roomba_bt.behaviours.drops import DROP
 from roomba_bt.behaviours.homing import ACROSS_PLANS, HomeByMap, path_across
+from roomba_bt.behaviours.reversing import OWN_MM
 from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
+from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.oi.stream import SLOT_SECONDS
 from roomba_bt.robot.interface import Odometry
 from roomba_bt.robot.testing import StubRobot
+from roomba_bt.runtime.stack import RunStack, TreeMission
+from roomba_bt.sim import SimLink, Simulator
+from roomba_bt.sim.world import Pose, parse_world
 
 Sweep = Callable[..., EpisodeResult]
 Make = Callable[..., object]
@@ -256,7 +262,7 @@ def test_the_way_home_backs_off_a_hazard_as_cover_does(
     cleaning = _backs_off(cover, wheels, HAZARDS[why], under_way=30)
     py_trees.blackboard.Blackboard.storage.clear()
     _, home = _cover_then_homing(make, wheels)
-    homing = _backs_off(home, wheels, HAZARDS[why])
+    homing = _backs_off(home, wheels, HAZARDS[why], under_way=30)  # so does the way home
     # one frame's move backing off, and the encoders' count
     step = driving.BACK_MM_S * SLOT_SECONDS + MM_PER_COUNT
     for backed, speeds in (cleaning, homing):
@@ -444,3 +450,56 @@ def test_a_leg_toward_a_known_drop_ends_short_of_it(make: Make, robot: StubRobot
     assert leg in fmap.avoid
     assert home._phase != "drive"
     assert not [c for c in robot.flush() if c.spec.name == "drive_direct" and max(c.args) > 0]
+
+
+#: A 3 m x 2.5 m room whose south 60 cm are stairs, a virtual wall's beam across it at 0.81 m
+STAIRS_BEHIND_A_BEAM = """
+name: stairs-behind-a-beam
+rooms: [[[0, 0], [3, 0], [3, 2.5], [0, 2.5]]]
+drops: [{name: stairs, rect: [0, 0, 3, 0.6]}]
+virtual_walls: [{from: [0, 0.81], to: [3, 0.81]}]
+"""
+
+
+class _LegIntoABeam(HomeByMap):
+    """``home_by_map`` as a leg north begins: it has just turned in place (it has driven
+    nothing facing this way), its omni receiver into a virtual wall's beam, the stairs
+    behind it; where the dock's beams were seen is 1 m ahead."""
+
+    def start(self) -> None:
+        odo = self.snapshot.odometry
+        bearings = Bearings(FloorMap(), odo)
+        heading = odo.theta_rad
+        goal = bearings.map.cell(
+            odo.x_mm + 1000.0 * math.cos(heading), odo.y_mm + 1000.0 * math.sin(heading)
+        )
+        assert goal is not None
+        bearings.map.beams[goal] = 0.0
+        storage = py_trees.blackboard.Blackboard.storage
+        storage[coverage_map.run_board().name(coverage_map.MAP_KEY)] = bearings
+        super().start()
+        self._phase, self._cell, self._limit = "drive", goal, 1000.0
+        self._line = (odo.x_mm, odo.y_mm, odo.theta_rad)
+
+
+def test_the_way_home_does_not_back_blind_off_a_beam_onto_the_stairs() -> None:
+    """Its wheels 8 cm from the stairs' edge behind it, a leg that meets a virtual wall's
+    beam at once backed off it 10 cm blind (a Create 2 has no sensor behind the wheels):
+    a wheel went down the stairs. Now it backs as ``cover`` does (behaviours/reversing.py):
+    no floor driven behind it, so no more than under its own body (6 cm): no wheel drop."""
+    world = parse_world(STAIRS_BEHIND_A_BEAM)
+    start = Pose(1500.0, 600.0 + 80.0, math.pi / 2)
+    simulator = Simulator(world, CREATE2, 0, start=start)
+    home = _LegIntoABeam("home_by_map", {})
+    root = py_trees.composites.Sequence(
+        "root", memory=True, children=[Mode("safe", {"to": "safe"}), home]
+    )
+    stack = RunStack(TreeMission(root, "leg-into-a-beam"), SimLink(simulator), profile=CREATE2,
+                     timeout_s=10.0)  # fmt: skip
+    try:
+        stack.run()
+    finally:
+        stack.close()
+    assert not simulator.fallen
+    lowest = min(point.y for point in simulator.trace)
+    assert 600.0 + 10.0 < lowest < start.y - OWN_MM + 10.0, lowest  # it backed: its own 6 cm
