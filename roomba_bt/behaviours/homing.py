@@ -125,7 +125,10 @@ class HomeByMap(Action):
     robot leaves Safe/Full (started again, it plans again from where it is). A leg met by a
     bump, a cliff or a virtual wall, or on which it makes no progress for 3 s (wedged with
     no bump shown: a cabinet's side beyond the bumper), is backed off and kept out of the
-    next plans. Drive Direct (145)."""
+    next plans; it backs up as ``cover`` does, only over floor it has just driven (its first
+    6 cm under its own body aside) and never toward a drop on its map, less or not at all
+    where the floor behind is not such floor (a leg begins with a turn in place). Drive
+    Direct (145)."""
 
     moves = True
 

@@ -1,4 +1,5 @@
-"""How far ``cover`` may back up: only over floor it has just driven, never onto a known drop.
+"""How far ``cover`` and ``home_by_map`` may back up: only over floor just driven, never onto
+a known drop.
 
 Why: a Create 2 sees nothing behind it (no bumper, no cliff sensor behind the wheels), and
 ``cover`` backs up in four places (off a bump, a cliff or a virtual wall's beam; off one
@@ -7,6 +8,9 @@ next lane, up to 18 cm of room for its radius). Backing blind, the arc dropped a
 down the apartment's stairs (living room, seed 8, 1.5 % encoder error, in both one and two
 passes, session 36): a lane that ended where it began, at a drop its drifted map had on the
 wrong side, after a turn in place, and the arc's 18 cm back went over the real edge behind.
+``home_by_map`` keeps the same :class:`~.coverage_map.Bearings` and backs up by the same
+rule (each of its legs begins with a turn in place: a beam's or a wedge's 10 cm back went
+over floor it had not driven).
 
 What a back-off may cover now::
 

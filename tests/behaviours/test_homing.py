@@ -272,6 +272,28 @@ def test_the_way_home_backs_off_a_hazard_as_cover_does(
     assert abs(cleaning[0] - homing[0]) < step
 
 
+def test_the_way_home_backs_off_no_bump_toward_a_drop_on_its_map(
+    make: Make, robot: StubRobot
+) -> None:
+    """A drop ``cover`` met lies 18 cm behind the way home's centre, across its line (over
+    floor it drove: with the encoders' error a drop may sit on the map there): a bump ahead
+    then backs it off not at all, where it backed its 3 cm blind."""
+    wheels = _Wheels(robot)
+    _, home = _cover_then_homing(make, wheels)
+    for _ in range(30):
+        wheels.frame()
+        home.tick_once()
+    assert home._bearings is not None
+    pose = home._pose
+    back = pose.theta_rad + math.pi
+    x, y = pose.x_mm + 180.0 * math.cos(back), pose.y_mm + 180.0 * math.sin(back)
+    across = (-150.0 * math.sin(back), 150.0 * math.cos(back))
+    home._bearings.map.drops.mark(x - across[0], y - across[1], back, 0.0)
+    home._bearings.map.drops.mark(x + across[0], y + across[1], back, 1.0)
+    backed, _ = _backs_off(home, wheels, HAZARDS["bump"], under_way=1)
+    assert backed < 1.0, backed
+
+
 def _held_until(leaf: Cover | HomeByMap, wheels: _Wheels, gave_up: Callable[[], bool]) -> float:
     """How long (s) ``leaf`` drives on with its wheels held until ``gave_up()``."""
     start = wheels.robot.snapshot.time
