@@ -298,8 +298,9 @@ class HomeByMap(Action):
         (the first :data:`~.reversing.OWN_MM` aside: under its own body) with no known drop
         behind, as ``cover`` does (:mod:`.reversing`: it sees nothing behind it). Every
         back-off here is off something ahead (a hazard, or a leg it is wedged on), and a
-        leg starts after a turn in place: backed blind, a beam's or a wedge's 10 cm went
-        over floor it had not driven, a known drop's edge too."""
+        leg starts after a turn in place: backed blind, a beam's or a wedge's 10 cm could
+        go over floor it had not driven, and any back-off toward a drop on its map (a
+        wheel down the stairs in ``tests/behaviours/test_homing.py``)."""
         assert self._bearings is not None
         allowed = self._bearings.reversible(distance, reversing.OWN_MM)
         self._phase, self._back_to = "back", self._pose.distance_mm - allowed
