@@ -43,6 +43,7 @@ from roomba_bt.evaluate.episode import (
     run_episode,
 )
 from roomba_bt.evaluate.parallel import NO_WORKERS, SCHEDULER_LOST
+from roomba_bt.evaluate.sources import remove_copies
 from roomba_bt.installation import optional_import_failure
 from roomba_bt.runtime.wall_limit import WallLimit, WallLimitReached
 
@@ -246,22 +247,34 @@ SHUTDOWN_NOTICE_S = 5.0
 
 def close_quietly(client: Any, cluster: Any) -> None:
     """Close a local cluster in order, without a word: first each worker's loggers are
-    silenced (in the worker's process, by the client), then those of this process (its
+    silenced and its copies of the missions removed (in the worker's process, by the client:
+    :func:`_closing_worker`), then those of this process (its
     scheduler, nannies and client) until the end, then the client closes, then the
     cluster. A shutdown races Dask's own traffic (a worker's heartbeat meets the closed
     scheduler or its own closing connection pool), and Dask logs each such loss as an ERROR
     with its traceback: on a loaded machine one came under the summary of an evaluation,
     after a Ctrl-C or not. What the evaluation asked is done by then; its errors came back
-    with the futures."""
+    with the futures. So a worker that has not closed 4 s after its nanny asked (0.8 of
+    ``Nanny.close``'s 5 s; a loaded machine) and is killed loses nothing: its plugins'
+    teardown and its atexit handlers do not run (its copies of the missions are removed
+    before: they were left in the temporary folder), the nanny's warning is silenced, and
+    Dask purges the worker's directory lock the next time a cluster starts."""
     levels = set_dask_log_level()
     try:
         with contextlib.suppress(Exception):  # a worker that does not answer is ended anyway
-            client.run(set_dask_log_level, on_error="ignore",
+            client.run(_closing_worker, on_error="ignore",
                        callback_timeout=SHUTDOWN_NOTICE_S)  # fmt: skip
         client.close()
         cluster.close()
     finally:
         restore_log_levels(levels)
+
+
+def _closing_worker() -> None:
+    """Runs on each worker of a local cluster as it closes: its Dask loggers silenced, its
+    copies of the missions removed (it runs no more episodes)."""
+    set_dask_log_level()
+    remove_copies()
 
 
 def set_dask_log_level(level: int = SILENT) -> dict[str, int]:

@@ -72,7 +72,9 @@ _COPIES: dict[str, Path] = {}
 
 
 @atexit.register
-def _remove_copies() -> None:
+def remove_copies() -> None:
+    """This process's copies of the bundles removed: at its exit, and on a local Dask
+    cluster's worker as the cluster closes (a worker its nanny kills then runs no atexit)."""
     for folder in _COPIES.values():
         shutil.rmtree(folder, ignore_errors=True)
     _COPIES.clear()
