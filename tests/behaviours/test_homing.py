@@ -13,7 +13,6 @@ import pytest
 from py_trees.common import Status
 
 from roomba_bt.behaviours import coverage_map, driving
-from roomba_bt.behaviours.actions import Mode
 from roomba_bt.behaviours.coverage_map import (
     SWEPT,
     VISITED,
@@ -30,13 +29,12 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
-from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.oi.stream import SLOT_SECONDS
 from roomba_bt.robot.interface import Odometry
 from roomba_bt.robot.testing import StubRobot
-from roomba_bt.runtime.stack import RunStack, TreeMission
-from roomba_bt.sim import SimLink, Simulator
-from roomba_bt.sim.world import Pose, parse_world
+from roomba_bt.sim.world import Pose
+
+from .sim_tree import run_after_mode
 
 Sweep = Callable[..., EpisodeResult]
 Make = Callable[..., object]
@@ -509,19 +507,9 @@ def test_the_way_home_does_not_back_blind_off_a_beam_onto_the_stairs() -> None:
     beam at once backed off it 10 cm blind (a Create 2 has no sensor behind the wheels):
     a wheel went down the stairs. Now it backs as ``cover`` does (behaviours/reversing.py):
     no floor driven behind it, so no more than under its own body (6 cm): no wheel drop."""
-    world = parse_world(STAIRS_BEHIND_A_BEAM)
     start = Pose(1500.0, 600.0 + 80.0, math.pi / 2)
-    simulator = Simulator(world, CREATE2, 0, start=start)
     home = _LegIntoABeam("home_by_map", {})
-    root = py_trees.composites.Sequence(
-        "root", memory=True, children=[Mode("safe", {"to": "safe"}), home]
-    )
-    stack = RunStack(TreeMission(root, "leg-into-a-beam"), SimLink(simulator), profile=CREATE2,
-                     timeout_s=10.0)  # fmt: skip
-    try:
-        stack.run()
-    finally:
-        stack.close()
+    simulator = run_after_mode(STAIRS_BEHIND_A_BEAM, start, "safe", home, "leg-into-a-beam", 10.0)
     assert not simulator.fallen
     lowest = min(point.y for point in simulator.trace)
     assert 600.0 + 10.0 < lowest < start.y - OWN_MM + 10.0, lowest  # it backed: its own 6 cm

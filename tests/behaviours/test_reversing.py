@@ -6,17 +6,13 @@ from __future__ import annotations
 
 import math
 
-import py_trees
-
 from roomba_bt.behaviours import driving
-from roomba_bt.behaviours.actions import Mode
 from roomba_bt.behaviours.coverage_map import Cover, FloorMap
 from roomba_bt.behaviours.reversing import OWN_MM, Trail
-from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.interface import Odometry
-from roomba_bt.runtime.stack import RunStack, TreeMission
-from roomba_bt.sim import SimLink, Simulator
-from roomba_bt.sim.world import Pose, parse_world
+from roomba_bt.sim.world import Pose
+
+from .sim_tree import run_after_mode
 
 
 def _driven(trail: Trail, heading: float, length: float) -> Odometry:
@@ -125,19 +121,9 @@ def test_the_arc_onto_the_next_lane_does_not_back_blind_onto_the_stairs() -> Non
     sensor behind the wheels): a wheel dropped down the stairs. Now the floor behind is
     floor it has not driven, so it turns in place, moves over and turns: no wheel drop, and
     it goes on."""
-    world = parse_world(STAIRS_BEHIND)
     start = Pose(1500.0, 600.0 + 150.0, math.pi / 2)
-    simulator = Simulator(world, CREATE2, 0, start=start)
     cover = _LaneAtADrop("cover", {})
-    root = py_trees.composites.Sequence(
-        "root", memory=True, children=[Mode("full", {"to": "full"}), cover]
-    )
-    stack = RunStack(TreeMission(root, "lane-at-a-drop"), SimLink(simulator), profile=CREATE2,
-                     timeout_s=20.0)  # fmt: skip
-    try:
-        stack.run()
-    finally:
-        stack.close()
+    simulator = run_after_mode(STAIRS_BEHIND, start, "full", cover, "lane-at-a-drop", 20.0)
     assert not simulator.fallen
     lowest = min(point.y for point in simulator.trace)
     assert lowest > 600.0 + 100.0, lowest  # its wheels never neared the edge
