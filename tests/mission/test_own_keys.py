@@ -11,13 +11,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from runtime.own_keys import CountInto  # tests/runtime: the plugin the run tests use too
 
-from roomba_bt.behaviours import INT, STR, Condition, Param, declare, default_registry, write_key
+from roomba_bt.behaviours import default_registry
 from roomba_bt.behaviours.blackboard import BlackboardRef
 from roomba_bt.cli import main
 from roomba_bt.mission import CompiledMission, Diagnostic, compile_mission
 from roomba_bt.mission.plan import Node
-from roomba_bt.robot.interface import Snapshot
 
 Errors = Callable[..., list[str]]
 
@@ -278,20 +278,6 @@ def test_a_blackboard_value_in_the_body_reads_the_uses_own_key(
     assert refs == [BlackboardRef("leg#1/v"), BlackboardRef("leg#2/v")]
 
 
-@declare(
-    "dirt_level",
-    kind="condition",
-    params=(Param("key", STR, from_blackboard=False, doc="an int key: the level"),),
-    writes_keys={"key": INT},
-)
-class DirtLevel(Condition):
-    """Writes a level to the key its parameter names (a plugin's key parameter)."""
-
-    def check(self, snapshot: Snapshot) -> bool:
-        write_key(str(self.value("key")), 3, self.name)
-        return True
-
-
 def test_a_plugins_key_parameter_in_a_body_names_the_uses_own_key(
     mission_file: Callable[..., Path],
 ) -> None:
@@ -303,11 +289,11 @@ def test_a_plugins_key_parameter_in_a_body_names_the_uses_own_key(
         subtrees:
           seen:
             blackboard: {level: int}
-            tree: {sequence: [{dirt_level: {key: level}}, {check: {key: level, value: 3}}]}
-        tree: {sequence: [{subtree: seen}, {dirt_level: {key: level}}]}
+            tree: {sequence: [{count_into: {key: level}}, {check: {key: level, value: 1}}]}
+        tree: {sequence: [{subtree: seen}, {count_into: {key: level}}]}
         """
     )
-    registry = default_registry().with_behaviours([DirtLevel])
+    registry = default_registry().with_behaviours([CountInto])
     mission, diagnostics = compile_mission(path, registry=registry)
     assert diagnostics == [] and mission is not None
     assert [node.params["key"] for node in leaves(mission)] == ["seen#1/level"] * 2 + ["level"]

@@ -8,34 +8,13 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from runtime.own_keys import PASSED  # tests/runtime: the mission the run test runs
+
 from roomba_bt.behaviours.blackboard import BlackboardRef
 from roomba_bt.mission import CompiledMission
 from roomba_bt.mission.plan import Node
 
 Errors = Callable[..., list[str]]
-
-#: ``leg`` owns ``here``; ``measure`` writes the key its parameter names, and ``leg``
-#: drives the distance ``measure`` put in its own ``here``
-PASSED = """
-mission: passed
-subtrees:
-  measure:
-    parameters: {out: {type: str}, length: {type: distance, default: 25cm}}
-    tree:
-      set: {key: "${out}", value: "${length}"}
-  leg:
-    blackboard: {here: distance}
-    parameters: {length: {type: distance}}
-    tree:
-      sequence:
-        - subtree: {id: measure, out: here, length: "${length}"}
-        - drive: {distance: "@here"}
-tree:
-  sequence:
-    - mode: safe
-    - subtree: {id: leg, length: 10cm}
-    - subtree: {id: leg, length: 20cm}
-"""
 
 
 def leaves(mission: CompiledMission) -> list[Node]:
