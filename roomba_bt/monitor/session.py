@@ -630,7 +630,12 @@ def node_path(infos: list[Any], index: int) -> str:
 
 def find_node(infos: list[Any], wanted: str) -> int:
     """The index of the node ``wanted`` names: its path from the root (:func:`node_path`) or,
-    when only one node has it, its name; ValueError says which nodes were meant or found."""
+    when only one node has it, its name; else, a string of digits (``"3"``: a script that
+    quoted the index, or took it from a form's text field) is that index, range-checked as a
+    number is. A name wins over the index it looks like (a node may be named ``3``), so a
+    mission whose node is renamed never changes which node a digit string meant without a
+    word: the error listed the indices and then refused ``"3"`` as "no node has that name".
+    ValueError says which nodes were meant or found."""
     paths = [node_path(infos, i) for i in range(len(infos))]
     if wanted in paths:
         return paths.index(wanted)
@@ -643,6 +648,8 @@ def find_node(infos: list[Any], wanted: str) -> int:
             f"{', '.join(map(str, named))}); give its index or its path, e.g. "
             f"{paths[named[0]]!r}"
         )
+    if wanted.isascii() and wanted.isdigit():
+        return int(wanted)
     raise ValueError(
         f"node {wanted!r}: no node has that name or path; give an index 0..{len(infos) - 1}, "
         "a node's name or its path from the root (names joined by /)"

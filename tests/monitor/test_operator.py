@@ -98,6 +98,23 @@ def test_a_node_is_found_by_its_path_or_its_name_if_only_one_has_it() -> None:
         find_node(infos, "undock")
 
 
+def test_a_string_of_digits_is_an_index_unless_a_node_has_that_name() -> None:
+    """``"node": "3"`` was refused as "no node has that name" by an error that listed the
+    indices: a script that quoted the index, or read it from a text field, is taken at its
+    word; a node named ``3`` still wins, and ``"٣"`` (an Arabic-Indic three) is no index."""
+
+    def info(index: int, name: str, parent: int | None) -> NodeInfo:
+        return NodeInfo(index, name, "behaviour", 0, parent, (), False)
+
+    infos = [info(0, "root", None), info(1, "dock", 0), info(2, "drive", 0)]
+    assert find_node(infos, "2") == 2
+    assert find_node(infos, "0") == 0
+    named = [*infos, info(3, "1", 0)]  # a node named "1": its name, not index 1
+    assert find_node(named, "1") == 3
+    with pytest.raises(ValueError, match="no node has that name"):
+        find_node(infos, "\u0663")
+
+
 def test_the_api_takes_a_node_by_name_and_says_who_asked() -> None:
     server = _serve()
     try:
@@ -116,5 +133,12 @@ def test_the_api_takes_a_node_by_name_and_says_who_asked() -> None:
         ]
         got, body = _control(server, {"action": "break", "node": "nothing", "value": "start"})
         assert got == 400 and "no node has that name or path" in body["error"], json.dumps(body)
+        got, body = _control(server, {"action": "break", "node": str(index), "value": "end"})
+        assert got == 202, body  # a quoted index
+        assert session._requests.get_nowait().node == index
+        too_far = str(len(session.feed.infos))
+        got, body = _control(server, {"action": "break", "node": too_far, "value": "end"})
+        assert got == 400, body
+        assert f"node {too_far}: allowed 0..{int(too_far) - 1}" in body["error"], body
     finally:
         server.close()
