@@ -384,6 +384,10 @@ class RunFeed:
         self.generation = -1
         self.finished: str | None = None  # the run's outcome once it ended
         self.ending: Ending | None = None  # what its safe stop left (:meth:`end`)
+        #: why the robot panel's last tick is all there is of the robot at the end: a
+        #: record without its run's end (a killed run's), which the panel's title says, as
+        #: the banner does; None: the run's end is known, or its panel says why not itself
+        self.no_end: str | None = None
         self.truth_start: tuple[float, float, float] | None = None  # where odometry's 0 is
         #: writers of the event log (the tick thread, a logging thread, the file watcher)
         #: take it so that the log's order is its sequence numbers'; readers never do
@@ -622,12 +626,14 @@ class RunFeed:
         )
 
     # ---------------------------------------------------------------- any thread
-    def end(self, finished: str, ending: Ending | None) -> None:
+    def end(self, finished: str, ending: Ending | None, no_end: str | None = None) -> None:
         """The run is over: ``finished`` is what the page's banner says, ``ending`` what the
         robot was left in (the robot panel's last state; None: not known, a record's view
-        that diverged or was cut short). ``ending`` is published first: a server that sees
-        ``finished`` change sends the robot panel it gives."""
+        that diverged or was cut short), ``no_end`` why a record's view has no end to show
+        (:attr:`no_end`). ``ending`` and ``no_end`` are published first: a server that sees
+        ``finished`` change sends the robot panel they give."""
         self.ending = ending
+        self.no_end = no_end
         self.finished = finished
 
     def event(

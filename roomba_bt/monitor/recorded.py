@@ -90,9 +90,13 @@ def replay_into_feed(
     finished = how_the_replay_ended(record, summary, difference, feed, transport.ended_early)
     # what the recorded run's safe stop left the robot in: the replay wrote the same stop
     # (checked against the record), where the record holds the run's end and no difference
-    whole = difference is None and record.ending is not None and not record.being_written
-    whole = whole and record.recording_stopped is None and not transport.ended_early
-    feed.end(finished, Ending.of(summary) if whole else None)
+    told = difference is None and not record.being_written
+    told = told and record.recording_stopped is None and not transport.ended_early
+    whole = told and record.ending is not None
+    # the robot panel's title says a killed run's last tick is all the record has, as the
+    # banner does (it said "its last tick before the run ended", an end the record lacks)
+    unended = told and record.ending is None and record.end_said() is not None
+    feed.end(finished, Ending.of(summary) if whole else None, NO_END if unended else None)
     return feed, summary
 
 
@@ -238,6 +242,12 @@ def operator_replay(record: Record, mission: Any) -> ReplayedActs | None:
     feed = RunFeed(source="record", mission_name=mission.name, history=OPERATOR_REPLAY_HISTORY)
     feed.set_tree(mission.root)
     return ReplayedActs(feed, acts)
+
+
+#: the robot panel's word for a record without its run's end (:meth:`Record.end_said
+#: <roomba_bt.runtime.recording.Record.end_said>` is the banner's): ``Robot: its last
+#: recorded tick (no end recorded: the run was killed, or writing its record failed)``
+NO_END = "no end recorded: the run was killed, or writing its record failed"
 
 
 def how_the_replay_ended(

@@ -732,6 +732,7 @@ class MonitorServer:
                 if new_events:
                     message["events"] = new_events
                     event_seq = new_events[-1]["seq"]
+                message["no_end"] = feed.no_end  # read before finished: end() sets it first
                 message["finished"] = finished = feed.finished
                 message["sent"] = stamp()
                 sent_session = now_session

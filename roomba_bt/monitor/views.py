@@ -388,6 +388,7 @@ def header_view(feed: RunFeed, extra: Mapping[str, Any]) -> dict[str, Any]:
         "first_tick": first.tick if first else 0,
         "last_tick": last.tick if last else 0,
         "finished": feed.finished,
+        "no_end": feed.no_end,
         "truth_start": list(feed.truth_start) if feed.truth_start is not None else None,
         "packets": PACKET_NAMES,
         **extra,

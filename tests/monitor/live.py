@@ -145,11 +145,17 @@ def feed_of_run(root: py_trees.behaviour.Behaviour, name: str, history: int) -> 
     return feed
 
 
-def replayed_record(mission: Path, timeout: str, record_path: Path) -> tuple[RunFeed, RunSummary]:
+def replayed_record(
+    mission: Path, timeout: str, record_path: Path, *, killed: bool = False
+) -> tuple[RunFeed, RunSummary]:
     """``mission`` run with ``--record`` (it fails at ``timeout``), then replayed into a feed:
-    what ``roomba-bt monitor RECORD`` serves."""
+    what ``roomba-bt monitor RECORD`` serves. ``killed``: its record's first half only, as
+    a run killed there (``kill -9``) leaves it, without its end."""
     assert main(["run", str(mission), "--fast", "--timeout", timeout, "--display", "none",
                  "--record", str(record_path)]) == 1  # fmt: skip
+    if killed:
+        lines = record_path.read_text(encoding="utf-8").splitlines(keepends=True)
+        record_path.write_text("".join(lines[: len(lines) // 2]), encoding="utf-8")
     record = load_record(record_path)
     loaded = load_mission(mission, {}, profile=CREATE2)
     packets = tuple(record.header["packets"])

@@ -15,6 +15,7 @@ from typing import Any
 import pytest
 
 from roomba_bt.mission import load_mission
+from roomba_bt.monitor.recorded import NO_END
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import CREATE2
@@ -126,6 +127,32 @@ def test_a_rewound_record_s_robot_panel_is_titled_by_the_tick_it_shows(
     title = page.inner_text("#robot-panel h2").lower()
     assert title == "robot after the run ended: stopped, passive", title
     assert page.inner_text("#mode") == "Passive"
+
+
+def test_a_killed_run_s_record_s_robot_panel_says_its_last_tick_has_no_end_after_it(
+    tmp_path: Path, page: Any
+) -> None:
+    """A killed run's record (no end line) titled its last tick "Robot: its last tick
+    before the run ended", an end the record does not hold, while the banner said the
+    record ends without the run's end: the title says so too."""
+    feed, _ = replayed_record(SHUTTLE, "6s", tmp_path / "killed.jsonl", killed=True)
+    server = MonitorServer(feed, None, port=0)
+    server.start()
+    try:
+        page.goto(server.url)
+        page.wait_for_selector('#source:text("record")', timeout=WAIT_MS)
+        page.wait_for_selector('#banner:has-text("without the run\'s end")', timeout=WAIT_MS)
+        _, last = feed.window()
+        assert last is not None
+        _seek(page, last.tick)
+        title = page.inner_text("#robot-panel h2").lower()
+        assert title == f"robot: its last recorded tick ({NO_END})", title
+        first, _ = feed.window()
+        assert first is not None
+        _seek(page, first.tick)  # rewound: the tick it shows
+        assert page.inner_text("#robot-panel h2").lower() == f"robot at tick {first.tick}"
+    finally:
+        server.close()
 
 
 def test_a_rewound_record_s_streamed_packets_are_those_of_the_tick_shown(

@@ -556,3 +556,48 @@ def test_a_body_refused_as_too_large_leaves_no_task_pending_at_the_end(
         gc.collect()  # a pending task is said when it is destroyed
     destroyed = [r for r in caplog.records if "Task was destroyed" in r.getMessage()]
     assert destroyed == []
+
+
+@pytest.mark.parametrize("killed", [False, True])
+def test_a_killed_run_s_record_tells_the_page_its_last_tick_has_no_end(
+    killed: bool, tmp_path: Path
+) -> None:
+    """The page titled a killed run's last tick "its last tick before the run ended", an end
+    its record does not hold (the banner said so): the header and the updates carry
+    ``no_end``, which the robot panel's title says (``Robot: its last recorded tick (no end
+    recorded: ...)``); a whole record's is null (its panel shows the end)."""
+    import asyncio
+
+    import aiohttp
+
+    from roomba_bt.monitor.recorded import NO_END
+
+    from .live import replayed_record
+
+    feed, _ = replayed_record(SHUTTLE, "3s", tmp_path / "run.jsonl", killed=killed)
+    server = MonitorServer(feed, None, port=0)
+    server.start()
+
+    async def listen() -> list[dict[str, Any]]:
+        async with (
+            aiohttp.ClientSession() as client,
+            client.ws_connect(f"ws://127.0.0.1:{server.port}/ws") as ws,
+        ):
+            return [json.loads((await ws.receive()).data) for _ in range(2)]
+
+    messages: list[list[dict[str, Any]]] = []
+    watcher = threading.Thread(
+        target=lambda: messages.append(asyncio.run(asyncio.wait_for(listen(), 30)))
+    )
+    try:
+        status, state = _call(f"http://127.0.0.1:{server.port}/api/state")
+        watcher.start()
+        watcher.join(60)
+    finally:
+        server.close()
+    expected = NO_END if killed else None
+    assert status == 200 and state["header"]["no_end"] == expected, state["header"]
+    hello, update = messages[0]
+    assert hello["header"]["no_end"] == expected
+    assert update["type"] == "update" and update["no_end"] == expected
+    assert ("without the run's end" in update["finished"]) is killed, update["finished"]

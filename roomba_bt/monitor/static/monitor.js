@@ -41,6 +41,8 @@ const view = {
   shownState: null,
   world: null, fontSize: 13, follow: true, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
   finished: null, ended: false,
+  // why a record's view has no end to show (header.no_end: a killed run's record), or null
+  noEnd: null,
   // what the run's safe stop left the robot in, when the state shown is after it (state.ended)
   shownEnded: null,
   // the run this page watches (its first hello's header.run.id), and another run found
@@ -649,7 +651,11 @@ function robotTitle() {
     title = ended.stopped ? `Robot after the run ended: stopped, ${ended.mode}`
       : `Robot: last seen before the run ended (final mode ${ended.mode})`;
   }
-  else if (view.finished && (view.live || view.shownTick >= view.window[1])) title = "Robot: its last tick before the run ended";
+  else if (view.finished && (view.live || view.shownTick >= view.window[1])) {
+    // a record without its run's end (a killed run's) has no end to show: the server says so
+    title = view.noEnd ? `Robot: its last recorded tick (${view.noEnd})`
+      : "Robot: its last tick before the run ended";
+  }
   const h2 = $("robot-panel").querySelector("h2");
   if (h2.textContent !== title) h2.textContent = title;
 }
@@ -754,6 +760,7 @@ function connect() {
     if (msg.session) view.session = msg.session;
     if (msg.window) view.window = msg.window;
     if (msg.events) addEvents(msg.events);
+    if (msg.no_end !== undefined) view.noEnd = msg.no_end;
     if (msg.finished !== undefined) view.finished = msg.finished;
     if (msg.path) appendLivePath(msg.path);
     if (msg.state) { view.liveState = msg.state; if (view.live) render(msg.state); else updateTimeline(); }
@@ -842,6 +849,7 @@ function hello(header) {
   $("legend-truth").hidden = header.source !== "simulator";
   noControlsNote(header);
   view.window = [header.first_tick, header.last_tick];
+  view.noEnd = header.no_end === undefined ? view.noEnd : header.no_end;
   view.finished = header.finished === undefined ? view.finished : header.finished;
   if (JSON.stringify(header.tree) !== JSON.stringify(view.tree)) buildTree(header.tree);
   view.pathLive = { odometry: [], truth: [], truthStart: header.truth_start || null };
