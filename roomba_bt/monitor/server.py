@@ -14,7 +14,9 @@ thread is never asked to wake the server: a wake-up from it (a
 write to the loop's self-pipe) releases the GIL mid-``after_tick`` and cost it up to 0.4 ms
 (measured). With no tick for 50 ms (a recorded run, a run that ended or is held) it sends
 anyway. A page whose socket is slow holds up only its own pump; when it catches up, it is
-sent the newest state and the ticks in between are lost to it, never to the robot.
+sent the newest state and the ticks in between are lost to it, never to the robot. A page
+that stopped reading (a lid closed) is held as soon as it leaves a ping unanswered for
+:data:`BEHIND_S`, before the sockets' buffers fill with minutes of updates (:class:`_Reading`).
 
 Routes (all behind the token when one is set), each under ``/view/`` too: the view-only
 link's pages, whose controls are off whatever the token, and whose cookie is their own::
@@ -77,6 +79,15 @@ AFTER_TICK_S = 0.001  # how long after a tick's expected end the pump looks
 #: sends an update anyway, so a page that hears nothing for longer knows its link is silent
 #: (packets lost, the socket not closed: a train's tunnel) and says so
 HEARTBEAT_S = 1.0
+#: a page that has not answered the pump's ping for this long is behind (it stopped reading:
+#: a laptop's lid closed, a phone's browser frozen in a pocket) and is sent nothing until it
+#: answers: the sockets' buffers (megabytes on a loopback) held every update meanwhile, and a
+#: page woken after a minute showed 26 s of minute-old updates in turn. Held, it reads at
+#: most this long's updates on waking, then the newest state (the pump merges what it held)
+BEHIND_S = 1.0
+#: how often the pump pings a page to learn how far it has read (one ping in flight at most:
+#: a browser answers at once, without its script, when it reads the frame)
+PING_EVERY_S = 0.5
 #: the oldest view a control that sets the robot going may come from: a page stamps each
 #: control with the ``sent`` of the last update it had (the server's clock: no clock of the
 #: browser's is compared), and a resume, step or force sent from a page more than this behind
@@ -173,6 +184,38 @@ def next_look(ended: float, due: float, period: float = SLOT_SECONDS) -> float:
     """
     steps = max(1, math.ceil((due - ended - AFTER_TICK_S) / period))
     return ended + steps * period + AFTER_TICK_S
+
+
+class _Reading:
+    """How far a page has read its socket, from the pump's pings (the WebSocket's own: the
+    other end answers each with a pong when it reads it, after every message sent before it,
+    a browser without its page's script). The pump sends an update only while the page keeps
+    up; a write that blocks cannot tell, since the sockets' buffers take minutes of updates
+    first. Used by the page's socket's handler (the pongs) and its pump, in the server's
+    event loop alone."""
+
+    def __init__(self) -> None:
+        self._sent = 0  # the number of the last ping sent
+        self._answered = 0  # the number of the last ping answered
+        self._when = 0.0  # when the last ping was sent (the loop's clock)
+
+    def answered(self, data: bytes) -> None:
+        """A pong: its ping's number (another pong, a browser's unasked one, is ignored)."""
+        with contextlib.suppress(ValueError):
+            self._answered = max(self._answered, int(data))
+
+    def behind(self, now: float) -> bool:
+        """Whether the page has left a ping unanswered for :data:`BEHIND_S`."""
+        return self._answered < self._sent and now - self._when > BEHIND_S
+
+    def ping(self, now: float) -> bytes | None:
+        """The next ping's payload, when one is due (none in flight, the last one
+        :data:`PING_EVERY_S` ago), else None."""
+        if self._answered < self._sent or now - self._when < PING_EVERY_S:
+            return None
+        self._sent += 1
+        self._when = now
+        return str(self._sent).encode()
 
 
 def stamp() -> float:
@@ -646,16 +689,22 @@ class MonitorServer:
         )
 
     async def _socket(self, request: web.Request) -> web.StreamResponse:
-        ws = web.WebSocketResponse(heartbeat=20)
+        # autoping off: the pongs to the pump's pings say how far the page has read
+        ws = web.WebSocketResponse(heartbeat=20, autoping=False)
         await ws.prepare(request)
         self.pages += 1
         self._sockets.add(ws)
         hello = {"type": "hello", "header": self._header(request)}
-        pump = asyncio.get_running_loop().create_task(self._pump(ws, hello))
+        reading = _Reading()
+        pump = asyncio.get_running_loop().create_task(self._pump(ws, hello, reading))
         try:
-            async for message in ws:  # the page sends nothing we need; read to see it close
+            async for message in ws:  # the page sends nothing else we need; read to see it close
                 if message.type is WSMsgType.ERROR:
                     break
+                if message.type is WSMsgType.PONG:
+                    reading.answered(message.data)
+                elif message.type is WSMsgType.PING:  # a client's own: answered, as autoping did
+                    await ws.pong(message.data)
         finally:
             pump.cancel()
             self.pages -= 1
@@ -685,7 +734,9 @@ class MonitorServer:
                 return
             await asyncio.sleep(TICK_POLL_S)
 
-    async def _pump(self, ws: web.WebSocketResponse, hello: dict[str, Any]) -> None:
+    async def _pump(
+        self, ws: web.WebSocketResponse, hello: dict[str, Any], reading: _Reading
+    ) -> None:
         feed = self.feed
         loop = asyncio.get_running_loop()
         latest = feed.latest()
@@ -698,6 +749,9 @@ class MonitorServer:
         heard = loop.time()  # when the page was last sent a message
         while not ws.closed:
             last_sent = loop.time()
+            if reading.behind(last_sent):  # it stopped reading: held until it answers
+                await self._after_a_tick(last_sent)
+                continue
             records = feed.ring.since(seq)
             new_events = [e._asdict() for e in feed.events_after(event_seq)]
             now_session = session_view(self.session)
@@ -738,6 +792,9 @@ class MonitorServer:
                 sent_session = now_session
                 try:
                     await ws.send_str(json.dumps(message))
+                    ping = reading.ping(loop.time())
+                    if ping is not None:
+                        await ws.ping(ping)
                 except (ConnectionResetError, RuntimeError):
                     return
                 heard = loop.time()

@@ -18,7 +18,7 @@ import pytest
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
-from roomba_bt.monitor.server import AFTER_TICK_S, MonitorServer, next_look
+from roomba_bt.monitor.server import AFTER_TICK_S, UPDATE_PERIOD_S, MonitorServer, next_look
 from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import CREATE2
@@ -601,3 +601,47 @@ def test_a_killed_run_s_record_tells_the_page_its_last_tick_has_no_end(
     assert hello["header"]["no_end"] == expected
     assert update["type"] == "update" and update["no_end"] == expected
     assert ("without the run's end" in update["finished"]) is killed, update["finished"]
+
+
+def test_a_page_that_stopped_reading_is_sent_the_newest_state_not_a_backlog() -> None:
+    """A laptop's lid closed: its page reads nothing for a while, then reads on. It was sent
+    every update meanwhile (the sockets' buffers held them: 26 s of minute-old updates after
+    a minute), which it then showed in turn, far behind the run. The pump holds a page that
+    has not answered its ping for :data:`BEHIND_S`: on reading on it gets at most the
+    updates of that second or so, then the newest state."""
+    import asyncio
+
+    import aiohttp
+
+    from .live import start_live_run
+
+    live = start_live_run(SHUTTLE)
+    feed = live.feed
+
+    def newest() -> int:
+        latest = feed.latest()
+        return latest.tick if latest else 0
+
+    async def page() -> tuple[int, int]:
+        async with (
+            aiohttp.ClientSession() as client,
+            client.ws_connect(f"ws://127.0.0.1:{live.server.port}/ws", max_msg_size=0) as ws,
+        ):
+            while "state" not in json.loads((await ws.receive()).data):
+                pass  # the hello, and updates until the run has ticked
+            stalled_at = newest()
+            while newest() < stalled_at + 400:  # the lid closed for 6 s of the run's ticks
+                await asyncio.sleep(0.05)  # reading nothing meanwhile
+            woke_at, stale = newest(), 0
+            while True:  # reads on: how many updates came before one of now
+                message = json.loads((await ws.receive()).data)
+                if message.get("state", {}).get("tick", -1) >= woke_at:
+                    return stale, woke_at - stalled_at
+                stale += 1
+
+    try:
+        stale, behind = asyncio.run(asyncio.wait_for(page(), 120))
+    finally:
+        live.finish()
+    # 6 s of updates at 20 a second is 120: one second or so of them, at most 2 s
+    assert stale <= 2 * round(1 / UPDATE_PERIOD_S) + 4, (stale, behind)
