@@ -62,7 +62,7 @@ from importlib import resources
 from typing import Any
 from urllib.parse import urlsplit
 
-from aiohttp import WSCloseCode, WSMsgType, web
+from aiohttp import WSCloseCode, WSMessage, WSMsgType, web
 
 from roomba_bt.monitor.access import Access, Tokens
 from roomba_bt.monitor.address import DEFAULT_PORT, is_loopback
@@ -111,6 +111,7 @@ VIEW_ONLY = (
 )
 STATIC_TYPES = {".js": "text/javascript", ".css": "text/css", ".svg": "image/svg+xml"}
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+Socket = web.WebSocketResponse  # a page's
 
 
 def cookie_name(request: web.Request, *, view: bool = False) -> str:
@@ -208,14 +209,30 @@ class _Reading:
         """Whether the page has left a ping unanswered for :data:`BEHIND_S`."""
         return self._answered < self._sent and now - self._when > BEHIND_S
 
-    def ping(self, now: float) -> bytes | None:
-        """The next ping's payload, when one is due (none in flight, the last one
-        :data:`PING_EVERY_S` ago), else None."""
+    async def caught_up(self) -> None:
+        """Return once the page is not :meth:`behind` (at once, mostly): held meanwhile."""
+        loop = asyncio.get_running_loop()
+        while self.behind(loop.time()):
+            await asyncio.sleep(UPDATE_PERIOD_S)
+
+    async def send(self, ws: Socket, text: str) -> None:
+        """``text`` sent, then a ping when one is due (none in flight, the last one
+        :data:`PING_EVERY_S` ago)."""
+        await ws.send_str(text)
+        now = asyncio.get_running_loop().time()
         if self._answered < self._sent or now - self._when < PING_EVERY_S:
-            return None
+            return
         self._sent += 1
         self._when = now
-        return str(self._sent).encode()
+        await ws.ping(str(self._sent).encode())
+
+    async def heard(self, ws: Socket, message: WSMessage) -> None:
+        """A message from the page: a pong noted, a ping of its own answered (autoping is
+        off, so that the pongs reach :meth:`answered`)."""
+        if message.type is WSMsgType.PONG:
+            self.answered(message.data)
+        elif message.type is WSMsgType.PING:
+            await ws.pong(message.data)
 
 
 def stamp() -> float:
@@ -689,29 +706,24 @@ class MonitorServer:
         )
 
     async def _socket(self, request: web.Request) -> web.StreamResponse:
-        # autoping off: the pongs to the pump's pings say how far the page has read
-        ws = web.WebSocketResponse(heartbeat=20, autoping=False)
+        ws = web.WebSocketResponse(heartbeat=20, autoping=False)  # the pongs: _Reading's
         await ws.prepare(request)
         self.pages += 1
         self._sockets.add(ws)
         hello = {"type": "hello", "header": self._header(request)}
-        reading = _Reading()
-        pump = asyncio.get_running_loop().create_task(self._pump(ws, hello, reading))
+        pump = asyncio.get_running_loop().create_task(self._pump(ws, hello, reading := _Reading()))
         try:
-            async for message in ws:  # the page sends nothing else we need; read to see it close
+            async for message in ws:  # the page sends nothing but pongs; read to see it close
                 if message.type is WSMsgType.ERROR:
                     break
-                if message.type is WSMsgType.PONG:
-                    reading.answered(message.data)
-                elif message.type is WSMsgType.PING:  # a client's own: answered, as autoping did
-                    await ws.pong(message.data)
+                await reading.heard(ws, message)
         finally:
             pump.cancel()
             self.pages -= 1
             self._sockets.discard(ws)
         return ws
 
-    async def _after_a_tick(self, last_sent: float) -> None:
+    async def _after_a_tick(self, last_sent: float, reading: _Reading) -> None:
         """Wait out the update period, then until just after a tick's end (the tick thread has
         recorded a tick and is about to sleep until the next frame), or :data:`TICK_WAIT_S`.
 
@@ -720,6 +732,7 @@ class MonitorServer:
         after its period, and wakes once, not every 2 ms, never in the middle of a tick that
         is on time. If no tick has just ended there (a late frame), it looks every
         :data:`TICK_POLL_S`; a run with no ticks (recorded, ended) is sent after the period."""
+        await reading.caught_up()  # first, a page that stopped reading is held
         loop = asyncio.get_running_loop()
         ring = self.feed.ring
         due = last_sent + UPDATE_PERIOD_S
@@ -734,9 +747,7 @@ class MonitorServer:
                 return
             await asyncio.sleep(TICK_POLL_S)
 
-    async def _pump(
-        self, ws: web.WebSocketResponse, hello: dict[str, Any], reading: _Reading
-    ) -> None:
+    async def _pump(self, ws: Socket, hello: dict[str, Any], reading: _Reading) -> None:
         feed = self.feed
         loop = asyncio.get_running_loop()
         latest = feed.latest()
@@ -749,9 +760,6 @@ class MonitorServer:
         heard = loop.time()  # when the page was last sent a message
         while not ws.closed:
             last_sent = loop.time()
-            if reading.behind(last_sent):  # it stopped reading: held until it answers
-                await self._after_a_tick(last_sent)
-                continue
             records = feed.ring.since(seq)
             new_events = [e._asdict() for e in feed.events_after(event_seq)]
             now_session = session_view(self.session)
@@ -791,11 +799,8 @@ class MonitorServer:
                 message["sent"] = stamp()
                 sent_session = now_session
                 try:
-                    await ws.send_str(json.dumps(message))
-                    ping = reading.ping(loop.time())
-                    if ping is not None:
-                        await ws.ping(ping)
+                    await reading.send(ws, json.dumps(message))
                 except (ConnectionResetError, RuntimeError):
                     return
                 heard = loop.time()
-            await self._after_a_tick(last_sent)
+            await self._after_a_tick(last_sent, reading)
