@@ -36,6 +36,7 @@ from roomba_bt.runtime.long_run import RobotCycleWatch
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.runtime.teardown import (
     behaviour_at,
+    behaviour_in,
     during,
     note_stop_abandoned,
     note_stop_failures,
@@ -70,8 +71,14 @@ STOPPING_THE_TREE = (
 #: terminate that closes a file or a socket has ample time, an operator's Ctrl-C meanwhile
 #: waits no longer; ``run --wall-limit`` below it caps it (:func:`tree_stop_limit`).
 TREE_STOP_LIMIT_S = 5.0
-#: ... and while the nodes' ``shutdown()`` runs
+#: ... and while the nodes' ``shutdown()`` runs, waited for as long at most (the same
+#: bound, decided, session 36: a ``shutdown()`` that never returned hung the process as a
+#: ``terminate()`` did, after the safe stop but before the summary and the exit code)
 SHUTTING_DOWN = "the robot is stopped; the behaviours' shutdown() is under way"
+#: how a HUNG run's reason begins when a ``terminate()`` or a ``shutdown()`` never returned
+#: (``eval``'s closing line words a HUNG episode from it: ``cli/eval_report.py``)
+STOP_NOT_ENDED = "the tree's stop did not end within"
+SHUTDOWN_NOT_ENDED = "the behaviours' shutdown() did not end within"
 #: what the run's reason says a late signal came during (``Ctrl-C during the tree's stop, in
 #: slow (Slow.terminate at plugin.py:12)``; the safe stop's is ``THE_SAFE_STOP``)
 THE_TREES_STOP, THE_SHUTDOWN = "the tree's stop", "the behaviours' shutdown()"
@@ -96,10 +103,14 @@ class RunEnding:
     #: the watch for a cycle the robot started by itself (the loop's once-a-second look),
     #: looked at once more before the safe stop (:meth:`safe_stop`)
     cycles: RobotCycleWatch = field(init=False)
+    #: what the tree's stop left for the shutdown: its bound, and the node whose
+    #: ``terminate()`` was abandoned (:meth:`end_tree`, :meth:`safe_stop`)
+    left: _StopLeft = field(init=False)
 
     def __post_init__(self) -> None:
         watch = RobotCycleWatch(self.connection, self.summary, self.odometer, self.clock)
         object.__setattr__(self, "cycles", watch)  # frozen: set once, as it is made
+        object.__setattr__(self, "left", _StopLeft())
 
     def end_tree(
         self,
@@ -117,7 +128,10 @@ class RunEnding:
         (:meth:`_abandoned`), in this thread, which is not stuck."""
         # the mission's last words, whatever ended it (the summary's "mission said")
         self.summary.said = last_said(root) or ""
-        stopper = _TreeStop(self, root, raised_in)
+        self.left.limit_s = limit_s  # the shutdown's bound too
+        stopper = _Bounded(
+            THE_TREES_STOP, "roomba-bt tree stop", lambda: self.stop_tree(root, raised_in)
+        )
         first = self.wheels_first(root, tick_guard, guard, stopper, limit_s)
         began = time.monotonic()
         failures = stopper.within(limit_s)
@@ -128,17 +142,21 @@ class RunEnding:
         self._said_slow_stop(tick_guard, time.monotonic() - began, first)
         return first
 
-    def _abandoned(self, stopper: _TreeStop, limit_s: float, late: bool) -> None:
+    def _abandoned(self, stopper: _Bounded, limit_s: float, late: bool) -> None:
         """The tree's stop ran past ``limit_s`` (:class:`_TreeStop`): said in the summary,
         naming the method it is stuck in and its line (``term_hang (TermHang.terminate at
         plugin.py:17)``, as the tick guard names a blocked ``update``), and warned; what its
         nodes queued is dropped, and the writer still holds what would set the robot going
-        (its thread may write yet). ``late``: a signal came meanwhile, whose interrupt the
-        run's reason says (:func:`note_stop_abandoned`)."""
+        (its thread may write yet). The node stuck there is not shut down
+        (:attr:`left`, :meth:`safe_stop`): its ``shutdown()`` would meet the state its
+        ``terminate()`` holds, and wait on it as well. ``late``: a signal came meanwhile,
+        whose interrupt the run's reason says (:func:`note_stop_abandoned`)."""
+        self.left.stuck = stopper.behaviour()
         where = stopper.where() or "a behaviour's terminate()"
+        skipped = "; its shutdown() not called" if self.left.stuck is not None else ""
         said = (
-            f"the tree's stop did not end within {duration_said(limit_s)}: {where} had not "
-            "returned; the run's end went on without it (the safe stop, the summary)"
+            f"{STOP_NOT_ENDED} {duration_said(limit_s)}: {where} had not returned; the run's "
+            f"end went on without it (the safe stop, the summary{skipped})"
         )
         log.warning("%s", said)
         note_stop_abandoned(self.summary, said, interrupted=late)
@@ -155,16 +173,40 @@ class RunEnding:
         motors off went out before the tree's stop), a cycle the robot still drives by
         itself at ``last`` (the last tick's snapshot; None: none came) ended by it with Safe
         first (:meth:`RobotCycleWatch.at_end`), then each node's ``shutdown()`` of the tree
-        at ``set_up`` (None: its ``setup()`` never ran, nothing to close). ``guard`` is told
+        at ``set_up`` (None: its ``setup()`` never ran, nothing to close), but the one whose
+        ``terminate()`` the tree's stop left running (:attr:`left`), in a thread of its own
+        waited for as long as the tree's stop at most (:meth:`_shut_down`). ``guard`` is told
         what the run does meanwhile, for a Ctrl-C then."""
         guard.stopping(SAFE_STOP_UNDER_WAY)
         if last is not None:
             self.cycles.at_end(last)
         stop_robot(self.connection, self.summary, first)
         if set_up is not None:
-            guard.stopping(SHUTTING_DOWN, during(THE_SHUTDOWN))
-            _, exits = shutdown_nodes(set_up)  # an exception there: logged, no more
-            note_stop_failures(self.summary, exits)  # sys.exit() there: the run's error
+            self._shut_down(set_up, guard)
+
+    def _shut_down(self, set_up: py_trees.behaviour.Behaviour, guard: InterruptGuard) -> None:
+        """Each node's ``shutdown()`` (:func:`shutdown_nodes`; an exception there logged, no
+        more; a ``sys.exit()`` there the run's error) in a daemon thread, waited for the
+        tree's stop's bound at most: past it the run's end goes on to the summary and the
+        exit code without it, said as the tree's stop's is (HUNG, the method and its line);
+        one that never returned hung the process after the safe stop."""
+        stuck = self.left.stuck
+        shutdown = _Bounded(
+            THE_SHUTDOWN, "roomba-bt shutdown", lambda: shutdown_nodes(set_up, stuck)[1]
+        )
+        guard.stopping(SHUTTING_DOWN, shutdown.during)
+        limit_s = self.left.limit_s
+        exits = shutdown.within(limit_s)
+        if exits is not None:
+            note_stop_failures(self.summary, exits)
+            return
+        where = shutdown.where() or "a behaviour's shutdown()"
+        said = (
+            f"{SHUTDOWN_NOT_ENDED} {duration_said(limit_s)}: {where} had not returned; the "
+            "run's end went on without it (the summary)"
+        )
+        log.warning("%s", said)
+        note_stop_abandoned(self.summary, said, interrupted=guard.late is not None)
 
     def sum_up(self, wall_time_s: float, last: Snapshot | None, unconfirmed: int) -> None:
         """The summary's last figures, once the robot is stopped: the run's wall time, the
@@ -188,7 +230,7 @@ class RunEnding:
         root: py_trees.behaviour.Behaviour,
         tick_guard: TickGuardLike | None,
         guard: InterruptGuard,
-        stopper: _TreeStop | None = None,
+        stopper: _Bounded | None = None,
         limit_s: float = TREE_STOP_LIMIT_S,
     ) -> bool:
         """Before the tree's stop, whose ``terminate()`` calls may block (a plugin's
@@ -303,38 +345,44 @@ class RunEnding:
             summary.first_dropped = f"{when}{who} {how} {what}"
 
 
-class _TreeStop:
-    """The tree's stop at a run's end (:meth:`RunEnding.stop_tree`) in a daemon thread of its
-    own, lent the run's blackboard (a ``terminate()`` reads and writes keys as it would in
-    the run's thread), so that the thread that waits for it is never stuck in a plugin's
-    ``terminate()`` that does not return: it goes on to the safe stop and the summary, and
-    the process exits with the thread still in it (a daemon thread: nothing waits for it at
-    the interpreter's exit; decided over ``os._exit``, which would skip the record's and the
-    streams' own closing, and over an exception raised in the stuck thread, which a
-    ``threading.Event().wait()`` in C never sees)."""
+@dataclass
+class _StopLeft:
+    """What a run's tree's stop leaves for its shutdown (:attr:`RunEnding.left`): the bound
+    it was waited for, and the node whose ``terminate()`` had not returned (None: none)."""
 
-    def __init__(
-        self,
-        ending: RunEnding,
-        root: py_trees.behaviour.Behaviour,
-        raised_in: py_trees.behaviour.Behaviour | None,
-    ) -> None:
-        self.ending, self.root, self.raised_in = ending, root, raised_in
+    limit_s: float = TREE_STOP_LIMIT_S
+    stuck: py_trees.behaviour.Behaviour | None = None
+
+
+class _Bounded:
+    """A part of a run's end that calls the behaviours' code, the tree's stop
+    (:meth:`RunEnding.stop_tree`) or the nodes' ``shutdown()`` (``work``: what each that
+    failed says), in a daemon thread of its own, lent the run's blackboard (a ``terminate()``
+    reads and writes keys as it would in the run's thread), so that the thread that waits
+    for it is never stuck in a plugin's method that does not return: it goes on to the safe
+    stop and the summary, and the process exits with the thread still in it (a daemon
+    thread: nothing waits for it at the interpreter's exit; decided over ``os._exit``, which
+    would skip the record's and the streams' own closing, and over an exception raised in
+    the stuck thread, which a ``threading.Event().wait()`` in C never sees). ``phase``: what
+    a signal meanwhile came during (:data:`THE_TREES_STOP`, :data:`THE_SHUTDOWN`)."""
+
+    def __init__(self, phase: str, name: str, work: Callable[[], list[str]]) -> None:
+        self.phase, self.work = phase, work
         self.board = run_board()  # the run's, read in the run's thread
         self.failures: list[str] = []
-        #: what the thread raised that was not a terminate's failure (a signal's interrupt
+        #: what the thread raised that was not a behaviour's failure (a signal's interrupt
         #: raised in it is not: signals go to the main thread), raised again in the waiter
         self.raised: BaseException | None = None
         self.done = threading.Event()
         #: where this thread signalled its own process (:meth:`_called`), "" if it did not
         self.signalled = ""
-        self.thread = threading.Thread(target=self._run, name="roomba-bt tree stop", daemon=True)
+        self.thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def _run(self) -> None:
-        sys.setprofile(self._called)  # this thread's alone, for as long as it stops the tree
+        sys.setprofile(self._called)  # this thread's alone, for as long as it runs
         try:
             with running_on(self.board, ends_run=False):
-                self.failures = self.ending.stop_tree(self.root, self.raised_in)
+                self.failures = self.work()
         except BaseException as exc:  # carried to the waiting thread, raised there
             self.raised = exc
         finally:
@@ -349,8 +397,8 @@ class _TreeStop:
             self.signalled = behaviour_at(frame)
 
     def within(self, limit_s: float) -> list[str] | None:
-        """Start the stop and wait for it ``limit_s`` at most: what each ``terminate`` that
-        raised says, or None if it has not ended by then. A signal's handler runs in this
+        """Start the work and wait for it ``limit_s`` at most: what each behaviour that
+        failed says, or None if it has not ended by then. A signal's handler runs in this
         (the main) thread meanwhile: the guard holds it (:class:`InterruptGuard`)."""
         self.thread.start()
         if not self.done.wait(limit_s):
@@ -359,20 +407,36 @@ class _TreeStop:
             raise self.raised
         return self.failures
 
-    def where(self) -> str:
-        """The behaviour's method the stop is in now, at its line (:func:`behaviour_at`)."""
+    def _frame(self) -> FrameType | None:
         ident = self.thread.ident
-        return behaviour_at(None if ident is None else sys._current_frames().get(ident))
+        return None if ident is None else sys._current_frames().get(ident)
+
+    def where(self) -> str:
+        """The behaviour's method the thread is in now, at its line (:func:`behaviour_at`)."""
+        return behaviour_at(self._frame())
+
+    def behaviour(self) -> py_trees.behaviour.Behaviour | None:
+        """The behaviour whose method the thread is in now (:func:`behaviour_in`)."""
+        return behaviour_in(self._frame())
 
     def during(self, _frame: FrameType | None) -> str:
-        """What a signal that came during the stop came during (``InterruptGuard.stopping``'s
-        ``during``, given the main thread's frame, which only waits): the tree's stop, in
-        the behaviour's method this thread is in, or sent the signal from."""
+        """What a signal that came meanwhile came during (``InterruptGuard.stopping``'s
+        ``during``, given the main thread's frame, which only waits): the phase, in the
+        behaviour's method this thread is in, or sent the signal from."""
         where = self.signalled or self.where()
-        return f"{THE_TREES_STOP}, in {where}" if where else THE_TREES_STOP
+        return f"{self.phase}, in {where}" if where else self.phase
 
 
-#: the calls by which a thread signals its own process (:meth:`_TreeStop._called`)
+def threads_left() -> int:
+    """How many threads a run's end left stuck in a behaviour's ``terminate()`` or
+    ``shutdown()`` still live in this process (:class:`_Bounded`'s, past their bound): each
+    holds its run's tree, connection and simulator until the process exits (``eval --jobs 1``
+    caps them: ``evaluate/parallel.py``)."""
+    names = {"roomba-bt tree stop", "roomba-bt shutdown"}
+    return sum(1 for t in threading.enumerate() if t.name in names and t.is_alive())
+
+
+#: the calls by which a thread signals its own process (:meth:`_Bounded._called`)
 _SIGNALLING = tuple(
     call
     for call in (os.kill, getattr(signal, "pthread_kill", None), signal.raise_signal)

@@ -318,6 +318,13 @@ def behaviour_at(frame: FrameType | None) -> str:
     return f"{owner.name} ({type(owner).__name__}.{code.co_name} at {code.co_filename}:{line})"
 
 
+def behaviour_in(frame: FrameType | None) -> py_trees.behaviour.Behaviour | None:
+    """The behaviour whose method is the innermost from ``frame`` out that is one
+    (:func:`behaviour_at` names it): the node a stuck thread is stuck in; None if none."""
+    found = _behaviour_frame(list(traceback.walk_stack(frame))[::-1]) if frame else None
+    return found[0] if found is not None else None
+
+
 def _behaviour_frame(
     frames: list[tuple[FrameType, int]],
 ) -> tuple[py_trees.behaviour.Behaviour, FrameType, int] | None:
@@ -443,7 +450,9 @@ def _setup_raised(
     return None
 
 
-def shutdown_nodes(root: py_trees.behaviour.Behaviour) -> tuple[list[str], list[str]]:
+def shutdown_nodes(
+    root: py_trees.behaviour.Behaviour, skip: py_trees.behaviour.Behaviour | None = None
+) -> tuple[list[str], list[str]]:
     """Every node's ``shutdown()`` (py_trees' ``BehaviourTree.shutdown``: what a node opened
     in ``setup`` closed), each once and guarded: one that raises is logged with its
     behaviour's name and the others still run. Only the nodes whose ``setup()`` completed
@@ -451,11 +460,16 @@ def shutdown_nodes(root: py_trees.behaviour.Behaviour) -> tuple[list[str], list[
     (logged, the run's outcome left as it is: a clean-up that failed), then each that was no
     ``Exception`` (``sys.exit()``, a ``KeyboardInterrupt`` or ``BaseException`` of its own:
     the code tried to end the program, or choose its exit code; :func:`note_stop_failures`
-    makes it the run's error, decided). A signal's interrupt goes on as it came."""
+    makes it the run's error, decided). A signal's interrupt goes on as it came. ``skip``:
+    the node whose ``terminate()`` the run's end left running (``runtime/ending.py``), not
+    shut down: its ``shutdown()`` would meet what that holds, and wait as well."""
     failures: list[str] = []
     exits: list[str] = []
     held = _SET_UP.pop(id(root), None)
     for node in held[1] if held is not None and held[0] is root else ():
+        if node is skip:
+            log.warning("shutdown() of %s not called: its terminate() had not returned", node.name)
+            continue
         try:
             node.shutdown()
         except BaseException as exc:

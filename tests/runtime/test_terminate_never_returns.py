@@ -56,6 +56,9 @@ class HangOnStop(Action):
         super().terminate(new_status)
         # one line: the signal the test sends once it reads this finds the thread on it
         print("terminate entered", file=sys.stderr, flush=True); RELEASE.wait()
+
+    def shutdown(self):
+        RELEASE.wait()  # never called: its terminate had not returned
 '''
 
 #: the line of its wait, which the summary names
@@ -74,16 +77,46 @@ MISSION = (
 )
 
 
+#: a leaf that succeeds at once; its shutdown() waits on an Event nobody sets
+HANG_ON_SHUTDOWN = '''\
+import threading
+
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+
+RELEASE = threading.Event()
+
+
+@declare("hang_on_shutdown", kind="action", params=(), reads=(), sends=())
+class HangOnShutdown(Action):
+    """Succeeds; its shutdown() never returns."""
+
+    def update(self):
+        return Status.SUCCESS
+
+    def shutdown(self):
+        RELEASE.wait()
+'''
+
+SHUTDOWN_LINE = next(
+    i for i, line in enumerate(HANG_ON_SHUTDOWN.splitlines(), 1) if "RELEASE.wait()" in line
+)
+
+
 @pytest.fixture
 def mission(tmp_path: Path) -> Iterator[Path]:
     """The mission and its plugin file; the plugin's Event set when the test ends, so the
     thread left in its terminate() ends too."""
-    (tmp_path / "hang.py").write_text(HANG_ON_STOP)
+    yield _written(tmp_path, HANG_ON_STOP, MISSION)
+    _release_all(tmp_path / "hang.py")
+
+
+def _written(tmp_path: Path, plugin: str, text: str) -> Path:
+    (tmp_path / "hang.py").write_text(plugin)
     path = tmp_path / "m.yaml"
-    path.write_text(MISSION)
-    yield path
-    for module in _plugin_modules(tmp_path / "hang.py"):
-        module.RELEASE.set()
+    path.write_text(text)
+    return path
 
 
 def _plugin_modules(path: Path) -> list[ModuleType]:
@@ -124,10 +157,51 @@ def test_a_terminate_that_never_returns_ends_the_run_hung_with_its_safe_stop(
     where = f"hang_on_stop (HangOnStop.terminate at {tmp_path / 'hang.py'}:{WAIT_LINE})"
     assert (
         f"outcome      HUNG (the tree's stop did not end within 0.5 s: {where} had not "
-        "returned; the run's end went on without it (the safe stop, the summary) (the run "
+        "returned; the run's end went on without it (the safe stop, the summary; its shutdown() "
+        "not called) (the run "
         "had ended: timeout: "
     ) in out, out
     assert "safe stop    sent drive, motors, pause_resume_stream, start" in out
+    assert "final mode   Passive" in out
+    assert _outbound(record).endswith(SAFE_END)
+    assert "shutdown() did not end" not in out, out  # the stuck node's was not called
+    end = json.loads(record.read_text().splitlines()[-2])["note"]
+    assert end["ended"] == "hung"
+
+
+def test_a_shutdown_that_never_returns_ends_the_run_hung_after_its_safe_stop(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A mission that succeeds, one of whose nodes' shutdown() blocks for ever: after the
+    bound (made short here) the run ends, exit 4, HUNG naming the shutdown and its line,
+    the safe stop sent whole before it and the robot left in Passive. Before, the process
+    never ended after the safe stop: no summary, no exit code."""
+    from roomba_bt.cli import main
+
+    text = MISSION.replace("hang_on_stop", "hang_on_shutdown")
+    mission = _written(tmp_path, HANG_ON_SHUTDOWN, text)
+    monkeypatch.setattr(ending, "TREE_STOP_LIMIT_S", 0.5, raising=False)
+    record = tmp_path / "run.jsonl"
+    give_up = threading.Timer(GIVE_UP_S, _release_all, (tmp_path / "hang.py",))
+    give_up.daemon = True
+    give_up.start()  # the old code, which waited for ever, fails rather than hangs
+    try:
+        code = main([
+            "run", str(mission), "--fast", "--allow-plugin-files", "--record", str(record),
+            "--display", "none",
+        ])  # fmt: skip
+    finally:
+        give_up.cancel()
+        _release_all(tmp_path / "hang.py")
+    out = capsys.readouterr().out
+    assert code == 4, out
+    where = f"hang_on_shutdown (HangOnShutdown.shutdown at {tmp_path / 'hang.py'}:{SHUTDOWN_LINE})"
+    assert (
+        f"outcome      HUNG (the behaviours' shutdown() did not end within 0.5 s: {where} had "
+        "not returned; the run's end went on without it (the summary) (the run had ended: "
+        "success"
+    ) in out, out
+    assert "safe stop    sent drive, motors, pause_resume_stream, start" in out, out
     assert "final mode   Passive" in out
     assert _outbound(record).endswith(SAFE_END)
     end = json.loads(record.read_text().splitlines()[-2])["note"]
