@@ -392,10 +392,13 @@ def eval_command(args: argparse.Namespace) -> int:
         return refused(unwritten, args)
     interruption = interruption_of(done)
     if interruption is not None:
-        failed = interruption.environment_failed
-        said = interruption.said if failed else f"interrupted {interruption.said}"
+        failed, bug = interruption.environment_failed, interruption.behaviour_failed
+        said = interruption.said if failed or bug else f"interrupted {interruption.said}"
         print(f"roomba-bt eval: {said}; {finished_said(done, evaluated)}, summarised above",
               file=sys.stderr)  # fmt: skip
+        if bug:  # threads left stuck in a behaviour: its HUNG episodes named, exit 4
+            verdict(args, evaluated.summaries, done)
+            return ExitCode.BEHAVIOUR_ERROR
         # the workers or the cluster gone: the run environment failed, not the missions
         # (3, as a connection's failure); a signal is the operator's (130)
         return ExitCode.CONNECTION if failed else ExitCode.INTERRUPTED

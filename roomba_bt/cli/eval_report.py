@@ -235,8 +235,10 @@ def _json_report(
 
 def verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Evaluation]) -> int:
     """The exit code of a finished evaluation, with what decided it on stderr: 4 when a
-    behaviour raised in an episode, one ran past ``--wall-limit`` (HUNG) or one's worker
-    died running it (DIED), 1 when a success rate is below ``--min-rate``, else 0."""
+    behaviour raised in an episode, one ran past ``--wall-limit`` or hung in a
+    ``terminate()`` or ``shutdown()`` (HUNG, each worded as its reason says:
+    :func:`hung_how`) or one's worker died running it (DIED), 1 when a success rate is below
+    ``--min-rate``, else 0."""
     min_rate: float | None = args.min_rate
     low = [s for s in summaries if min_rate is not None and s.rate < min_rate]
     for s in low:
@@ -251,12 +253,17 @@ def verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Evalu
     for ending, how, then in (
         (Outcome.ERROR.value, "ended with a behaviour's exception (a bug in it or its plugin)",
          "see its traceback with"),
-        (HUNG, "ran past --wall-limit (stuck: an endless loop in a behaviour?)",
-         "run it alone with"),
+        *((HUNG, why, "run it alone with")
+          for why in (HUNG_PAST_LIMIT, HUNG_IN_TERMINATE, HUNG_IN_SHUTDOWN)),
         (DIED, "killed the worker process running it (os._exit in a behaviour? a crash in C "
          "code?)", "run it alone with"),
     ):  # fmt: skip
-        found = [r for e in done for r in e.results if r.outcome == ending]
+        found = [
+            r
+            for e in done
+            for r in e.results
+            if r.outcome == ending and (ending != HUNG or hung_how(r.reason) == how)
+        ]
         if found:
             bug = True
             print(
@@ -268,6 +275,29 @@ def verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Evalu
     if bug:
         return ExitCode.BEHAVIOUR_ERROR
     return ExitCode.MISSION_FAILED if low else ExitCode.OK
+
+
+#: What eval's closing line says of HUNG episodes, by how their reason begins (the run's
+#: own words, ``runtime/ending.py``: :func:`hung_how`): a ``terminate()`` or a ``shutdown()``
+#: that never returned, the run's end going on without it, was called "an endless loop?" too
+HUNG_IN_TERMINATE = (
+    "hung in a behaviour's terminate() that never returned (the run's end went on without it)"
+)
+HUNG_IN_SHUTDOWN = (
+    "hung in a behaviour's shutdown() that never returned (the run's end went on without it)"
+)
+HUNG_PAST_LIMIT = "ran past --wall-limit (stuck: an endless loop in a behaviour?)"
+
+
+def hung_how(reason: str) -> str:
+    """How eval's closing line words a HUNG episode whose reason is ``reason``: the tree's
+    stop's or the shutdown's words when the reason begins with them (``the tree's stop did
+    not end within 5 s: ...``), else the wall limit's."""
+    from roomba_bt.runtime.ending import SHUTDOWN_NOT_ENDED, STOP_NOT_ENDED
+
+    if reason.startswith(STOP_NOT_ENDED):
+        return HUNG_IN_TERMINATE
+    return HUNG_IN_SHUTDOWN if reason.startswith(SHUTDOWN_NOT_ENDED) else HUNG_PAST_LIMIT
 
 
 def rerun_command(args: argparse.Namespace, result: Any) -> str:

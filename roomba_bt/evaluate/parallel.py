@@ -41,6 +41,7 @@ from roomba_bt.evaluate.episode import (
 )
 from roomba_bt.evaluate.interleave import Interleaved
 from roomba_bt.evaluate.interleave import Progress as Progress  # re-exported: callers name it here
+from roomba_bt.runtime.ending import threads_left
 
 #: How many times a local evaluation starts its workers again after one died with no episode
 #: to blame (each episode it was running ran alone without a death: ended from outside, by
@@ -48,6 +49,19 @@ from roomba_bt.evaluate.interleave import Progress as Progress  # re-exported: c
 #: episode that kills its worker again when it runs alone is recorded as DIED instead, and
 #: is no such death: the sweep goes on.
 POOL_RESTARTS = 2
+#: How many threads stuck in a behaviour's ``terminate()`` or ``shutdown()`` an evaluation in
+#: its own process (``--jobs 1 --wall-limit none``) lets its episodes leave before it stops
+#: with :class:`ThreadsLeftError` (decided, session 36). The run's end goes on without such a
+#: thread (``runtime/ending.py``), a daemon, so the process still exits; but it lives until
+#: then, holding its episode's tree, connection and simulator: one per episode, without
+#: bound, over a sweep of thousands.
+THREADS_LEFT_CAP = 10
+
+
+class ThreadsLeftError(RuntimeError):
+    """An evaluation in its own process stopped: its episodes left :data:`THREADS_LEFT_CAP`
+    threads stuck in a behaviour's ``terminate()`` or ``shutdown()``; what finished is kept
+    (``run``'s results, as on Ctrl-C)."""
 
 
 class WorkersLostError(RuntimeError):
@@ -103,8 +117,17 @@ def run_episodes(
             progress(len(run.results), total, result)
 
     if wall_limit_s is None and (jobs <= 1 or total <= 1):
+        before = threads_left()  # a program's own, from runs before this one: not counted
         for index, spec in enumerate(specs):
             finished(index, run_episode(spec))
+            left = threads_left() - before
+            if left >= THREADS_LEFT_CAP and index + 1 < total:
+                raise ThreadsLeftError(
+                    f"the sweep stopped: {left} episode(s) left a thread stuck in a "
+                    "behaviour's terminate() or shutdown() in this process (each keeps its "
+                    f"episode's tree and simulator until the process exits; at most "
+                    f"{THREADS_LEFT_CAP}); {total - index - 1} episode(s) not run"
+                )
         return run.in_order()
     todo, deaths = list(range(total)), 0
     while todo:
@@ -495,6 +518,9 @@ def _say_where_stuck(signum: int, frame: FrameType | None) -> None:
 #: (:class:`~roomba_bt.evaluate.cluster.NoWorkersError`); the Dask scheduler was lost, or
 #: forgot the episodes (:class:`~roomba_bt.evaluate.cluster.SchedulerLostError`).
 WORKERS_LOST = "workers-lost"
+#: ... and the episodes of one in its own process left too many threads stuck in a
+#: behaviour (:class:`ThreadsLeftError`): a bug in the behaviour, as a HUNG episode is
+THREADS_LEFT = "threads-left"
 NO_WORKERS = "no-workers"
 SCHEDULER_LOST = "scheduler-lost"
 ENVIRONMENT_FAILURES = frozenset({WORKERS_LOST, NO_WORKERS, SCHEDULER_LOST})
@@ -516,6 +542,11 @@ class Interruption:
         """The machinery that runs the episodes failed (``eval`` exits 3, as for a
         connection's failure); else a signal stopped it, the operator's (exit 130)."""
         return self.cause in ENVIRONMENT_FAILURES
+
+    @property
+    def behaviour_failed(self) -> bool:
+        """A behaviour's bug stopped it (:data:`THREADS_LEFT`): ``eval`` exits 4."""
+        return self.cause == THREADS_LEFT
 
 
 def interruption_by(interrupt: KeyboardInterrupt) -> Interruption:
@@ -615,6 +646,8 @@ def _on_local_processes(specs: list[EpisodeSpec], engine: Engine, bar: Progress 
         interruption = interruption_by(exc)
     except WorkersLostError as exc:
         interruption = Interruption(WORKERS_LOST, str(exc))
+    except ThreadsLeftError as exc:
+        interruption = Interruption(THREADS_LEFT, str(exc))
     return run.results, run.retried, interruption
 
 

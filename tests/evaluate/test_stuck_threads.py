@@ -1,0 +1,94 @@
+"""An in-process sweep (``eval --jobs 1 --wall-limit none``) whose episodes each leave a
+thread stuck in a behaviour's ``terminate()`` (the run's end goes on without it:
+``runtime/ending.py``): each such thread is a daemon, so the process can still exit, and
+the sweep stops once :data:`~roomba_bt.evaluate.parallel.THREADS_LEFT_CAP` of them are
+left (each holds its episode's tree, connection and simulator until the process exits),
+with a clear message and exit 4; eval's closing line words them from their reason, not as
+"an endless loop?"."""
+
+from __future__ import annotations
+
+import sys
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.evaluate import parallel
+from roomba_bt.runtime import ending
+
+#: a leaf that runs until stopped; its terminate() waits on an Event nobody sets
+HANG_ON_STOP = '''\
+import threading
+
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+
+RELEASE = threading.Event()
+
+
+@declare("hang_on_stop", kind="action", params=(), reads=(), sends=())
+class HangOnStop(Action):
+    """Runs until stopped; its terminate() never returns."""
+
+    def update(self):
+        return Status.RUNNING
+
+    def terminate(self, new_status):
+        RELEASE.wait()
+'''
+
+MISSION = "mission: hang_on_stop\nplugins: [./hang.py]\ntree:\n  hang_on_stop\n"
+
+STUCK = {"roomba-bt tree stop", "roomba-bt shutdown"}
+
+
+@pytest.fixture
+def mission(tmp_path: Path) -> Iterator[Path]:
+    """The mission and its plugin; the plugin's Event set when the test ends, so that every
+    thread left in its terminate() ends too."""
+    (tmp_path / "hang.py").write_text(HANG_ON_STOP)
+    path = tmp_path / "m.yaml"
+    path.write_text(MISSION)
+    yield path
+    for module in list(sys.modules.values()):
+        if getattr(module, "__file__", None) == str(tmp_path / "hang.py"):
+            module.RELEASE.set()
+
+
+def _stuck() -> list[threading.Thread]:
+    return [t for t in threading.enumerate() if t.name in STUCK and t.is_alive()]
+
+
+def test_a_sweep_whose_episodes_each_hang_in_terminate_stops_at_the_cap(
+    mission: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """20 episodes in this process, each leaving its terminate() stuck (the stop's bound
+    made short): the sweep ends, its stuck threads are daemons and no more than the cap,
+    and it stops there with a message that says why and what to do, exit 4."""
+    from roomba_bt.cli import main
+
+    monkeypatch.setattr(ending, "TREE_STOP_LIMIT_S", 0.05)
+    monkeypatch.setattr(parallel, "THREADS_LEFT_CAP", 4)
+    before = len(_stuck())
+    code = main([
+        "eval", str(mission), "--runs", "20", "--jobs", "1", "--wall-limit", "none",
+        "--timeout", "0.2s", "--allow-plugin-files",
+    ])  # fmt: skip
+    out, err = capsys.readouterr()
+    left = _stuck()
+    assert all(t.daemon for t in left)
+    assert len(left) - before == 4, err  # not one per episode: 20
+    assert code == 4, out + err
+    assert "4 of 20 episode(s) finished" in err, err
+    assert (
+        "the sweep stopped: 4 episode(s) left a thread stuck in a behaviour's terminate() "
+        "or shutdown() in this process"
+    ) in err, err
+    assert (
+        "4 episode(s) hung in a behaviour's terminate() that never returned (the run's end "
+        "went on without it), the first: seed "
+    ) in err, err
+    assert "endless loop" not in err, err
