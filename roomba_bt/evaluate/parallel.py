@@ -107,7 +107,9 @@ def run_episodes(
     run again as after a death (not counted as one). Only a process can be ended whatever
     it runs, so with a limit even ``jobs`` 1 runs in a worker process; without one (None),
     ``jobs`` 1 runs in this process, and an endless loop in a behaviour hangs it (and one
-    that ends its process ends the evaluation)."""
+    that ends its process ends the evaluation); its episodes' threads left stuck in a
+    behaviour's ``terminate()`` or ``shutdown()`` stop it at :data:`THREADS_LEFT_CAP`
+    (:class:`ThreadsLeftError`)."""
     run = run if run is not None else LocalRun()
     total = len(specs)
 
@@ -117,17 +119,7 @@ def run_episodes(
             progress(len(run.results), total, result)
 
     if wall_limit_s is None and (jobs <= 1 or total <= 1):
-        before = threads_left()  # a program's own, from runs before this one: not counted
-        for index, spec in enumerate(specs):
-            finished(index, run_episode(spec))
-            left = threads_left() - before
-            if left >= THREADS_LEFT_CAP and index + 1 < total:
-                raise ThreadsLeftError(
-                    f"the sweep stopped: {left} episode(s) left a thread stuck in a "
-                    "behaviour's terminate() or shutdown() in this process (each keeps its "
-                    f"episode's tree and simulator until the process exits; at most "
-                    f"{THREADS_LEFT_CAP}); {total - index - 1} episode(s) not run"
-                )
+        _in_this_process(specs, finished)
         return run.in_order()
     todo, deaths = list(range(total)), 0
     while todo:
@@ -155,6 +147,25 @@ def run_episodes(
             )
         deaths += 1
     return run.in_order()
+
+
+def _in_this_process(
+    specs: Sequence[EpisodeSpec], finished: Callable[[int, EpisodeResult], None]
+) -> None:
+    """Every spec's episode in this process, one after the other, until they have left
+    :data:`THREADS_LEFT_CAP` threads stuck in a behaviour: then :class:`ThreadsLeftError`."""
+    total = len(specs)
+    before = threads_left()  # a program's own, from runs before this one: not counted
+    for index, spec in enumerate(specs):
+        finished(index, run_episode(spec))
+        left = threads_left() - before
+        if left >= THREADS_LEFT_CAP and index + 1 < total:
+            raise ThreadsLeftError(
+                f"the sweep stopped: {left} episode(s) left a thread stuck in a behaviour's "
+                "terminate() or shutdown() in this process (each keeps its episode's tree and "
+                f"simulator until the process exits; at most {THREADS_LEFT_CAP}); "
+                f"{total - index - 1} episode(s) not run"
+            )
 
 
 def _blame(
