@@ -107,9 +107,7 @@ def run_episodes(
     run again as after a death (not counted as one). Only a process can be ended whatever
     it runs, so with a limit even ``jobs`` 1 runs in a worker process; without one (None),
     ``jobs`` 1 runs in this process, and an endless loop in a behaviour hangs it (and one
-    that ends its process ends the evaluation); its episodes' threads left stuck in a
-    behaviour's ``terminate()`` or ``shutdown()`` stop it at :data:`THREADS_LEFT_CAP`
-    (:class:`ThreadsLeftError`)."""
+    that ends its process ends the evaluation; a cap: :func:`_in_this_process`)."""
     run = run if run is not None else LocalRun()
     total = len(specs)
 
