@@ -56,3 +56,33 @@ def test_last_words_that_never_end_are_ended_by_the_signal_all_the_same() -> Non
     thread ends it :data:`LAST_WORDS_S` after the signal, ``128 + SIGINT``."""
     done = _run(CTRL_C_IN_THE_LAST_WORDS, "stuck")
     assert done.returncode == 128 + signal.SIGINT, done.stderr
+
+
+#: a second signal whose handler runs inside the first's (three SIGTERMs sent together as a
+#: summary printed): here the first handler's timer, as it starts, sends the second
+SIGNAL_INSIDE_THE_HANDLER = """
+import os, signal, sys, threading
+from roomba_bt.robot import safety
+from roomba_bt.robot.safety import signals_end_the_process
+
+class Timer(threading.Timer):
+    def start(self):
+        os.kill(os.getpid(), signal.SIGTERM)  # its handler runs inside this one's
+        for _ in range(1000):  # a few bytecodes: Python runs the pending handler here
+            pass
+        super().start()
+
+safety.threading.Timer = Timer
+signals_end_the_process()
+os.kill(os.getpid(), signal.SIGTERM)
+print("the summary", flush=True)
+sys.exit(3)
+"""
+
+
+def test_a_signal_inside_the_first_one_s_handler_does_not_stop_the_exit() -> None:
+    """A verifier's three SIGTERMs sent together as a run's summary printed left 3 of 6
+    processes running for ever: the second's handler ran inside the first's and waited for
+    a lock the first held. Now the command exits with its own code."""
+    done = _run(SIGNAL_INSIDE_THE_HANDLER)
+    assert (done.returncode, done.stdout) == (3, "the summary\n"), done.stderr
