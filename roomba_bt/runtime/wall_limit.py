@@ -134,6 +134,11 @@ def ran_out(
     <roomba_bt.robot.wording.ConnectionWording>`); an evaluation's episode keeps ``eval
     --wall-limit``'s, being judged on a worker process that does not know its caller's."""
     behaviour, where = stuck_in(frames) if frames else (None, "")
+    if behaviour is None and where:  # the run's own code: a run longer than the limit
+        where = (
+            f"outside every behaviour ({where}): no behaviour was stuck, the run was still "
+            "going; a run this long needs a longer limit"
+        )
     said = f" {where}" if where else ": no Python frame answered (a loop in C code?)"
     named = limit_named.format(limit=duration_said(limit_s))
     return behaviour, f"{named} of wall-clock time ran out{said}"
