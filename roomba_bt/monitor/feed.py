@@ -319,6 +319,16 @@ class PausedMotion:
         self._counts: tuple[int | None, int | None] | None = None
         self._moving = True
 
+    def before_the_pause(self, snapshot: Snapshot | None) -> None:
+        """A ticked frame (the last before a pause, when one comes): the pause's first frame
+        is compared with its counts. Compared with nothing, it was judged still, and in a
+        run in Passive (a built-in cycle's: no requested speed, no mode change at the pause)
+        the first still frame after it was left out."""
+        if snapshot is not None:
+            odometry = snapshot.odometry
+            self._counts = (odometry.left_counts, odometry.right_counts)
+        self._moving = True
+
     def seen(self, snapshot: Snapshot) -> bool:
         odometry = snapshot.odometry
         counts = (odometry.left_counts, odometry.right_counts)
@@ -461,7 +471,7 @@ class RunFeed:
                 return changed
         else:
             self._paused_kept = None
-            self._motion = PausedMotion()
+            self._motion.before_the_pause(snapshot)
         truth = self.truth() if self.truth is not None else None
         if truth is not None and self.truth_start is None:
             self.truth_start = truth
