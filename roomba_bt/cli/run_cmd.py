@@ -60,7 +60,7 @@ from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, duration_said, encodes, escaped
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG, TurnedAway
-from roomba_bt.robot.safety import answer_given, signals_end_the_process
+from roomba_bt.robot.safety import answer_given, signals_end_the_process, terminal_stops_kept
 from roomba_bt.runtime.summary import (
     DEFAULT_GRACE,
     DEFAULT_TICK_LIMIT,
@@ -754,7 +754,9 @@ def _run_and_report(
         # SIGTERM", exit 130 (a program's call gets its own back after the report, as ever)
         process = getattr(args, "as_the_process", False)
         if process:
+            put_back = terminal_stops_kept()  # as the run held them, through the report
             stack.runner.release_interrupts()
+            put_back()
         if process and summary.outcome is Outcome.NO_CONNECTION:
             answer_given()
         else:

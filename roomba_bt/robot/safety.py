@@ -51,6 +51,23 @@ TERMINAL_STOP_SIGNALS: tuple[int, ...] = tuple(
     getattr(signal, name) for name in ("SIGTTOU", "SIGTTIN") if hasattr(signal, name)
 )
 
+
+def terminal_stops_kept() -> Callable[[], None]:
+    """The terminal's stops (:data:`TERMINAL_STOP_SIGNALS`) as they are now, and a call that
+    puts them back: a run's handlers are given back before its report (a signal then is the
+    report's, not the run's), and a run on the wall clock held these ignored; given back
+    too, the report written from the background to a ``stty tostop`` terminal stopped the
+    process (SIGTTOU) while a script waited for its exit."""
+    now = {signum: signal.getsignal(signum) for signum in TERMINAL_STOP_SIGNALS}
+
+    def put_back() -> None:
+        for signum, handler in now.items():
+            with contextlib.suppress(ValueError, TypeError):  # not the main thread; unknown
+                signal.signal(signum, handler)
+
+    return put_back
+
+
 #: The signals that end a run with its safe stop: those that end the command from its first
 #: line (Ctrl-C, ``kill``/systemd, the terminal gone, Ctrl-\:
 #: :data:`~roomba_bt._entry.EARLY_SIGNALS`), and :data:`WALL_CLOCK_SIGNALS`.

@@ -46,6 +46,16 @@ CLOSED_AT_ONCE = (
     "hold it (a bridge or roomba-bt sim --tcp serves one client at a time: another run, "
     "sensors or doctor on this robot?)"
 )
+#: pyserial's words when an ``rfc2217://`` server did not answer its negotiation in time
+RFC2217_UNANSWERED_TEXT = "does not seem to support RFC2217"
+#: what they mean: a raw TCP bridge, or one that closed the connection before answering (on a
+#: loaded host the negotiation's wait ran out before the write that meets the close failed)
+RFC2217_UNANSWERED = (
+    "the far end did not answer RFC 2217's negotiation: a bridge that speaks raw TCP (name "
+    "it socket://HOST:PORT), or one that closed the connection at once: another client may "
+    "hold it (a bridge or roomba-bt sim --tcp serves one client at a time: another run, "
+    "sensors or doctor on this robot?)"
+)
 #: the error numbers of a connection the far end closed (a write after its close, a reset)
 CLOSED_ERRORS = (errno.EPIPE, errno.ECONNRESET, errno.ECONNABORTED)
 #: the error numbers of an address that could not be reached: no route to it, or its
@@ -103,9 +113,12 @@ def url_problem(text: str) -> str | None:
     return None
 
 
-def open_failure(device: str, code: int | None) -> str | None:
+def open_failure(device: str, code: int | None, message: str = "") -> str | None:
     """The cause of a failed open of ``device`` told by its errno ``code`` (or by what the
-    name is), with what to do; None when they tell nothing more than the error's message."""
+    name is, or pyserial's ``message`` of an unanswered RFC 2217 negotiation), with what to
+    do; None when they tell nothing more than the error's message."""
+    if RFC2217_UNANSWERED_TEXT in message:
+        return RFC2217_UNANSWERED
     if _ADDRESS.fullmatch(device):
         return (
             "a network address needs its scheme: socket://HOST:PORT (a Wi-Fi bridge, roomba-bt "

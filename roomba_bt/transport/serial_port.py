@@ -336,7 +336,7 @@ class SerialTransport:
                 port.exclusive = True
             port.open()
         except _OPEN_ERRORS as exc:
-            known = open_failure(url, error_number(exc))
+            known = open_failure(url, error_number(exc), str(exc))
             if known in (IN_USE, IN_USE_EXCLUSIVE) and _held_here(url):
                 known = IN_USE_HERE
             raise TransportError(url, "open the port", known or exc) from exc
