@@ -1194,7 +1194,6 @@ def test_a_thinned_pause_keeps_the_frame_that_shows_the_wheels_stopped(
     from the first taking in the frames left out between) and then a frame a second, so it
     showed PAUSED, Passive and the wheels turning for a second. A paused frame that shows
     the robot moving is kept, and so is the first one that shows it still."""
-    from roomba_bt.monitor.views import state_view
 
     rig = Rig(thin_pauses=True, link=OneFrameLate)
     link = rig.connection.transport
@@ -1209,18 +1208,25 @@ def test_a_thinned_pause_keeps_the_frame_that_shows_the_wheels_stopped(
         rig.session.request("stop")
 
     rig.run_with(operator)
-    records = rig.feed.since(0)[0]
-    paused = [r for r in records if not r.ticked]
-    began = paused[0].tick
-    shown = []
-    for r in paused[:5]:
-        _, earlier = rig.feed.at(r.tick)  # as the server shows a tick: with the one before it
-        view = state_view(rig.feed, r, earlier)["robot"]
-        wheels = view["wheels"]
-        shown.append((r.tick - began, view["mode"], wheels["left"], wheels["right"]))
+    shown = _paused_frames_shown(rig)
     assert shown[1][1] == "Passive" and shown[1][2] != 0, shown  # sent before the stop: moving
     still = next(d for d, mode, left, right in shown if (left, right) == (0, 0))
     assert still <= 4, shown  # the stop shown a frame or two later, not a second
+
+
+def _paused_frames_shown(rig: Rig) -> list[tuple[int, str, int, int]]:
+    """The first five frames a thinned pause kept, as the page shows them (each with the one
+    before it, as the server does): ticks since the pause's first, mode, wheels."""
+    from roomba_bt.monitor.views import state_view
+
+    paused = [r for r in rig.feed.since(0)[0] if not r.ticked]
+    shown = []
+    for r in paused[:5]:
+        _, earlier = rig.feed.at(r.tick)
+        view = state_view(rig.feed, r, earlier)["robot"]
+        wheels = view["wheels"]
+        shown.append((r.tick - paused[0].tick, view["mode"], wheels["left"], wheels["right"]))
+    return shown
 
 
 def test_a_thinned_pause_of_a_run_in_passive_keeps_the_first_still_frame(
@@ -1231,8 +1237,6 @@ def test_a_thinned_pause_of_a_run_in_passive_keeps_the_first_still_frame(
     compared with nothing (judged still), so the first still frame after it was left out and
     the page showed PAUSED, Passive and 296 mm/s for a second (a verifier's finding). The
     first paused frame is compared with the last ticked one."""
-    from roomba_bt.monitor.views import state_view
-
     rig = Rig(mission=HERE.parents[1] / "missions" / "dock-builtin.yaml", thin_pauses=True)
 
     def operator(rig: Rig) -> None:
@@ -1242,13 +1246,6 @@ def test_a_thinned_pause_of_a_run_in_passive_keeps_the_first_still_frame(
         rig.session.request("stop")
 
     rig.run_with(operator)
-    records = rig.feed.since(0)[0]
-    paused = [r for r in records if not r.ticked]
-    began = paused[0].tick
-    shown = []
-    for r in paused[:5]:
-        _, earlier = rig.feed.at(r.tick)
-        wheels = state_view(rig.feed, r, earlier)["robot"]["wheels"]
-        shown.append((r.tick - began, wheels["left"], wheels["right"]))
-    still = next(d for d, left, right in shown if (left, right) == (0, 0))
+    shown = _paused_frames_shown(rig)
+    still = next(d for d, mode, left, right in shown if (left, right) == (0, 0))
     assert still <= 4, shown  # the stop shown a frame or two later, not a second
