@@ -138,20 +138,13 @@ def test_a_terminate_that_never_returns_ends_the_run_hung_with_its_safe_stop(
     """``roomba-bt run --fast`` whose time limit preempts the leaf: its terminate() blocks
     for ever. After the bound (made short here) the run ends: exit 4, HUNG naming the
     terminate and its line, the safe stop sent whole and the robot left in Passive."""
-    from roomba_bt.cli import main
 
     monkeypatch.setattr(ending, "TREE_STOP_LIMIT_S", 0.5, raising=False)
     record = tmp_path / "run.jsonl"
-    give_up = threading.Timer(GIVE_UP_S, _release_all, (tmp_path / "hang.py",))
-    give_up.daemon = True
-    give_up.start()  # the old code, which waited for ever, fails rather than hangs
-    try:
-        code = main([
-            "run", str(mission), "--fast", "--allow-plugin-files", "--timeout", "0.3s",
-            "--record", str(record), "--display", "none",
-        ])  # fmt: skip
-    finally:
-        give_up.cancel()
+    code = _main_given_up(tmp_path, [
+        "run", str(mission), "--fast", "--allow-plugin-files", "--timeout", "0.3s",
+        "--record", str(record), "--display", "none",
+    ])  # fmt: skip
     out = capsys.readouterr().out
     assert code == 4, out
     where = f"hang_on_stop (HangOnStop.terminate at {tmp_path / 'hang.py'}:{WAIT_LINE})"
@@ -176,23 +169,18 @@ def test_a_shutdown_that_never_returns_ends_the_run_hung_after_its_safe_stop(
     bound (made short here) the run ends, exit 4, HUNG naming the shutdown and its line,
     the safe stop sent whole before it and the robot left in Passive. Before, the process
     never ended after the safe stop: no summary, no exit code."""
-    from roomba_bt.cli import main
 
     text = MISSION.replace("hang_on_stop", "hang_on_shutdown")
     mission = _written(tmp_path, HANG_ON_SHUTDOWN, text)
     monkeypatch.setattr(ending, "TREE_STOP_LIMIT_S", 0.5, raising=False)
     record = tmp_path / "run.jsonl"
-    give_up = threading.Timer(GIVE_UP_S, _release_all, (tmp_path / "hang.py",))
-    give_up.daemon = True
-    give_up.start()  # the old code, which waited for ever, fails rather than hangs
     try:
-        code = main([
+        code = _main_given_up(tmp_path, [
             "run", str(mission), "--fast", "--allow-plugin-files", "--record", str(record),
             "--display", "none",
         ])  # fmt: skip
     finally:
-        give_up.cancel()
-        _release_all(tmp_path / "hang.py")
+        _release_all(tmp_path / "hang.py")  # no fixture releases this test's plugin
     out = capsys.readouterr().out
     assert code == 4, out
     where = f"hang_on_shutdown (HangOnShutdown.shutdown at {tmp_path / 'hang.py'}:{SHUTDOWN_LINE})"
@@ -206,6 +194,20 @@ def test_a_shutdown_that_never_returns_ends_the_run_hung_after_its_safe_stop(
     assert _outbound(record).endswith(SAFE_END)
     end = json.loads(record.read_text().splitlines()[-2])["note"]
     assert end["ended"] == "hung"
+
+
+def _main_given_up(tmp_path: Path, argv: list[str]) -> int:
+    """The CLI's ``main(argv)``, the plugin's waits released after :data:`GIVE_UP_S`: the old
+    code, which waited for ever, fails rather than hangs."""
+    from roomba_bt.cli import main
+
+    give_up = threading.Timer(GIVE_UP_S, _release_all, (tmp_path / "hang.py",))
+    give_up.daemon = True
+    give_up.start()
+    try:
+        return main(argv)
+    finally:
+        give_up.cancel()
 
 
 def _release_all(path: Path) -> None:
