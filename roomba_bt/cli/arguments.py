@@ -364,29 +364,49 @@ MAX_SEEDS = 1_000_000
 
 
 def seed_list(text: str) -> list[int]:
-    """``eval --seeds``: seeds and ranges, ``1-40,42,43`` (each range's ends included),
-    in increasing order, each once: the seeds a sweep is to run (those an interrupted one
-    did not finish, or a few to look at again)."""
-    allowed = "allowed: seeds 0 or more and ranges, comma-separated: 1-40,42,43"
-    seeds: set[int] = set()
-    for item in text.split(","):
-        first, dash, last = item.strip().partition("-")
-        try:
-            lo = int(first)
-            hi = int(last) if dash else lo
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"found {item.strip()!r}; {allowed}") from None
-        if hi < lo:  # "found '5-3'; allowed: ... 1-40" did not say what was wrong with it
-            raise argparse.ArgumentTypeError(
-                f"found {item.strip()!r}: a range from high to low; allowed: from low to high, "
-                f"{hi}-{lo}"
-            )
-        if lo < 0:
-            raise argparse.ArgumentTypeError(f"found {item.strip()!r}; {allowed}")
-        if len(seeds) + hi - lo + 1 > MAX_SEEDS:
+    """``eval --seeds``: seeds and ranges, ``1-40,42,43`` (each range's ends included), in
+    the order given: the seeds a sweep is to run (those an interrupted one did not finish,
+    or a few to look at again). ``--out`` and ``--json`` keep that order. A seed given twice
+    is refused, naming it: it is one episode (the seed decides it), and run twice it counted
+    twice in the rate and its interval; the list was sorted and such a seed dropped without
+    a word, and a user reading the records in the order typed read them in another."""
+    seeds: list[int] = []
+    seen: set[int] = set()
+    items = [item.strip() for item in text.split(",")]
+    for item in items:
+        added = _seed_range(item)
+        if len(seeds) + added.stop - added.start > MAX_SEEDS:  # len(): an int of C size
             raise argparse.ArgumentTypeError(f"found {text!r}: more than {MAX_SEEDS:,} seeds")
-        seeds.update(range(lo, hi + 1))
-    return sorted(seeds)
+        if not seen.isdisjoint(added):
+            again = [seed for seed in added if seed in seen]
+            earlier = next(one for one in items if again[0] in _seed_range(one))
+            where = f"in {earlier!r} and {item!r}" if earlier != item else f"as {item!r} twice"
+            more = f" ({len(again)} seeds given twice)" if len(again) > 1 else ""
+            raise argparse.ArgumentTypeError(
+                f"found seed {again[0]} {where}{more}; allowed: each seed once (a seed is one "
+                "episode, the same each time it runs: twice, it would count twice)"
+            )
+        seeds.extend(added)
+        seen.update(added)
+    return seeds
+
+
+def _seed_range(item: str) -> range:
+    """One item of ``--seeds``: a seed (``42``) or a range, ends included (``1-40``)."""
+    allowed = "allowed: seeds 0 or more and ranges, comma-separated: 1-40,42,43"
+    first, dash, last = item.partition("-")
+    try:
+        lo = int(first)
+        hi = int(last) if dash else lo
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"found {item!r}; {allowed}") from None
+    if hi < lo:  # "found '5-3'; allowed: ... 1-40" did not say what was wrong with it
+        raise argparse.ArgumentTypeError(
+            f"found {item!r}: a range from high to low; allowed: from low to high, {hi}-{lo}"
+        )
+    if lo < 0:
+        raise argparse.ArgumentTypeError(f"found {item!r}; {allowed}")
+    return range(lo, hi + 1)
 
 
 def battery_charge(text: str) -> float:

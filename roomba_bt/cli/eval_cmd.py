@@ -144,7 +144,8 @@ def _add_episode_options(ev: argparse.ArgumentParser) -> None:
     ev.add_argument(
         "--seeds", type=seed_list, metavar="LIST",
         help="run these seeds instead of --seed and --runs: 1-40,42,43, each range low to "
-        "high (each variant; run in increasing order, each seed once)",
+        "high (each variant; run and written in the order given; a seed given twice is "
+        "refused)",
     )  # fmt: skip
     ev.add_argument(
         "--jobs",

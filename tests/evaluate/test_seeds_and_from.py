@@ -19,11 +19,33 @@ AB = ["eval", BUMP, "--sweep", "duration=1s,2s", "--no-progress", "--reproducibl
 
 def test_seeds_runs_the_seeds_listed(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "r.jsonl"
-    assert main([*AB, "--seeds", "3,5-6,5", "--out", str(out), "--json"]) == 0
+    assert main([*AB, "--seeds", "3,5-6", "--out", str(out), "--json"]) == 0
     conditions = json.loads(capsys.readouterr().out)["conditions"]
     assert (conditions["seeds"], conditions["seed"], conditions["runs"]) == ([3, 5, 6], 3, 3)
     seeds = [json.loads(line)["seed"] for line in out.read_text().splitlines()]
     assert seeds == [3, 5, 6, 3, 5, 6]  # each variant's, in order
+
+
+def test_seeds_run_and_are_written_in_the_order_given(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--seeds 6,3,5`` ran and wrote 3, 5, 6: a user reading the records (or
+    ``conditions.seeds``) in the order typed read them in another. Kept as given, in JSON
+    Lines, CSV and ``--json``; the text report is the one of the same seeds upwards (the
+    statistics do not depend on the order)."""
+    import csv
+
+    assert main([*AB, "--seeds", "3,5,6"]) == 0
+    upwards = capsys.readouterr().out
+    out, table = tmp_path / "r.jsonl", tmp_path / "r.csv"
+    assert main([*AB, "--seeds", "6,3,5", "--out", str(out)]) == 0
+    assert capsys.readouterr().out == upwards
+    assert [json.loads(line)["seed"] for line in out.read_text().splitlines()] == [6, 3, 5] * 2
+    assert main([*AB, "--seeds", "6,3,5", "--out", str(table), "--json"]) == 0
+    conditions = json.loads(capsys.readouterr().out)["conditions"]
+    assert (conditions["seeds"], conditions["seed"], conditions["runs"]) == ([6, 3, 5], 6, 3)
+    with table.open(newline="") as rows:
+        assert [int(row["seed"]) for row in csv.DictReader(rows)] == [6, 3, 5] * 2
 
 
 @pytest.mark.parametrize(
@@ -35,6 +57,15 @@ def test_seeds_runs_the_seeds_listed(tmp_path: Path, capsys: pytest.CaptureFixtu
             "allowed: from low to high, 3-5",
         ),
         (["--seeds", "1,x"], "argument --seeds: found 'x'"),
+        (
+            ["--seeds", "5,3,3,1"],
+            "argument --seeds: found seed 3 as '3' twice; allowed: each seed once (a seed is "
+            "one episode, the same each time it runs: twice, it would count twice)\n",
+        ),
+        (
+            ["--seeds", "1-40,42,30-50"],
+            "argument --seeds: found seed 30 in '1-40' and '30-50' (12 seeds given twice); ",
+        ),
         (["--seeds", "-1"], "argument --seeds: found '-1'"),
         (["--seeds", "1-3", "--runs", "3"], "--seeds and --runs: give the seeds one way"),
         (["--seeds", "1-3", "--seed", "1"], "--seeds and --seed: give the seeds one way"),
