@@ -492,6 +492,8 @@ def _resumed(
         resumed = resume(args, chosen, planned, world)
     except ResumeError as exc:
         return refused(f"--resume: {exc}", args)
+    for said in resumed.cut_said:
+        print(f"roomba-bt eval: --resume: {said}", file=sys.stderr)
     if args.resume:
         left = sum(len(batch) for batch in resumed.todo)
         print(f"roomba-bt eval: --resume: {resumed.reused} episode(s) read back from "

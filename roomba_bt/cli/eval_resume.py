@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -24,7 +24,7 @@ from roomba_bt.runtime.claimed import IN_USE, held_by_a_writer
 if TYPE_CHECKING:
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
     from roomba_bt.evaluate.parallel import Evaluation
-    from roomba_bt.evaluate.records import PartialResults
+    from roomba_bt.evaluate.records import CutShort, PartialResults
     from roomba_bt.sim.world import World
 
 #: How far a record's start pose (m, degrees) may be from the one this evaluation draws for
@@ -63,6 +63,9 @@ class Resumed:
     todo: list[list[EpisodeSpec]]
     #: per variant, each seed's place in the plan
     places: list[dict[int, int]]
+    #: a line each, the records found cut short at the end of a file and dropped
+    #: (:class:`~roomba_bt.evaluate.records.CutShort`): what became of their episodes
+    cut_said: list[str] = field(default_factory=list)
 
     @property
     def reused(self) -> int:
@@ -153,11 +156,12 @@ def resume(
     ResumeError naming the file, line and what differs when a record was made otherwise."""
     places = [{spec.seed: i for i, spec in enumerate(batch)} for batch in batches]
     found: list[dict[int, EpisodeResult]] = [{} for _ in batches]
+    cut: list[CutShort] = []
     if args.resume:
         variant_of = {(v.mission, v.params): i for i, v in enumerate(chosen)}
         made_by: dict[str, dict[str, Any]] = getattr(args, "made_by", {})
         for path in earlier_files(args.out):
-            for line, row, result in _rows(path):
+            for line, row, result in _rows(path, cut):
                 where = f"{path}:{line}"
                 index = variant_of.get((result.mission, tuple(sorted(result.params))))
                 if index is None:
@@ -178,14 +182,40 @@ def resume(
         [s for s in batch if s.seed not in held]
         for batch, (held, _) in zip(batches, pairs, strict=True)
     ]
-    return Resumed(earlier, todo, places)
+    return Resumed(earlier, todo, places, [_cut_said(one, chosen, found, places) for one in cut])
 
 
-def _rows(path: Path) -> list[tuple[int, dict[str, Any], EpisodeResult]]:
+def _cut_said(
+    cut: CutShort,
+    chosen: list[Any],
+    found: list[dict[int, EpisodeResult]],
+    places: list[dict[int, int]],
+) -> str:
+    """The line that says a record cut short at a file's end was dropped, and what becomes
+    of its episode: it runs again (the usual case: a sweep killed as it wrote it), or the
+    other file holds it (``--out`` cut by a full disk, the partial file whole)."""
+    missions = {v.mission for v in chosen}
+    of = f" of {cut.mission}" if cut.mission is not None and len(missions) > 1 else ""
+    what = "the last record" if cut.seed is None else f"the record of seed {cut.seed}{of}"
+    mine = [i for i, v in enumerate(chosen) if cut.mission in (None, v.mission)]
+    if cut.seed is None:  # the episodes no record holds run: it is among them, if any
+        then = "cut before its seed, its episode runs again unless another record holds it"
+    elif not any(cut.seed in places[i] for i in mine):
+        then = "its seed is not among this evaluation's"
+    elif all(cut.seed in found[i] for i in mine if cut.seed in places[i]):
+        then = "its episode is read back from the other file"
+    else:
+        then = "the episode runs again"
+    return (f"{cut.path}:{cut.line}: {what} was cut short as it was written (the file ends "
+            f"inside it: the sweep was killed, or the disk was full): dropped; {then}")  # fmt: skip
+
+
+def _rows(path: Path, cut: list[CutShort]) -> list[tuple[int, dict[str, Any], EpisodeResult]]:
+    """The records of ``path``, a last one cut short dropped into ``cut``."""
     from roomba_bt.evaluate.records import ResultsFileError, read_rows
 
     try:
-        return read_rows(path)
+        return read_rows(path, cut)
     except ResultsFileError as exc:
         raise ResumeError(f"{exc}; --resume reads it back (--force: write over it)") from None
 

@@ -48,9 +48,11 @@ when the episode ended, null / an empty cell when it never wrote it
 from __future__ import annotations
 
 import csv
+import io
 import json
+import re
 from collections.abc import Iterable, Mapping
-from dataclasses import fields
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -499,28 +501,104 @@ def _json_row(path: str | Path, n: int, text: str) -> dict[str, Any]:
     return record
 
 
-def read_rows(path: str | Path) -> list[tuple[int, dict[str, Any], EpisodeResult]]:
+@dataclass(frozen=True)
+class CutShort:
+    """The last record of a results file, cut short: the file ends inside it, without its
+    end of line. The trace a sweep leaves when it is killed as it writes a record (a ``kill
+    -9``, the OOM killer, a power cut) or the disk fills: its writer ends every record with
+    one. :func:`read_rows` given a list drops it there, and ``eval --resume`` runs its
+    episode again; a line bad in the middle of a file, or one bad with its end of line, is
+    no such trace and is refused as before."""
+
+    path: str
+    line: int
+    #: what the part written names, None where it was cut before it (a value followed by
+    #: the next column's, so that ``"seed": 12`` cut from 123 is not read as seed 12)
+    seed: int | None
+    mission: str | None
+
+
+#: a record's first columns as a JSON line holds them (json.dumps' separators), each ended
+_JSON_MISSION = re.compile(r'^\{"mission": ("(?:[^"\\]|\\.)*"),')
+_JSON_SEED = re.compile(r'"seed": (\d+),')
+
+
+def _cut_json(path: str | Path, line: int, text: str) -> CutShort:
+    """What the part of a JSON line written before the cut names."""
+    mission, seed = _JSON_MISSION.match(text), _JSON_SEED.search(text)
+    return CutShort(str(path), line, int(seed[1]) if seed else None,
+                    json.loads(mission[1]) if mission else None)  # fmt: skip
+
+
+def _cut_csv(path: str | Path, line: int, row: dict[str | None, Any]) -> CutShort:
+    """What the part of a CSV row written before the cut names: a cell followed by the
+    next column's is whole."""
+    whole = [column for column, value in row.items() if value is not None][:-1]
+    seed = row["seed"] if "seed" in whole and str(row["seed"]).isdigit() else None
+    return CutShort(str(path), line, None if seed is None else int(seed),
+                    str(row["mission"]) if "mission" in whole else None)  # fmt: skip
+
+
+def _text(path: str | Path, cut: list[CutShort] | None) -> tuple[str, str]:
+    """The file's text, and apart from it the end of a JSON Lines file after its last end of
+    line when ``cut`` is given (none otherwise: read as a line); ResultsFileError when it is
+    not UTF-8 (the end apart aside: cut inside a character, it is not)."""
+    expected = "expected results as eval --out writes them (.jsonl or .csv)"
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise ResultsFileError(f"{path}: {exc.strerror or exc}") from None
+    tail = b""
+    if cut is not None and results_format(path) == ".jsonl":
+        end = data.rfind(b"\n") + 1
+        data, tail = data[:end], data[end:]
+    try:
+        return data.decode("utf-8"), tail.decode("utf-8", errors="replace")
+    except UnicodeDecodeError as exc:  # a ValueError: said without the file's name
+        raise ResultsFileError(f"{path}: not UTF-8 text (byte 0x{exc.object[exc.start]:02x}); "
+                               f"{expected}") from None  # fmt: skip
+
+
+def _csv_rows(
+    path: str | Path, text: str, cut: list[CutShort] | None
+) -> list[tuple[int, dict[str, Any]]]:
+    """The rows of a CSV results file; with ``cut``, a last row without its end of line (the
+    writer ends each: this one was cut, and a cell cut short may read as another value) is
+    dropped into it."""
+    rows = list(enumerate(csv.DictReader(io.StringIO(text, newline="")), 2))
+    if cut is not None and rows and not text.endswith("\n"):
+        line, last = rows.pop()
+        cut.append(_cut_csv(path, line, last))
+    return [(n, _csv_row(path, n, row)) for n, row in rows]
+
+
+def read_rows(
+    path: str | Path, cut: list[CutShort] | None = None
+) -> list[tuple[int, dict[str, Any], EpisodeResult]]:
     """Each record of a file :func:`write_results` wrote, as (line, the row as written, the
     episode): the row keeps what :func:`from_record` leaves out (the provenance columns,
-    which ``eval --resume`` checks); ResultsFileError naming file:line otherwise."""
+    which ``eval --resume`` checks); ResultsFileError naming file:line otherwise. Given
+    ``cut``, a last record cut short (:class:`CutShort`) is dropped and put there instead
+    of refused: a JSON line without its end of line that is not a whole object, a CSV row
+    without its end of line."""
     expected = "expected results as eval --out writes them (.jsonl or .csv)"
     if Path(path).is_dir():  # said as what it is: not "Is a directory", not "no suffix"
         raise ResultsFileError(f"{path}: a directory; {expected}")
     fmt = results_format(path)
-    rows: list[tuple[int, dict[str, Any]]] = []
-    try:
-        with open(path, encoding="utf-8", newline="") as src:
-            if fmt == ".csv":
-                rows = [(n, _csv_row(path, n, row)) for n, row in enumerate(csv.DictReader(src), 2)]
-            for n, text in enumerate(src if fmt == ".jsonl" else (), 1):
-                if not text.strip():
-                    continue
-                rows.append((n, _json_row(path, n, text)))
-    except OSError as exc:
-        raise ResultsFileError(f"{path}: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:  # a ValueError: said without the file's name
-        raise ResultsFileError(f"{path}: not UTF-8 text (byte 0x{exc.object[exc.start]:02x}); "
-                               f"{expected}") from None  # fmt: skip
+    text, tail = _text(path, cut)
+    if fmt == ".csv":
+        rows = _csv_rows(path, text, cut)
+    else:
+        lines = io.StringIO(text, newline="").readlines()
+        rows = [(n, _json_row(path, n, line)) for n, line in enumerate(lines, 1) if line.strip()]
+        if tail.strip():
+            n = len(lines) + 1
+            try:
+                rows.append((n, _json_row(path, n, tail)))
+            except ResultsFileError:  # never a whole object: the kill's trace
+                if cut is None:  # a tail is apart only when cut is given
+                    raise
+                cut.append(_cut_json(path, n, tail))
     out = []
     for line, row in rows:
         try:

@@ -245,3 +245,136 @@ def test_a_path_run_again_otherwise_is_said(
     err = capsys.readouterr().err
     assert "warning: --plot: 1 episode(s) read back ran otherwise now than their records " in err
     assert "say (seeds 0): an option the records do not carry (--timeout, " in err
+
+
+@pytest.fixture
+def killed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> bytes:
+    """The partial file a sweep of 4 seeds per variant left when killed after its last
+    record: written by the sweep itself (its removal at the end skipped), ``--out`` never
+    made. Its lines are in the order the episodes finished."""
+    from roomba_bt.evaluate.records import PartialResults
+
+    with monkeypatch.context() as patched:
+        patched.setattr(PartialResults, "done", lambda self, keep=False: self._file.close())
+        assert _sweep(tmp_path / "k.jsonl", 4) == 0
+    (tmp_path / "k.jsonl").unlink()
+    capsys.readouterr()
+    return (tmp_path / "k.jsonl.partial.jsonl").read_bytes()
+
+
+def _last_line(data: bytes) -> tuple[bytes, bytes]:
+    """The lines before the last, and the last (with its end of line)."""
+    start = data.rstrip(b"\n").rfind(b"\n") + 1
+    return data[:start], data[start:]
+
+
+def _cut_at(last: bytes, where: str) -> int:
+    """A byte offset in the last line: its first byte, just after the seed's digits (the
+    seed not yet known: "3" may be the start of "31"), just after the seed's comma, half
+    way, all but its closing brace."""
+    seed_end = last.index(b'"seed": ') + len(b'"seed": 3')
+    offsets = {"first byte": 1, "inside the seed": seed_end, "after the seed": seed_end + 1,
+               "half way": len(last) // 2, "all but the brace": len(last) - 2}  # fmt: skip
+    return offsets[where]
+
+
+@pytest.mark.parametrize(
+    "where", ["first byte", "inside the seed", "after the seed", "half way", "all but the brace"]
+)
+def test_a_resume_drops_the_last_record_a_kill_cut_short_and_runs_it_again(
+    where: str,
+    killed: bytes,
+    tmp_path: Path,
+    uninterrupted: dict[str, str],
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A sweep killed as it wrote a record (or on a full disk) leaves its last line cut
+    short, without its end of line: ``--resume`` refused the file ("not JSON ... the line
+    cut short"), and a killed sweep could not be resumed. The line is dropped, said once,
+    and its episode runs again: ``--out`` ends as an uninterrupted run writes it."""
+    before, last = _last_line(killed)
+    assert json.loads(last)["seed"] == 3  # the cut offsets name a one-digit seed
+    partial = tmp_path / "k.jsonl.partial.jsonl"
+    partial.write_bytes(before + last[: _cut_at(last, where)])
+    assert _sweep(tmp_path / "k.jsonl", 4, "--resume") == 0
+    err = capsys.readouterr().err
+    said = f"roomba-bt eval: --resume: {partial}:8: "
+    if where in ("first byte", "inside the seed"):
+        said += ("the last record was cut short as it was written (the file ends inside it: the "
+                 "sweep was killed, or the disk was full): dropped; cut before its seed, its "
+                 "episode runs again unless another record holds it\n")  # fmt: skip
+    else:
+        said += ("the record of seed 3 was cut short as it was written (the file ends inside "
+                 "it: the sweep was killed, or the disk was full): dropped; the episode runs "
+                 "again\n")  # fmt: skip
+    assert said in err and err.count(" cut short ") == 1, err
+    assert "7 episode(s) read back from" in err and ", 1 to run" in err
+    assert (tmp_path / "k.jsonl").read_text() == uninterrupted[".jsonl"]
+    assert not partial.exists()
+
+
+def test_a_whole_last_record_without_its_end_of_line_is_kept(
+    killed: bytes, tmp_path: Path, uninterrupted: dict[str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Cut just before its end of line, the record is whole: read back, nothing runs."""
+    (tmp_path / "k.jsonl.partial.jsonl").write_bytes(killed.rstrip(b"\n"))
+    assert _sweep(tmp_path / "k.jsonl", 4, "--resume") == 0
+    err = capsys.readouterr().err
+    assert "8 episode(s) read back" in err and "0 to run" in err and "cut short" not in err
+    assert (tmp_path / "k.jsonl").read_text() == uninterrupted[".jsonl"]
+
+
+@pytest.mark.parametrize(
+    ("bad", "said"),
+    [
+        ("middle", ":3:"),  # a line of the middle cut short, its end of line kept
+        ("whole last", ":8:"),  # the last line cut short, but with its end of line
+    ],
+)
+def test_a_bad_line_that_is_no_kill_trace_is_still_refused(
+    bad: str, said: str, killed: bytes, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Only the last line, without its end of line, is a kill's trace: a bad line with its
+    end of line (in the middle, or last) was written so, and is refused naming file:line,
+    exit 2, no episode run and the file as it was."""
+    lines = killed.splitlines(keepends=True)
+    index = 2 if bad == "middle" else -1
+    lines[index] = lines[index][: len(lines[index]) // 2] + b"\n"
+    partial = tmp_path / "k.jsonl.partial.jsonl"
+    partial.write_bytes(b"".join(lines))
+    assert _sweep(tmp_path / "k.jsonl", 4, "--resume") == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"roomba-bt eval: --resume: {partial}{said}") and "not JSON" in err
+    assert "cut short" not in err
+    assert partial.read_bytes() == b"".join(lines)
+    assert not (tmp_path / "k.jsonl").exists()
+
+
+@pytest.mark.parametrize("keep", [0, 2])  # the row's end of line lost, or more of it
+def test_a_csv_out_cut_short_at_its_end_is_resumed(
+    keep: int, tmp_path: Path, uninterrupted: dict[str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--out r.csv`` is written at the end; a full disk, or a kill then, cuts its last row
+    (the partial file, kept, holds it: here there is none). A CSV cell cut short may read as
+    another value, so a last row without its end of line is dropped whatever it reads as."""
+    out = tmp_path / "r.csv"
+    data = uninterrupted[".csv"].encode()
+    out.write_bytes(data[: len(data) - len(b"\r\n") - keep])
+    assert _sweep(out, 4, "--resume") == 0
+    err = capsys.readouterr().err
+    assert f"--resume: {out}:9: the record of seed 3 was cut short" in err, err
+    assert "7 episode(s) read back" in err and ", 1 to run" in err
+    assert out.read_text() == uninterrupted[".csv"]
+
+
+def test_a_partial_file_ending_in_nul_bytes_is_resumed(
+    killed: bytes, tmp_path: Path, uninterrupted: dict[str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A power cut can leave a file's last block as NUL bytes after its last line."""
+    (tmp_path / "k.jsonl.partial.jsonl").write_bytes(killed + b"\0" * 300)
+    assert _sweep(tmp_path / "k.jsonl", 4, "--resume") == 0
+    err = capsys.readouterr().err
+    assert ":9: the last record was cut short" in err and "0 to run" in err
+    assert (tmp_path / "k.jsonl").read_text() == uninterrupted[".jsonl"]
