@@ -95,7 +95,7 @@ if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts fas
     from roomba_bt.cli.validate_report import Checked
     from roomba_bt.evaluate import EvaluationError
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, MissionNotCompiled
-    from roomba_bt.evaluate.parallel import Engine, Evaluation, Progress
+    from roomba_bt.evaluate.parallel import Engine, Evaluation, Interruption, Progress
     from roomba_bt.evaluate.records import PartialResults
     from roomba_bt.mission import Diagnostic, Permissions
     from roomba_bt.sim.world import World
@@ -393,16 +393,7 @@ def eval_command(args: argparse.Namespace) -> int:
         return refused(unwritten, args)
     interruption = interruption_of(done)
     if interruption is not None:
-        failed, bug = interruption.environment_failed, interruption.behaviour_failed
-        said = interruption.said if failed or bug else f"interrupted {interruption.said}"
-        print(f"roomba-bt eval: {said}; {finished_said(done, evaluated)}, summarised above",
-              file=sys.stderr)  # fmt: skip
-        if bug:  # threads left stuck in a behaviour: its HUNG episodes named, exit 4
-            verdict(args, evaluated.summaries, done)
-            return ExitCode.BEHAVIOUR_ERROR
-        # the workers or the cluster gone: the run environment failed, not the missions
-        # (3, as a connection's failure); a signal is the operator's (130)
-        return ExitCode.CONNECTION if failed else ExitCode.INTERRUPTED
+        return _stopped(args, done, evaluated, interruption)
     if args.plot:
         traced = _paths_read_back(args, evaluated, resumed.read_back(planned), engine)
         if isinstance(traced, int):
@@ -411,6 +402,31 @@ def eval_command(args: argparse.Namespace) -> int:
         if plotted is not None:
             return plotted
     return verdict(args, evaluated.summaries, done)
+
+
+def _stopped(
+    args: argparse.Namespace,
+    done: list[Evaluation],
+    evaluated: Evaluated,
+    interruption: Interruption,
+) -> int:
+    """The ending of an evaluation that stopped before its end (its summary and records
+    out): why, said on stderr, and its exit code. A ``--plot`` is not drawn then, and that
+    is said: the file was not made, without a word."""
+    failed, bug = interruption.environment_failed, interruption.behaviour_failed
+    said = interruption.said if failed or bug else f"interrupted {interruption.said}"
+    print(f"roomba-bt eval: {said}; {finished_said(done, evaluated)}, summarised above",
+          file=sys.stderr)  # fmt: skip
+    if args.plot:
+        then = " (--resume with --plot draws every episode once the rest have run)"
+        print(f"roomba-bt eval: --plot {args.plot} not drawn: the evaluation stopped before its "
+              f"end{then if args.out else ''}", file=sys.stderr)  # fmt: skip
+    if bug:  # threads left stuck in a behaviour: its HUNG episodes named, exit 4
+        verdict(args, evaluated.summaries, done)
+        return ExitCode.BEHAVIOUR_ERROR
+    # the workers or the cluster gone: the run environment failed, not the missions
+    # (3, as a connection's failure); a signal is the operator's (130)
+    return ExitCode.CONNECTION if failed else ExitCode.INTERRUPTED
 
 
 def _paths_read_back(
@@ -496,8 +512,9 @@ def _resumed(
         print(f"roomba-bt eval: --resume: {said}", file=sys.stderr)
     if args.resume:
         left = sum(len(batch) for batch in resumed.todo)
-        print(f"roomba-bt eval: --resume: {resumed.reused} episode(s) read back from "
-              f"{args.out}, {left} to run", file=sys.stderr)  # fmt: skip
+        files = " and ".join(resumed.read_from) or args.out
+        print(f"roomba-bt eval: --resume: {resumed.reused} episode(s) read back from {files}, "
+              f"{left} to run", file=sys.stderr)  # fmt: skip
     return resumed
 
 

@@ -66,6 +66,9 @@ class Resumed:
     #: a line each, the records found cut short at the end of a file and dropped
     #: (:class:`~roomba_bt.evaluate.records.CutShort`): what became of their episodes
     cut_said: list[str] = field(default_factory=list)
+    #: the files the episodes read back came from (``--out``, its partial file): "read
+    #: back from ab.jsonl" named ``--out`` alone when most came from the partial file
+    read_from: list[str] = field(default_factory=list)
 
     @property
     def reused(self) -> int:
@@ -157,6 +160,7 @@ def resume(
     places = [{spec.seed: i for i, spec in enumerate(batch)} for batch in batches]
     found: list[dict[int, EpisodeResult]] = [{} for _ in batches]
     cut: list[CutShort] = []
+    read_from: list[str] = []
     if args.resume:
         variant_of = {(v.mission, v.params): i for i, v in enumerate(chosen)}
         made_by: dict[str, dict[str, Any]] = getattr(args, "made_by", {})
@@ -175,14 +179,17 @@ def resume(
                                       "--seeds differ)")  # fmt: skip
                 spec = batches[index][spec_at]
                 _check_alike(where, row, result, spec, made_by.get(result.mission, {}), world)
-                found[index].setdefault(result.seed, result)  # --out's first, then the partial
+                kept = found[index].setdefault(result.seed, result)  # --out's, then the partial's
+                if kept is result and str(path) not in read_from:
+                    read_from.append(str(path))
     pairs = list(zip(found, places, strict=True))
     earlier = [sorted(held.values(), key=lambda r: place[r.seed]) for held, place in pairs]
     todo = [
         [s for s in batch if s.seed not in held]
         for batch, (held, _) in zip(batches, pairs, strict=True)
     ]
-    return Resumed(earlier, todo, places, [_cut_said(one, chosen, found, places) for one in cut])
+    cut_said = [_cut_said(one, chosen, found, places) for one in cut]
+    return Resumed(earlier, todo, places, cut_said, read_from)
 
 
 def _cut_said(

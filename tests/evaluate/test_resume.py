@@ -67,7 +67,7 @@ def test_a_resume_reads_the_partial_file_a_killed_sweep_left(
     assert _sweep(out, 4) == 2  # refused: the partial file holds episodes
     assert "r.jsonl.partial.jsonl already holds episodes" in capsys.readouterr().err
     assert _sweep(out, 4, "--resume") == 0
-    assert "3 episode(s) read back" in capsys.readouterr().err
+    assert f"3 episode(s) read back from {out}.partial.jsonl, 5 to run" in capsys.readouterr().err
     assert out.read_text() == uninterrupted[".jsonl"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["full.csv", "full.jsonl", "r.jsonl"]
 
@@ -310,7 +310,7 @@ def test_a_resume_drops_the_last_record_a_kill_cut_short_and_runs_it_again(
                  "it: the sweep was killed, or the disk was full): dropped; the episode runs "
                  "again\n")  # fmt: skip
     assert said in err and err.count(" cut short ") == 1, err
-    assert "7 episode(s) read back from" in err and ", 1 to run" in err
+    assert f"7 episode(s) read back from {partial}, 1 to run" in err
     assert (tmp_path / "k.jsonl").read_text() == uninterrupted[".jsonl"]
     assert not partial.exists()
 
@@ -378,3 +378,49 @@ def test_a_partial_file_ending_in_nul_bytes_is_resumed(
     err = capsys.readouterr().err
     assert ":9: the last record was cut short" in err and "0 to run" in err
     assert (tmp_path / "k.jsonl").read_text() == uninterrupted[".jsonl"]
+
+
+@pytest.mark.parametrize("out", [True, False])
+def test_an_interrupted_evaluation_says_its_plot_is_not_drawn(
+    out: bool, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A Ctrl-C after the second of 5 episodes: the summary and the records of the two are
+    out, exit 130, and ``--plot``'s file was not made without a word; now said, with how to
+    draw them all (``--resume``, given an ``--out`` to resume)."""
+    import roomba_bt.evaluate.parallel as parallel
+
+    class CtrlCAtTheSecond:
+        def __init__(self, **_: object) -> None:
+            pass
+
+        def __call__(self, done: int, total: int, result: object) -> None:
+            if done == 2:
+                raise KeyboardInterrupt
+
+    monkeypatch.setattr(parallel, "ProgressBar", CtrlCAtTheSecond)
+    plot = tmp_path / "p.png"
+    written = ["--out", str(tmp_path / "r.jsonl")] if out else []
+    argv = ["eval", BUMP, "-p", "duration=1s", "--runs", "5", "--jobs", "1", "--wall-limit",
+            "none", "--plot", str(plot), *written]  # fmt: skip
+    assert main(argv) == 130
+    err = capsys.readouterr().err
+    said = f"roomba-bt eval: --plot {plot} not drawn: the evaluation stopped before its end"
+    then = " (--resume with --plot draws every episode once the rest have run)" if out else ""
+    assert f"{said}{then}\n" in err, err
+    assert not plot.exists()
+    if out:
+        assert len((tmp_path / "r.jsonl").read_text().splitlines()) == 2
+
+
+def test_a_resume_names_each_file_it_read_episodes_from(
+    killed: bytes, tmp_path: Path, uninterrupted: dict[str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """ "read back from k.jsonl" named ``--out`` alone, also when most of the episodes came
+    from its partial file."""
+    out = tmp_path / "k.jsonl"
+    out.write_text("".join(uninterrupted[".jsonl"].splitlines(keepends=True)[:2]))
+    (tmp_path / "k.jsonl.partial.jsonl").write_bytes(killed)
+    assert _sweep(out, 4, "--resume") == 0
+    said = f"8 episode(s) read back from {out} and {out}.partial.jsonl, 0 to run"
+    assert said in capsys.readouterr().err
+    assert out.read_text() == uninterrupted[".jsonl"]
