@@ -411,12 +411,18 @@ def _stopped(
     interruption: Interruption,
 ) -> int:
     """The ending of an evaluation that stopped before its end (its summary and records
-    out): why, said on stderr, and its exit code. A ``--plot`` is not drawn then, and that
-    is said: the file was not made, without a word."""
+    out): why, said on stderr, and its exit code; with ``--out``, how to run the episodes
+    left (``--resume``: a Ctrl-C's user was not told). A ``--plot`` is not drawn then, and
+    that is said: the file was not made, without a word."""
     failed, bug = interruption.environment_failed, interruption.behaviour_failed
     said = interruption.said if failed or bug else f"interrupted {interruption.said}"
     print(f"roomba-bt eval: {said}; {finished_said(done, evaluated)}, summarised above",
           file=sys.stderr)  # fmt: skip
+    if args.out and not bug:  # the way on, where a thousand-episode sweep's user looks
+        left = evaluated.runs * len(evaluated.chosen) - count_episodes(done)
+        again = "again" if args.resume else "with --resume"
+        print(f"roomba-bt eval: the same command {again} runs the {left} episode(s) left "
+              f"(--out {args.out} holds those finished)", file=sys.stderr)  # fmt: skip
     if args.plot:
         then = " (--resume with --plot draws every episode once the rest have run)"
         print(f"roomba-bt eval: --plot {args.plot} not drawn: the evaluation stopped before its "

@@ -386,7 +386,7 @@ def test_an_interrupted_evaluation_says_its_plot_is_not_drawn(
 ) -> None:
     """A Ctrl-C after the second of 5 episodes: the summary and the records of the two are
     out, exit 130, and ``--plot``'s file was not made without a word; now said, with how to
-    draw them all (``--resume``, given an ``--out`` to resume)."""
+    draw them all, and how to run the rest (``--resume``, given an ``--out`` to resume)."""
     import roomba_bt.evaluate.parallel as parallel
 
     class CtrlCAtTheSecond:
@@ -408,6 +408,8 @@ def test_an_interrupted_evaluation_says_its_plot_is_not_drawn(
     then = " (--resume with --plot draws every episode once the rest have run)" if out else ""
     assert f"{said}{then}\n" in err, err
     assert not plot.exists()
+    left = f"the same command with --resume runs the 3 episode(s) left (--out {tmp_path}/r.jsonl"
+    assert (left in err) == out
     if out:
         assert len((tmp_path / "r.jsonl").read_text().splitlines()) == 2
 
