@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from roomba_bt.evaluate.episode import EpisodeResult
     from roomba_bt.evaluate.parallel import Evaluation
+    from roomba_bt.evaluate.records import CutShort
 
 
 def add_from_option(ev: argparse.ArgumentParser) -> None:
@@ -48,19 +49,20 @@ class FromFilesError(ValueError):
 
 
 def read_variants(
-    files: list[str],
+    files: list[str], cut: list[CutShort] | None = None
 ) -> list[tuple[str, tuple[tuple[str, str], ...], list[EpisodeResult]]]:
     """Each variant's episodes in ``files``: (mission, parameters, results in seed order), in
     the order first met. A (variant, seed) met again must be the same episode (as written
     by another run with ``--reproducible``, its wall-clock columns aside): it counts once;
-    another one is refused, naming both places."""
+    another one is refused, naming both places. Given ``cut``, a file's last record cut
+    short (a killed sweep's partial file) is left out and put there instead of refused."""
     from roomba_bt.evaluate.records import ResultsFileError, read_rows, written_record
 
     found: dict[tuple[str, tuple[tuple[str, str], ...]], dict[int, tuple[str, EpisodeResult]]] = {}
     worlds: list[tuple[str, str, str | None]] = []  # the first record's: place, name, SHA-256
     for path in files:
         try:
-            rows = read_rows(path)
+            rows = read_rows(path, cut)
         except (ResultsFileError, ValueError) as exc:
             raise FromFilesError(str(exc)) from None
         for line, row, result in rows:
@@ -128,10 +130,13 @@ def report_from_files(args: argparse.Namespace) -> int:
         return refused(f"--from and {ignored}: --from reports on the episodes its files hold "
                        f"as they are (it runs none and writes no file); {ignored} is for a "
                        "run: give one or the other", args)  # fmt: skip
+    cut: list[CutShort] = []
     try:
-        variants = read_variants(args.from_files)
+        variants = read_variants(args.from_files, cut)
     except FromFilesError as exc:
+        _left_out(cut)
         return refused(f"--from {exc}", args)
+    _left_out(cut)
     chosen = [
         Variant(_label(mission, params), mission, params, mission)
         for mission, params, _ in variants
@@ -145,6 +150,14 @@ def report_from_files(args: argparse.Namespace) -> int:
     print(f"roomba-bt eval: {count_episodes(done)} episode(s) of {len(chosen)} variant(s) "
           f"read from {', '.join(args.from_files)}; none run", file=sys.stderr)  # fmt: skip
     return verdict(args, evaluated.summaries, done)
+
+
+def _left_out(cut: list[CutShort]) -> None:
+    """Each file's last record cut short (a killed sweep's partial file), said left out of
+    the report: such a file was refused, and the report of a killed sweep's episodes needed
+    the file edited first."""
+    for one in cut:
+        print(f"roomba-bt eval: --from {one.said(True)}: left out", file=sys.stderr)
 
 
 def _label(mission: str, params: tuple[tuple[str, str], ...]) -> str:

@@ -201,9 +201,6 @@ def _cut_said(
     """The line that says a record cut short at a file's end was dropped, and what becomes
     of its episode: it runs again (the usual case: a sweep killed as it wrote it), or the
     other file holds it (``--out`` cut by a full disk, the partial file whole)."""
-    missions = {v.mission for v in chosen}
-    of = f" of {cut.mission}" if cut.mission is not None and len(missions) > 1 else ""
-    what = "the last record" if cut.seed is None else f"the record of seed {cut.seed}{of}"
     mine = [i for i, v in enumerate(chosen) if cut.mission in (None, v.mission)]
     if cut.seed is None:  # the episodes no record holds run: it is among them, if any
         then = "cut before its seed, its episode runs again unless another record holds it"
@@ -213,8 +210,7 @@ def _cut_said(
         then = "its episode is read back from the other file"
     else:
         then = "the episode runs again"
-    return (f"{cut.path}:{cut.line}: {what} was cut short as it was written (the file ends "
-            f"inside it: the sweep was killed, or the disk was full): dropped; {then}")  # fmt: skip
+    return f"{cut.said(len({v.mission for v in chosen}) > 1)}: dropped; {then}"
 
 
 def _rows(path: Path, cut: list[CutShort]) -> list[tuple[int, dict[str, Any], EpisodeResult]]:

@@ -517,6 +517,15 @@ class CutShort:
     seed: int | None
     mission: str | None
 
+    def said(self, name_mission: bool) -> str:
+        """``r.jsonl:75: the record of seed 37 was cut short as it was written (...)``;
+        its mission named too when ``name_mission`` (of several) and the part written
+        names it."""
+        of = f" of {self.mission}" if name_mission and self.mission is not None else ""
+        what = "the last record" if self.seed is None else f"the record of seed {self.seed}{of}"
+        return (f"{self.path}:{self.line}: {what} was cut short as it was written (the file "
+                "ends inside it: the sweep was killed, or the disk was full)")  # fmt: skip
+
 
 #: a record's first columns as a JSON line holds them (json.dumps' separators), each ended
 _JSON_MISSION = re.compile(r'^\{"mission": ("(?:[^"\\]|\\.)*"),')
@@ -542,21 +551,25 @@ def _cut_csv(path: str | Path, line: int, row: dict[str | None, Any]) -> CutShor
 def _text(path: str | Path, cut: list[CutShort] | None) -> tuple[str, str]:
     """The file's text, and apart from it the end of a JSON Lines file after its last end of
     line when ``cut`` is given (none otherwise: read as a line); ResultsFileError when it is
-    not UTF-8 (the end apart aside: cut inside a character, it is not)."""
-    expected = "expected results as eval --out writes them (.jsonl or .csv)"
+    not UTF-8, but for a character cut short at its very end when ``cut`` is given (a kill
+    between the bytes of a character: the record it ends is cut short anyway)."""
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
         raise ResultsFileError(f"{path}: {exc.strerror or exc}") from None
-    tail = b""
-    if cut is not None and results_format(path) == ".jsonl":
-        end = data.rfind(b"\n") + 1
-        data, tail = data[:end], data[end:]
     try:
-        return data.decode("utf-8"), tail.decode("utf-8", errors="replace")
+        text = data.decode("utf-8")
     except UnicodeDecodeError as exc:  # a ValueError: said without the file's name
-        raise ResultsFileError(f"{path}: not UTF-8 text (byte 0x{exc.object[exc.start]:02x}); "
-                               f"{expected}") from None  # fmt: skip
+        at_the_end = exc.end == len(data) and exc.reason == "unexpected end of data"
+        if cut is None or not at_the_end:
+            raise ResultsFileError(f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x}); "
+                                   "expected results as eval --out writes them (.jsonl or "
+                                   ".csv)") from None  # fmt: skip
+        text = data[: exc.start].decode("utf-8")  # the first error: all before it decodes
+    if cut is None or results_format(path) != ".jsonl":
+        return text, ""
+    end = text.rfind("\n") + 1
+    return text[:end], text[end:]
 
 
 def _csv_rows(

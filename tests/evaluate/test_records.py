@@ -11,9 +11,11 @@ import pytest
 from roomba_bt.evaluate import EpisodeResult, episode_specs, run_episodes, summarize
 from roomba_bt.evaluate.records import (
     COLUMNS,
+    CutShort,
     ResultsFileError,
     from_record,
     read_results,
+    read_rows,
     results_format,
     to_record,
     write_results,
@@ -193,3 +195,26 @@ def test_how_the_mission_ended_is_in_the_records(tmp_path: Path, suffix: str) ->
     older = to_record(ran[0])
     del older["mission_said"]
     assert from_record(older).said == ""
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_a_last_record_cut_inside_a_character_is_cut_short_not_bad_utf8(
+    tmp_path: Path, results: list[EpisodeResult], suffix: str
+) -> None:
+    """A kill between the bytes of a character (a ``mission_said`` in French) leaves a file
+    that is not UTF-8 at its very end: given a list, the reader drops that record as cut
+    short, as any other; without one (``read_results``) it is refused as before. Bytes not
+    UTF-8 anywhere else are refused either way."""
+    said = replace(results[-1], said="arrivé à la base")
+    path = tmp_path / f"r{suffix}"
+    write_results(path, [*results[:-1], said])
+    data = path.read_bytes().replace(b"\\u00e9", "é".encode())  # JSON as pandas may write it
+    path.write_bytes(data[: data.index("é".encode()) + 1])
+    cut: list[CutShort] = []
+    assert [row[2].seed for row in read_rows(path, cut)] == [4, 5]
+    assert cut == [CutShort(str(path), 3 if suffix == ".jsonl" else 4, 6, BUMP)]
+    with pytest.raises(ResultsFileError, match="not UTF-8 text"):
+        read_results(path)
+    path.write_bytes(data[:20] + b"\xff" + data[20:])
+    with pytest.raises(ResultsFileError, match=r"not UTF-8 text \(byte 0xff\)"):
+        read_rows(path, [])

@@ -222,9 +222,8 @@ def test_from_says_the_profile_and_warnings_the_records_hold(
         (None, "{path}: a directory; expected results as eval --out writes them (.jsonl or "
          ".csv)"),
         (b"\xff\xfe", "{path}: not UTF-8 text (byte 0xff); expected results as eval --out"),
-        (b'{"seed": 1, "outc', "{path}:1:13: not JSON (Unterminated string starting at), the "
-         "line cut short (the file ends inside it); expected one JSON object a line, as eval "
-         "--out writes it"),
+        (b'{"seed": 1, "outc\n', "{path}:1:18: not JSON (Invalid control character at); "
+         "expected one JSON object a line, as eval --out writes it"),
         (b"[1, 2]\n", "{path}:1: found a JSON array; expected an object per line, as eval --out"),
     ],
 )  # fmt: skip
@@ -244,6 +243,31 @@ def test_from_a_file_that_holds_no_results_says_which_and_why_in_one_line(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err
     assert err.startswith(f"roomba-bt eval: --from {said.format(path=path)}"), err
+
+
+def test_from_leaves_out_the_last_record_a_killed_sweep_cut_short(
+    ran: tuple[Path, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The partial file of a sweep killed as it wrote a record ends inside it, without its
+    end of line: ``--from`` refused it ("not JSON ..., the line cut short"), and the report
+    of a killed sweep needed the file edited. The record is left out, said in one line; a
+    file holding nothing else has no episode to report on."""
+    out, _ = ran
+    lines = out.read_bytes().splitlines(keepends=True)
+    partial = tmp_path / "k.jsonl.partial.jsonl"
+    partial.write_bytes(b"".join(lines[:5]) + lines[5][: len(lines[5]) // 2])
+    assert main(["eval", "--from", str(partial), "--json"]) == 0
+    report, err = capsys.readouterr()
+    assert [v["runs"] for v in json.loads(report)["variants"]] == [3, 2]
+    assert err == (f"roomba-bt eval: --from {partial}:6: the record of seed 2 of {BUMP} was cut "
+                   "short as it was written (the file ends inside it: the sweep was killed, or "
+                   f"the disk was full): left out\nroomba-bt eval: 5 episode(s) of 2 variant(s) "
+                   f"read from {partial}; none run\n")  # fmt: skip
+    partial.write_bytes(b'{"seed": 1, "outc')
+    assert main(["eval", "--from", str(partial)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"roomba-bt eval: --from {partial}:1: the record of seed 1 was cut")
+    assert err.endswith(f"left out\nroomba-bt eval: --from {partial}: no episode to report on\n")
 
 
 @pytest.mark.parametrize(
