@@ -877,7 +877,7 @@ def _report_on_stdout(
 
     if isinstance(observer, TerminalDisplay):
         if stack.runner.has_snapshot:
-            observer.render(stack.runner)
+            observer.render(stack.runner, as_left=stack.runner.tree_as_left)  # not [-]: stopped
         observer.close()  # the last screen drawn before the report is printed under it
     if args.display != "none":  # as the run left it: its stop marks every node INVALID
         print(_render_tree(stack.mission, status=True, as_ticked=stack.runner.tree_as_left))

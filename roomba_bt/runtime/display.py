@@ -313,6 +313,7 @@ def fitted_tree(
     rows: int,
     columns: int,
     marks: dict[py_trees.common.Status, str] | None = None,
+    as_left: TreeStatuses | None = None,
 ) -> list[str]:
     """The tree as at most ``rows`` lines of at most ``columns`` characters.
 
@@ -324,19 +325,26 @@ def fitted_tree(
 
     Each line starts with the node's kind as :func:`text_tree` draws it (``{-}`` a sequence
     with memory, ``[o]`` a reactive fallback, ``-->`` a leaf): without it a reactive
-    composite could not be told from one with memory while the tree ran, folded or not."""
+    composite could not be told from one with memory while the tree ran, folded or not.
+
+    ``as_left``: the statuses the run left its tree in (``MissionRunner.tree_as_left``), for
+    the last screen after the run's end has stopped the tree: the stop marks every node
+    INVALID, and that screen showed ``[-]`` on every node above the tree printed under it
+    with the right marks (``mode(safe) [✓]``, ``boom [-] -- raised RuntimeError``)."""
     shown = marks or _MARKS
     lines: list[tuple[str, bool]] = []  # (text, on the running path)
+    left = as_left.nodes if as_left is not None else {}
 
     def walk(node: py_trees.behaviour.Behaviour, depth: int) -> None:
-        running = node.status is py_trees.common.Status.RUNNING
+        status = left[node.id][0] if node.id in left else node.status
+        running = status is py_trees.common.Status.RUNNING
         children = list(node.children)
         folded = not running and children and depth > 0
         hidden = sum(1 for _ in node.iterate()) - 1 if folded else 0
         more = f" +{hidden}" if hidden else ""
         name = name_shown(node.name)
         kind = _KIND_SYMBOLS[node_kind(node)]
-        line = f"{'  ' * depth}{kind} {name} [{shown[node.status]}]{more}"
+        line = f"{'  ' * depth}{kind} {name} [{shown[status]}]{more}"
         lines.append((line, running))
         if running or depth == 0:
             for child in children:
@@ -561,9 +569,11 @@ class TerminalDisplay:
         self._last = now
         self.render(runner)
 
-    def render(self, runner: MissionRunner) -> None:
+    def render(self, runner: MissionRunner, as_left: TreeStatuses | None = None) -> None:
         """Draw once, through :attr:`writer`: a terminal that stalls or is gone holds up
-        nothing, and its ``OSError`` no longer reads as a lost port in the tick loop."""
+        nothing, and its ``OSError`` no longer reads as a lost port in the tick loop.
+        ``as_left``: the statuses the run left its tree in, for the last screen, drawn
+        after the run's end stopped the tree (:func:`fitted_tree`)."""
         if self.writer.gone:
             return
         columns, rows = self._size()
@@ -571,7 +581,9 @@ class TerminalDisplay:
         if self.label:
             status.insert(0, self.label[:columns])
         # the status lines, a blank line, the tree, and the cursor's line left free
-        tree = fitted_tree(runner.mission.root, rows - 2 - len(status), columns, self.marks)
+        tree = fitted_tree(
+            runner.mission.root, rows - 2 - len(status), columns, self.marks, as_left
+        )
         screen = "\n".join(status) + "\n\n" + "\n".join(tree) + "\n"
         text = "\n" + screen if self.plain else "\x1b[H\x1b[J" + screen
         self.writer.post(text, latest_only=True)

@@ -811,3 +811,28 @@ def test_after_a_behaviour_s_exception_the_tree_and_the_log_show_how_far_the_run
     if display == "log":
         logged = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.run"]
         assert logged[-2:] == ["pre -> SUCCESS", "motors(main_brush=on) -> SUCCESS"], logged
+
+
+def _marks(screen: str) -> dict[str, str]:
+    """Each node's status mark in a drawing of the tree, by its name (``--> pre [✓]``)."""
+    drawn = (re.match(r"\s*\S+ (.+?) \[(.)\]", line) for line in screen.splitlines())
+    return {m.group(1): m.group(2) for m in drawn if m is not None}
+
+
+def test_after_a_behaviour_s_exception_the_live_tree_s_last_screen_is_the_tree_as_left(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The live tree's last screen is drawn after the run's end has stopped the tree, which
+    marks every node INVALID: it showed ``[-]`` on every node, ``mode(safe)`` and the
+    sequence too, right above the tree printed after the run with the marks the run left
+    (session 37). It shows those marks: the same as the tree under it."""
+    options = ("--display", "tree", "--allow-plugin-files")
+    assert _run_file(tmp_path, "boom.yaml", BOOM, *options, plugins={"boom.py": BOOM_PLUGIN}) == 4
+    out = capsys.readouterr().out
+    # the last screen (its sensor lines, then the live tree), then the tree after the run
+    *_, live, final = out[: out.index("mission ")].split("{-} sequence [")
+    shown, left = _marks("{-} sequence [" + live), _marks("{-} sequence [" + final)
+    assert shown["sequence"] == "*", live
+    for name in ("mode(safe)", "pre", "motors(main_brush=on)"):
+        assert shown[name] == "✓", live
+    assert shown == {name: left[name] for name in shown}, (live, final)
