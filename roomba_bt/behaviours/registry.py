@@ -30,6 +30,7 @@ import importlib.util
 import inspect
 import logging
 import re
+import reprlib
 import sys
 import traceback
 import types
@@ -144,8 +145,10 @@ class PluginError:
     #: import, or a class declared itself wrongly. ``schema`` and ``behaviours`` fail on these
     #: (a schema without them marks every mission that uses them wrong in an editor)
     loses_behaviours: bool = True
-    #: the name the one refused class declares, when its plugin's other classes loaded: a
-    #: half-loaded plugin, whose loaded behaviours missions use; "" when none of it loaded
+    #: what was refused alone, as said (the name the refused class declares, quoted, or an
+    #: entry point's list item that is no behaviour class), when its plugin's other classes
+    #: loaded: a half-loaded plugin, whose loaded behaviours missions use; "" when none of
+    #: it loaded
     refused: str = ""
 
     def __str__(self) -> str:
@@ -157,7 +160,7 @@ class PluginError:
         refused behaviour (0.2.0's ``behaviours`` said "its behaviours are not listed" and
         then listed the others), or every behaviour of a plugin that did not load."""
         if self.refused:
-            return f"{self.refused!r} (refused alone: the plugin's other behaviours loaded)"
+            return f"{self.refused} (refused alone: the plugin's other behaviours loaded)"
         return f"the behaviours of plugin {self.plugin}"
 
 
@@ -327,25 +330,23 @@ class Registry:
         entry: EntryPoint | None = None,
     ) -> list[Declaration]:
         """Register what an entry point or a plugin file provides (class, sequence of
-        classes, or module); each class that declares itself wrongly becomes a recorded
-        :class:`PluginError` naming it and where it is, and the others still load (one bad
-        class dropped the rest of its module). ``said_as``: the origin the errors name, when
-        it is not ``origin``; ``entry``: the entry point that provides them (its name is
-        among each error's :attr:`PluginError.names`; its distribution, the package a
-        mission may name them by)."""
+        classes, or module); each class that declares itself wrongly, and each item of a list
+        that is no behaviour class, becomes a recorded :class:`PluginError` naming it and
+        where it is, and the others still load (one bad class dropped the rest of its module;
+        until session 37 one such item refused its whole list, good classes and all, though a
+        class of the list that declared itself wrongly was refused alone). ``said_as``: the
+        origin the errors name, when it is not ``origin``; ``entry``: the entry point that
+        provides them (its name is among each error's :attr:`PluginError.names`; its
+        distribution, the package a mission may name them by)."""
         said = said_as or origin
         named = () if entry is None else (entry.name,)
         try:
-            classes = _provided(provider)
-        except DeclarationError as exc:
-            # refused whole: the names its good classes declare are lost with it, and an
-            # unknown node of one of them gets this error as its note
-            lost = _declared_names(provider)
-            cause = f"declares itself wrongly: {exc}"
-            if lost:
-                cause += f" (the entry refused whole: {', '.join(map(repr, lost))} with it)"
-            self._errors.append(PluginError(said, cause, names=(*lost, *named)))
+            classes, unfit = _provided(provider)
+        except DeclarationError as exc:  # nothing of it is a behaviour class
+            self._errors.append(PluginError(said, f"declares itself wrongly: {exc}", names=named))
             return []
+        for item, wrong in unfit:  # a list's item that is no class: refused alone
+            self._errors.append(PluginError(said, wrong, names=named, refused=item))
         registered: list[Declaration] = []
         for cls in classes:
             # what a mission calls it: the name its declaration gives, refused or not
@@ -368,11 +369,13 @@ class Registry:
                 word = _language_word_refused(cls, exc.name, spelled)
                 self._errors.append(PluginError(said, word, names=names, loses_behaviours=False))
             except _NotABehaviour as exc:
-                refused = names[0] if isinstance(declared, Declaration) else ""
+                refused = repr(names[0]) if isinstance(declared, Declaration) else ""
                 wrong = f"{_where(cls)}: {exc}"
                 self._errors.append(PluginError(said, wrong, names=names, refused=refused))
             except DeclarationError as exc:
-                refused = names[0] if isinstance(declared, Declaration) else ""
+                # a class of a list with no declaration of its own is refused alone too
+                alone = _where(cls) if len(classes) > 1 else ""
+                refused = repr(names[0]) if isinstance(declared, Declaration) else alone
                 wrong = f"{_where(cls)} declares itself wrongly: {exc}"
                 self._errors.append(PluginError(said, wrong, names=names, refused=refused))
         return registered
@@ -524,11 +527,11 @@ class Registry:
     # ------------------------------------------------------------------ queries
     def may_have_meant(self, word: str) -> tuple[list[PluginError], bool]:
         """The plugins that did not load whose behaviour ``word`` may have been, and whether
-        one declares it: those that declare the name (a class refused; a list refused
-        whole, its good classes' names with it), else those that did not import at all (any
-        name could have been theirs; one that imported and declared nothing had no name to
-        give). A mission's "unknown node" and ``behaviours NAME`` note them; not every
-        broken plugin on the machine, nor one whose error merely contains the word."""
+        one declares it: those that declare the name (a class refused), else those that did
+        not import at all (any name could have been theirs; one that imported and declared
+        nothing had no name to give). A mission's "unknown node" and ``behaviours NAME`` note
+        them; not every broken plugin on the machine, nor one whose error merely contains
+        the word."""
         errors = self.errors
         named = [e for e in errors if word in e.names]
         return (named, True) if named else ([e for e in errors if not e.imported], False)
@@ -817,23 +820,47 @@ class _NotABehaviour(DeclarationError):
     module's other classes still load."""
 
 
-def _provided(provider: object) -> list[type]:
-    """The classes an entry point or a plugin file provides: behaviour classes, and a
-    module's classes decorated with @declare that are not behaviours (each is an error of
-    its own, :meth:`Registry.register_provider`); raises :class:`DeclarationError` when it
-    provides none, or something else."""
+#: an item of an entry point's list that is no behaviour class: (the item as said, why)
+Unfit = tuple[str, str]
+
+
+def _provided(provider: object) -> tuple[list[type], list[Unfit]]:
+    """The classes an entry point or a plugin file provides: behaviour classes, and the
+    classes decorated with @declare that are not behaviours (each is an error of its own,
+    :meth:`Registry.register_provider`); and each item of a list (or tuple) that is neither,
+    said (:func:`_unfit_items`), refused alone. Raises :class:`DeclarationError` when it
+    provides no class, or something else."""
+    unfit: list[Unfit] = []
+    if isinstance(provider, list | tuple):
+        provider, unfit = _unfit_items(provider)
     classes = list(_classes_of(provider))
+    if not classes and unfit:  # nothing of the list loads: the entry is refused whole
+        raise DeclarationError("; ".join(why for _, why in unfit))
     if not classes:
         raise DeclarationError("it provides no behaviour class (decorated with @declare)")
-    return classes
+    return classes, unfit
 
 
-def _declared_names(provider: object) -> tuple[str, ...]:
-    """The names the classes of a refused list (or tuple) declare: what a mission calls
-    the behaviours lost with it."""
-    items = provider if isinstance(provider, list | tuple) else ()
-    declared = [getattr(item, "__dict__", {}).get("declaration") for item in items]
-    return tuple(d.name for d in declared if isinstance(d, Declaration))
+def _unfit_items(items: list[object] | tuple[object, ...]) -> tuple[list[type], list[Unfit]]:
+    """A list's classes that are behaviours or say they are (decorated with @declare), and
+    each other item, as said (``Helper (lab.py:12)``, ``'not a class'``) with why it is
+    refused: its place in the list, what it is, what a list holds."""
+    classes: list[type] = []
+    unfit: list[Unfit] = []
+    for place, item in enumerate(items, 1):
+        if isinstance(item, type) and (
+            issubclass(item, RobotBehaviour) or "declaration" in item.__dict__
+        ):
+            classes.append(item)
+            continue
+        said = _where(item) if isinstance(item, type) else reprlib.repr(item)
+        what = "a class" if isinstance(item, type) else f"a {type(item).__name__}"
+        unfit.append((said, (
+            f"item {place} of its list, {said} ({what}), is no behaviour class: the list holds "
+            "classes derived from roomba_bt.behaviours.Action or Condition, each decorated "
+            "with @declare"
+        )))  # fmt: skip
+    return classes, unfit
 
 
 def _classes_of(provider: object) -> Iterable[type]:
@@ -847,13 +874,8 @@ def _classes_of(provider: object) -> Iterable[type]:
         if not issubclass(provider, RobotBehaviour):
             raise DeclarationError(f"{_qualname(provider)} is not a RobotBehaviour subclass")
         return [provider]
-    if isinstance(provider, list | tuple):
-        out = []
-        for item in provider:
-            if not (isinstance(item, type) and issubclass(item, RobotBehaviour)):
-                raise DeclarationError(f"{item!r} is not a RobotBehaviour subclass")
-            out.append(item)
-        return out
+    if isinstance(provider, list | tuple):  # its classes (:func:`_unfit_items`)
+        return list(provider)
     raise DeclarationError(
         f"the entry point names {provider!r}: expected a behaviour class, a list of them, "
         "or a module"

@@ -713,8 +713,8 @@ def _unknown_behaviour(name: str, registry: Registry) -> str:
     """What ``behaviours NAME`` says of a name no behaviour has: the plugin that declares it
     and did not load (its error follows), else the plugins none of whose behaviours loaded,
     else a did-you-mean and where a plugin file's behaviours are listed. It said "a plugin
-    file's are listed with --plugin-file FILE" of a name an installed plugin declares in a
-    list refused whole, as if the name were in a file."""
+    file's are listed with --plugin-file FILE" of a name an installed plugin's refused class
+    declares, as if the name were in a file."""
     from roomba_bt.behaviours.units import closest
 
     likely, declares = registry.may_have_meant(name)

@@ -317,7 +317,7 @@ class NodeParser:
         if unread is not None and self.ctx.registry.why_unknown(word) is None:
             return f"unknown node {word!r}{where} ({unread})"  # its plugins: were not read
         # the plugins that may have meant this word: one that declares it (a class refused
-        # for its declaration, or a list refused whole: the cause, not a misspelling), else
+        # for its declaration: the cause, not a misspelling), else
         # those that did not import at all (any name could have been theirs); a few, not
         # every broken plugin on the machine (one line of more than 1,000 characters)
         likely, declares = self.ctx.registry.may_have_meant(word)

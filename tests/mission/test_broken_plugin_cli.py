@@ -190,10 +190,14 @@ def test_a_plugin_file_that_raises_keyboard_interrupt_is_a_mission_error(
     assert "interrupted" not in err
 
 
-#: an entry point to a list holding a good class and a string: refused whole (s36)
+#: an entry point to a list holding a good class, a string and a class declared wrongly:
+#: refused whole until session 37, its good class with it
 LISTED = (
-    conditions_module(("s36_ok", "Ok", "Always true: in a list refused whole.", True))
-    + "\n\nLIST = [Ok, 'not a class']\n"
+    conditions_module(("s36_ok", "Ok", "Always true: in a list beside two bad items.", True))
+    + '\n\n@declare("s36_bad", kind="action")\nclass Bad(Condition):\n'
+    + '    """Declared an action, derived from Condition."""\n\n'
+    + "    def check(self, snapshot):\n        return True\n\n\n"
+    + "LIST = [Ok, 'not a class', Bad]\n"
 )
 
 
@@ -205,42 +209,78 @@ def listed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     (info / "entry_points.txt").write_text("[roomba_bt.behaviours]\nlst = s36_list:LIST\n")
 
 
+#: how the registry names the listed plugin
+LST = "'lst' (s36_list:LIST, from bt-s36-list)"
+
+
 @pytest.mark.usefixtures("listed")
-def test_an_unknown_node_of_an_entry_point_refused_whole_notes_that_plugin(
+def test_a_list_s_good_class_loads_and_each_bad_item_is_said_alone(
     tmp_path: Path, capsys: Capsys
 ) -> None:
-    """A list refused whole (one item no class) took its good class with it, and the
-    mission's ``unknown node 's36_ok'`` had no note: one was given only for a plugin that
-    did not import (session 36, a stranger's finding)."""
+    """One item of an entry point's list that was no behaviour class (a string) refused the
+    whole list: its good class was an unknown node, though a class of the list declared
+    wrongly was refused alone (session 37). The good class loads and runs; each bad item is
+    a plugin that did not load, in ``validate``'s JSON as a warning, naming the entry point,
+    the item and what is wrong, the good class not among what a mission cannot use."""
     mission = tmp_path / "m.yaml"
     mission.write_text("tree:\n  s36_ok\n")
+    assert main(["validate", "--format", "json", str(mission)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["summary"]["errors"] == 0
+    item, bad = report["plugins_not_loaded"]
+    assert item["plugin"] == bad["plugin"] == LST
+    assert item["error"] == (
+        "item 2 of its list, 'not a class' (a str), is no behaviour class: the list holds "
+        "classes derived from roomba_bt.behaviours.Action or Condition, each decorated with "
+        "@declare"
+    )
+    assert item["lost"] == "'not a class' (refused alone: the plugin's other behaviours loaded)"
+    assert bad["error"].startswith("Bad (")
+    assert "declares itself wrongly: kind='action', but Bad derives from Condition" in bad["error"]
+    assert bad["lost"] == "'s36_bad' (refused alone: the plugin's other behaviours loaded)"
+    assert all(p["severity"] == "warning" and "s36_ok" not in p["message"] for p in (item, bad))
+    assert main(["run", str(mission), "--fast", "--display", "none"]) == 0
+    assert "outcome      SUCCESS" in capsys.readouterr().out
+
+
+@pytest.mark.usefixtures("listed")
+def test_an_unknown_node_of_a_list_s_refused_class_notes_that_class(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """The mission's ``unknown node`` of a name a refused class of the list declares has
+    that class's error as its note (session 36 gave a note only for a plugin that did not
+    import), not the other items'."""
+    mission = tmp_path / "m.yaml"
+    mission.write_text("tree:\n  s36_bad\n")
     assert main(["validate", str(mission)]) == 2
     out, err = capsys.readouterr()
-    assert (
-        "m.yaml:2:3: unknown node 's36_ok' (note: plugin 'lst' (s36_list:LIST, from "
-        "bt-s36-list): declares itself wrongly: 'not a class' is not a RobotBehaviour "
-        "subclass (the entry refused whole: 's36_ok' with it)) [tree]" in out + err
-    ), out + err
+    [line] = [line for line in (out + err).splitlines() if "unknown node 's36_bad'" in line]
+    assert line.startswith(f"{mission}:2:3: unknown node 's36_bad' (note: plugin {LST}: Bad ("), (
+        line
+    )
+    assert "declares itself wrongly: kind='action', but Bad derives from Condition" in line
+    assert "not a class" not in line
 
 
 @pytest.mark.usefixtures("listed")
 def test_behaviours_of_a_name_a_plugin_that_did_not_load_declares_says_so_as_errors(
     capsys: Capsys,
 ) -> None:
-    """``behaviours s36_ok`` said "a plugin file's are listed with --plugin-file FILE" (the
+    """``behaviours s36_bad`` said "a plugin file's are listed with --plugin-file FILE" (the
     name is an installed plugin's) and then the plugin's error as ``roomba-bt: warning:``,
     where ``behaviours`` of a name that loads says it as ``roomba-bt behaviours: error:``."""
-    assert main(["behaviours", "s36_ok"]) == 2
+    assert main(["behaviours", "s36_bad"]) == 2
     err = capsys.readouterr().err
     lines = err.splitlines()
     assert lines[0] == (
-        "roomba-bt behaviours: unknown behaviour 's36_ok': it is declared by plugin 'lst' "
-        "(s36_list:LIST, from bt-s36-list), which did not load (below)"
+        f"roomba-bt behaviours: unknown behaviour 's36_bad': it is declared by plugin {LST}, "
+        "which did not load (below)"
     ), err
-    assert lines[1].startswith("roomba-bt behaviours: error: plugin 'lst' (s36_list:LIST"), err
+    said = f"roomba-bt behaviours: error: plugin {LST}: "
+    assert [line[len(said) :][:5] for line in lines[1:3]] == ["item ", "Bad ("], err
     assert "--plugin-file" not in err and "roomba-bt: warning" not in err, err
-    assert main(["behaviours", "s36_ok", "--skip-broken-plugins"]) == 2  # still unknown
-    assert "roomba-bt behaviours: warning: plugin 'lst'" in capsys.readouterr().err
+    assert main(["behaviours", "s36_bad", "--skip-broken-plugins"]) == 2  # still unknown
+    assert f"roomba-bt behaviours: warning: plugin {LST}" in capsys.readouterr().err
 
 
 def test_validate_s_json_and_github_formats_say_a_plugin_that_did_not_load(
