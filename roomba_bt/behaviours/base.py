@@ -97,7 +97,16 @@ class UnkeptDeclaration(TypeError):
     Full unwarned (decided, session 36: the behaviour's error at that send, before the
     command is queued, as :class:`UndeclaredCommand`)."""
 
-    def __init__(self, behaviour: RobotBehaviour, command: Command, broken: str) -> None:
+    def __init__(
+        self,
+        behaviour: RobotBehaviour,
+        command: Command,
+        broken: str,
+        returned: py_trees.common.Status | None = None,
+    ) -> None:
+        #: the behaviour, and the status it returned where that broke it (a SUCCESS in a
+        #: mode it only passes through): the run's error names the ``return`` that gave it
+        self.node, self.returned = behaviour, returned
         cls = type(behaviour)
         where = ""
         with contextlib.suppress(OSError, TypeError):
@@ -204,25 +213,61 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
     def _hold_to_leads_to(self, command: Command, sent: OIMode) -> None:
         """Refuse a mode command (leading to ``sent``) leading elsewhere than the mode its
         declaration says it leads to with its parameters (none said: the check took the mode
-        as unchanged)."""
-        declared = self.declaration.mode_after(self._resolved)
+        as unchanged) or a mode it says it passes through on the way (``passes_through=``:
+        noted, :attr:`_passing`, until a command leads on to the mode it leads to)."""
+        declaration = self.declaration
+        declared = declaration.mode_after(self._resolved)
         if sent is declared:
+            self._passing = None
             return
+        visits = declaration.passes_through
+        if sent in visits:
+            self._passing = command
+            return
+        through = f", passes_through={', '.join(m.label for m in visits)}" if visits else ""
         if declared is None:
             broken = (
-                "it leaves the mode as it found it (its sends= lead to no one mode, and it "
-                f"gives no leads_to=): declare leads_to=OIMode.{sent.name} if it ends there"
+                f"it leaves the mode as it found it (its sends= lead to no one mode, and it "
+                f"gives no leads_to=){through}: declare leads_to=OIMode.{sent.name} if it "
+                f"ends there, or passes_through=OIMode.{sent.name} and the mode it ends in "
+                "if it leaves it again"
             )
         else:
             broken = (
-                f"leads_to={declared.label}, and {command.spec.name} leads to {sent.label}: the "
-                "mode check follows leads_to= to judge the leaves after it; declare the mode "
-                "it ends in (a function of its parameters where they decide)"
+                f"leads_to={declared.label}{through}, and {command.spec.name} leads to "
+                f"{sent.label}: the mode check follows leads_to= to judge the leaves after it; "
+                "declare the mode it ends in (a function of its parameters where they decide), "
+                f"and passes_through=OIMode.{sent.name} if it goes there on the way"
             )
         raise UnkeptDeclaration(self, command, broken)
 
+    def _left_passing(self) -> None:
+        """Refuse a SUCCESS in a mode it only passes through (``passes_through=``): the mode
+        check takes the leaves after it to start in its ``leads_to``, and a drive after it
+        would run in Full unwarned. Said with the command that took it there."""
+        command = self._passing
+        assert command is not None
+        self._passing = None
+        declaration = self.declaration
+        declared = declaration.mode_after(self._resolved)
+        visits = ", ".join(m.label for m in declaration.passes_through)
+        ended = declared.label if declared is not None else "the mode it leads to"
+        passed = command.spec.leads_to
+        raise UnkeptDeclaration(
+            self,
+            command,
+            f"leads_to={ended}, passes_through={visits}, and it returned SUCCESS with no mode "
+            f"command after this one: it ended in {passed.label if passed else '?'}, not "
+            f"{ended}; send the command that takes it to {ended} before it succeeds",
+            _SUCCESS,
+        )
+
     #: whether the last wheel command it sent set them turning (:meth:`send` notes it)
     _started_motion = False
+    #: the mode command it last sent where that leads to a mode its declaration's
+    #: ``passes_through=`` names, not yet followed by one leading to its ``leads_to``
+    #: (:meth:`_hold_to_leads_to`); None: none
+    _passing: Command | None = None
     #: whether it sent a built-in cycle (Clean, Spot, Max, Seek Dock) not yet ended by it
     _started_cycle = False
 
@@ -490,6 +535,10 @@ class Action(RobotBehaviour):
         super().stop(new_status)
         if self._started_motion or (self._started_cycle and new_status is not _SUCCESS):
             self._end_what_terminate_left(new_status)
+        if self._passing is not None:  # a mode it passes through: not where it may succeed
+            if new_status is _SUCCESS:
+                self._left_passing()
+            self._passing = None
 
     def _end_what_terminate_left(self, new_status: py_trees.common.Status) -> None:
         """The halt (and the cycle's end) that an override of :meth:`terminate` left out, or

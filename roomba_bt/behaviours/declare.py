@@ -298,6 +298,12 @@ class Declaration:
     key_types: tuple[tuple[str, ValueType], ...] = field(default=())
     #: its wheel commands only stop the wheels (``stop``: Drive 0), so it turns none
     halts_only: bool = False
+    #: the modes its own mode commands take the robot to on the way to ``leads_to`` (an
+    #: action that sends Full, drives, and sends Safe: ``passes_through=OIMode.FULL``,
+    #: ``leads_to=OIMode.SAFE``): ``send()`` takes a mode command leading to one of these
+    #: or to ``leads_to``, and the static mode check takes it that the leaf may fail or be
+    #: halted in any of them. It succeeds in ``leads_to`` alone (held to when it succeeds)
+    passes_through: tuple[OIMode, ...] = ()
     #: the packet tests its answer is, where a parameter names one by a word (``stasis:
     #: dirty`` is ``stasis == 2``): the per-profile range check reads them as it reads a
     #: ``sensor:`` test's, so a test the chosen robot cannot pass is said either way
@@ -476,6 +482,8 @@ class Declaration:
                 "roomba_bt.oi.opcodes)"
             )
         problem = _powers_down(self.sends)
+        if problem is None:
+            problem = _passes_through_problem(self)
         if problem is not None:
             raise DeclarationError(problem)
         if self.kind == "condition" and self.sends:
@@ -509,6 +517,51 @@ def _powers_down(sends: tuple[int, ...]) -> str | None:
                 "asleep and its sensor stream stops, which a run cannot tell from a lost "
                 "cable; leave the robot in Passive with mode: passive, or by the run's end"
             )
+    return None
+
+
+def _passes_through_problem(decl: Declaration) -> str | None:
+    """What is wrong with ``decl``'s ``passes_through=``, or None: each an :class:`OIMode`
+    that one of its ``sends=`` leads to (a mode it cannot reach is a typo the mode check
+    would believe), none the mode it leads to, and that mode said and led to by one of its
+    commands: a leaf that passes through Full must send what takes it out again."""
+    visits = decl.passes_through
+    if not visits:
+        return None
+    wrong = [m for m in visits if not isinstance(m, OIMode)]
+    if wrong:
+        return f"passes_through= names OI modes (OIMode.FULL, ...), got {wrong[0]!r}"
+    reached = {COMMANDS[op].leads_to for op in decl.sends if op in COMMANDS}
+    said = ", ".join(m.label for m in visits)
+    for mode in visits:
+        if mode not in reached:
+            senders = ", ".join(
+                f"{c.name} ({c.opcode})"
+                for c in COMMANDS.values()
+                if c.leads_to is mode and c.effect is not Effect.POWER_DOWN
+            )
+            return (
+                f"passes_through={said}, but none of its sends= leads to {mode.label} "
+                f"({senders} would): add the command it sends, or drop {mode.label}"
+            )  # fmt: skip
+    if callable(decl.leads_to):  # the mode it ends in depends on its parameters
+        return None
+    if decl.leads_to is None:
+        return (
+            f"passes_through={said}, and no leads_to= says the mode it ends in (its other "
+            "mode commands lead to no one mode): declare leads_to=OIMode.SAFE, say, if it "
+            "ends there"
+        )
+    if decl.leads_to in visits:
+        return (
+            f"passes_through={said} names {decl.leads_to.label}, the mode it leads to "
+            "(leads_to=): passes_through= names only the modes it leaves again"
+        )
+    if decl.leads_to not in reached:
+        return (
+            f"passes_through={said}, leads_to={decl.leads_to.label}, but none of its sends= "
+            f"leads to {decl.leads_to.label}: add the mode command that takes it there"
+        )
     return None
 
 
@@ -657,12 +710,16 @@ def _is_number(value: object) -> bool:
 B = TypeVar("B", bound="type[RobotBehaviour]")
 
 
-def mode_after_sending(sends: tuple[int, ...]) -> OIMode | None:
+def mode_after_sending(
+    sends: tuple[int, ...], passes_through: tuple[OIMode, ...] = ()
+) -> OIMode | None:
     """The OI mode after the commands of ``sends``, from the opcode table's ``leads_to``:
-    the one mode they lead to; None when none of them changes the mode, or when they lead to
-    several (a behaviour that sends Safe or Full by a parameter says which with a function
-    of its parameters)."""
+    the one mode they lead to, besides those it only ``passes_through`` (Full, for an action
+    that sends Full, drives and sends Safe: it leads to Safe); None when none of them
+    changes the mode, or when they lead to several (a behaviour that sends Safe or Full by a
+    parameter says which with a function of its parameters)."""
     after = {COMMANDS[op].leads_to for op in sends if op in COMMANDS} - {None}
+    after -= set(passes_through)
     return after.pop() if len(after) == 1 else None
 
 
@@ -683,6 +740,7 @@ def declare(
     reads: tuple[int, ...] | PacketsOf = (),
     sends: tuple[int, ...] = (),
     leads_to: OIMode | ModeOf | None = None,
+    passes_through: OIMode | tuple[OIMode, ...] = (),
     primary: str | None = None,
     writes_keys: tuple[str, ...] | Mapping[str, ValueType] = (),
     reads_keys: tuple[str, ...] | Mapping[str, ValueType] = (),
@@ -701,8 +759,12 @@ def declare(
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
     the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
     says of the commands in ``sends`` (:func:`mode_after_sending`): Spot (134) leads to
-    Passive, so ``spot`` need not say it. ``halts_only=True`` says that its wheel commands
-    only stop the wheels (``stop``): the Full-mode warning passes it by. ``at_once=True``
+    Passive, so ``spot`` need not say it. ``passes_through`` names the modes (one, or a
+    tuple) its own mode commands take the robot to on the way to the one it leads to (an
+    action that sends Full, drives, then sends Safe passes through Full and leads to Safe):
+    ``send()`` refused its Full where ``leads_to=OIMode.SAFE`` was all it could say.
+    ``halts_only=True`` says that its wheel commands only stop the wheels (``stop``): the
+    Full-mode warning passes it by. ``at_once=True``
     says that it returns SUCCESS on the tick it starts, every time in the modes its commands
     are taken in (the static checks rely on it: a test ticks every built-in that says so;
     the robot's own fall to Passive is beyond them, and ``motors`` there fails at once:
@@ -719,7 +781,8 @@ def declare(
     parameters, whether it only stops what Passive has stopped already (the wheels, the
     motors), sending nothing there (``Action.stopped_already``): validate accepts it in
     Passive where no built-in cycle the tree started may drive."""
-    after = mode_after_sending(sends) if leads_to is None else leads_to
+    visits = (passes_through,) if isinstance(passes_through, OIMode) else tuple(passes_through)
+    after = mode_after_sending(sends, visits) if leads_to is None else leads_to
     writes, written_types = key_roles(writes_keys)
     reads_named, read_types = key_roles(reads_keys)
 
@@ -731,7 +794,7 @@ def declare(
             key_types=(*written_types, *read_types), halts_only=halts_only,
             compares=compares, sends_by=sends_by, at_once=at_once, may_succeed=may_succeed,
             never_fails=never_fails, needs=needs, needs_only_warns=needs_only_warns,
-            in_passive=in_passive, stops_only=stops_only,
+            in_passive=in_passive, stops_only=stops_only, passes_through=visits,
         )  # fmt: skip
         return cls
 

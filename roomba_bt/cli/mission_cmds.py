@@ -584,6 +584,8 @@ def describe_behaviours(
                 "sends": list(decl.sends),
                 "modes": [m.label for m in sorted(decl.modes)],
                 "leads_to": _leads_to(decl),
+                # the modes its own mode commands take it to on the way (passes_through=)
+                "passes_through": [m.label for m in decl.passes_through],
             }
         )
     return out
@@ -736,6 +738,8 @@ def _print_behaviour(entry: dict[str, Any]) -> None:
     head = f"{entry['name']}  ({entry['kind']}"
     if len(entry["modes"]) < 4:
         head += f"; needs {modes}"
+    if entry["passes_through"]:
+        head += f"; passes through {' and '.join(entry['passes_through'])}"
     if entry["leads_to"]:
         head += f"; leads to {entry['leads_to']}"
     if entry["origin"] != "builtin":

@@ -193,7 +193,9 @@ class ModeCheck:
     def _leaf(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         """A leaf fails in the modes it was entered in; one that starts a built-in cycle
         (``seek_dock: {timeout: ...}``) may fail after it sent it, and its failure ends the
-        cycle in Passive (Start): a ``drive`` on its fallback needs a ``mode: safe`` first."""
+        cycle in Passive (Start): a ``drive`` on its fallback needs a ``mode: safe`` first.
+        One that passes through modes on its way (``passes_through=``: Full, then Safe) may
+        fail in those too, or in the mode it leads to, once it got there."""
         decl = node.decl
         assert decl is not None
         self._entered(node, decl, entry)
@@ -207,7 +209,7 @@ class ModeCheck:
             self.cycle_starters.append(node)
             return _CYCLE_DRIVING, entry | {OIMode.PASSIVE}
         after = decl.mode_after(node.params)
-        return (frozenset({after}) if after is not None else entry), entry
+        return (frozenset({after}) if after is not None else entry), entry | _visited(decl, after)
 
     def _unbuilt(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         """A node that could not be built: a behaviour whose parameters were wrong is judged
@@ -224,7 +226,7 @@ class ModeCheck:
         if decl.starts_cycle:
             return _CYCLE_DRIVING, entry | {OIMode.PASSIVE}
         after = decl.leads_to
-        return (frozenset({after}) if after is not None else entry), entry
+        return (frozenset({after}) if after is not None else entry), entry | _visited(decl, after)
 
     def _entered(self, node: Node, decl: Declaration, entry: Modes) -> None:
         """``node`` (of behaviour ``decl``) reached in ``entry``: an error, once, if one of
@@ -394,13 +396,25 @@ _COMPOSITE_HANDLERS: dict[str | None, _ModeHandler] = {
 
 
 def _leads_to_within(node: Node) -> Modes:
+    """The modes the leaves under ``node`` may leave the robot in, where a limit halts
+    them anywhere: those they lead to, and those they pass through (``passes_through=``)."""
     out: set[OIMode] = set()
     for n in node.walk():
         if n.decl is not None:
             after = n.decl.mode_after(n.params)
             if after is not None:
                 out.add(after)
+            out.update(n.decl.passes_through)
     return frozenset(out)
+
+
+def _visited(decl: Declaration, after: OIMode | None) -> Modes:
+    """The modes a leaf that passes through some (``passes_through=``) may fail in besides
+    those it was entered in: those, and the one it leads to (``after``), once there. Empty
+    for every other leaf: it fails where it was entered."""
+    if not decl.passes_through:
+        return _EMPTY
+    return frozenset(decl.passes_through) | (frozenset({after}) if after is not None else _EMPTY)
 
 
 class KeyCheck:

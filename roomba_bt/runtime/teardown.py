@@ -30,6 +30,7 @@ from typing import Any
 
 import py_trees
 
+from roomba_bt.behaviours.base import UnkeptDeclaration
 from roomba_bt.behaviours.blackboard import KeyRange
 from roomba_bt.behaviours.lean import InvalidStatus
 from roomba_bt.behaviours.returned import returned_from
@@ -66,6 +67,13 @@ def behaviour_error(exc: BaseException, *, method: bool = True) -> str:
     if isinstance(exc, Exception) and str(exc):  # its lines as they are; an empty one by name
         what = f"{type(exc).__name__}: {exc}"  # ("MemoryError:  in its update()" had two spaces)
     behaviour, where = innermost_behaviour(frames)
+    came_out_of: str | None = None
+    if isinstance(exc, UnkeptDeclaration) and exc.returned is not None:
+        # refused as it returned (a SUCCESS in a mode it passes through), after its update:
+        # the return that gave it, not roomba-bt's stop that found it
+        behaviour, where, came_out_of = exc.node, _top_line(frames), "update"
+        with contextlib.suppress(TypeError, OSError, SyntaxError):
+            where = returned_from(type(behaviour).update, exc.returned)
     if isinstance(exc, InvalidStatus):  # raised after its update (check) returned: where it is
         behaviour, where = exc.node, _top_line(frames)
         update: Any = getattr(type(behaviour), exc.method, None)
@@ -78,7 +86,8 @@ def behaviour_error(exc: BaseException, *, method: bool = True) -> str:
         return f"behaviour {tree_path(behaviour or exc.node)} raised {what}"
     if behaviour is None:
         return f"{what} ({where})" if where else what
-    came_out_of = _method_of(behaviour, frames) if method else None
+    if came_out_of is None and method:
+        came_out_of = _method_of(behaviour, frames)
     within = f" in its {came_out_of}()" if came_out_of else ""
     hint = _hint(exc, behaviour)
     return f"behaviour {tree_path(behaviour)} raised {what}{within} ({where}){hint}"

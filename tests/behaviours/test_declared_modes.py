@@ -87,8 +87,128 @@ def test_a_mode_command_leading_elsewhere_than_leads_to_is_refused() -> None:
         UnkeptDeclaration,
         match=r"liar sent full \(132\) 84, but its @declare \(at .*test_declared_modes.py:\d+\) "
         r"says leads_to=Safe, and full leads to Full",
-    ):
+    ) as raised:
         leaf.tick_once()
+    assert "and passes_through=OIMode.FULL if it goes there on the way" in str(raised.value)
+
+
+class _Scripted(Action):
+    """Sends, on each tick, that tick's commands, and answers that tick's status."""
+
+    script: list[tuple[list[Command], Status]]
+
+    def start(self) -> None:
+        self.ticks = iter(self.script)
+
+    def update(self) -> Status:
+        sent, status = next(self.ticks)
+        for command in sent:
+            self.send(command)
+        return status
+
+
+#: Full, a drive in it, then Safe: what an action that dashes in Full itself declares
+DASH = dict(sends=opcodes("full", "drive", "safe"), passes_through=OIMode.FULL)
+#: its ticks: Full and a drive; the halt and Safe, SUCCESS
+DASHES = [
+    ([commands.full(), commands.drive(300, 32767)], Status.RUNNING),
+    ([commands.halt(), commands.safe()], Status.SUCCESS),
+]
+
+
+def _scripted(script: list[tuple[list[Command], Status]], **declared: object) -> Action:
+    class Dash(_Scripted):
+        """Sends what its script says."""
+
+    Dash.script = script
+    declared_cls = declare("dash", kind="action", **declared)(Dash)  # type: ignore[arg-type]
+    Registry(entry_point_group=None).register(declared_cls, "test")  # its declaration checked
+    leaf: Action = declared_cls("dash")
+    leaf.setup(robot=StubRobot())
+    return leaf
+
+
+@pytest.mark.parametrize(
+    "declared",
+    [{**DASH, "leads_to": OIMode.SAFE}, DASH, {**DASH, "passes_through": (OIMode.FULL,)}],
+    ids=["leads_to said", "leads_to from its other commands", "a tuple of modes"],
+)
+def test_an_action_that_passes_through_full_and_ends_in_safe_runs(
+    declared: dict[str, object],
+) -> None:
+    """It went to Full itself, drove, and went back to Safe, and said so as it could
+    (``leads_to=Safe``): refused at its Full, since the declarations had no way to say
+    "passes through Full" (session 37). ``passes_through=`` says it; ``leads_to`` is then
+    what its other mode commands lead to, where not said."""
+    leaf = _scripted(DASHES, **declared)
+    assert leaf.declaration.leads_to is OIMode.SAFE
+    assert leaf.declaration.passes_through == (OIMode.FULL,)
+    assert leaf.robot is not None
+    for sent, status in DASHES:  # each tick's commands queued, and written (drained)
+        leaf.tick_once()
+        assert leaf.status is status
+        assert leaf.robot.outbox.drain() == sent
+
+
+def test_a_mode_command_neither_passed_through_nor_led_to_is_refused() -> None:
+    leaf = _scripted(
+        [([commands.start()], Status.SUCCESS)],
+        sends=opcodes("full", "drive", "safe", "start"), passes_through=OIMode.FULL,
+        leads_to=OIMode.SAFE,
+    )  # fmt: skip
+    with pytest.raises(UnkeptDeclaration, match=r"dash sent start \(128\) 80, but its @declare "
+                       r"\(at .*\) says leads_to=Safe, passes_through=Full, and start leads to "
+                       r"Passive"):  # fmt: skip
+        leaf.tick_once()
+
+
+def test_a_success_in_a_mode_it_only_passes_through_is_refused() -> None:
+    """Its ``leads_to`` is where the mode check has the leaves after it start: a SUCCESS
+    left in Full had a drive after it run in Full, unwarned."""
+    leaf = _scripted([([commands.full()], Status.SUCCESS)], **DASH)
+    with pytest.raises(UnkeptDeclaration, match=r"dash sent full \(132\) 84, but its @declare "
+                       r"\(at .*\) says leads_to=Safe, passes_through=Full, and it returned "
+                       r"SUCCESS with no mode command after this one: it ended in Full, not "
+                       r"Safe") as raised:  # fmt: skip
+        leaf.tick_once()
+    assert raised.value.returned is Status.SUCCESS  # the run names its return
+
+
+@pytest.mark.parametrize("ending", ["failure", "halted"])
+def test_a_failure_or_a_halt_on_the_way_is_no_broken_declaration(ending: str) -> None:
+    """The mode check takes it that such a leaf fails, or is halted, in a mode it passes
+    through (a drive on the fallback after it is judged in Full)."""
+    script = [([commands.full()], Status.FAILURE if ending == "failure" else Status.RUNNING)]
+    leaf = _scripted(script, **DASH)
+    leaf.tick_once()
+    if ending == "halted":
+        leaf.stop(Status.INVALID)
+    assert leaf.status is (Status.FAILURE if ending == "failure" else Status.INVALID)
+
+
+@pytest.mark.parametrize(
+    ("declared", "said"),
+    [
+        ({"sends": opcodes("drive", "safe"), "passes_through": OIMode.FULL},
+         "passes_through=Full, but none of its sends= leads to Full (full (132) would)"),
+        ({**DASH, "leads_to": OIMode.FULL},
+         "passes_through=Full names Full, the mode it leads to"),
+        ({"sends": opcodes("full", "drive"), "passes_through": OIMode.FULL},
+         "passes_through=Full, and no leads_to= says the mode it ends in"),
+        ({**DASH, "leads_to": OIMode.PASSIVE},
+         "passes_through=Full, leads_to=Passive, but none of its sends= leads to Passive"),
+        ({**DASH, "passes_through": ("full",)},
+         "passes_through= names OI modes (OIMode.FULL, ...), got 'full'"),
+    ],
+    ids=["a mode it cannot reach", "the mode it ends in", "no end", "an end it cannot reach",
+         "not a mode"],
+)  # fmt: skip
+def test_a_passes_through_that_cannot_be_kept_is_refused_when_registered(
+    declared: dict[str, object], said: str
+) -> None:
+    with pytest.raises(DeclarationError) as raised:
+        _scripted(DASHES, **declared)
+    assert said in str(raised.value)
 
 
 def test_a_mode_command_with_no_mode_declared_is_refused() -> None:

@@ -465,6 +465,55 @@ def test_a_leaf_that_switches_to_full_itself_and_drives_is_warned(
     )
 
 
+#: an action that goes to Full itself, drives, and goes back to Safe (its drive is elided)
+PASSES_FULL = """
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.opcodes import opcodes
+
+
+@declare("dash", kind="action", sends=opcodes("full", "drive", "safe"),
+         passes_through=OIMode.FULL, leads_to=OIMode.SAFE, reads={reads})
+class Dash(Action):
+    \"\"\"Dashes in Full, and goes back to Safe.\"\"\"
+
+    def update(self):
+        self.send(commands.full())
+        self.send(commands.safe())
+        return Status.SUCCESS
+"""
+
+#: the drive the mission puts after it
+AFTER_DASH = "drive: {velocity: 100 mm/s, duration: 1s}"
+
+
+@pytest.mark.parametrize(
+    ("tree", "reads", "warned"),
+    [
+        (f"sequence: [{{mode: safe}}, dash, {{{AFTER_DASH}}}]", "(9, 10, 11, 12)", []),
+        (f"sequence: [{{mode: safe}}, dash, {{{AFTER_DASH}}}]", "()",
+         ["3:28: dash switches to Full mode itself and can turn the wheels there"]),
+        (f"sequence: [{{mode: safe}}, selector: [dash, {{{AFTER_DASH}}}]]", "(9, 10, 11, 12)",
+         ["3:46: drive can turn the wheels in Full mode"]),
+    ],
+    ids=["after its success: in Safe", "it does not read the cliffs", "after its failure"],
+)  # fmt: skip
+def test_a_leaf_that_passes_through_full_is_judged_in_the_modes_it_may_end_in(
+    mission_file: Callable[..., Path], tree: str, reads: str, warned: list[str]
+) -> None:
+    """``passes_through=OIMode.FULL``, ``leads_to=OIMode.SAFE``: a drive after its success
+    is judged in Safe, one on the fallback after its failure in Full too (it may fail on
+    its way, in Full), and the leaf itself is warned of as any that sends Full and drives."""
+    mission_file(PASSES_FULL.format(reads=reads), "dash.py")
+    path = mission_file(f"plugins: [./dash.py]\ntree:\n  {tree}\n")
+    mission = load_mission(path, permissions=Permissions(plugin_files=True))
+    said = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    assert [m.split(",")[0] for m in said] == warned, said
+
+
 SENSOR_UNTIL = (
     "tree:\n  sequence:\n    - mode: safe\n    - drive: {{velocity: 100 mm/s}}\n"
     "      until: {{sensor: '{test}'}}\n"

@@ -179,6 +179,12 @@ MODE_LIAR = MODE_LIAR.replace(
     '@declare("mode_liar", kind="action", sends=(131, 132), leads_to=OIMode.SAFE)',
 ).replace("commands.drive(100, 32767)", "commands.full()")
 
+#: passes through Full by its declaration, and succeeds there: the drive after it ran in Full
+STAYS_FULL = MODE_LIAR.replace("mode_liar", "stays_full").replace("ModeLiar", "StaysFull")
+STAYS_FULL = STAYS_FULL.replace(
+    "leads_to=OIMode.SAFE)", "leads_to=OIMode.SAFE, passes_through=OIMode.FULL)"
+).replace("return Status.RUNNING", "return Status.SUCCESS")
+
 #: the stranger's boom_check: a packet that does not exist
 NO_SUCH_PACKET = UNREAD.replace("near", "far").replace("frame[27]", "frame[99]")
 
@@ -240,6 +246,10 @@ class Says(Condition):
         ("mode_liar", MODE_LIAR,  # believed: the drive after it ran in Full, exit 0
          "raised UnkeptDeclaration: mode_liar sent full (132) 84, but its @declare (at "
          "{plugin}:9) says leads_to=Safe, and full leads to Full", "at {plugin}:14"),
+        ("stays_full", STAYS_FULL,  # refused as it succeeds, at the return that said so
+         "raised UnkeptDeclaration: stays_full sent full (132) 84, but its @declare (at "
+         "{plugin}:9) says leads_to=Safe, passes_through=Full, and it returned SUCCESS with no "
+         "mode command after this one: it ended in Full, not Safe", "at {plugin}:15"),
         ("near", UNREAD,  # the KeyError did not say where to declare it
          "raised MissingPacket: 'packet 27 (wall_signal) is not in this frame",
          "at {plugin}:10"),
@@ -283,6 +293,60 @@ def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
     assert "ticks        1 " in out  # ended on the tick it happened
     assert "safe stop    sent drive, motors" in out
     assert "invalid status" not in out + err
+
+
+#: an honest action that passes through Full: Full, a drive there, then Safe
+DASH = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.opcodes import opcodes
+
+
+@declare("dash", kind="action", sends=opcodes("full", "drive", "safe"), reads=(9, 10, 11, 12),
+         passes_through=OIMode.FULL, leads_to=OIMode.SAFE)
+class Dash(Action):
+    """Goes to Full, drives three ticks there, and goes back to Safe."""
+
+    def start(self):
+        self.send(commands.full())
+        self.in_full = 0
+
+    def update(self):
+        if self.snapshot.mode is OIMode.FULL:
+            self.in_full += 1
+        if self.in_full < 3:
+            self.send(commands.drive(300, 32767))
+            return Status.RUNNING
+        self.send(commands.halt())
+        self.send(commands.safe())
+        self.feedback_message = f"drove {self.in_full} ticks in Full"
+        return Status.SUCCESS
+'''
+
+
+def test_a_plugin_that_passes_through_full_as_declared_runs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An action that sends Full itself, drives, then sends Safe, declaring the end mode it
+    could (``leads_to=Safe``), was refused at its Full (session 37): declared with
+    ``passes_through=OIMode.FULL``, it validates, runs in Full and hands the drive after it
+    Safe; the mode guard refuses none of its commands."""
+    (tmp_path / "dash.py").write_text(DASH)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "plugins: [./dash.py]\ntree:\n  sequence:\n    - mode: safe\n    - dash\n"
+        "    - drive: {velocity: 100 mm/s, duration: 0.5s}\n    - mode: passive\n"
+    )
+    assert main(["validate", str(mission), "--allow-plugin-files", "--strict"]) == 0
+    capsys.readouterr()
+    assert main([*_run(mission), "--strict", "--display", "tree"]) == 0
+    out = capsys.readouterr().out
+    assert "--> dash [✓] -- drove 3 ticks in Full" in out, out
+    assert "outcome      SUCCESS" in out
+    assert " 0 refused by the mode guard" in out
 
 
 OS_ERRORS = [
