@@ -351,26 +351,33 @@ def fitted_tree(
                 walk(child, depth + 1)
 
     walk(root, 0)
-    rows = max(rows, 2)
-    if len(lines) > rows:
-        keep = [True] * len(lines)
-        excess = len(lines) - (rows - 1)  # one row says how many are hidden
-        for i in range(len(lines) - 1, 0, -1):
-            if excess == 0:
-                break
-            if not lines[i][1]:
-                keep[i] = False
-                excess -= 1
-        for i in range(len(lines) - 1, 0, -1):  # still too tall: the deepest running lines
-            if excess == 0:
-                break
-            if keep[i]:
-                keep[i] = False
-                excess -= 1
-        left_out = keep.count(False)
-        lines = [line for line, kept in zip(lines, keep, strict=True) if kept]
-        lines.append((f"... {left_out} more lines (a larger terminal shows them)", False))
-    return [text[: max(columns, 10)] for text, _ in lines]
+    return [text[: max(columns, 10)] for text, _ in _within_rows(lines, max(rows, 2))]
+
+
+def _within_rows(lines: list[tuple[str, bool]], rows: int) -> list[tuple[str, bool]]:
+    """:func:`fitted_tree`'s ``lines`` (each with whether it is on the running path) cut
+    to ``rows``: the lines off the running path go first, from the bottom, then the deepest
+    running ones, and one line says how many were left out."""
+    if len(lines) <= rows:
+        return lines
+    keep = [True] * len(lines)
+    excess = len(lines) - (rows - 1)  # one row says how many are hidden
+    for i in range(len(lines) - 1, 0, -1):
+        if excess == 0:
+            break
+        if not lines[i][1]:
+            keep[i] = False
+            excess -= 1
+    for i in range(len(lines) - 1, 0, -1):  # still too tall: the deepest running lines
+        if excess == 0:
+            break
+        if keep[i]:
+            keep[i] = False
+            excess -= 1
+    left_out = keep.count(False)
+    lines = [line for line, kept in zip(lines, keep, strict=True) if kept]
+    lines.append((f"... {left_out} more lines (a larger terminal shows them)", False))
+    return lines
 
 
 def status_marks(stream: TextIO) -> dict[py_trees.common.Status, str]:
