@@ -853,12 +853,20 @@ def _unfit_items(items: list[object] | tuple[object, ...]) -> tuple[list[type], 
         ):
             classes.append(item)
             continue
-        said = _where(item) if isinstance(item, type) else reprlib.repr(item)
-        what = "a class" if isinstance(item, type) else f"a {type(item).__name__}"
+        if isinstance(item, type):
+            said, wrong = (
+                f"class {item.__qualname__}",
+                (
+                    f"class {_where(item)}, derives from neither roomba_bt.behaviours.Action nor "
+                    "Condition"
+                ),
+            )
+        else:
+            said = reprlib.repr(item)
+            wrong = f"{said} (a {type(item).__name__}), is no class"
         unfit.append((said, (
-            f"item {place} of its list, {said} ({what}), is no behaviour class: the list holds "
-            "classes derived from roomba_bt.behaviours.Action or Condition, each decorated "
-            "with @declare"
+            f"item {place} of its list, {wrong}: the list holds behaviour classes (derived "
+            "from Action or Condition, each decorated with @declare)"
         )))  # fmt: skip
     return classes, unfit
 

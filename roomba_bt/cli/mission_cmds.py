@@ -816,8 +816,9 @@ def _plugins_broken(command: str, registry: Registry, skip: bool, consequence: s
         print(f"roomba-bt {command}: {kind}: {escaped(str(error), ANY_CONTROL)}", file=sys.stderr)
     if not broken or skip:
         return False
-    one = len(broken) == 1
-    what = "an installed plugin" if one else f"{len(broken)} installed plugins"
+    plugins = len({error.plugin for error in broken})  # a half-loaded one: an error a class
+    one = plugins == 1
+    what = "an installed plugin" if one else f"{plugins} installed plugins"
     it = "it" if one else "them"
     lost = escaped("; ".join(error.lost for error in broken), ANY_CONTROL)
     print(

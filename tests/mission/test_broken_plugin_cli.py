@@ -197,7 +197,8 @@ LISTED = (
     + '\n\n@declare("s36_bad", kind="action")\nclass Bad(Condition):\n'
     + '    """Declared an action, derived from Condition."""\n\n'
     + "    def check(self, snapshot):\n        return True\n\n\n"
-    + "LIST = [Ok, 'not a class', Bad]\n"
+    + 'class Helper:\n    """No behaviour: listed by mistake."""\n\n\n'
+    + "LIST = [Ok, 'not a class', Bad, Helper]\n"
 )
 
 
@@ -227,18 +228,23 @@ def test_a_list_s_good_class_loads_and_each_bad_item_is_said_alone(
     assert main(["validate", "--format", "json", str(mission)]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["summary"]["errors"] == 0
-    item, bad = report["plugins_not_loaded"]
-    assert item["plugin"] == bad["plugin"] == LST
+    item, helper, bad = report["plugins_not_loaded"]
+    assert item["plugin"] == helper["plugin"] == bad["plugin"] == LST
     assert item["error"] == (
-        "item 2 of its list, 'not a class' (a str), is no behaviour class: the list holds "
-        "classes derived from roomba_bt.behaviours.Action or Condition, each decorated with "
-        "@declare"
+        "item 2 of its list, 'not a class' (a str), is no class: the list holds behaviour "
+        "classes (derived from Action or Condition, each decorated with @declare)"
     )
     assert item["lost"] == "'not a class' (refused alone: the plugin's other behaviours loaded)"
+    assert helper["error"].startswith("item 4 of its list, class Helper (")
+    assert (
+        "s36_list.py:20), derives from neither roomba_bt.behaviours.Action nor" in (helper["error"])
+    )
+    assert helper["lost"] == "class Helper (refused alone: the plugin's other behaviours loaded)"
     assert bad["error"].startswith("Bad (")
     assert "declares itself wrongly: kind='action', but Bad derives from Condition" in bad["error"]
     assert bad["lost"] == "'s36_bad' (refused alone: the plugin's other behaviours loaded)"
-    assert all(p["severity"] == "warning" and "s36_ok" not in p["message"] for p in (item, bad))
+    said = (item, helper, bad)
+    assert all(p["severity"] == "warning" and "s36_ok" not in p["message"] for p in said)
     assert main(["run", str(mission), "--fast", "--display", "none"]) == 0
     assert "outcome      SUCCESS" in capsys.readouterr().out
 
@@ -277,7 +283,10 @@ def test_behaviours_of_a_name_a_plugin_that_did_not_load_declares_says_so_as_err
         "which did not load (below)"
     ), err
     said = f"roomba-bt behaviours: error: plugin {LST}: "
-    assert [line[len(said) :][:5] for line in lines[1:3]] == ["item ", "Bad ("], err
+    assert [line[len(said) :][:6] for line in lines[1:4]] == ["item 2", "item 4", "Bad (/"], err
+    # one plugin, half loaded: three of its items refused, each said (it said "3 installed
+    # plugins did not load")
+    assert lines[4].startswith("roomba-bt behaviours: an installed plugin did not load (not "), err
     assert "--plugin-file" not in err and "roomba-bt: warning" not in err, err
     assert main(["behaviours", "s36_bad", "--skip-broken-plugins"]) == 2  # still unknown
     assert f"roomba-bt behaviours: warning: plugin {LST}" in capsys.readouterr().err
