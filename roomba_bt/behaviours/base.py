@@ -227,7 +227,7 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         through = f", passes_through={', '.join(m.label for m in visits)}" if visits else ""
         if declared is None:
             broken = (
-                f"it leaves the mode as it found it (its sends= lead to no one mode, and it "
+                "it leaves the mode as it found it (its sends= lead to no one mode, and it "
                 f"gives no leads_to=){through}: declare leads_to=OIMode.{sent.name} if it "
                 f"ends there, or passes_through=OIMode.{sent.name} and the mode it ends in "
                 "if it leaves it again"
@@ -253,12 +253,13 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         visits = ", ".join(m.label for m in declaration.passes_through)
         ended = declared.label if declared is not None else "the mode it leads to"
         passed = command.spec.leads_to
+        assert passed is not None  # a mode command: the one that took it there
         raise UnkeptDeclaration(
             self,
             command,
             f"leads_to={ended}, passes_through={visits}, and it returned SUCCESS with no mode "
-            f"command after this one: it ended in {passed.label if passed else '?'}, not "
-            f"{ended}; send the command that takes it to {ended} before it succeeds",
+            f"command after this one: it ended in {passed.label}, not {ended}; send the "
+            f"command that takes it to {ended} before it succeeds",
             _SUCCESS,
         )
 
