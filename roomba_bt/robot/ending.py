@@ -141,10 +141,10 @@ QUIET_BEFORE_PERIODS = 3
 #: (:attr:`PortReturn.within`: a run's ``--grace``).
 REOPEN_WITHIN_S = 2.0
 #: What to do about a robot the stop could not reach over a port that is gone; ``reach``: the
-#: link's way back to it (:attr:`~roomba_bt.transport.link_kind.LinkWords.reach`)
+#: link's way back to it (:attr:`~roomba_bt.transport.link_kind.LinkWords.reach`: doctor on
+#: a device or a bridge; for a pty, that its path will not come back)
 PORT_GONE_ADVICE = (
-    "the robot may still be moving: pick it up or press its Clean or power button; {reach}, "
-    "then roomba-bt doctor --port {port}"
+    "the robot may still be moving: pick it up or press its Clean or power button; {reach}"
 )
 
 #: Requested wheel velocities (left, right) and the encoders (left, right): what a stop the
@@ -821,7 +821,7 @@ class SafeStop:
             report = f"last seen in {mode.label} {describe_activity(wheels, stopped_by)}; {why}"
         if self._gone and not idle:
             port = writer.link.name
-            report += ": " + PORT_GONE_ADVICE.format(reach=link_of(port).reach, port=port)
+            report += ": " + PORT_GONE_ADVICE.format(reach=link_of(port).reach)
         self._gone = False
         if report != self.stop_report:  # close() tries once more: said once, not twice
             log.log(level, "%s: %s", self.writer.link.name, report)

@@ -73,7 +73,10 @@ class LinkWords:
     echo_causes: tuple[str, ...]
     #: how BRC reaches the robot where keep-awake could not pulse it on this port
     pulse_fix: str
-    #: what to do to reach the robot again after a stop that did not get through (then doctor)
+    #: what to do to reach the robot again after a stop that did not get through: for a
+    #: device or a bridge, bring the line back, then ``roomba-bt doctor`` on it; for a pty,
+    #: that its path will not come back (its number goes to the next program that opens a
+    #: pty, and doctor there would write its Query Lists and hang-up into that program)
     reach: str
     #: what comes back when a port that failed is opened again
     reopened: str
@@ -150,7 +153,10 @@ def _network_words(port: str) -> LinkWords:
             f"BRC must cross {bridge}: rfc2217:// to a bridge that wires BRC to RTS or DTR "
             "(esp-link can), or BRC on a pin of the bridge"
         ),
-        reach=f"wait for {bridge} to come back (it reset, or the Wi-Fi dropped)",
+        reach=(
+            f"wait for {bridge} to come back (it reset, or the Wi-Fi dropped), then "
+            f"roomba-bt doctor --port {port}"
+        ),
         reopened="the connection",
         went_silent=(
             f"{bridge} rebooted or left Wi-Fi range, and no reset reached this computer; "
@@ -169,7 +175,19 @@ def _network_words(port: str) -> LinkWords:
     )
 
 
-def _cable_words(kind: LinkKind, reopens: bool) -> LinkWords:
+#: What to do about a pty that failed under a run: nothing comes back at its path. A stranger
+#: was told "reseat the cable, then roomba-bt doctor --port /dev/pts/0" after the simulator
+#: was killed; by then /dev/pts/0 was another program's pty (the kernel hands out the lowest
+#: free number), and doctor wrote its Query Lists and a 1 s hang-up into it. The run's own
+#: stop refuses such a path (``device_identity.py``); the advice no longer sends a user there.
+_PTY_GONE = (
+    "{port} will not come back (a pty's number goes to the next program that opens one: "
+    "doctor there would talk to that program): start the simulator or bridge again and use "
+    "the path it prints"
+)
+
+
+def _cable_words(kind: LinkKind, reopens: bool, port: str) -> LinkWords:
     """A serial adapter's link (a device path, a pty, ``loop://``): its cable and adapter."""
     return LinkWords(
         kind=kind,
@@ -201,7 +219,9 @@ def _cable_words(kind: LinkKind, reopens: bool) -> LinkWords:
             "the wrong device",
         ),
         pulse_fix="use a USB cable with BRC on RTS or DTR, or an rfc2217:// bridge",
-        reach="reseat the cable",
+        reach=_PTY_GONE.format(port=port)
+        if kind is LinkKind.PTY
+        else f"reseat the cable, then roomba-bt doctor --port {port}",
         reopened="the port",
         # never said: a device path's silence is the stream's or the robot's (the port
         # itself fails when the adapter goes), and a pty's never comes back
@@ -221,7 +241,7 @@ def link_of(port: str) -> LinkWords:
     if port.lower().startswith(NETWORK_PORTS):
         return _network_words(port)
     if "://" in port:
-        return _cable_words(LinkKind.OTHER, reopens=False)
+        return _cable_words(LinkKind.OTHER, reopens=False, port=port)
     if port.startswith(PTY_DEVICES):
-        return _cable_words(LinkKind.PTY, reopens=False)
-    return _cable_words(LinkKind.DEVICE, reopens=True)
+        return _cable_words(LinkKind.PTY, reopens=False, port=port)
+    return _cable_words(LinkKind.DEVICE, reopens=True, port=port)

@@ -46,9 +46,13 @@ class Pullable:
 Linked = TypeVar("Linked", bound=Pullable)
 
 
-def driving(link_type: type[Linked] = Pullable) -> tuple[Connection, Linked]:  # type: ignore[assignment]
-    """A connection driving at 200 mm/s in Safe over a ``link_type`` link, frames coming."""
-    link = link_type(SimLink(Simulator(parse_world(BOX, "<test>"), profile=CREATE2)))
+def driving(
+    link_type: type[Linked] = Pullable,  # type: ignore[assignment]
+    name: str = "sim://",
+) -> tuple[Connection, Linked]:
+    """A connection driving at 200 mm/s in Safe over a ``link_type`` link named ``name``,
+    frames coming."""
+    link = link_type(SimLink(Simulator(parse_world(BOX, "<test>"), profile=CREATE2), name))
     connection = Connection(link, CREATE2)
     connection.start("safe", PACKETS)
     connection.send_many([oi.drive(200, 32767)])
@@ -78,6 +82,22 @@ def test_a_stop_that_cannot_be_written_is_reported_undelivered() -> None:
     )
     assert connection.mode is OIMode.SAFE  # not advanced to Passive by the unsent Start
     assert connection.safe_stopped is False
+
+
+def test_a_stop_not_delivered_to_a_pty_says_its_path_will_not_come_back() -> None:
+    """A pty's number goes to the next program that opens one: doctor --port at it (the
+    advice a device path gets) wrote Query Lists and a hang-up into another session's
+    simulator. Nothing is opened again there (``LinkWords.reopens``), and nothing sent."""
+    connection, link = driving(name="/dev/pts/7")
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert connection.stop_report == (
+        "last seen in Safe at 200 mm/s; the stop was not delivered: the port is gone: the robot "
+        "may still be moving: pick it up or press its Clean or power button; /dev/pts/7 will "
+        "not come back (a pty's number goes to the next program that opens one: doctor there "
+        "would talk to that program): start the simulator or bridge again and use the path it "
+        "prints"
+    )
 
 
 def test_a_delivered_stop_leaves_no_report() -> None:

@@ -93,3 +93,17 @@ def test_a_device_path_keeps_the_cable_s_words() -> None:
     assert "check that the cable wires BRC to RTS or DTR" in str(
         RobotAsleep("/dev/ttyUSB0", 300.0, keep_awake=True, pulses=True)
     )
+
+
+def test_a_stop_not_delivered_sends_a_pty_s_user_to_no_path_that_may_be_another_s() -> None:
+    """After a run lost a pty (the simulator killed), its user was told "reseat the cable,
+    then roomba-bt doctor --port /dev/pts/0"; the kernel gives that number to the next
+    program that opens a pty, and doctor wrote its Query Lists and a hang-up into another
+    session's simulator. A device path and a bridge come back, and keep doctor's advice."""
+    pty = link_of("/dev/pts/0").reach
+    assert pty.startswith("/dev/pts/0 will not come back")
+    assert "start the simulator or bridge again and use the path it prints" in pty
+    assert "doctor --port" not in pty and "cable" not in pty
+    for port in ("/dev/ttyUSB0", "/dev/serial/by-id/usb-FTDI_X-if00-port0"):
+        assert link_of(port).reach == f"reseat the cable, then roomba-bt doctor --port {port}"
+    assert link_of(BRIDGES[0]).reach.endswith(f"then roomba-bt doctor --port {BRIDGES[0]}")
