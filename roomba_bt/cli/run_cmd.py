@@ -103,7 +103,8 @@ def _add_run_parser(sub: Any) -> None:
         f"""run a mission on a robot (--port) or the simulator
 
         Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
-        virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
+        virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage
+        (or a --profile the robot's frames show wrong before anything of the mission was sent),
         3 not started: the port could not be opened or the robot did not answer (nothing of
         the mission sent: safe to retry), 4 a behaviour raised an exception (sys.exit() too) or
         the run hung past --wall-limit, 7
@@ -893,6 +894,7 @@ def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSum
     if (
         summary.outcome.exit_code
         in (
+            ExitCode.INVALID,  # a wrong profile: what the robot is, and the fix
             ExitCode.CONNECTION,
             ExitCode.LINK_LOST,
             ExitCode.MISSION_FAILED,

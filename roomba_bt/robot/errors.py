@@ -136,6 +136,11 @@ class NoAnswer(ConnectionFailed):
 class LinkDown(RobotError, ConnectionError):
     """The link failed while running: the port is gone or the stream stopped."""
 
+    #: the frames that came show a robot of another model than the profile's (a
+    #: :class:`StreamStalled`'s or a :class:`StreamLost`'s; None for every other failure):
+    #: a setting, which fails the same way again, not a line that failed
+    mismatch: ProfileMismatch | None = None
+
     def __init__(self, port: str, message: str, headline: str = "") -> None:
         self.port = port
         #: the message's short first line, for where it is repeated (a run's stderr line,

@@ -452,7 +452,7 @@ class MissionRunner(BaseHandle):
                     raise
                 summary.outcome, summary.reason = Outcome.HUNG, limit.said(exc)
             except BaseException as exc:  # Ctrl-C; a stop, a lost link, a bug, sys.exit()
-                interrupt, raised_in = run_ended_by(exc, summary, answered=self.has_snapshot)
+                interrupt, raised_in = run_ended_by(exc, self)
             finally:
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
@@ -773,28 +773,32 @@ def noted_fall(
 
 
 def run_ended_by(
-    exc: BaseException, summary: RunSummary, *, answered: bool
+    exc: BaseException, runner: MissionRunner
 ) -> tuple[KeyboardInterrupt | None, py_trees.behaviour.Behaviour | None]:
     """The run's outcome and reason when ``exc`` ended it (:meth:`MissionRunner.run`): an
     interrupt (Ctrl-C, or :class:`Terminated`: SIGTERM, SIGHUP, ...), returned to be raised
     once the robot is stopped; else what :func:`ended_by` says, a behaviour's own ``raise
     KeyboardInterrupt`` too (:func:`behaviours_interrupt`), the node whose ``terminate``
     raised it returned (its ``terminate`` is not called again)."""
+    summary = runner.summary
     if isinstance(exc, KeyboardInterrupt) and not behaviours_interrupt(exc):
         why = interrupt_reason(exc)
         cut = f" {summary.cut_short}" if summary.cut_short else ""
         summary.outcome, summary.reason = Outcome.INTERRUPTED, why + cut
         return exc, None
-    ended_by(exc, summary, answered=answered)
+    # answered: a frame came; wrote: a command since the start-up (a wrong profile's 2 or 8)
+    ended_by(exc, summary, answered=runner.has_snapshot, wrote=runner.count_written() > 0)
     summary.ended_at = (-1, getattr(exc, "at", "after"))  # a stop's: before the tick
     return None, terminate_raised(exc)
 
 
-def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None:
+def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool, wrote: bool) -> None:
     """The outcome and reason of a run that ``exc`` ended (Ctrl-C aside): the operator's
     stop, the link (its own errors, :class:`LinkDown` and :class:`ConnectionFailed`;
     ``answered``: the robot had streamed, so it was not merely never there; a bridge that
-    closed before a byte, :class:`TurnedAway`, with none answered: not started), or an
+    closed before a byte, :class:`TurnedAway`, with none answered: not started; frames of
+    another model than the profile's before the run ``wrote`` a command since its start-up:
+    a wrong setting, exit 2, nothing moved), or an
     exception in a behaviour, an ``OSError`` too, or its ``sys.exit()``, a
     ``KeyboardInterrupt`` it raised itself (no signal came), a ``BaseException`` of its own
     (its path, method and file:line, the traceback: not ours to exit, as at a plugin's
@@ -807,8 +811,9 @@ def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None
         summary.outcome = Outcome.CONNECTION_LOST if answered else Outcome.NO_CONNECTION
         summary.reason, summary.link_error = str(exc), exc
     elif isinstance(exc, LinkDown):
-        summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
-        summary.headline, summary.link_error = exc.headline, exc
+        wrong = exc.mismatch is not None and not wrote  # before a command of the mission
+        summary.outcome = Outcome.WRONG_PROFILE if wrong else Outcome.CONNECTION_LOST
+        summary.reason, summary.headline, summary.link_error = str(exc), exc.headline, exc
     else:  # a bug in a behaviour must still end in a safe stop. An OSError is one too: the
         # link turns its own I/O errors into LinkDown (PortLost) and ConnectionFailed where
         # it reads and writes (robot/link.py), so a bare one came from a behaviour's code

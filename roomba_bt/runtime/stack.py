@@ -613,8 +613,11 @@ class LinkLostAfter(AfterTickGate):
             transport.link_lost_from = transport.written
 
 
-#: the end notes of a run whose link failed (``Outcome.CONNECTION_LOST``, ``NO_CONNECTION``)
-LINK_FAILED = ("connection lost", "no connection")
+#: the end notes of a run whose link failed (``Outcome.CONNECTION_LOST``, ``NO_CONNECTION``),
+#: or whose robot's frames were another model's (``WRONG_PROFILE``: its link's end all the same)
+LINK_FAILED = tuple(
+    o.value for o in (Outcome.CONNECTION_LOST, Outcome.NO_CONNECTION, Outcome.WRONG_PROFILE)
+)
 
 
 def link_lost_after(

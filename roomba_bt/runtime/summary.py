@@ -41,7 +41,10 @@ class ExitCode(IntEnum):
 
     OK = 0  # mission succeeded / command did what was asked
     MISSION_FAILED = 1  # the tree ended in FAILURE (or the timeout ran out)
-    INVALID = 2  # invalid mission, world or command-line usage
+    #: invalid mission, world or command-line usage; for ``run``, also a profile that the
+    #: robot's frames show wrong before anything of the mission was written
+    #: (``Outcome.WRONG_PROFILE``): a setting, which fails the same way again
+    INVALID = 2
     #: could not start: the port could not be opened or the robot did not answer the
     #: start-up (``Outcome.NO_CONNECTION``); no command of the mission was sent, so trying
     #: again is safe (systemd's ``Restart=on-failure``, docs/unattended.md). ``sensors``,
@@ -101,6 +104,12 @@ class Outcome(Enum):
     CONNECTION_LOST = "connection lost"
     #: the robot never answered the start-up (it was never connected, so nothing was lost)
     NO_CONNECTION = "no connection"
+    #: the robot's frames show another model than the profile's (the robot layer's
+    #: ``mismatch``) before the run wrote anything of the mission: nothing moved, and a
+    #: retry fails the same way until the setting is fixed, so exit 2, a mistake in the
+    #: command line. It was exit 8, "the link was lost after the run started: a person looks
+    #: first" (session 37). Found after a command of the mission, it stays CONNECTION_LOST
+    WRONG_PROFILE = "wrong profile"
     ERROR = "error"
     #: the run ran past its wall-clock limit (``run --wall-limit``, an ``eval`` episode's):
     #: stuck, most often in a behaviour's endless loop. No exception in the tree (nothing
@@ -123,6 +132,7 @@ _EXIT = {
     Outcome.INTERRUPTED: ExitCode.INTERRUPTED,
     Outcome.CONNECTION_LOST: ExitCode.LINK_LOST,
     Outcome.NO_CONNECTION: ExitCode.CONNECTION,
+    Outcome.WRONG_PROFILE: ExitCode.INVALID,
     Outcome.ERROR: ExitCode.BEHAVIOUR_ERROR,
     Outcome.HUNG: ExitCode.BEHAVIOUR_ERROR,
     Outcome.INPUT_ENDED: ExitCode.MISSION_FAILED,

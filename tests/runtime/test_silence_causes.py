@@ -548,7 +548,9 @@ def test_a_roomba500_read_by_the_default_profile_ends_the_run_at_the_watchdog_tr
     summary = stack.run()
     ended_at = link.now()  # the virtual clock: the run's own time, not the wall's
     stack.close()
-    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 8
+    # found before the mission's first command: a setting (exit 2), no link lost (8)
+    assert summary.outcome is Outcome.WRONG_PROFILE and summary.exit_code == 2
+    assert summary.commands_written == 0
     assert "then the run waited" not in summary.reason, summary.reason
     assert "use --profile roomba500" in summary.reason
     assert summary.stalls == 1 and summary.stalls_ridden == 0
@@ -587,4 +589,34 @@ def test_a_roomba500_read_by_the_default_profile_near_a_wall_is_not_called_noise
     # its stop was "unconfirmed: its frames fail the create2 profile's range": the robot went
     # quiet after Pause Stream and answered a Query List, which no profile's range refuses
     assert summary.safe_stop == "sent pause_resume_stream, start", summary.safe_stop
-    assert summary.stop_delivered and summary.exit_code == 8  # the lost stream's
+    # found at the first frames, before the mission's mode: safe: a setting, exit 2
+    assert summary.commands_written == 0 and summary.outcome is Outcome.WRONG_PROFILE
+    assert summary.stop_delivered and summary.exit_code == 2
+
+
+def test_a_wrong_profile_found_after_the_mission_wrote_a_command_is_still_a_link_lost() -> None:
+    """The same 500 read by the default profile, its wall on its left at the start: frames
+    pass the create2 range until its turn puts the wall on its right (wall signal over
+    1023). The mission had written Safe and a turn by then: the robot may have moved, so
+    the run ends as a lost stream, exit 8 (a person looks first), the fix named all the
+    same; only a wrong profile found before any command of the mission is exit 2."""
+    from dataclasses import replace
+
+    from roomba_bt.mission import load_mission_text
+
+    mission = load_mission_text(
+        "tree:\n  sequence:\n    - mode: safe\n    - turn: 180deg\n    - wait: 3s\n"
+        "      until: {sensor: wall_signal > 1000}\n",
+        profile=CREATE2,
+    )
+    wall_on_the_left = (
+        "rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]\nrobot: {start: {at: [2, 0.2], heading: 180}}\n"
+    )
+    summing = replace(ROOMBA500, checksum_includes_header=True)
+    simulator = Simulator(parse_world(wall_on_the_left), summing, 0, trace=False)
+    stack = RunStack(mission, SimLink(simulator), profile=CREATE2)
+    summary = stack.run()
+    stack.close()
+    assert summary.commands_written > 0 and summary.ticks > 0
+    assert "use --profile roomba500" in summary.reason, summary.reason
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 8

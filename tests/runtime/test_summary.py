@@ -84,6 +84,7 @@ EXIT_CODES = {
     Outcome.TIMEOUT: 1,
     Outcome.INPUT_ENDED: 1,
     Outcome.NO_CONNECTION: 3,  # nothing of the mission sent: safe to retry
+    Outcome.WRONG_PROFILE: 2,  # nothing of the mission sent, and a retry fails the same way
     Outcome.ERROR: 4,
     Outcome.HUNG: 4,
     Outcome.CONNECTION_LOST: 8,  # the robot may have moved: a person looks first
