@@ -1241,12 +1241,13 @@ def _replay_verdict(summary: RunSummary, transport: ReplayTransport, recorded: R
     its exit code: the same (0), the same up to where the recorded run's link failed (0),
     or the first difference, with what changed since the record was made (1)."""
     from roomba_bt.runtime.provenance import changed_plugins, changed_sources, drift_line
+    from roomba_bt.runtime.stack import past_the_link_loss
 
     record, mission = recorded.record, recorded.mission
     difference = transport.first_difference()
-    lost = _past_the_link_loss(transport, difference, record.ending)
+    lost = past_the_link_loss(transport, difference, record.ending)
     if lost is not None:  # the same up to where the recorded run's link failed
-        print(*lost, sep="\n")
+        print(*(f"replay: {line}" for line in lost), sep="\n")
         return ExitCode.OK
     sources = changed_sources(record.header, mission.files, record.path)
     plugins = changed_plugins(record.header, mission.root)
@@ -1276,35 +1277,6 @@ def _replay_verdict(summary: RunSummary, transport: ReplayTransport, recorded: R
             "before noted without its tick"
         )
     return ExitCode.MISSION_FAILED
-
-
-def _past_the_link_loss(
-    transport: ReplayTransport,
-    difference: tuple[int, str, str] | None,
-    ending: dict[str, Any] | None,
-) -> tuple[str, str] | None:
-    """What ``replay`` says of a difference that came only after the recorded run's link
-    failed (after its tree's last tick: :attr:`ReplayTransport.link_lost_from`), or None
-    for any other. The recorded run then wrote what the failure had it write (the watchdog's
-    drive 0, queries, a wake by BRC, the stop, or nothing once the port was gone), which a
-    replay, with no line to fail, does not do again: "first difference", exit 1, read as
-    "your mission changed" for every record of a pulled cable or a reset robot."""
-    lost_from = transport.link_lost_from
-    if difference is None or lost_from is None or difference[0] < lost_from:
-        return None
-    _, expected, sent = difference
-    time, tick = (ending or {}).get("time"), (ending or {}).get("tick")
-    if not isinstance(tick, int):  # the start-up's bytes alone, the same up to the difference
-        lost = f"before its tree's first tick; the {difference[0]} bytes up to there are the same"
-    else:
-        when = f" at mission time {time:.3f} s" if isinstance(time, int | float) else ""
-        lost = f"{when}, after its tree's last tick; compared up to there: the tree wrote the "
-        lost += f"same {lost_from} bytes"
-    return (
-        f"replay: the recorded run lost its link {lost.lstrip()}",
-        f"replay: past there the replay does not fail as its link did (the record holds "
-        f"{expected}, the replay's own ending sent {sent})",
-    )
 
 
 def _compared(

@@ -41,7 +41,7 @@ from roomba_bt.runtime.recording import (
     record_holder,
     recorded_path,
 )
-from roomba_bt.runtime.stack import replay_record
+from roomba_bt.runtime.stack import past_the_link_loss, replay_record
 from roomba_bt.runtime.summary import RunSummary
 
 if TYPE_CHECKING:
@@ -84,13 +84,16 @@ def replay_into_feed(
         # the tick guard's: shown as the run had it (the end note: below, with the end)
         if not isinstance(note.get("tick"), int) and ENDED not in note:
             feed.event("force" if "force" in note else "note", _note_text(note), t)
-    difference = diverged(summary, transport)
+    # a difference past where the recorded run's link failed is none (replay's own words)
+    lost = past_the_link_loss(transport, transport.first_difference(), record.ending)
+    difference = diverged(summary, transport) if lost is None else None
     if difference is not None and diverged_at is not None:
         diverged_at(difference)
-    finished = how_the_replay_ended(record, summary, difference, feed, transport.ended_early)
+    finished = how_the_replay_ended(record, summary, difference, feed, transport.ended_early, lost)
     # what the recorded run's safe stop left the robot in: the replay wrote the same stop
     # (checked against the record), where the record holds the run's end and no difference
-    told = difference is None and not record.being_written
+    # (nor a link lost: the recorded run's stop went into its failed link, the replay's not)
+    told = difference is None and lost is None and not record.being_written
     told = told and record.recording_stopped is None and not transport.ended_early
     whole = told and record.ending is not None
     # the robot panel's title says a killed run's last tick is all the record has, as the
@@ -256,12 +259,16 @@ def how_the_replay_ended(
     difference: str | None,
     feed: RunFeed,
     ended_early: bool = False,
+    lost: tuple[str, str] | None = None,
 ) -> str:
     """What the record view says of the end (its banner, and the event log): where the
     replay diverged from the record, if it did (``difference``: where, what was expected,
     what was sent; the timeline ends there, as ``replay`` says it: it said only "input
-    ended"), else where its window ended (``ended_early``: ``--to``), else how the recorded
-    run ended (its end note: "the recorded run was stopped by the operator at t=44.17 s"),
+    ended"), else that the recorded run lost its link there (``lost``:
+    :func:`~roomba_bt.runtime.stack.past_the_link_loss`, as ``replay`` says it: it said
+    "replay diverged ... expected nothing, sent Drive (137)"), else where its window ended
+    (``ended_early``: ``--to``), else how the recorded run ended (its end note: "the
+    recorded run was stopped by the operator at t=44.17 s"),
     else that the record ends without its run's end (as ``replay`` says it:
     :meth:`Record.end_said <roomba_bt.runtime.recording.Record.end_said>`), else the
     replay's outcome."""
@@ -269,6 +276,12 @@ def how_the_replay_ended(
     if difference is not None:
         feed.event("warning", difference)
         return f"{difference} ({ticks})"
+    if lost is not None:
+        if record.ending is not None:
+            feed.event("control", ending_text(record.ending))
+        for said in lost:
+            feed.event("control", said)
+        return f"{lost[0]} ({ticks})"
     if ended_early:
         text = (
             f"shown up to t={summary.mission_time_s:.2f} s of mission time (--to); the "

@@ -637,6 +637,38 @@ def link_lost_after(
     return LinkLostAfter(tick, gate, transport)
 
 
+def past_the_link_loss(
+    transport: ReplayTransport,
+    difference: tuple[int, str, str] | None,
+    ending: Mapping[str, Any] | None,
+) -> tuple[str, str] | None:
+    """What a replay says of a difference (``transport.first_difference()``) that came only
+    after the recorded run's link failed (after its tree's last tick:
+    :attr:`ReplayTransport.link_lost_from`), two sentences, or None for any other;
+    ``ending``: the record's end note. The recorded run then wrote what the failure had it
+    write (the watchdog's drive 0, queries, a wake by BRC, the stop, or nothing once the
+    port was gone), which a replay, with no line to fail, does not do again: "first
+    difference", exit 1, read as "your mission changed" for every record of a pulled cable
+    or a reset robot. ``replay`` and the monitor's view of a record both say it (the
+    monitor said "replay diverged from the record", read as a broken record)."""
+    lost_from = transport.link_lost_from
+    if difference is None or lost_from is None or difference[0] < lost_from:
+        return None
+    _, expected, sent = difference
+    time, tick = (ending or {}).get("time"), (ending or {}).get("tick")
+    if not isinstance(tick, int):  # the start-up's bytes alone, the same up to the difference
+        lost = f"before its tree's first tick; the {difference[0]} bytes up to there are the same"
+    else:
+        when = f" at mission time {time:.3f} s" if isinstance(time, int | float) else ""
+        lost = f"{when}, after its tree's last tick; compared up to there: the tree wrote the "
+        lost += f"same {lost_from} bytes"
+    return (
+        f"the recorded run lost its link {lost.lstrip()}",
+        f"past there the replay does not fail as its link did (the record holds "
+        f"{expected}, the replay's own ending sent {sent})",
+    )
+
+
 def recorded_end(
     record: Record, gate: TickGate | None, transport: ReplayTransport | None = None
 ) -> RecordedEnd | None:

@@ -254,3 +254,46 @@ def test_the_page_cuts_a_long_mission_name_label_and_robot() -> None:
     assert header["mission"] == header["run"]["mission"] == f"{'N' * 80}... (200,000 characters)"
     assert header["run"]["label"] == f"{'L' * 80}... (100,000 characters)"
     assert header["run"]["robot"] == f"{'R' * 80}... (90 characters)"
+
+
+def test_the_record_of_a_run_that_lost_its_link_is_compared_up_to_there_not_diverged(
+    tmp_path: Path,
+) -> None:
+    """A run whose simulator's link was pulled at 1 s (in-process: the port fails under
+    it), recorded, then viewed as ``roomba-bt monitor RECORD`` does. Past its tree's last
+    tick the recorded run wrote what the failure had it write (nothing: the port was gone),
+    and the replay, on a line that cannot fail, its own stop: the view said "replay diverged
+    from the record at t=...: expected nothing, sent Drive (137) ...", read as a broken
+    record, where ``replay`` said "the recorded run lost its link ... compared up to there".
+    Both say it with the same words now (``stack.past_the_link_loss``)."""
+    from roomba_bt.sim import Faults
+
+    mission_file = tmp_path / "m.yaml"
+    mission_file.write_text(
+        "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n"
+    )
+    mission = load_mission(mission_file, {}, profile=CREATE2)
+    path = tmp_path / "run.jsonl"
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, 0, Faults(disconnect_at=1.0)))
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=3.0,
+                     record=Recording(path, str(mission_file)))  # fmt: skip
+    try:
+        assert stack.run().exit_code == 8  # the port gone under the run
+    finally:
+        stack.close()
+    differences: list[str] = []
+    feed, _ = replay_into_feed(
+        load_record(path), load_mission(mission_file, {}, profile=CREATE2), CREATE2,
+        stack.packets, 115200, "r", diverged_at=differences.append,
+    )  # fmt: skip
+    assert differences == []  # nothing said on stderr: the record is not broken
+    finished = feed.finished or ""
+    assert "diverged" not in finished, finished
+    assert finished.startswith("the recorded run lost its link at mission time 0.9"), finished
+    assert "after its tree's last tick; compared up to there: the tree wrote the same" in finished
+    events = [event.text for event in feed.events]
+    assert any(text.startswith("the recorded run ended in connection lost") for text in events)
+    past = "past there the replay does not fail as its link did"
+    assert any(text.startswith(past) for text in events), events
+    # the replay's own stop is not the recorded run's (which went into a port that was gone)
+    assert feed.ending is None
