@@ -30,6 +30,15 @@ from roomba_bt.sim.robot import Simulator
 
 #: the width the command's name and arguments are padded to, before its bytes
 _TEXT_WIDTH = 60
+#: why bytes the robot awake ignored were ignored
+NO_OPCODE = "no opcode, or sent at another baud rate"
+#: why bytes a robot asleep (the five-minute Passive sleep, ``sim --asleep``) ignored were:
+#: it was said as :data:`NO_OPCODE` of a run's start-up sent to it (session 37), which sent
+#: its user looking at the baud rate of a robot that only slept
+ASLEEP = (
+    "the robot is asleep, deaf to the line until a BRC pulse wakes it (on a pty a hang-up: "
+    "roomba-bt doctor or run --baud auto gives one)"
+)
 
 
 def command_text(spec: CommandSpec, args: bytes) -> str:
@@ -80,7 +89,7 @@ class Narrator:
         skipped = sim.ignored_bytes - self._ignored_bytes
         if skipped:
             self._ignored_bytes = sim.ignored_bytes
-            self._line(f"ignored {skipped} byte(s): no opcode, or sent at another baud rate")
+            self._line(f"ignored {skipped} byte(s): {ASLEEP if sim.deaf else NO_OPCODE}")
 
     def _line(self, text: str, time: float | None = None) -> None:
         at = self.simulator.time if time is None else time

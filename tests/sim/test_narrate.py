@@ -46,6 +46,27 @@ def test_a_drive_sent_again_unchanged_has_no_line_and_stray_bytes_are_counted() 
     assert lines[-1] == "ignored 1 byte(s): no opcode, or sent at another baud rate"
 
 
+def test_bytes_a_robot_asleep_ignores_are_said_ignored_because_it_sleeps() -> None:
+    """``sim --asleep --log`` under a run's start-up said "ignored 35 byte(s): no opcode, or
+    sent at another baud rate" of a robot that only slept: its user looked at the rate."""
+    host, narrator, lines = narrated()
+    host.send(C.start())
+    host.sim.fall_asleep("test")
+    narrator.catch_up()
+    host.send(bytes(3))  # the zeros a start-up sends to set the robot's parser in step
+    narrator.catch_up()
+    assert lines[-1] == (
+        "ignored 3 byte(s): the robot is asleep, deaf to the line until a BRC pulse wakes it "
+        "(on a pty a hang-up: roomba-bt doctor or run --baud auto gives one)"
+    )
+    host.sim.set_brc(True)  # a pulse: low, then released
+    host.sim.set_brc(False)
+    assert not host.sim.deaf
+    host.send(b"\x01")
+    narrator.catch_up()
+    assert lines[-1] == "ignored 1 byte(s): no opcode, or sent at another baud rate"
+
+
 def test_every_wheel_command_sent_again_unchanged_has_no_line() -> None:
     """Drive Direct (145) and Drive PWM (146) as well as Drive: ``clean`` sends a Drive
     Direct every frame, alone or in one write with other commands."""
