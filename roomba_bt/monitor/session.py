@@ -359,7 +359,9 @@ class MonitorSession:
                 summary.pauses += 1
         runner.clock_held = True  # mission time stands still until the resume
         runner.wall_limit.hold(True)  # and --wall-limit's count: a pause is no stuck tick
-        sleeps = self.WARN_OF_SLEEP and _sleeps_in_passive(connection) and runner.has_snapshot
+        # a reload's own pause (not ``noted``) lasts no frame: no sleep to count down to
+        sleeps = noted and self.WARN_OF_SLEEP and _sleeps_in_passive(connection)
+        sleeps = sleeps and runner.has_snapshot
         began = runner.snapshot.tick if sleeps else 0
         self._sleep_warn_tick = began + round(SLEEP_WARNING_S / SLOT_SECONDS) if sleeps else None
         self._sleep_tick = began + round(ROBOT_SLEEPS_S / SLOT_SECONDS) if sleeps else None
@@ -367,11 +369,16 @@ class MonitorSession:
             self.state.sleep_note = sleep_countdown(round(ROBOT_SLEEPS_S / SLOT_SECONDS))
         sent = ", ".join(c.name for c in commands) or "nothing"
         asleep = f"; {_cannot_keep_awake()} unless resumed" if sleeps else ""
-        self._said(
-            runner,
-            "control",
-            f"pause ({why}): safe stop {self.SENT} {sent}{self.WHERE}; tree frozen{asleep}",
+        # a reload's: said as what it is. It said "pause (reload): ...; tree frozen; this link
+        # cannot keep the robot awake: the run ends 5 min into the pause unless resumed", and
+        # the new tree then drove at once, as a reload does (docs/monitor.md)
+        said = (
+            f"pause ({why}): safe stop {self.SENT} {sent}{self.WHERE}; tree frozen{asleep}"
+            if noted
+            else f"{why}: safe stop {self.SENT} {sent}{self.WHERE}; the old tree stops and "
+            "the new one takes over at the next frame (no pause: nothing to resume)"
         )
+        self._said(runner, "control", said)
         for listener in self.listeners:
             with contextlib.suppress(Exception):
                 listener(why)

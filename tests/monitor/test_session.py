@@ -508,6 +508,40 @@ def test_a_reload_stops_the_old_tree_under_the_safe_stop_and_the_new_tree_is_the
     assert summary.mission == rig.feed.mission_name == "waiting"
 
 
+def test_a_reload_on_a_link_without_keep_awake_says_the_new_tree_takes_over_not_a_pause(
+    until: Callable[..., None], tmp_path: Path
+) -> None:
+    """``run --watch`` on a pty (no keep-awake): the reload's safe stop was logged as
+    "pause (reload): ...; tree frozen; this link cannot keep the robot awake: the run ends
+    5 min into the pause unless resumed", and the new tree then drove at once, as a reload
+    does: nothing was paused, nothing to resume, no sleep to count down to."""
+    waiting = tmp_path / "waiting.yaml"
+    waiting.write_text("mission: waiting\ntree:\n  sequence:\n    - mode: safe\n    - wait: 1s\n")
+    rig = Rig(keep_awake=False)
+    new = load_mission(waiting, {}, profile=CREATE2)
+    notes: list[str] = []
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100 and bool(rig.sim.left_speed))
+        rig.session.reload(new)
+        until(lambda: rig.stack.mission is new)
+        notes.append(rig.session.state.sleep_note)
+
+    summary = rig.run_with(operator)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert summary.pauses == 0
+    controls = [e.text for e in rig.feed.events if e.kind == "control"]
+    [reload] = [text for text in controls if text.startswith("reload")]
+    assert reload.startswith("reload: safe stop sent drive"), reload
+    assert reload.endswith(
+        "the old tree stops and the new one takes over at the next frame (no pause: nothing "
+        "to resume)"
+    ), reload
+    assert not any(text.startswith("pause (") for text in controls), controls
+    assert not any("into the pause" in e.text for e in rig.feed.events)
+    assert notes == [""]  # no countdown to a sleep on the banner
+
+
 def test_a_reload_while_paused_resumes_into_the_new_tree_from_passive_with_no_old_command(
     until: Callable[..., None], tmp_path: Path
 ) -> None:
