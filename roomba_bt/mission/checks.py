@@ -420,11 +420,13 @@ def _visited(decl: Declaration, after: OIMode | None) -> Modes:
 class KeyCheck:
     """The static read-before-write pass over blackboard keys."""
 
-    def __init__(self, shown: Callable[[str], str] = said_key) -> None:
+    def __init__(self, passed: Mapping[int, Node] | None = None) -> None:
         self.errors: list[Diagnostic] = []
         self._reported: set[tuple[int, str]] = set()
-        #: how a message names a key
-        self._shown = shown
+        #: of a check of one body's own keys (``OwnKeys.checked``): each leaf of a body it
+        #: uses, by id, with the use in the judged body it is reached through, where a read
+        #: of a key passed down there is said (:meth:`_unwritten`)
+        self._passed: Mapping[int, Node] = passed or {}
         #: the keys judged (a subtree's own at one use, in its body and where a body it uses
         #: was given one by name: ``OwnKeys.checked``); None: every key but a use's own,
         #: which its body alone judges (nothing outside it reads or writes them)
@@ -447,6 +449,26 @@ class KeyCheck:
     def _judges(self, key: str) -> bool:
         return not is_own_key(key) if self._judged is None else key in self._judged
 
+    def _unwritten(self, node: Node, key: str, loc: Loc) -> Diagnostic:
+        """``node`` reads ``key`` (at ``loc``) before anything writes it. Said at the read;
+        or, a key passed down by name to a body the judged one uses (``self._passed``), at
+        that use in the judged body, naming the read: the body that passes it is the one
+        to fix (write it before the use, or give it an initial value), and the read's line
+        alone, in a subtree that has no such key, did not say which use passed it."""
+        fix = "give it an initial value under blackboard:, or write it first (set, mark, for_each)"
+        use = self._passed.get(id(node))
+        if use is None or use.use_loc is None:
+            return loc.at(
+                f"{node.name} reads blackboard key {said_key(key)} before anything writes it "
+                f"on some path: {fix}"
+            )
+        at = f"{loc.line}:{loc.column}"
+        at = at if loc.file == use.use_loc.file else f"{loc.file}:{at}"
+        return use.use_loc.at(
+            f"subtree {use.use} reads blackboard key {said_key(key)} before anything writes "
+            f"it on some path (passed down to {node.name} at {at}): {fix}"
+        )
+
     def visit(self, node: Node, written: frozenset[str]) -> frozenset[str]:
         """Keys certainly written after ``node`` succeeds."""
         kind = node.kind
@@ -458,14 +480,7 @@ class KeyCheck:
                     continue
                 if (id(node), key) not in self._reported:
                     self._reported.add((id(node), key))
-                    self.errors.append(
-                        loc.at(
-                            f"{node.name} reads blackboard key {self._shown(key)} before anything "
-                            "writes "
-                            "it on some path: give it an initial value under blackboard:, "
-                            "or write it first (set, mark, for_each)"
-                        )
-                    )
+                    self.errors.append(self._unwritten(node, key, loc))
             return written | frozenset(node.keys_written())
         order = goes_on(node)
         if order == SUCCESS:  # a sequence

@@ -421,6 +421,7 @@ class NodeParser:
         # show draws the use with what it was given, whatever the body
         given = ", ".join(f"{p}={written_text(n, env, lists=True)}" for p, n, _, _ in args)
         body.use = f"{name}({given})" if given else name
+        body.use_loc = key_loc
         return body
 
     def _body_at(

@@ -14,7 +14,9 @@ the tick path as it was: a behaviour reads ``/mission/go#1/here`` as it reads
 
 Read before written is judged in the body alone (:meth:`OwnKeys.checked`): nothing outside
 it reads or writes its own keys, so the body decides it whole, and the error is the
-subtree's own, found by ``validate`` of its library alone and said once, not at every use.
+subtree's own, found by ``validate`` of its library alone and said once, not at every use;
+a read in a subtree the body passes a key down to is said at the body's use of it
+(:func:`passed_down`), the line of the body to fix.
 
 The bodies of the subtrees a body uses are not renamed with it: a body's own keys are its
 alone (lexical scope), so a library's subtree used inside another cannot have its keys taken
@@ -112,10 +114,10 @@ class OwnKeys:
             return
         names = {key: own_key_name(sub.name, number, key) for key in sub.keys}
         renamed(body, names, scope)
-        check = KeyCheck()
+        check = KeyCheck(passed_down(body))
         written = frozenset(names[key] for key, decl in sub.keys.items() if decl.has_initial)
         check.run(body, written, judged=frozenset(names.values()))
-        for error in check.errors:  # one read in a body it uses: marked with that use
+        for error in check.errors:  # a read in a body it uses: said at that use, in this one
             self.ctx.error(replace(error, used_in=()))  # alone, not at one: the body's own
 
     def at_use(self, sub: SubtreeDef, env: Mapping[str, Bound], use: SubtreeUse) -> tuple[str, ...]:
@@ -140,6 +142,22 @@ class OwnKeys:
                 decl = replace(decl, initial=value, initial_loc=iloc.used_at(use))
             outside[full] = decl
         return tuple(names.values())
+
+
+def passed_down(body: Node) -> dict[int, Node]:
+    """Each leaf in the bodies of the subtrees ``body`` uses, by id, with the use in
+    ``body`` it is reached through (the root of the body expanded there, which names its
+    use: :attr:`Node.use_loc`). ``body``'s own root names none yet: its use is named after
+    it is checked."""
+    found: dict[int, Node] = {}
+    stack: list[tuple[Node, Node | None]] = [(body, None)]
+    while stack:
+        node, use = stack.pop()
+        use = use or (node if node.use_loc is not None else None)
+        if use is not None and node.kind == "leaf":
+            found[id(node)] = use
+        stack.extend((child, use) for child in node.children)
+    return found
 
 
 def renamed(body: Node, names: Mapping[str, str], scope: KeyScope) -> None:

@@ -53,6 +53,10 @@ class Node:
     #: the subtree use this node is the body of, with the arguments the use writes
     #: (``bump_recovery(angle=45deg)``), for ``show`` to draw every use one way; "" otherwise
     use: str = ""
+    #: where that use is written (its ``subtree`` key): a key its body reads before it is
+    #: written, passed down by the body it is used in, is said there (that body's line,
+    #: :class:`~roomba_bt.mission.checks.KeyCheck`); None otherwise
+    use_loc: Loc | None = None
     #: the names the use's own blackboard keys have (``go#1/here``: a subtree's own
     #: ``blackboard:``, :mod:`roomba_bt.mission.own_keys`), for ``show`` to say; () otherwise
     own_keys: tuple[str, ...] = ()

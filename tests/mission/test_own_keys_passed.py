@@ -7,11 +7,12 @@ a body that owns ``here`` had ``measure`` look ``here`` up among the mission's k
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 from runtime.own_keys import PASSED  # tests/runtime: the mission the run test runs
 
 from roomba_bt.behaviours.blackboard import BlackboardRef
-from roomba_bt.mission import CompiledMission
+from roomba_bt.mission import CompiledMission, compile_mission
 from roomba_bt.mission.plan import Node
 
 Errors = Callable[..., list[str]]
@@ -137,16 +138,69 @@ def test_read_before_written_through_the_use(errors_of: Errors) -> None:
           sequence: [{subtree: {id: measure, out: n}}, {set: {key: n, value: 1}}]
     tree: {subtree: leg}
     """
+    """Said at the use that passes the key (leg's line, the body to fix), naming the read
+    in the nested body: said at that read (5:25), in ``measure``, which has no key ``n``,
+    it did not say which use passed it."""
     assert errors_of(text) == [
-        "5:25: check(key=n, value=1) reads blackboard key 'n' (subtree leg's own) before "
-        "anything writes it on some path: give it an initial value under blackboard:, or "
-        "write it first (set, mark, for_each)"
+        "9:19: subtree measure(out=n) reads blackboard key 'n' (subtree leg's own) before "
+        "anything writes it on some path (passed down to check(key=n, value=1) at 5:25): "
+        "give it an initial value under blackboard:, or write it first (set, mark, for_each)"
     ]
     written_first = text.replace(
         "[{subtree: {id: measure, out: n}}, {set: {key: n, value: 1}}]",
         "[{set: {key: n, value: 1}}, {subtree: {id: measure, out: n}}]",
     )
     assert errors_of(written_first) == []
+
+
+def test_read_before_written_two_levels_down_is_said_at_the_use_in_the_owning_body(
+    mission_file: Callable[..., Path],
+) -> None:
+    """``leg`` passes its ``n`` to ``mid``, which passes it on to ``measure``, which reads
+    it: said once (leg used twice), at leg's use of ``mid``, the read in another file named
+    with its file; ``validate`` of the library alone says the same."""
+    mission_file(
+        """
+        subtrees:
+          measure:
+            parameters: {out: {type: str}}
+            tree:
+              sequence:
+                - check: {key: "${out}", value: 1}
+        """,
+        "inner.yaml",
+    )
+    lib = mission_file(
+        """
+        include: [inner.yaml]
+        subtrees:
+          mid:
+            parameters: {out: {type: str}}
+            tree: {subtree: {id: measure, out: "${out}"}}
+          leg:
+            blackboard: {n: int}
+            tree:
+              sequence:
+                - wait: 1s
+                - subtree: {id: mid, out: n}
+                - set: {key: n, value: 1}
+        """,
+        "lib.yaml",
+    )
+    mission = mission_file(
+        "mission: deeper\ninclude: [lib.yaml]\ntree: {sequence: [{subtree: leg}, {subtree: leg}]}\n"
+    )
+    said = (
+        "subtree mid(out=n) reads blackboard key 'n' (subtree leg's own) before anything "
+        f"writes it on some path (passed down to check(key=n, value=1) at {lib.parent}"
+        "/inner.yaml:6:24): give it an initial value under blackboard:, or write it first "
+        "(set, mark, for_each)"
+    )
+    for path, require_tree in ((mission, True), (lib, False)):
+        found = compile_mission(path, require_tree=require_tree)[1]
+        assert [f"{d.file}:{d.line}:{d.column}: {d.message}" for d in found] == [
+            f"{lib}:11:11: {said}"
+        ]
 
 
 def test_a_name_the_caller_does_not_have(errors_of: Errors) -> None:
