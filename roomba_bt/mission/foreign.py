@@ -30,8 +30,11 @@ class Foreign:
     note: str
 
 
-_RETRY_TIMES = "times: N, at least 1"
-_COUNTS = "policy: all, one or selected; there are no counts, and any failure fails"
+_RETRY_TIMES = "times: N (at least 1)"
+_COUNTS = (
+    "policy: all, one or selected (the children selected: [NAME, ...] names); there are no "
+    "counts, and any failure fails"
+)
 _IN_A_UNIT = "a time with its unit, such as 2s or 500ms"
 _NO_SCRIPT = (
     "there are no scripts: set: {key: KEY, value: VALUE} writes a key, check: {key: KEY, "
@@ -56,8 +59,9 @@ BTCPP: dict[str, Foreign] = {
     ),
     "RunOnce": Foreign(
         ("oneshot",),
-        "oneshot: NODE runs it until it succeeds, then returns SUCCESS without "
-        "running it again (policy: on_completion: until it ends either way)",
+        "oneshot: NODE runs it until it succeeds, then returns SUCCESS without running it "
+        "again; oneshot: {policy: on_completion, do: NODE} until it ends either way, as "
+        "RunOnce does",
     ),
     "Sleep": Foreign(("wait",), "wait: 500ms"),
     "SequenceWithMemory": Foreign(("sequence",), _MEMORY),
@@ -73,6 +77,12 @@ BTCPP: dict[str, Foreign] = {
     "failure_count": Foreign(("policy",), _COUNTS),
     "success_threshold": Foreign(("policy",), _COUNTS),
     "failure_threshold": Foreign(("policy",), _COUNTS),
+    "ParallelAll": Foreign(
+        ("parallel",),
+        "parallel: [NODE, NODE] (policy: all, the default) succeeds when every child has; "
+        "any failure fails it",
+    ),
+    "max_failures": Foreign(("policy",), _COUNTS),
     "_while": Foreign(("while",), "while: CONDITION, written beside the node's word"),
     "_successIf": Foreign(
         ("until",),

@@ -3,10 +3,13 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 
 import pytest
+import yaml
 
+from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.language import MODIFIERS, WORDS
 from roomba_bt.behaviours.registry import builtin_registry
 from roomba_bt.mission.foreign import BTCPP
@@ -33,7 +36,7 @@ _HEAD = "blackboard: {target: distance}\nsubtrees: {back_off: {tree: stop}}\ntre
         ("sequence_star: [stop]", "SequenceStar is 'sequence' here: roomba-bt's sequence has "),
         ("retry: {num_attempts: 3, do: stop}",
          "retry: unknown option 'num_attempts' (BehaviorTree.CPP's num_attempts is 'times' "
-         "here: times: N, at least 1); known: do, times"),
+         "here: times: N (at least 1)); known: do, times"),
         ("repeat: {num_cycles: 3, do: stop}", "num_cycles is 'times' here"),
         ("timeout: {msec: 500, do: stop}",
          "msec is 'after' here: a time with its unit, such as 2s or 500ms); known: do, after"),
@@ -41,8 +44,15 @@ _HEAD = "blackboard: {target: distance}\nsubtrees: {back_off: {tree: stop}}\ntre
         ("wait: {msec: 500}", "wait: unknown parameter 'msec' (BehaviorTree.CPP's msec is "
          "'duration' here"),
         ("parallel: {success_count: 1, children: [stop]}",
-         "success_count is 'policy' here: policy: all, one or selected; there are no counts"),
+         "success_count is 'policy' here: policy: all, one or selected (the children "
+         "selected: [NAME, ...] names); there are no counts"),
         ("parallel: {failure_count: 1, children: [stop]}", "failure_count is 'policy' here"),
+        ("ParallelAll: {max_failures: 1, children: [stop]}",
+         "ParallelAll is 'parallel' here: parallel: [NODE, NODE] (policy: all, the default)"),
+        ("parallel: {max_failures: 2, children: [stop]}",
+         "max_failures is 'policy' here: policy: all, one or selected (the children selected: "
+         "[NAME, ...] names); there are no counts, and any failure fails"),
+        ("RunOnce: stop", "oneshot: {policy: on_completion, do: NODE} until it ends either way"),
         ("subtree: {ID: back_off}",
          "subtree needs id: NAME; found 'ID' (BehaviorTree.CPP's ID is 'id' here"),
         # none here: said so, with what to write; never 'spot' or 'force_success'
@@ -123,3 +133,85 @@ def test_every_word_the_table_names_is_one_of_ours() -> None:
     named = {word for entry in BTCPP.values() for word in entry.ours}
     assert named and named <= ours, named - ours
     assert all(entry.note for entry in BTCPP.values())
+
+
+#: what a note's placeholders stand for in the mission a suggestion is tried in
+_FILLED = {"NODE": "stop", "CONDITION": "{bump: any}", "IF": "{bump: any}", "THEN": "{wait: 1s}",
+           "ELSE": "stop", "KEY": "k", "VALUE": "1", "N": "2", "NAME": "back_off"}  # fmt: skip
+_PLACEHOLDER = re.compile(r"\b(" + "|".join(_FILLED) + r")\b")
+#: ``word: `` where a suggestion may start (not a key inside one's mapping: ``{key: ``)
+_WRITTEN = re.compile(r"(?<![\w{])(\w+): ")
+#: an option's values as a note lists them: ``all, one or selected``
+_LISTED = re.compile(r"\w+(?:, \w+)*(?: or \w+)?")
+
+
+def _value_end(text: str, start: int) -> int:
+    """Where the value starting at ``start`` ends: a flow mapping or list's closing
+    bracket, or the end of a plain word."""
+    if text[start] not in "{[":
+        found = re.compile(r"[^\s,;)]+").match(text, start)
+        assert found is not None, text[start:]
+        return found.end()
+    depth = 0
+    for end in range(start, len(text)):
+        depth += {"{": 1, "[": 1, "}": -1, "]": -1}.get(text[end], 0)
+        if depth == 0:
+            return end + 1
+    raise AssertionError(f"unclosed in {text!r}")
+
+
+def _suggested(note: str, words: set[str]) -> list[str]:
+    """The YAML a note suggests: each ``word: value`` of a node word or modifier in it,
+    a flow value whole (``retry: {times: N, do: NODE}``)."""
+    found, at = [], 0
+    while (written := _WRITTEN.search(note, at)) is not None:
+        at = written.end()
+        if written.group(1) in words:
+            at = _value_end(note, written.end())
+            found.append(note[written.start() : at])
+    return found
+
+
+def test_every_hint_suggests_what_validates(errors_of: Errors) -> None:
+    """What a hint tells a BT.CPP user to write is held to the language as it is: each
+    node or modifier it suggests validates (placeholders filled in), and each option value
+    it names is one the option takes, so a renamed option, value or word cannot leave a
+    hint that the validator then refuses. A note with no suggestion says what to write
+    in words (a counterpart's option)."""
+    registry = builtin_registry()
+    words = {*WORDS, *registry.names(), "subtree"}
+    head = (
+        "blackboard: {k: {type: int, initial: 0}}\n"
+        "subtrees: {back_off: {parameters: {parameter: {type: str, default: x}}, tree: stop}}\n"
+        "tree:\n  sequence:\n    - mode: safe\n"
+    )
+    tried = 0
+    for theirs, entry in BTCPP.items():
+        for suggestion in _suggested(entry.note, words | set(MODIFIERS)):
+            filled = _PLACEHOLDER.sub(lambda m: _FILLED[m.group(1)], suggestion)
+            if filled.partition(":")[0] in MODIFIERS:  # written beside a node's word
+                filled = "{wait: 1s, " + filled + "}"
+            elif not filled.startswith("{"):
+                filled = "{" + filled + "}"
+            assert errors_of(head + f"    - {filled}\n") == [], (theirs, suggestion)
+            tried += 1
+        options = {o.name: o for kind in WORDS.values() for o in kind.options}
+        for option in (word for word in entry.ours if word in options):
+            for written in re.finditer(rf"\b{option}: ", entry.note):
+                listed = _LISTED.match(entry.note, written.end())
+                assert listed is not None, (theirs, entry.note)
+                for value in re.split(r", | or ", _PLACEHOLDER.sub(
+                        lambda m: _FILLED[m.group(1)], listed.group())):  # fmt: skip
+                    takes = [kind.option(option) for kind in WORDS.values()]
+                    assert any(_takes(p, value) for p in takes if p is not None), (theirs, value)
+                    tried += 1
+    assert tried > len(BTCPP)
+
+
+def _takes(param: Param, written: str) -> bool:
+    """Whether ``param`` takes the value ``written`` (YAML) in its type and range."""
+    try:
+        value = param.type.parse(yaml.safe_load(written))
+    except ValueError:
+        return False
+    return param.check_range(value) is None
