@@ -409,7 +409,9 @@ def _drive_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
               maximum=_VELOCITY.maximum, doc="average wheel speed; negative backs up"),
         Param("radius", RADIUS, default="straight", minimum=_RADIUS.minimum,
               maximum=_RADIUS.maximum,
-              doc="turn radius (positive turns left), straight, spin_left or spin_right"),
+              doc="turn radius (positive turns left), straight, spin_left or spin_right",
+              # the side the turn's centre is on, which the path bends to forward and back
+              signs=("left", "right")),
         Param("left", SPEED, minimum=WHEEL.minimum, maximum=WHEEL.maximum,
               doc="left wheel speed (Drive Direct 145), with right"),
         Param("right", SPEED, minimum=WHEEL.minimum, maximum=WHEEL.maximum,

@@ -664,6 +664,34 @@ def test_a_leaf_is_named_alike_however_the_file_writes_the_same_value(
     ], names
 
 
+def test_a_drives_radius_says_which_side_it_bends_to(compile_text: Compile) -> None:
+    """``drive(velocity=-200 mm/s, radius=-500 mm)`` left the reader to know the sign's
+    convention, as ``turn(-45deg)`` did: a radius says the side the turn's centre is on,
+    the way the path bends forward and backing up alike (docs/missions.md: positive turns
+    left); a word (``straight``, ``spin_left``) or a key read at run time says itself."""
+    mission = compile_text(
+        """
+        blackboard: {r: {type: radius, initial: 300 mm}}
+        tree:
+          sequence:
+            - mode: safe
+            - drive: {velocity: 200 mm/s, radius: 50cm, distance: 20cm}
+            - drive: {velocity: -200 mm/s, radius: -500 mm, distance: 20cm}
+            - drive: {radius: straight, duration: 1s}
+            - drive: {radius: spin_left, duration: 1s}
+            - drive: {radius: "@r", duration: 1s}
+        """
+    )
+    names = [node.name for node in mission.root.iterate() if not node.children]
+    assert names[1:] == [
+        "drive(velocity=200 mm/s, radius=50cm left, distance=20cm)",
+        "drive(velocity=-200 mm/s, radius=-500 mm right, distance=20cm)",
+        "drive(radius=straight, duration=1s)",
+        "drive(radius=spin_left, duration=1s)",
+        "drive(radius=@r, duration=1s)",
+    ], names
+
+
 def test_show_draws_the_names_the_run_uses(
     mission_file: Callable[..., Path], capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -97,7 +97,7 @@ def test_a_run_in_the_background_of_a_terminal_prints_lines_not_the_live_tree(
     assert ended == "exit 1", ended
     screen = (tmp_path / "screen.out").read_bytes()
     assert CLEAR_SCREEN not in screen
-    assert b"INFO roomba_bt.run: drive(velocity=100 mm/s, radius=200 mm) -> RUNNING" in screen
+    assert b"INFO roomba_bt.run: drive(velocity=100 mm/s, radius=200 mm left) -> RUNNING" in screen
     ended = _in_the_background(
         tmp_path, "run", "circle.yaml", "--timeout", "1s", tostop=False, foreground=True
     )
