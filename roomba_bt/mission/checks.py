@@ -462,11 +462,10 @@ class KeyCheck:
                 f"{node.name} reads blackboard key {said_key(key)} before anything writes it "
                 f"on some path: {fix}"
             )
-        at = f"{loc.line}:{loc.column}"
-        at = at if loc.file == use.use_loc.file else f"{loc.file}:{at}"
         return use.use_loc.at(
             f"subtree {use.use} reads blackboard key {said_key(key)} before anything writes "
-            f"it on some path (passed down to {node.name} at {at}): {fix}"
+            f"it on some path (passed down to {node.name} at {loc.said_from(use.use_loc)}): "
+            f"{fix}"
         )
 
     def visit(self, node: Node, written: frozenset[str]) -> frozenset[str]:
@@ -530,6 +529,10 @@ def _may_write(node: Node) -> bool:
 #: a parameter reading a key as ``@key``: the behaviour's name, the parameter, the reference,
 #: and where it is written
 _Reader = tuple[str, Param, BlackboardRef, Loc]
+#: a value the mission writes to a key: what writes it, the value, where it is written (a
+#: list parameter's item: in the default), and what the message adds after the key (the
+#: ``for_each`` such an item is given to)
+_Write = tuple[str, Any, Loc, str]
 
 
 def key_ranges(root: Node, keys: Mapping[str, KeyDecl]) -> list[Diagnostic]:
@@ -546,38 +549,36 @@ def key_ranges(root: Node, keys: Mapping[str, KeyDecl]) -> list[Diagnostic]:
         written = list(writes.get(key, ()))
         if declared is not None and declared.has_initial:
             where = declared.initial_loc or declared.loc
-            written.insert(0, ("initial value", declared.initial, where))
-        for what, value, where in written:
+            written.insert(0, ("initial value", declared.initial, where, ""))
+        for what, value, where, note in written:
             for behaviour, param, ref, use in reads:
                 read = value.get(ref.field) if ref.field and isinstance(value, dict) else value
                 problem = None if ref.field and read is value else param.check_range(read)
                 if problem is None:
                     continue
-                at = f"{use.line}:{use.column}"
-                at = at if use.file == where.file else f"{use.file}:{at}"
+                at = use.said_from(where)
                 out.append(
                     where.at(
-                        f"{what} of blackboard key {said_key(key)}: {behaviour}'s {param.name} "
-                        f"reads it as {written_ref(ref)} (at {at}): {problem}"
+                        f"{what} of blackboard key {said_key(key)}{note}: {behaviour}'s "
+                        f"{param.name} reads it as {written_ref(ref)} (at {at}): {problem}"
                     )
                 )
     return out
 
 
-def _ranged_key_uses(
-    root: Node,
-) -> tuple[dict[str, list[_Reader]], dict[str, list[tuple[str, Any, Loc]]]]:
+def _ranged_key_uses(root: Node) -> tuple[dict[str, list[_Reader]], dict[str, list[_Write]]]:
     """The parameters with a declared range that read a key as ``@key``, and the values the
     mission writes itself (``set`` leaves, ``for_each`` items), with where each is written,
     by key."""
     readers: dict[str, list[_Reader]] = {}
-    writes: dict[str, list[tuple[str, Any, Loc]]] = {}
+    writes: dict[str, list[_Write]] = {}
     for node in root.walk():
         decl = node.decl
         if node.kind == "for_each":
             items, locs = node.options.get("items", ()), node.options.get("loc:items", ())
+            notes = node.options.get("said:items", ())
             writes.setdefault(node.options["key"], []).extend(
-                ("for_each item", item, where) for item, where in zip(items, locs, strict=True)
+                ("for_each item", *written) for written in zip(items, locs, notes, strict=True)
             )
         if node.kind != "leaf" or decl is None:
             continue
@@ -593,7 +594,7 @@ def _ranged_key_uses(
         key = node.params.get("key")
         if decl.name == "set" and isinstance(key, str):
             where = node.options.get("loc:value", node.loc)
-            writes.setdefault(key, []).append(("set value", node.params.get("value"), where))
+            writes.setdefault(key, []).append(("set value", node.params.get("value"), where, ""))
     return readers, writes
 
 

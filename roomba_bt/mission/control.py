@@ -44,6 +44,7 @@ from roomba_bt.mission.values import (
     unknown,
     unknown_later,
     warn_escaped,
+    whole_parameter,
 )
 
 if TYPE_CHECKING:
@@ -129,18 +130,28 @@ def _list_parameter(
     item: ValueType,
     env: Mapping[str, Bound],
     said: tuple[str, str],
-) -> tuple[list[Any], list[Loc]]:
+) -> tuple[list[Any], list[Loc], list[str]]:
     """``for_each.in: "${legs}"``: the items of a list parameter whose items are of the
-    key's type ``item``, each said at the use (where they are written is the parameter's
-    default, or -p); none when its value is unknown. ``said``: the option, and its error
-    when empty."""
+    key's type ``item``, each with where a finding about it is said, and what that says of
+    where it came from: an item of the parameter's default at its own place in the default
+    (the line to change), naming the use; another (-p, a subtree's argument) at the use,
+    naming where it was set. None when its value is unknown. ``said``: the option, and its
+    error when empty."""
     what, empty = said
     value = resolve(ctx, node, loc, list_of(item), env, what, no_ref=_ITEMS_FIXED)
     if value is UNKNOWN:
-        return [], []
+        return [], [], []
     if not value:
         raise Bad(loc.at(empty + (said_origin(node, env) or said_defaults([node], env, loc))))
-    return list(value), [loc] * len(value)
+    whole = whole_parameter(node, env)
+    if whole is None or whole[1].origin or len(whole[1].default_items) != len(value):
+        return list(value), [loc] * len(value), [said_origin(node, env)] * len(value)
+    name, bound = whole
+    notes = [
+        f" (item {number} of the default of parameter {name}, {what} at {loc.said_from(at)})"
+        for number, at in enumerate(bound.default_items, 1)
+    ]
+    return list(value), list(bound.default_items), notes
 
 
 def _empty_list(kind: NodeKind, param: Param, item: str) -> str:
@@ -461,8 +472,9 @@ def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fi
         empty = _empty_list(kind, param, "item, a value of the key's type")
         items: list[Any] = []
         locs: list[Loc] = []
+        notes: list[str] = []  # where a parameter's item came from: none written here
         if _given_whole(inode):
-            items, locs = _list_parameter(ctx, inode, iloc, decl.type, env, (what, empty))
+            items, locs, notes = _list_parameter(ctx, inode, iloc, decl.type, env, (what, empty))
         else:
             entries = sequence(inode, iloc, what)
             if not entries:
@@ -475,3 +487,4 @@ def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fi
                     ctx.report(bad)
         options["items"] = items
         options["loc:items"] = locs  # where each is written: the range check of its readers
+        options["said:items"] = notes or [""] * len(items)

@@ -580,7 +580,7 @@ class Loader:
         fields = known_fields(node, loc, f"subtree {name!r}", _SUBTREE_FIELDS)
         params: dict[str, tuple[ValueType, Any, Loc]] = {}
         default_texts: dict[str, str] = {}
-        default_at: dict[str, Loc] = {}
+        default_at: dict[str, tuple[Loc, tuple[Loc, ...]]] = {}
         broken: set[str] = set()
         if "parameters" in fields:
             pnode, _, ploc = fields["parameters"]
@@ -642,11 +642,13 @@ def bind_parameters(
                 )
                 env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                 continue
+            at, items_at = _default_at(value, vloc)
             env[name] = Bound(
                 vtype,
                 default,
                 _default_text(vtype, value, default),
-                default_at=_default_at(value, vloc),
+                default_at=at,
+                default_items=items_at,
                 wording=wording,
             )
     for name, text in overrides.items():
@@ -1279,12 +1281,16 @@ def _link_loop(each: str, text: str) -> str:
     )
 
 
-def _default_at(node: yaml.Node, loc: Loc) -> Loc:
-    """Where the ``default:`` of a parameter's declaration ``node`` (at ``loc``) is written."""
+def _default_at(node: yaml.Node, loc: Loc) -> tuple[Loc, tuple[Loc, ...]]:
+    """Where the ``default:`` of a parameter's declaration ``node`` (at ``loc``) is written,
+    and, a list, where each of its items is (none otherwise)."""
     for key, value in getattr(node, "value", []):
         if getattr(key, "value", None) == "default":
-            return loc.child(value, "default")
-    return loc
+            at = loc.child(value, "default")
+            if not isinstance(value, yaml.SequenceNode):
+                return at, ()
+            return at, tuple(at.child(item, f"[{i}]") for i, item in enumerate(value.value))
+    return loc, ()
 
 
 def _default_text(vtype: ValueType, declaration: yaml.Node, default: Any) -> str:

@@ -580,8 +580,9 @@ def _by_default(sub: SubtreeDef, pname: str, wording: Wording) -> Bound:
     the default's place and how a use gives another (``speed: VALUE at the use``)."""
     vtype, default, _ = sub.params[pname]
     at_use = replace(wording, give_template="{name}: {value} at the use")
+    at, items = sub.default_at.get(pname, (None, ()))
     return Bound(
-        vtype, default, sub.default_texts[pname], default_at=sub.default_at.get(pname),
+        vtype, default, sub.default_texts[pname], default_at=at, default_items=items,
         wording=at_use,
     )  # fmt: skip
 

@@ -47,6 +47,12 @@ class Loc:
             self.file, self.line, self.column, message, self.path, used_in=used_in, later=later
         )
 
+    def said_from(self, said_at: Loc) -> str:
+        """This place named in a message said at ``said_at``: ``12:5``, with its file when
+        that is another (a library's line named from the mission's, or the other way)."""
+        at = f"{self.line}:{self.column}"
+        return at if self.file == said_at.file else f"{self.file}:{at}"
+
     def used_at(self, *uses: SubtreeUse) -> Loc:
         """This place as the subtree use ``uses`` expand it, innermost first (outside the
         ones it has: those of a subtree used within the subtree a use names)."""

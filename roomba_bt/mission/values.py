@@ -303,6 +303,9 @@ class Bound:
     #: and how to give another (:func:`said_default`); not ``origin``, which a subtree's
     #: argument passes on in place of the use that gave it
     default_at: Loc | None = None
+    #: of a list parameter bound to its default: where each item of the default is written,
+    #: where a ``for_each`` item out of its readers' range is said (not at the ``in:``)
+    default_items: tuple[Loc, ...] = ()
     #: how the caller gives a parameter another value (said with ``default_at``)
     wording: Wording = PYTHON
     #: the blackboard keys seen where a subtree argument's value was written (the body
@@ -416,8 +419,9 @@ class SubtreeDef:
     #: names its nodes with
     default_texts: Mapping[str, str] = field(default_factory=dict)
     #: where each default is written: an error its value makes in the body names it
-    #: (:func:`said_default`), as a mission parameter's
-    default_at: Mapping[str, Loc] = field(default_factory=dict)
+    #: (:func:`said_default`), as a mission parameter's; and where each item of a list's
+    #: default is (:attr:`Bound.default_items`)
+    default_at: Mapping[str, tuple[Loc, tuple[Loc, ...]]] = field(default_factory=dict)
     #: its own ``blackboard:``, by the names its body writes: keys of each use's own,
     #: renamed at each use (``NodeParser``: ``go#1/here``), hiding the mission's there
     keys: Mapping[str, KeyDecl] = field(default_factory=dict)
@@ -1032,10 +1036,9 @@ def _default_of(name: str, bound: Bound, said_at: Loc) -> str:
     that is not the one of ``said_at``)."""
     at = bound.default_at
     assert at is not None
-    where = (
-        f"{at.line}:{at.column}" if at.file == said_at.file else f"{at.file}:{at.line}:{at.column}"
+    return (
+        f"${{{name}}} is {bound.text}, the default of parameter {name} at {at.said_from(said_at)}"
     )
-    return f"${{{name}}} is {bound.text}, the default of parameter {name} at {where}"
 
 
 def _in_range(name: str, bound: Bound, param: Param, negative: str) -> str:
@@ -1052,17 +1055,24 @@ def _in_range(name: str, bound: Bound, param: Param, negative: str) -> str:
     return f"{name}={nearest:g}{param.type.unit}"
 
 
-def origin_of(node: yaml.Node, env: Mapping[str, Bound]) -> str:
-    """Where the value of ``node`` was set, when it is a whole ``${name}`` whose parameter
-    was set elsewhere (a subtree's argument passing the mission's on: the error at its use
-    in a library names the command line)."""
+def whole_parameter(node: yaml.Node, env: Mapping[str, Bound]) -> tuple[str, Bound] | None:
+    """The parameter ``node`` is, when it is a whole ``${name}`` (or ``-${name}``) of one
+    in ``env``, and its binding; else None."""
     if isinstance(node, yaml.ScalarNode) and isinstance(node.value, str):
         full = _FULL_SUBSTITUTION.match(node.value)
         if full is not None:
             bound = env.get(full.group(2))
             if bound is not None:
-                return bound.origin
-    return ""
+                return full.group(2), bound
+    return None
+
+
+def origin_of(node: yaml.Node, env: Mapping[str, Bound]) -> str:
+    """Where the value of ``node`` was set, when it is a whole ``${name}`` whose parameter
+    was set elsewhere (a subtree's argument passing the mission's on: the error at its use
+    in a library names the command line)."""
+    whole = whole_parameter(node, env)
+    return "" if whole is None else whole[1].origin
 
 
 def said_origin(node: yaml.Node, env: Mapping[str, Bound]) -> str:

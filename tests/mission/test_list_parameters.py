@@ -8,11 +8,12 @@ validate time at its own place."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
 
-from roomba_bt.mission import CompiledMission
+from roomba_bt.mission import CompiledMission, compile_mission
 
 Compile = Callable[..., CompiledMission]
 Errors = Callable[..., list[str]]
@@ -346,3 +347,42 @@ def test_the_schema_takes_a_list_of_records_as_validate_does() -> None:
     assert validator.is_valid(yaml.safe_load(WAYPOINTS))
     wrong = WAYPOINTS.replace("items: {fields:", "items: {field:")
     assert not validator.is_valid(yaml.safe_load(wrong))
+
+
+def test_a_list_parameters_default_item_out_of_range_is_said_at_the_item(
+    errors_of: Errors, mission_file: Callable[..., Path]
+) -> None:
+    """An item of a list parameter's default was said at the ``for_each``'s ``in:``
+    (13:13), which holds no 9000 deg: now at the item in the default (the line to change),
+    naming the ``for_each`` and the reader. One set with -p is said at the use, naming
+    where it was set; a library subtree's default at its item in the library."""
+    text = WAYPOINTS.replace("turn: -90deg}]", "turn: 9000deg}]")
+    reader = "turn's angle reads it as @wp.turn (at 17:21): angle 9000 deg is out of range"
+    assert errors_of(text) == [
+        "5:46: for_each item of blackboard key 'wp' (item 2 of the default of parameter route, "
+        f"for_each.in at 13:13): {reader}: allowed -3600..3600 deg"
+    ]
+    given = {"route": "[{distance: 1m, turn: 9000deg}]"}
+    assert errors_of(text, given) == [
+        "13:13: for_each item of blackboard key 'wp' (${route} is route=[{distance: 1m, turn: "
+        f"9000deg}}], given in params): {reader}: allowed -3600..3600 deg"
+    ]
+    lib = mission_file(
+        """
+        subtrees:
+          walk:
+            parameters:
+              legs: {type: list, items: distance, default: [10cm, -3cm]}
+            blackboard: {d: distance}
+            tree: {for_each: {key: d, in: "${legs}", do: {drive: {distance: "@d"}}}}
+        """,
+        "lib.yaml",
+    )
+    said = (
+        "4:59: for_each item of blackboard key 'd' (subtree walk's own) (item 2 of the default "
+        "of parameter legs, for_each.in at 6:35): drive's distance reads it as @d (at 6:69): "
+        "distance -30 mm is out of range: allowed 0 mm or more"
+    )
+    used = "mission: m\ninclude: [lib.yaml]\ntree: {sequence: [{mode: safe}, {subtree: walk}]}\n"
+    found = compile_mission(mission_file(used))[1]
+    assert [(d.file, f"{d.line}:{d.column}: {d.message}") for d in found] == [(str(lib), said)]
