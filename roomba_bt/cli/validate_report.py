@@ -190,9 +190,9 @@ def _unseen(diagnostics: list[Diagnostic], seen: set[Diagnostic]) -> list[Diagno
     """The diagnostics whose place and message were not said yet (``seen`` updated)."""
     fresh = []
     for d in diagnostics:
-        place = d.located()
-        if place not in seen:
-            seen.add(place)
+        before = len(seen)
+        seen.add(d.located())  # one hash a diagnostic (a file may have 68,000)
+        if len(seen) != before:
             fresh.append(d)
     return fresh
 

@@ -33,6 +33,7 @@ from roomba_bt.mission.values import (
     UNKNOWN,
     Bound,
     Context,
+    UnknownNames,
     Written,
     key_written_in,
     name_text,
@@ -42,7 +43,6 @@ from roomba_bt.mission.values import (
     said_origin,
     substituted,
     unknown,
-    unknown_later,
     warn_escaped,
     whole_parameter,
 )
@@ -176,11 +176,12 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
     fields: Fields = {}
     if isinstance(value, yaml.MappingNode):
         allowed = ["children", *(p.name for p in kind.options)]
+        unknown_option = UnknownNames("option", allowed, word)
         items = mapping(value, loc, word)
         _children_as_keys(parser, word, [(k, kl) for k, _, kl, _ in items if k not in allowed])
         for k, v, kl, vl in items:
             if k not in allowed:
-                message, later = unknown_later("option", k, allowed, word)
+                message, later = unknown_option(k)
                 ctx.error(kl.at(f"{word}: {message}", later))
                 continue
             fields[k] = (v, vl)

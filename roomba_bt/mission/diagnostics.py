@@ -53,13 +53,15 @@ class SubtreeUse(Place):
     path: str = field(default="", compare=False)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Later:
     """A part of a diagnostic's message worked out only when the diagnostic is shown: the
     "did you mean" of an unknown name (difflib, tens of microseconds a name). A file of
     68,000 unknown parameters spent 5 s of its 15 on suggestions for errors past the 100
     printed. ``after``: the text of the message the part follows (``unknown parameter
-    'x'``); ``part``: the part (`` (did you mean 'y'?)``), or "" for none."""
+    'x'``); ``part``: the part (`` (did you mean 'y'?)``), or "" for none. Never changed
+    once made, but not ``frozen``, as :class:`Diagnostic`: one is made with each of those
+    errors."""
 
     after: str
     part: Callable[[], str]
@@ -74,10 +76,17 @@ class Later:
 UseChain = tuple[SubtreeUse, ...]
 
 
-@dataclass(frozen=True, slots=True, order=True)
+@dataclass(slots=True, order=True, unsafe_hash=True)
 class Diagnostic:
     """One error (or, ``severity="warning"``, something that compiles but is likely a
     mistake): file, 1-based line and column, the message, and the YAML path.
+
+    Never changed once made (:func:`dataclasses.replace` makes another), but not
+    ``frozen``: a frozen dataclass's ``__init__`` sets each of its eleven fields through
+    ``object.__setattr__``, four to six times the cost of a plain one, and a file of 68,000
+    unknown parameters makes a diagnostic for each and another at each ``replace``; equal,
+    ordered and hashed by its fields as before (:class:`~roomba_bt.mission.source.Loc`
+    does the same).
 
     ``included_from``: when ``file`` is not the file that was compiled but one it includes,
     the include entries that reached it, innermost first: the last is in the compiled file.
@@ -254,20 +263,21 @@ def merged_uses(diagnostics: Iterable[Diagnostic]) -> list[Diagnostic]:
     times gave a hundred lines. It is said at its first use (the mission's line, the one
     counted and annotated), naming the others. One whose message differs with the use (a
     parameter's value said) stays one a use."""
-    uses: dict[Diagnostic, list[UseChain]] = {}
-    first: dict[Diagnostic, Diagnostic] = {}
+    #: each finding (the diagnostic without its uses): the one said, and every use found
+    found: dict[Diagnostic, tuple[Diagnostic, list[UseChain]]] = {}
     for diagnostic in diagnostics:
-        # most have no use to drop: a replace() each was a tenth of a 68,000-error file's time
-        same = replace(diagnostic, used_in=()) if diagnostic.used_in else diagnostic
+        if not diagnostic.used_in:  # most: one look-up, no replace() (a 68,000-error file)
+            found.setdefault(diagnostic, (diagnostic, []))
+            continue
+        same = replace(diagnostic, used_in=())
         if diagnostic.in_subtree:  # the finding, wherever in the mission's file it was caused
             same = replace(same, line=0, column=0, yaml_path="")
-        found = uses.setdefault(same, [])
-        found.extend(chain for chain in diagnostic.used_in if chain not in found)
-        if same not in first or _place(diagnostic) < _place(first[same]):
-            first[same] = diagnostic
+        said, chains = found.setdefault(same, (diagnostic, []))
+        chains.extend(chain for chain in diagnostic.used_in if chain not in chains)
+        if _place(diagnostic) < _place(said):
+            found[same] = diagnostic, chains
     merged = []
-    for same, chains in uses.items():
-        said = first[same]
+    for said, chains in found.values():
         if said.in_subtree:  # its own use first, the others in the file's order
             own = said.used_in[0][-1]
             chains = sorted(chains, key=lambda chain: (chain[-1] != own, chain[-1]))

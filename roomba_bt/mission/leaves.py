@@ -22,6 +22,7 @@ from roomba_bt.mission.values import (
     UNKNOWN,
     Bound,
     Context,
+    UnknownNames,
     Written,
     key_written_in,
     parameters_used,
@@ -31,21 +32,25 @@ from roomba_bt.mission.values import (
     said_origin,
     substituted,
     unknown,
-    unknown_later,
 )
 from roomba_bt.printable import shortened
 
 
-def _unknown_parameter(decl: Declaration, pname: str) -> tuple[str, Later | None]:
-    """``unknown parameter 'home'``, with the parameter the spec calls so where one does
-    (``(did you mean 'dock'? the spec's Home LED)``), else the closest name, worked out
-    when the error is shown (:func:`unknown_later`: a file may hold thousands)."""
-    pnames = [p.name for p in decl.params]
-    for param in decl.params:
-        if param.spec_name and param.spec_name.lower() == pname.lower():
-            hint = f" (did you mean {param.name!r}? {param.spec_name} is the spec's name for it)"
-            return unknown("parameter", pname, pnames, hint=hint), None
-    return unknown_later("parameter", pname, pnames, decl.name)
+class _UnknownParameters(UnknownNames):
+    """``unknown parameter 'home'`` of one leaf, with the parameter the spec calls so where
+    one does (``(did you mean 'dock'? the spec's Home LED)``), else the closest name,
+    worked out when the error is shown (:class:`UnknownNames`: a leaf may hold thousands)."""
+
+    def __init__(self, decl: Declaration) -> None:
+        super().__init__("parameter", [p.name for p in decl.params], decl.name)
+        self._spec = {p.spec_name.lower(): p for p in decl.params if p.spec_name}
+
+    def said(self, pname: str) -> tuple[str, Later | None]:
+        param = self._spec.get(pname.lower()) if self._spec else None
+        if param is None:
+            return self(pname)
+        hint = f" (did you mean {param.name!r}? {param.spec_name} is the spec's name for it)"
+        return unknown("parameter", pname, self.known, hint=hint), None
 
 
 def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
@@ -57,10 +62,12 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     options: dict[str, Any] = {}
     ok = True
     key_typed: dict[str, tuple[yaml.Node, Loc]] = {}
+    unknown_parameter: _UnknownParameters | None = None  # made at the first
     for pname, pnode, pkloc, pvloc in given:
         param = decl.param(pname)
         if param is None:
-            message, later = _unknown_parameter(decl, pname)
+            unknown_parameter = unknown_parameter or _UnknownParameters(decl)
+            message, later = unknown_parameter.said(pname)
             ctx.error(pkloc.at(f"{decl.name}: {message}", later))
             ok = False
             continue
@@ -73,18 +80,13 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
         except Bad as bad:
             ctx.report(bad)
             ok = False
+    written = {pname: pnode for pname, pnode, _, _ in given}
     for p in decl.params:
-        if (
-            p.required
-            and p.name not in params
-            and p.name not in key_typed
-            and p.name not in {g[0] for g in given}
-        ):
+        if p.required and not (p.name in params or p.name in key_typed or p.name in written):
             ctx.error(
                 key_loc.at(f"{decl.name}: missing required parameter {p.name!r} ({p.describe()})")
             )
             ok = False
-    written = {pname: pnode for pname, pnode, _, _ in given}
     # each value's type, as its text is shown in the leaf's name: a key-typed value's
     # (check's, set's) is its key's, filled in by _key_params
     types = {p.name: p.type for p in decl.params}

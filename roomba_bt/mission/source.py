@@ -223,21 +223,18 @@ def named_entries(
     if not isinstance(node, yaml.MappingNode):
         raise Bad(loc.at(f"{what} must be a mapping (key: value), got {kind_of(node)}"))
     out = []
-    not_names = [
-        loc_of(key_node, loc.file, loc.path).at(
-            f"keys of {what} must be names, got {_key_kind(key_node)}"
-        )
-        for _, key_node, _ in yamlsource.pairs(node, skip_duplicates=True)
-        if not _is_name(key_node)
-    ]
-    # each on its own line: `1:`, `true:`, `1.0:` are three keys, three errors
-    bad = Bad(not_names[0], tuple(not_names[1:])) if not_names else None
-    for _, key_node, value_node in yamlsource.pairs(node, skip_duplicates=True):
+    not_names = []
+    file, path = loc.file, loc.path
+    for _, key_node, value_node in yamlsource.pairs(node, skip_duplicates=True):  # once
         if not _is_name(key_node):
+            said = f"keys of {what} must be names, got {_key_kind(key_node)}"
+            not_names.append(loc_of(key_node, file, path).at(said))
             continue
         key = str(key_node.value)
-        key_loc = loc_of(key_node, loc.file, join(loc.path, key))
-        out.append((key, value_node, key_loc, loc_of(value_node, loc.file, key_loc.path)))
+        key_loc = loc_of(key_node, file, join(path, key))
+        out.append((key, value_node, key_loc, loc_of(value_node, file, key_loc.path)))
+    # each on its own line: `1:`, `true:`, `1.0:` are three keys, three errors
+    bad = Bad(not_names[0], tuple(not_names[1:])) if not_names else None
     return out, bad
 
 

@@ -13,6 +13,7 @@ import re
 from collections.abc import Callable, Collection, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import Any
 
 import yaml
@@ -263,19 +264,25 @@ def unknown(
     return f"unknown {what} {name!r}{hint}; known: {listing}"
 
 
-def unknown_later(
-    what: str, name: str, known: list[str], owner: str | None = None
-) -> tuple[str, Later]:
-    """:func:`unknown`'s message with its "did you mean" left for when it is shown
-    (:class:`~roomba_bt.mission.diagnostics.Later`; give both to ``Loc.at``): for the names
-    a file may hold thousands of, each unknown (a leaf's parameters, a word's options)."""
-    listing = ", ".join(known) if known else "none"
-    said = f"unknown {what} {name!r}"
+class UnknownNames:
+    """:func:`unknown`'s messages for names of one place (a leaf's parameters, a word's
+    options), each with its "did you mean" left for when it is shown
+    (:class:`~roomba_bt.mission.diagnostics.Later`; give both to ``Loc.at``): a file may
+    hold thousands of them. The list of known names is said once for them all (a leaf of
+    68,000 unknown parameters joined it 68,000 times)."""
 
-    def part() -> str:
-        return closest(name, known) if owner is None else suggestion(name, known, owner)
+    def __init__(self, what: str, known: list[str], owner: str | None = None) -> None:
+        self.what, self.known, self.owner = what, known, owner
+        self._listing = f"; known: {', '.join(known) if known else 'none'}"
 
-    return f"{said}; known: {listing}", Later(said, part)
+    def __call__(self, name: str) -> tuple[str, Later]:
+        said = f"unknown {self.what} {name!r}"
+        return said + self._listing, Later(said, partial(self._part, name))
+
+    def _part(self, name: str) -> str:
+        if self.owner is None:
+            return closest(name, self.known)
+        return suggestion(name, self.known, self.owner)
 
 
 class _Unknown:
@@ -461,8 +468,10 @@ class Context:
     _reported: set[Diagnostic] = field(default_factory=set, init=False, repr=False)
 
     def error(self, diagnostic: Diagnostic) -> None:
-        if diagnostic not in self._reported:
-            self._reported.add(diagnostic)
+        reported = self._reported
+        before = len(reported)
+        reported.add(diagnostic)  # one hash a diagnostic, not two (in, then add)
+        if len(reported) != before:
             self.diagnostics.append(diagnostic)
 
     def said(self, diagnostics: list[Diagnostic]) -> None:

@@ -909,8 +909,10 @@ def every_duplicate_key(root: yaml.Node) -> list[DuplicateKey]:
     pending: list[tuple[yaml.Node, PathKey]] = [(root, ())]
     while pending:
         node, path = pending.pop()
+        # a scalar holds no mapping: not walked (a file of 68,000 values made a path for each)
         if isinstance(node, yaml.SequenceNode):
-            pending += ((item, (*path, i)) for i, item in enumerate(node.value))
+            pending += ((item, (*path, i)) for i, item in enumerate(node.value)
+                        if item.__class__ is not yaml.ScalarNode)  # fmt: skip
         elif isinstance(node, yaml.MappingNode):
             texts = {k.value for k, _ in node.value if k.tag == STR}
             if len(texts) != len(node.value):  # not all texts, all different (most mappings)
@@ -918,7 +920,7 @@ def every_duplicate_key(root: yaml.Node) -> list[DuplicateKey]:
                     dup.path = (*path, str(dup.key))
                     found.append(dup)
             for key_node, value in node.value:
-                if isinstance(key_node, yaml.ScalarNode):
+                if value.__class__ is not yaml.ScalarNode and isinstance(key_node, yaml.ScalarNode):
                     pending.append((value, (*path, str(key_node.value))))
     found.sort(key=lambda dup: position(dup.node))
     return found

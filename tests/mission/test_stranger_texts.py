@@ -4,8 +4,10 @@ errors never shown."""
 
 from __future__ import annotations
 
+import gc
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -119,3 +121,36 @@ def test_suggestions_are_worked_out_only_for_the_errors_shown(
     assert len(asked) == MAX_REPORTED, len(asked)
     _, problems = compile_mission(path)  # one not shown still says it, when asked
     assert "(did you mean 'velocity'?)" in str(problems[-1])
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+@pytest.mark.parametrize("fails", [False, True])
+def test_the_cycle_collector_is_paused_while_a_file_is_compiled(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, enabled: bool, fails: bool
+) -> None:
+    """68,000 unknown parameters spent 1.0 s of their 2.5 s CPU in ten full collections,
+    each walking every YAML node, place and finding made so far (none of them garbage in a
+    cycle). Paused while the file is compiled, and as it was after, a compile that fails
+    inside too; one the caller paused stays paused."""
+    from roomba_bt.mission import compiler
+
+    seen: list[bool] = []
+    checked = compiler._checked
+
+    def spied(*args: Any, **kwargs: Any) -> Any:
+        seen.append(gc.isenabled())
+        if fails:
+            raise RuntimeError("a compiler bug")
+        return checked(*args, **kwargs)
+
+    monkeypatch.setattr(compiler, "_checked", spied)
+    path = _mission(tmp_path, "mission: m\ntree: {sequence: [mode: safe, drive: {velocty: 1}]}\n")
+    (gc.enable if enabled else gc.disable)()
+    try:
+        _, problems = compile_mission(path)
+        after = gc.isenabled()
+    finally:
+        gc.enable()
+    assert seen == [False] and after is enabled
+    said = "internal error while compiling" if fails else "unknown parameter 'velocty'"
+    assert said in problems[0].message, problems
