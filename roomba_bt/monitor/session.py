@@ -36,7 +36,7 @@ from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.printable import duration_words
 from roomba_bt.runtime.loop import StopRequested
-from roomba_bt.runtime.teardown import setup_tree, shutdown_nodes
+from roomba_bt.runtime.teardown import setup_tree
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
@@ -527,8 +527,8 @@ class MonitorSession:
         _note(runner, {"reload": mission.name, "at": "before"})
         if not was_paused:
             self._pause(runner, "reload", noted=False)
-        runner.stop_tree()
-        shutdown_nodes(runner.mission.root)  # the old tree is done with: what it opened, closed
+        # the old tree stopped, then what it opened closed, each bounded as at the run's end
+        runner.retire_tree(mission.name)  # (past it the run ends HUNG: RetireHung)
         runner.mission = mission
         # its name too, where a renamed one is shown: the page's header and the summary
         runner.summary.mission = self.feed.mission_name = mission.name

@@ -6,6 +6,9 @@ stop with nothing set going meanwhile (:meth:`RunEnding.stop_tree`; the monitor'
 retires a tree with it too), then the safe stop (:func:`stop_robot`, the connection's
 :class:`~roomba_bt.robot.ending.SafeStop`) and the nodes' ``shutdown()``
 (:meth:`RunEnding.safe_stop`), and the summary's word on each (:meth:`RunEnding.sum_up`).
+The monitor's reload retires its old tree with the same bounded stop and shutdown
+(:meth:`RunEnding.retire_tree`): one that does not end ends the run, HUNG, as the run's own
+end says it.
 """
 
 from __future__ import annotations
@@ -82,6 +85,20 @@ SHUTDOWN_NOT_ENDED = "the behaviours' shutdown() did not end within"
 #: what the run's reason says a late signal came during (``Ctrl-C during the tree's stop, in
 #: slow (Slow.terminate at plugin.py:12)``; the safe stop's is ``THE_SAFE_STOP``)
 THE_TREES_STOP, THE_SHUTDOWN = "the tree's stop", "the behaviours' shutdown()"
+#: what a HUNG run's reason says after its method and line when the monitor's reload waited
+#: for the old tree's stop or shutdown in vain (:meth:`RunEnding.retire_tree`)
+RELOAD_GIVEN_UP = "the reload of {mission} was given up and the run ended ({left})"
+
+
+class RetireHung(Exception):
+    """The monitor's reload waited for its old tree's stop or its nodes' ``shutdown()`` past
+    the bound of a run's end (:meth:`RunEnding.retire_tree`): the run ends on it, HUNG (exit
+    4), its reason (``str()``) naming the method and its line, as the run's end says one it
+    waited for in vain. An ``Exception`` raised by the runtime (the monitor's gate), never in
+    a behaviour's code: no behaviour's ``except`` sees it. ``at``: it came before the tick,
+    as the monitor's stop does (the record's end note)."""
+
+    at = "before"
 
 
 @dataclass(frozen=True, eq=False)
@@ -129,9 +146,13 @@ class RunEnding:
         # the mission's last words, whatever ended it (the summary's "mission said")
         self.summary.said = last_said(root) or ""
         self.left.limit_s = limit_s  # the shutdown's bound too
-        stopper = _Bounded(
-            THE_TREES_STOP, "roomba-bt tree stop", lambda: self.stop_tree(root, raised_in)
-        )
+        stopper = self.left.reloading if self.left.reloading_root is root else None
+        if stopper is not None and self.left.given_up:  # the run ended on it: said already
+            return False  # (the guard says the safe stop is under way: it is next)
+        if stopper is None:  # else the reload's, interrupted: waited for, not run twice
+            stopper = _Bounded(
+                THE_TREES_STOP, "roomba-bt tree stop", lambda: self.stop_tree(root, raised_in)
+            )
         first = self.wheels_first(root, tick_guard, guard, stopper, limit_s)
         began = time.monotonic()
         failures = stopper.within(limit_s)
@@ -143,24 +164,59 @@ class RunEnding:
         return first
 
     def _abandoned(self, stopper: _Bounded, limit_s: float, late: bool) -> None:
-        """The tree's stop ran past ``limit_s`` (:class:`_TreeStop`): said in the summary,
-        naming the method it is stuck in and its line (``term_hang (TermHang.terminate at
-        plugin.py:17)``, as the tick guard names a blocked ``update``), and warned; what its
-        nodes queued is dropped, and the writer still holds what would set the robot going
-        (its thread may write yet). The node stuck there is not shut down
-        (:attr:`left`, :meth:`safe_stop`): its ``shutdown()`` would meet the state its
-        ``terminate()`` holds, and wait on it as well. ``late``: a signal came meanwhile,
+        """The tree's stop ran past ``limit_s`` (:class:`_Bounded`): said in the summary
+        (:meth:`_stop_given_up`'s words), and warned. ``late``: a signal came meanwhile,
         whose interrupt the run's reason says (:func:`note_stop_abandoned`)."""
-        self.left.stuck = stopper.behaviour()
-        where = stopper.where() or "a behaviour's terminate()"
-        skipped = "; its shutdown() not called" if self.left.stuck is not None else ""
-        said = (
-            f"{STOP_NOT_ENDED} {duration_said(limit_s)}: {where} had not returned; the run's "
-            f"end went on without it (the safe stop, the summary{skipped})"
-        )
+        said = self._stop_given_up(stopper, limit_s, "the run's end went on without it ({})")
         log.warning("%s", said)
         note_stop_abandoned(self.summary, said, interrupted=late)
+
+    def _stop_given_up(self, stopper: _Bounded, limit_s: float, then: str) -> str:
+        """What a tree's stop that ran past ``limit_s`` says, naming the method it is stuck
+        in and its line (``term_hang (TermHang.terminate at plugin.py:17)``, as the tick guard
+        names a blocked ``update``), ``then`` what was done instead (``{}``: the safe stop and
+        the summary). What its nodes queued is dropped, and the writer still holds what would
+        set the robot going (its thread may write yet). The node stuck there is not shut down
+        (:attr:`left`, :meth:`safe_stop`): its ``shutdown()`` would meet the state its
+        ``terminate()`` holds, and wait on it as well."""
+        self.left.stuck = stopper.behaviour()
         self.outbox.clear()
+        where = stopper.where() or "a behaviour's terminate()"
+        skipped = "; its shutdown() not called" if self.left.stuck is not None else ""
+        left = then.format(f"the safe stop, the summary{skipped}")
+        return f"{STOP_NOT_ENDED} {duration_said(limit_s)}: {where} had not returned; {left}"
+
+    def retire_tree(
+        self, root: py_trees.behaviour.Behaviour, mission: str, limit_s: float = TREE_STOP_LIMIT_S
+    ) -> None:
+        """The monitor's reload, once its pause has stopped the robot: the old tree at
+        ``root`` stopped (:meth:`stop_tree`), then its nodes' ``shutdown()``, each in a
+        thread of its own waited for ``limit_s`` at most, as at the run's end
+        (:class:`_Bounded`): one that never returned hung the reload, and the run, for ever,
+        the robot paused in Passive and no signal but a kill ending it. Past the bound the
+        reload of ``mission`` (its name) is given up and :class:`RetireHung` raised, its words
+        those of the run's end (the method and its line); the run's end then neither stops
+        the tree again nor shuts down the node stuck in its ``terminate()`` (:attr:`left`).
+        A signal while the stop is waited for ends the run, whose end waits for this same
+        stop (:meth:`end_tree`), never a second one beside it. The failures of a
+        ``terminate()`` or ``shutdown()`` are logged, as a reload always did."""
+        stopper = _Bounded(THE_TREES_STOP, "roomba-bt tree stop", lambda: self.stop_tree(root))
+        self.left.reloading, self.left.reloading_root = stopper, root
+        then = RELOAD_GIVEN_UP.format(mission=mission, left="{}")
+        if stopper.within(limit_s) is None:
+            self.left.given_up = True
+            raise RetireHung(self._stop_given_up(stopper, limit_s, then))
+        self.left.reloading = self.left.reloading_root = None
+        shutdown = _Bounded(THE_SHUTDOWN, "roomba-bt shutdown", lambda: shutdown_nodes(root)[1])
+        if shutdown.within(limit_s) is None:
+            said = then.format("the safe stop, the summary")
+            raise RetireHung(self._shutdown_given_up(shutdown, limit_s, said))
+
+    def _shutdown_given_up(self, shutdown: _Bounded, limit_s: float, then: str) -> str:
+        """What the nodes' ``shutdown()`` that ran past ``limit_s`` says, naming the method
+        it is stuck in and its line; ``then``: what was done instead."""
+        where = shutdown.where() or "a behaviour's shutdown()"
+        return f"{SHUTDOWN_NOT_ENDED} {duration_said(limit_s)}: {where} had not returned; {then}"
 
     def safe_stop(
         self,
@@ -200,11 +256,8 @@ class RunEnding:
         if exits is not None:
             note_stop_failures(self.summary, exits)
             return
-        where = shutdown.where() or "a behaviour's shutdown()"
-        said = (
-            f"{SHUTDOWN_NOT_ENDED} {duration_said(limit_s)}: {where} had not returned; the "
-            "run's end went on without it (the summary)"
-        )
+        then = "the run's end went on without it (the summary)"
+        said = self._shutdown_given_up(shutdown, limit_s, then)
         log.warning("%s", said)
         note_stop_abandoned(self.summary, said, interrupted=guard.late is not None)
 
@@ -352,6 +405,12 @@ class _StopLeft:
 
     limit_s: float = TREE_STOP_LIMIT_S
     stuck: py_trees.behaviour.Behaviour | None = None
+    #: the monitor's reload's stop of its old tree (at ``reloading_root``) while it has not
+    #: ended (:meth:`RunEnding.retire_tree`): the run's end waits for it, never a second
+    reloading: _Bounded | None = None
+    reloading_root: py_trees.behaviour.Behaviour | None = None
+    #: ... and it was given up: the run ended on it, said (:class:`RetireHung`)
+    given_up: bool = False
 
 
 class _Bounded:
@@ -400,7 +459,8 @@ class _Bounded:
         """Start the work and wait for it ``limit_s`` at most: what each behaviour that
         failed says, or None if it has not ended by then. A signal's handler runs in this
         (the main) thread meanwhile: the guard holds it (:class:`InterruptGuard`)."""
-        self.thread.start()
+        if self.thread.ident is None:  # else started by a reload, and waited for again
+            self.thread.start()
         if not self.done.wait(limit_s):
             return None
         if self.raised is not None:

@@ -75,7 +75,7 @@ from roomba_bt.runtime.clock import (
     mission_time_after,
 )
 from roomba_bt.runtime.display import TreeStatuses
-from roomba_bt.runtime.ending import RunEnding, tree_stop_limit
+from roomba_bt.runtime.ending import RetireHung, RunEnding, tree_stop_limit
 from roomba_bt.runtime.long_run import MissionTimeChecks
 from roomba_bt.runtime.motion_watch import MotionWatch
 from roomba_bt.runtime.refusals import Refusals
@@ -478,10 +478,10 @@ class MissionRunner(BaseHandle):
         if self._guard is not None:
             self._guard.release()
 
-    def stop_tree(self, raised_in: py_trees.behaviour.Behaviour | None = None) -> list[str]:
-        """The running tree stopped (:meth:`RunEnding.stop_tree
-        <roomba_bt.runtime.ending.RunEnding.stop_tree>`): the run's end, a reload."""
-        return self._ending.stop_tree(self.mission.root, raised_in)
+    def retire_tree(self, mission: str) -> None:
+        """The monitor's reload to ``mission`` (its name): the tree stopped and shut down, each
+        bounded as at the run's end (``RunEnding.retire_tree``; ``RetireHung`` past it)."""
+        self._ending.retire_tree(self.mission.root, mission, tree_stop_limit(self.wall_limit_s))
 
     def _finish(
         self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
@@ -806,6 +806,8 @@ def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool, wrote: 
     after the safe stop."""
     if isinstance(exc, StopRequested):
         summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
+    elif isinstance(exc, RetireHung):  # the reload's old tree never stopped: as the end's
+        summary.outcome, summary.reason = Outcome.HUNG, str(exc)
     elif isinstance(exc, ConnectionFailed) or (isinstance(exc, TurnedAway) and not answered):
         # a bridge that turned the run away before any robot answered: never started
         summary.outcome = Outcome.CONNECTION_LOST if answered else Outcome.NO_CONNECTION

@@ -17,8 +17,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pytest
+from runtime.test_terminate_never_returns import HANG_ON_STOP, MISSION, WAIT_LINE
 
 from roomba_bt.cli import main
+from roomba_bt.runtime import ending
 
 if TYPE_CHECKING:  # the server needs the monitor extra, which each test checks for first
     from roomba_bt.monitor.server import MonitorServer
@@ -307,10 +309,10 @@ subtrees:
 class WatchedRun:
     """``roomba-bt run ... --watch`` in a subprocess, its output lines read as they come."""
 
-    def __init__(self, *args: str) -> None:
+    def __init__(self, *args: str, display: str = "none") -> None:
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "roomba_bt.cli", "run", *args, "--watch",
-             "--display", "none"],
+             "--display", display],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         )  # fmt: skip
         self.lines: queue.SimpleQueue[str] = queue.SimpleQueue()
@@ -340,6 +342,15 @@ class WatchedRun:
         self.proc.send_signal(signal.SIGINT)
         return self.proc.wait(timeout=30)
 
+    def said(self) -> str:
+        """What the process wrote that :meth:`expect` has not read, once it has ended."""
+        for reader in self.readers:
+            reader.join(30)
+        left: list[str] = []
+        while not self.lines.empty():
+            left.append(self.lines.get())
+        return "".join(left)
+
     def close(self) -> None:
         if self.proc.poll() is None:
             self.proc.kill()
@@ -367,6 +378,37 @@ def test_watch_reloads_when_an_included_file_changes(tmp_path: Path) -> None:
         assert run.interrupt() == 130
     finally:
         run.close()
+
+
+def test_ctrl_c_while_a_reload_waits_for_a_terminate_that_never_returns(tmp_path: Path) -> None:
+    """A change reloads the mission while its plugin's leaf drives; the old tree's stop
+    blocks in that leaf's terminate() for ever, and a Ctrl-C comes meanwhile. The run ends,
+    exit 130, its end waiting for that same stop (the bound of a run's end) rather than
+    calling the terminate a second time beside it, then the safe stop and the summary,
+    naming the terminate and its line. Before, the reload waited for ever, and the Ctrl-C
+    ended nothing."""
+    plugin, mission = tmp_path / "hang.py", tmp_path / "hang.yaml"
+    plugin.write_text(HANG_ON_STOP)
+    mission.write_text(MISSION)
+    run = WatchedRun(str(mission), "--allow-plugin-files", display="log")
+    try:
+        run.expect("out: watching ")
+        run.expect("hang_on_stop -> RUNNING")  # its leaf drives: the stop will terminate it
+        mission.write_text(MISSION.replace("mission: hang_on_stop", "mission: renamed"))
+        run.expect("err: terminate entered")
+        assert run.interrupt() == 130
+        said = run.said()
+    finally:
+        run.close()
+    where = f"hang_on_stop (HangOnStop.terminate at {plugin}:{WAIT_LINE})"
+    assert "out: outcome      INTERRUPTED (Ctrl-C or kill -INT (SIGINT); then the tree's " in said
+    assert (
+        f"the tree's stop did not end within {ending.TREE_STOP_LIMIT_S:g} s: {where} had not "
+        "returned; the run's end went on without it (the safe stop, the summary; its "
+        "shutdown() not called)"
+    ) in said, said
+    assert "terminate entered" not in said  # called once, at the reload
+    assert "out: final mode   Passive" in said, said
 
 
 MAIN_WITH_PLUGIN = """\

@@ -19,16 +19,28 @@ from runtime.simrun import (  # tests/runtime: a room with a drop, a recorded st
     record_run,
     stream_gap_link,
 )
+from runtime.test_terminate_never_returns import (  # a plugin whose terminate() blocks
+    HANG_ON_SHUTDOWN,
+    HANG_ON_STOP,
+    MISSION,
+    SHUTDOWN_LINE,
+    WAIT_LINE,
+    given_up,
+    outbound,
+    release_all,
+)
 
 from roomba_bt.cli import main
-from roomba_bt.mission import load_mission
+from roomba_bt.mission import Permissions, load_mission
 from roomba_bt.monitor import session as session_module
 from roomba_bt.monitor.feed import EventLogHandler, Ring, RunFeed
 from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
+from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot import silence
+from roomba_bt.runtime import ending
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.recording import load_record
 from roomba_bt.runtime.stack import Recording, RunStack
@@ -85,8 +97,10 @@ class Rig:
         keep_awake: bool | None = None,
         thin_pauses: bool = False,
         link: Callable[[Simulator], SimLink] = SimLink,
+        plugin_files: bool = False,
     ) -> None:
-        self.mission = load_mission(mission, {}, profile=CREATE2)
+        allowed = Permissions(plugin_files=plugin_files)
+        self.mission = load_mission(mission, {}, profile=CREATE2, permissions=allowed)
         self.sim = Simulator(load_world(world), CREATE2, 0)
         recording = Recording(record, str(SHUTTLE)) if record is not None else None
         self.stack = RunStack(
@@ -685,6 +699,82 @@ def test_a_reload_shuts_the_old_tree_down_and_the_run_s_end_the_new_one(
     old = [f"old {node.name}" for node in rig.mission.root.iterate()]
     # the run's end shuts down its tree then, the new one: the old one's came at the reload
     assert shut == old + [f"new {node.name}" for node in new.root.iterate()]
+
+
+#: the shuttle's drive after a leaf whose shutdown() never returns (its plugin's), the mission
+#: running on when the reload comes
+DRIVES_AFTER_A_HANGING_SHUTDOWN = (
+    "mission: hang_on_shutdown\n"
+    "plugins: [./hang.py]\n"
+    "tree:\n"
+    "  sequence:\n"
+    "    - mode: safe\n"
+    "    - hang_on_shutdown\n"
+    "    - drive: {velocity: 100 mm/s, duration: 60s}\n"
+)
+
+
+@pytest.mark.parametrize("hangs_in", ["terminate", "shutdown"])
+def test_a_reload_whose_old_tree_never_stops_ends_the_run_hung_with_the_robot_stopped(
+    until: Callable[..., None],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capfd: pytest.CaptureFixture[str],
+    hangs_in: str,
+) -> None:
+    """A reload while the tree drives, a plugin's terminate() (or shutdown()) never
+    returning: the reload called the old tree's stop and shutdown unbounded, and the run
+    hung for ever (the robot paused in Passive, no summary, no exit code). It waits as the
+    run's end does (the bound made short here), then the run ends HUNG (exit 4), naming the
+    method and its line; the run's end neither stops that tree a second time nor waits for
+    it again, and the robot is left stopped in Passive, the safe stop the last bytes
+    written."""
+    monkeypatch.setattr(ending, "TREE_STOP_LIMIT_S", 0.5)
+    stop = hangs_in == "terminate"
+    plugin = tmp_path / "hang.py"
+    plugin.write_text(HANG_ON_STOP if stop else HANG_ON_SHUTDOWN)
+    (tmp_path / "hang.yaml").write_text(MISSION if stop else DRIVES_AFTER_A_HANGING_SHUTDOWN)
+    waiting = tmp_path / "waiting.yaml"
+    waiting.write_text("mission: waiting\ntree:\n  sequence:\n    - mode: safe\n    - wait: 1s\n")
+    record = tmp_path / "run.jsonl"
+    rig = Rig(mission=tmp_path / "hang.yaml", plugin_files=True, record=record)
+    new = load_mission(waiting, {}, profile=CREATE2)
+    left_before = ending.threads_left()
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100 and bool(rig.sim.left_speed))
+        rig.session.reload(new)
+
+    try:
+        with given_up(plugin):
+            summary = rig.run_with(operator)
+            left = ending.threads_left() - left_before  # its thread, still in the method
+    finally:
+        release_all(plugin)
+    assert summary.outcome is Outcome.HUNG, summary.reason
+    assert summary.exit_code == 4
+    if stop:
+        where = f"hang_on_stop (HangOnStop.terminate at {plugin}:{WAIT_LINE})"
+        assert summary.reason == (
+            f"the tree's stop did not end within 0.5 s: {where} had not returned; the reload "
+            "of waiting was given up and the run ended (the safe stop, the summary; its "
+            "shutdown() not called)"
+        )
+        assert capfd.readouterr().err.count("terminate entered") == 1  # not stopped twice
+    else:
+        where = f"hang_on_shutdown (HangOnShutdown.shutdown at {plugin}:{SHUTDOWN_LINE})"
+        assert summary.reason == (
+            f"the behaviours' shutdown() did not end within 0.5 s: {where} had not returned; "
+            "the reload of waiting was given up and the run ended (the safe stop, the summary)"
+        )
+    assert rig.stack.mission is not new
+    assert summary.safe_stop.startswith("sent "), summary.safe_stop
+    assert rig.robot() == (OIMode.PASSIVE, 0.0, 0.0)
+    # the reload's pause (drive 0, motors off, Start), then the run's end's stream pause and
+    # Start: nothing between them (a terminate's thread is held from setting it going)
+    paused = oi.halt().data + oi.motors_off().data + oi.start().data
+    assert outbound(record).endswith(paused + oi.pause_stream().data + oi.start().data)
+    assert left == 1
 
 
 @pytest.mark.parametrize("brushes", [False, True])

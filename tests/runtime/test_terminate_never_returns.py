@@ -7,6 +7,7 @@ no Passive, and Ctrl-C and SIGTERM were held for a stop that never came."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import signal
 import subprocess
@@ -109,7 +110,7 @@ def mission(tmp_path: Path) -> Iterator[Path]:
     """The mission and its plugin file; the plugin's Event set when the test ends, so the
     thread left in its terminate() ends too."""
     yield _written(tmp_path, HANG_ON_STOP, MISSION)
-    _release_all(tmp_path / "hang.py")
+    release_all(tmp_path / "hang.py")
 
 
 def _written(tmp_path: Path, plugin: str, text: str) -> Path:
@@ -123,7 +124,7 @@ def _plugin_modules(path: Path) -> list[ModuleType]:
     return [m for m in list(sys.modules.values()) if getattr(m, "__file__", None) == str(path)]
 
 
-def _outbound(record: Path) -> bytes:
+def outbound(record: Path) -> bytes:
     """Every byte the run wrote, in order, from its record."""
     lines = [json.loads(line) for line in record.read_text().splitlines()]
     return b"".join(bytes.fromhex(line["b"]) for line in lines if line.get("d") == "out")
@@ -156,7 +157,7 @@ def test_a_terminate_that_never_returns_ends_the_run_hung_with_its_safe_stop(
     ) in out, out
     assert "safe stop    sent drive, motors, pause_resume_stream, start" in out
     assert "final mode   Passive" in out
-    assert _outbound(record).endswith(SAFE_END)
+    assert outbound(record).endswith(SAFE_END)
     assert "shutdown() did not end" not in out, out  # the stuck node's was not called
     end = json.loads(record.read_text().splitlines()[-2])["note"]
     assert end["ended"] == "hung"
@@ -180,7 +181,7 @@ def test_a_shutdown_that_never_returns_ends_the_run_hung_after_its_safe_stop(
             "--display", "none",
         ])  # fmt: skip
     finally:
-        _release_all(tmp_path / "hang.py")  # no fixture releases this test's plugin
+        release_all(tmp_path / "hang.py")  # no fixture releases this test's plugin
     out = capsys.readouterr().out
     assert code == 4, out
     where = f"hang_on_shutdown (HangOnShutdown.shutdown at {tmp_path / 'hang.py'}:{SHUTDOWN_LINE})"
@@ -191,26 +192,33 @@ def test_a_shutdown_that_never_returns_ends_the_run_hung_after_its_safe_stop(
     ) in out, out
     assert "safe stop    sent drive, motors, pause_resume_stream, start" in out, out
     assert "final mode   Passive" in out
-    assert _outbound(record).endswith(SAFE_END)
+    assert outbound(record).endswith(SAFE_END)
     end = json.loads(record.read_text().splitlines()[-2])["note"]
     assert end["ended"] == "hung"
 
 
 def _main_given_up(tmp_path: Path, argv: list[str]) -> int:
-    """The CLI's ``main(argv)``, the plugin's waits released after :data:`GIVE_UP_S`: the old
-    code, which waited for ever, fails rather than hangs."""
+    """The CLI's ``main(argv)`` under :func:`given_up`."""
     from roomba_bt.cli import main
 
-    give_up = threading.Timer(GIVE_UP_S, _release_all, (tmp_path / "hang.py",))
+    with given_up(tmp_path / "hang.py"):
+        return main(argv)
+
+
+@contextlib.contextmanager
+def given_up(plugin: Path) -> Iterator[None]:
+    """The plugin file's waits released after :data:`GIVE_UP_S`: the old code, which waited
+    for ever, fails rather than hangs (the monitor's reload too: tests/monitor)."""
+    give_up = threading.Timer(GIVE_UP_S, release_all, (plugin,))
     give_up.daemon = True
     give_up.start()
     try:
-        return main(argv)
+        yield
     finally:
         give_up.cancel()
 
 
-def _release_all(path: Path) -> None:
+def release_all(path: Path) -> None:
     for module in _plugin_modules(path):
         module.RELEASE.set()
 
@@ -255,4 +263,4 @@ def test_ctrl_c_while_the_run_waits_for_a_terminate_that_never_returns_is_exit_1
         "safe stop    drive 0, motors off before the tree's stop, then sent drive, motors, "
         "pause_resume_stream, start"
     ) in out, out
-    assert _outbound(record).endswith(oi.halt().data + oi.motors_off().data + SAFE_END)
+    assert outbound(record).endswith(oi.halt().data + oi.motors_off().data + SAFE_END)
