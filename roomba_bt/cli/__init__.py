@@ -144,21 +144,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     """The command: ``argv`` None is the process itself (``roomba-bt``), whose streams and
     signals are its own to set (:func:`_as_the_process`); a list is a program's call."""
     process = argv is None
+    code: int | None = None  # the command's answer, once known
     try:
         if process:  # inside: a signal may come while it imports, its handlers set
             _as_the_process()
         with spoken(_command_line_wording()):  # the connections' messages name the flags
-            return _command(argv)
+            code = _command(argv)
+        return code
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP before a run took them
-        return _interrupted(exc, process)
+        code = _interrupted(exc, process)
+        return code
     except RuntimeError as exc:
         interrupt = _signal_interrupt(exc)
         if interrupt is None:
             raise
-        return _interrupted(interrupt, process)
+        code = _interrupted(interrupt, process)
+        return code
     finally:
         if process:
-            _signals_end_the_process()  # the command's answer is out
+            _answer_given(code)  # the command's answer is out
             problem = stdout_problem()
             if problem is not None:
                 print(f"roomba-bt: {problem}", file=sys.stderr)
@@ -170,11 +174,11 @@ def _interrupted(exc: KeyboardInterrupt, process: bool) -> int:
     took the signal, or a command without one): said in one line, exit 130
     (:attr:`ExitCode.INTERRUPTED`). A robot's connection the command had opened was closed
     on the way, with its stop; a run says its own ending."""
-    if process:
-        _signals_end_the_process()  # only the last words are left
-    print(f"roomba-bt: interrupted{_by_signal(exc)}", file=sys.stderr)
     from roomba_bt.runtime.summary import ExitCode
 
+    if process:
+        _answer_given(ExitCode.INTERRUPTED)  # only the last words are left
+    print(f"roomba-bt: interrupted{_by_signal(exc)}", file=sys.stderr)
     return ExitCode.INTERRUPTED
 
 
@@ -272,12 +276,14 @@ def _as_the_process() -> None:
         warnings.filterwarnings("default", re.escape(ENCODE_MODULE_CALLED), DeprecationWarning)
 
 
-def _signals_end_the_process() -> None:
-    """The ending signals end the process at once from here on: the command's answer is out,
-    and a run's port and record closed (:func:`~roomba_bt.robot.safety.signals_end_the_process`)."""
-    from roomba_bt.robot.safety import signals_end_the_process
+def _answer_given(code: int | None) -> None:
+    """The command's answer is out (``code``, its exit code; None: an exception goes on), and
+    a run's port and record closed: an ending signal lets the last words finish, 2 s at
+    most, and the process exits with that answer
+    (:func:`~roomba_bt.robot.safety.answer_given`)."""
+    from roomba_bt.robot.safety import answer_given
 
-    signals_end_the_process()
+    answer_given(code)
 
 
 def _the_exit() -> None:

@@ -60,7 +60,7 @@ from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, duration_said, encodes, escaped
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG, TurnedAway
-from roomba_bt.robot.safety import answer_given, signals_end_the_process, terminal_stops_kept
+from roomba_bt.robot.safety import answer_given, terminal_stops_kept
 from roomba_bt.runtime.summary import (
     DEFAULT_GRACE,
     DEFAULT_TICK_LIMIT,
@@ -482,7 +482,7 @@ def _not_started(args: argparse.Namespace, exc: Exception, sent: str) -> int:
     stderr: a cron job's evening log had no ``outcome`` line to look for, and the hint said
     ``doctor --port URL``, not the port."""
     if getattr(args, "as_the_process", False):
-        answer_given()  # the port is closed: a signal now changes nothing (exit 3)
+        answer_given(ExitCode.CONNECTION)  # the port is closed: a signal changes nothing
     summary = RunSummary(Path(args.mission).stem, Outcome.NO_CONNECTION, reason=str(exc))
     summary.profile = "" if args.profile == AUTO_PROFILE else profile_line(args)
     summary.robot = robot_label(args.port, None)
@@ -748,20 +748,17 @@ def _run_and_report(
         stack.close()
         closed = True
         # the record's end note is out, the monitor shut down, the port closed (its exclusive
-        # mode cleared) and an undelivered stop tried again: a signal now ends the process,
-        # so that a report blocked on a pipe nobody reads can still be ended; a run that
-        # never started keeps its exit 3 (answer_given). The process's run handlers go
-        # first: given back after the report, they made a signal then "interrupted by
-        # SIGTERM", exit 130 (a program's call gets its own back after the report, as ever)
-        process = getattr(args, "as_the_process", False)
-        if process:
+        # mode cleared) and an undelivered stop tried again: the answer is known, and a
+        # signal now lets the report finish (2 s at most: one blocked on a pipe nobody reads
+        # can still be ended) and the process exit with it, 3 for a run that never started
+        # (answer_given). The process's run handlers go first: given back after the report,
+        # they made a signal then "interrupted by SIGTERM", exit 130 (a program's call keeps
+        # the run's hold through the report and gets its own back after it, as ever)
+        if getattr(args, "as_the_process", False):
             put_back = terminal_stops_kept()  # as the run held them, through the report
             stack.runner.release_interrupts()
             put_back()
-        if process and summary.outcome is Outcome.NO_CONNECTION:
-            answer_given()
-        else:
-            signals_end_the_process()
+            answer_given(summary.exit_code)
         _report(args, stack, summary, observer, simulator)
         return summary.exit_code
     except BaseException as exc:

@@ -394,65 +394,49 @@ def _waiting(doing: str, raises: bool) -> bytes:
 
 
 #: how long the command's last writes may take after a signal that came during them before
-#: the process ends by itself (:func:`signals_end_the_process`)
+#: the process ends by itself (:func:`answer_given`)
 LAST_WORDS_S = 2.0
 
 
-def signals_end_the_process() -> None:
-    """From now on the ending signals (:data:`ENDING_SIGNALS`) end the process, those
-    :data:`IGNORED_AT_START` aside; the terminal's stops are left as they are.
+def answer_given(code: int | None = None) -> None:
+    """The command's answer is known: ``code``, its exit code (None: the process's end is
+    near, the code not given here; a signal's then). From now on the ending signals
+    (:data:`ENDING_SIGNALS`, those :data:`IGNORED_AT_START` aside) do not change it: the
+    first lets the last words (a run's summary and report, a NO CONNECTION's hint) be
+    written and the command exit with its answer, but no longer than :data:`LAST_WORDS_S`:
+    a thread then ends the process with that answer, ``os._exit(code)`` (``128 + signal``
+    when none was given), even while a blocked write holds the stream's lock, which no
+    handler in the main thread can get past; the others change nothing. The terminal's
+    stop (Ctrl-Z) suspends, as ever.
 
-    The CLI's, for its last writes alone, once nothing a robot or the next run needs is left
-    (after a run: the record's end note written, the monitor shut down, the port closed and
-    its exclusive mode cleared, the stop tried again if it was not delivered). A report
-    written to a stdout nobody reads (a ``less`` left unscrolled, a frozen SSH session)
-    blocks, and signals held then left a process only SIGKILL could end. So a signal now
-    lets the last writes finish and the command exit with its own code, as it was going to,
-    but no longer than :data:`LAST_WORDS_S`: a thread then ends the process,
-    ``os._exit(128 + signal)``, even while a blocked write holds the stream's lock, which no
-    handler in the main thread can get past. Decided, session 36: the signals' default
-    action here killed the process by SIGINT (status -2, "killed by signal INT" in systemd's
-    log), and sometimes before the summary was printed, when an operator's Ctrl-C pressed a
-    few times 0.3 s apart reached the command after its run."""
-    ending = _taken(ENDING_SIGNALS)
-    for signum in ending:
+    The CLI's, as the process (a program that calls its ``main(argv)`` keeps its
+    handlers), once nothing a robot or the next run needs is left: after a run, the
+    record's end note written, the monitor shut down, the port closed and its exclusive
+    mode cleared, the stop tried again if it was not delivered; a run that never started
+    (no connection, exit 3), once its port is closed. A report written to a stdout nobody
+    reads (a ``less`` left unscrolled, a frozen SSH session) blocks, and signals held then
+    left a process only SIGKILL could end.
+
+    One rule, decided in session 37: a NO CONNECTION's first signal put the default actions
+    back, so a second killed the process (status -15 or -2, where the command had said 3),
+    while after a run's end a signal let its report finish and kept its code. Before
+    session 36 the signals' default action here killed the process by SIGINT (status -2,
+    "killed by signal INT" in systemd's log), sometimes before the summary was printed,
+    when an operator's Ctrl-C pressed a few times 0.3 s apart reached the command after its
+    run; and a SIGTERM as a run that never started printed its summary exited 130 or 143,
+    which told a service a run was stopped where none had started and a retry is safe."""
+    if code is not None:
+        _ANSWER[:] = [code]
+    for signum in _taken(ENDING_SIGNALS):
         with contextlib.suppress(ValueError):  # not the main thread
-            if signal.getsignal(signum) is _answer_stands:  # an answer given stays
-                continue
             if signum in WALL_CLOCK_SIGNALS:  # Ctrl-Z: suspends, as ever
                 signal.signal(signum, signal.SIG_DFL)
             else:
                 signal.signal(signum, _ends_after_the_last_words)
 
 
-def answer_given() -> None:
-    """The command's answer is known and nothing is left to stop (a run that never started:
-    no connection, exit 3, nothing of the mission sent): from now on an ending signal
-    (:data:`~roomba_bt._entry.EARLY_SIGNALS`, those :data:`IGNORED_AT_START` aside) does not
-    change it. The first lets the answer be written and the command exit with its own
-    code; it puts the signals' default actions back, so a second ends the process at once
-    (a summary blocked on a pipe nobody reads). Kept to the process's exit:
-    :func:`signals_end_the_process` leaves it. The process's own (the CLI as ``roomba-bt``):
-    a program that calls the CLI's ``main(argv)`` keeps its handlers.
-
-    Decided, session 36: a SIGTERM as a run that never started printed its summary exited
-    130 (``interrupted by SIGTERM`` under a summary that said NO CONNECTION) or, from the
-    command's answer on, 143; either told a service or a script that a run was stopped,
-    where none had started and a retry is safe, which is what exit 3 says."""
-    for signum in _taken(EARLY_SIGNALS):
-        with contextlib.suppress(ValueError):  # not the main thread
-            signal.signal(signum, _answer_stands)
-
-
-def _answer_stands(signum: int, frame: FrameType | None) -> None:
-    """:func:`answer_given`'s handler: the signal noted, the answer written on, the next
-    signal the process's end."""
-    for taken in _taken(EARLY_SIGNALS):
-        signal.signal(taken, signal.SIG_DFL)
-
-
 def _ends_after_the_last_words(signum: int, frame: FrameType | None) -> None:
-    """:func:`signals_end_the_process`'s handler: the first signal sets the process's end
+    """:func:`answer_given`'s handler: the first signal sets the process's end
     :data:`LAST_WORDS_S` later, by a thread; the others change nothing.
 
     No lock: a handler runs in the main thread, between two bytecodes of whatever ran
@@ -463,9 +447,16 @@ def _ends_after_the_last_words(signum: int, frame: FrameType | None) -> None:
     if _LAST_WORDS:
         return
     _LAST_WORDS.append(signum)
-    ender = threading.Timer(LAST_WORDS_S, os._exit, (128 + signum,))
+    ender = threading.Timer(LAST_WORDS_S, _last_words_run_out, (signum,))
     ender.daemon = True  # the process's own exit ends it first
     ender.start()
+
+
+def _last_words_run_out(signum: int) -> None:
+    """The process's end :data:`LAST_WORDS_S` after ``signum`` came, its last words not done:
+    with the command's answer, read now (the last given: :func:`answer_given`), else
+    ``128 + signum``."""
+    os._exit(_ANSWER[-1] if _ANSWER else 128 + signum)
 
 
 #: the most the process's exit may take once its last words are out
@@ -492,6 +483,8 @@ def signals_wait_for_the_exit() -> None:
 
 #: the signal whose :func:`_ends_after_the_last_words` set the process's end going (one)
 _LAST_WORDS: list[int] = []
+#: the command's exit code once known (:func:`answer_given`), what that end exits with
+_ANSWER: list[int] = []
 
 
 class InterruptGuard:
@@ -512,7 +505,7 @@ class InterruptGuard:
     a simulator's pty, refusing the next run until the simulator restarts; a stop that was
     not delivered is tried again there, the robot's last chance; and the record's end note
     tells replay how the run ended. Only then, around the report alone, does the CLI let the
-    signals end the process (:func:`signals_end_the_process`). The terminal's stops
+    signals end the process (:func:`answer_given`). The terminal's stops
     (:data:`TERMINAL_STOP_SIGNALS`) stay ignored: a summary written from the background
     goes out. Signal handlers belong to the main thread:
     elsewhere it does nothing.

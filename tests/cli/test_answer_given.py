@@ -1,7 +1,8 @@
 """A signal once a run's answer is NO CONNECTION (exit 3: not started, nothing of the mission
 sent, a retry safe) leaves that answer and its exit code as they are (``answer_given`` in
 ``roomba_bt/robot/safety.py``; docs/runtime.md). It was 130, ``interrupted by SIGTERM``
-under a summary that said NO CONNECTION, or 143 from the command's answer on.
+under a summary that said NO CONNECTION, or 143 from the command's answer on; and a second
+signal killed the process (status -15), where after a run's end it kept the run's code.
 
 Each child brings the signal to itself at a set point of the answer (no timing): as the
 summary is made, as the stderr lines after it are written, or once ``main`` has returned."""
@@ -20,27 +21,27 @@ ROOT = Path(__file__).resolve().parents[2]
 #: ``roomba-bt run dock --port PORT`` through the entry point, the signal ``SIGNUM`` brought
 #: at ``WHEN``: "summary" (the port never opened: as the summary is made), "report" (the
 #: port opened, the robot silent: as the report's stderr lines are written), "exit" (once
-#: ``main`` returned, before the process exits); ``TWICE``: a second one after the first
+#: ``main`` returned, before the process exits), "stuck" (as the summary is made, which then
+#: never ends: a stdout nobody reads); ``TIMES``: how many are sent together
 CHILD = """
-import os, signal, sys
+import os, signal, sys, time
 from roomba_bt.cli import run_cmd
 from roomba_bt._entry import main
 
-port, when, signum, twice = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4] == "1"
+port, when, signum, times = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 
 def bring():
-    os.kill(os.getpid(), signum)
+    for _ in range(times):
+        os.kill(os.getpid(), signum)
     for _ in range(1000):  # a Python handler runs between bytecodes, here at the latest
         pass
-    if twice:
-        os.kill(os.getpid(), signum)
-        for _ in range(1000):
-            pass
 
-if when == "summary":
+if when in ("summary", "stuck"):
     said = run_cmd.RunSummary.__str__
     def summary(self):
         bring()
+        if when == "stuck":
+            time.sleep(60)
         return said(self)
     run_cmd.RunSummary.__str__ = summary
 elif when == "report":
@@ -58,11 +59,9 @@ sys.exit(code)
 """
 
 
-def _answer(
-    port: str, when: str, signum: int, twice: bool = False
-) -> subprocess.CompletedProcess[str]:
+def _answer(port: str, when: str, signum: int, times: int = 1) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-c", CHILD, port, when, str(int(signum)), "1" if twice else "0"],
+        [sys.executable, "-c", CHILD, port, when, str(int(signum)), str(times)],
         capture_output=True, text=True, timeout=120, env={"PYTHONPATH": str(ROOT), "PATH": ""},
     )  # fmt: skip
 
@@ -89,11 +88,16 @@ def test_a_sigterm_after_a_robot_that_never_answered_leaves_exit_3(
     assert "interrupted" not in done.stderr and "Traceback" not in done.stderr
 
 
-def test_a_second_signal_ends_the_process_at_once(tmp_path: Path) -> None:
-    """A summary blocked on a pipe nobody reads is still ended: the second signal's default
-    action, as after every run's report."""
-    done = _answer(str(tmp_path / "ttyUSB9"), "summary", signal.SIGTERM, twice=True)
-    assert done.returncode == -signal.SIGTERM
+@pytest.mark.parametrize("when", ["summary", "stuck"])
+def test_three_sigterms_together_leave_exit_3_too(tmp_path: Path, when: str) -> None:
+    """The rule of every answer (a run's end too): the signals after the first change
+    nothing, and a summary blocked on a pipe nobody reads ("stuck") is ended 2 s after the
+    first, exit 3 all the same. The second killed the process (status -15: "killed by
+    SIGTERM")."""
+    done = _answer(str(tmp_path / "ttyUSB9"), when, signal.SIGTERM, times=3)
+    assert done.returncode == 3, (done.returncode, done.stderr)
+    if when == "summary":
+        assert "outcome      NO CONNECTION" in done.stdout
 
 
 def test_a_programs_call_keeps_its_own_handlers(tmp_path: Path) -> None:

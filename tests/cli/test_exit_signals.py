@@ -1,7 +1,7 @@
 """A signal after a run's answer is out (its summary, the exit code decided) ends the process
 with that code: three Ctrl-Cs 0.3 s apart after a monitored run killed it by SIGINT (status
 -2, "killed by signal INT" in systemd's log), the summary sometimes not printed, where the
-command had said 130 (``robot/safety.py``: ``signals_end_the_process``,
+command had said 130 (``robot/safety.py``: ``answer_given``,
 ``signals_wait_for_the_exit``)."""
 
 from __future__ import annotations
@@ -9,6 +9,8 @@ from __future__ import annotations
 import signal
 import subprocess
 import sys
+
+import pytest
 
 #: the command run as the process (``roomba-bt validate dock``), then a Ctrl-C as it exits:
 #: Python's finalization put its handlers back to the default action, which killed it
@@ -21,17 +23,17 @@ os.kill(os.getpid(), signal.SIGINT)
 sys.exit(code)
 """
 
-#: a Ctrl-C while the last words are written (a run's summary), and one whose last words
-#: never end (a stdout nobody reads: here a sleep)
-CTRL_C_IN_THE_LAST_WORDS = """
+#: a signal (``argv[2]``) while the last words are written (a run's summary, its answer 4
+#: known), and one whose last words never end (a stdout nobody reads: here a sleep)
+SIGNAL_IN_THE_LAST_WORDS = """
 import os, signal, sys, time
-from roomba_bt.robot.safety import signals_end_the_process
-signals_end_the_process()
-os.kill(os.getpid(), signal.SIGINT)
+from roomba_bt.robot.safety import answer_given
+answer_given(4)
+os.kill(os.getpid(), int(sys.argv[2]))
 print("the summary", flush=True)
 if sys.argv[1] == "stuck":
     time.sleep(60)
-sys.exit(130)
+sys.exit(4)
 """
 
 
@@ -46,16 +48,20 @@ def test_a_ctrl_c_as_the_command_exits_leaves_its_exit_code() -> None:
     assert done.returncode == 0, (done.returncode, done.stderr)
 
 
-def test_a_ctrl_c_in_the_last_words_lets_them_finish_with_the_command_s_code() -> None:
-    done = _run(CTRL_C_IN_THE_LAST_WORDS, "ends")
-    assert (done.returncode, done.stdout) == (130, "the summary\n"), done.stderr
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_in_the_last_words_lets_them_finish_with_the_command_s_code(
+    signum: int,
+) -> None:
+    done = _run(SIGNAL_IN_THE_LAST_WORDS, "ends", str(int(signum)))
+    assert (done.returncode, done.stdout) == (4, "the summary\n"), done.stderr
 
 
-def test_last_words_that_never_end_are_ended_by_the_signal_all_the_same() -> None:
-    """A write blocked on a pipe nobody reads is why the signals end the process here: a
-    thread ends it :data:`LAST_WORDS_S` after the signal, ``128 + SIGINT``."""
-    done = _run(CTRL_C_IN_THE_LAST_WORDS, "stuck")
-    assert done.returncode == 128 + signal.SIGINT, done.stderr
+def test_last_words_that_never_end_are_ended_with_the_command_s_answer() -> None:
+    """A write blocked on a pipe nobody reads is why a signal ends the process here: a
+    thread ends it :data:`LAST_WORDS_S` after the signal, with the answer the command had
+    given (it was ``128 + SIGTERM``, 143, whatever the run's own code)."""
+    done = _run(SIGNAL_IN_THE_LAST_WORDS, "stuck", str(int(signal.SIGTERM)))
+    assert done.returncode == 4, done.stderr
 
 
 #: a second signal whose handler runs inside the first's (three SIGTERMs sent together as a
@@ -63,7 +69,7 @@ def test_last_words_that_never_end_are_ended_by_the_signal_all_the_same() -> Non
 SIGNAL_INSIDE_THE_HANDLER = """
 import os, signal, sys, threading
 from roomba_bt.robot import safety
-from roomba_bt.robot.safety import signals_end_the_process
+from roomba_bt.robot.safety import answer_given
 
 class Timer(threading.Timer):
     def start(self):
@@ -73,7 +79,7 @@ class Timer(threading.Timer):
         super().start()
 
 safety.threading.Timer = Timer
-signals_end_the_process()
+answer_given(3)
 os.kill(os.getpid(), signal.SIGTERM)
 print("the summary", flush=True)
 sys.exit(3)

@@ -23,6 +23,7 @@ import pytest
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
+from roomba_bt.runtime.summary import ExitCode
 
 CLI = [sys.executable, "-m", "roomba_bt.cli"]
 DOCK = Path(__file__).resolve().parents[2] / "missions" / "dock.yaml"
@@ -229,7 +230,7 @@ def test_a_report_blocked_on_a_pipe_nobody_reads_can_be_ended(tmp_path: Path) ->
     that lands while the run still closes (its record, its port) is ignored, as it must be
     (``tests/runtime/test_signal_while_closing.py``): one is sent every 10 ms until the
     process ends, as an operator presses Ctrl-C again, and the first in the report ends it
-    2 s later."""
+    2 s later, with the run's own exit code."""
     record = tmp_path / "r.jsonl"
     read_end, write_end = _full_pipe()
     try:
@@ -252,9 +253,10 @@ def test_a_report_blocked_on_a_pipe_nobody_reads_can_be_ended(tmp_path: Path) ->
             proc.kill()
             proc.wait()
         os.close(read_end)
-    # ended by the thread the signal set going (robot/safety.py, LAST_WORDS_S): 128 + the
-    # signal, as the shell says it (the signal's default action, -15, before session 36)
-    assert proc.returncode == 128 + signal.SIGTERM
+    # ended by the thread the signal set going (robot/safety.py, LAST_WORDS_S) with the
+    # run's own answer, its timeout's exit 1 (128 + the signal in session 36; the signal's
+    # default action, -15, before it)
+    assert proc.returncode == ExitCode.MISSION_FAILED
 
 
 def _record_ended(record: Path) -> bool:
