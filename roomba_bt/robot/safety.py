@@ -119,6 +119,10 @@ def _taken(signals: tuple[int, ...]) -> tuple[int, ...]:
 #: ``grep 'INTERRUPTED (Ctrl-C'`` finds such runs still (decided, session 36: it said
 #: ``Ctrl-C`` alone, of a script's ``kill -INT`` too)
 SIGINT_SAID = "Ctrl-C or kill -INT (SIGINT)"
+#: ... and the other two a key sends, alike (decided, session 37: they named the key alone,
+#: ``Ctrl-\ (SIGQUIT)``, of a script's ``kill -QUIT`` too)
+SIGQUIT_SAID = "Ctrl-\\ or kill -QUIT (SIGQUIT)"
+SIGTSTP_SAID = "Ctrl-Z or kill -TSTP (SIGTSTP)"
 
 
 def interrupt_reason(interrupt: KeyboardInterrupt) -> str:
@@ -146,9 +150,9 @@ def signal_reason(signum: int, *, terminal: bool | None = None) -> str:
     if signum == signal.SIGINT:
         return SIGINT_SAID
     if signum == getattr(signal, "SIGTSTP", None):
-        return "Ctrl-Z (SIGTSTP): a suspended run could not stop its robot, so it ended"
+        return f"{SIGTSTP_SAID}: a suspended run could not stop its robot, so it ended"
     if signum == getattr(signal, "SIGQUIT", None):
-        return "Ctrl-\\ (SIGQUIT): the run ended with its safe stop, not at once"
+        return f"{SIGQUIT_SAID}: the run ended with its safe stop, not at once"
     return signal.Signals(signum).name
 
 

@@ -231,3 +231,18 @@ def test_a_sigint_is_named_as_either_sender_would_have_sent_it() -> None:
     assert said == "Ctrl-C or kill -INT (SIGINT)"
     assert interrupt_reason(KeyboardInterrupt()) == said
     assert interrupt_reason(Terminated(signal.SIGTERM)) == "SIGTERM"
+
+
+@pytest.mark.parametrize(
+    ("signum", "said"),
+    [
+        (signal.SIGQUIT, "Ctrl-\\ or kill -QUIT (SIGQUIT): the run ended with its safe stop"),
+        (signal.SIGTSTP, "Ctrl-Z or kill -TSTP (SIGTSTP): a suspended run could not stop"),
+    ],
+    ids=["SIGQUIT", "SIGTSTP"],
+)
+def test_the_other_keys_signals_are_named_as_sigint_is(signum: int, said: str) -> None:
+    """Ctrl-\\ and Ctrl-Z named their key alone (``Ctrl-\\ (SIGQUIT)``), of a script's
+    ``kill -QUIT`` too, where SIGINT's reason names both senders: said alike."""
+    assert signal_reason(signum).startswith(said)
+    assert interrupt_reason(Terminated(signum)) == signal_reason(signum)

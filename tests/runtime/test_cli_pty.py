@@ -19,6 +19,7 @@ import pytest
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.robot.discovery import PROBE_QUERY
+from roomba_bt.robot.safety import signal_reason
 from roomba_bt.runtime.recording import load_record
 
 from .bridge import ResettingBridge
@@ -119,6 +120,8 @@ def test_signal_ends_with_the_safe_stop_and_exit_130(
     out, err = ended(proc)
     assert proc.returncode == 130, err
     assert "INTERRUPTED" in out
+    if signum != signal.SIGHUP:  # a key's signal, named as either sender sends it
+        assert f"INTERRUPTED ({signal_reason(signum)}" in out, out
     assert ends_with_the_safe_stop(load_record(record).outbound)
 
 
