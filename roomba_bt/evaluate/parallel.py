@@ -64,6 +64,17 @@ class ThreadsLeftError(RuntimeError):
     (``run``'s results, as on Ctrl-C)."""
 
 
+class WorkerRetired(Exception):
+    """Raised in a pool worker instead of running an episode: an episode before left a
+    thread stuck in a behaviour's ``terminate()`` or ``shutdown()`` in that process
+    (:func:`_watched_episode`). The round hands no more episodes to its pool and runs this
+    one and the rest in a new one (:func:`_pool_round`): a worker with stuck threads is
+    retired and replaced, the rule of a sweep in its own process
+    (:data:`THREADS_LEFT_CAP`), where a process cannot be replaced, made that of each
+    worker, which can (decided, session 37: a worker kept one per such episode, without
+    bound, each holding its episode's tree and simulator until the worker ended)."""
+
+
 class WorkersLostError(RuntimeError):
     """A local worker process died more often than :data:`POOL_RESTARTS` with no episode to
     blame: the episodes that finished (``finished``, in spec order) and a message naming
@@ -212,8 +223,9 @@ class _Round:
     """How a pool round ended. When a worker died: the episodes the pool had taken and lost
     (running or queued in it: a broken pool ends every worker), those of them that had
     started (``running``: one of these may have killed it) and how it died (its exit status,
-    :func:`_how_it_died`; "" when unknown); the episodes never handed to the pool
-    (``unstarted``), and those ended at the wall-clock limit (``hung``: their HUNG results
+    :func:`_how_it_died`; "" when unknown); the episodes never handed to the pool or
+    refused by a retired worker (``unstarted``: :class:`WorkerRetired`), and those ended at
+    the wall-clock limit (``hung``: their HUNG results
     are in)."""
 
     lost: list[int]
@@ -246,6 +258,7 @@ def _pool_round(
     queue = iter(todo)
     running: dict[Future[EpisodeResult], int] = {}
     lost: list[int] = []
+    retired: list[int] = []  # refused by a worker with stuck threads: the next round's
 
     def submit(index: int) -> None:
         try:
@@ -263,12 +276,13 @@ def _pool_round(
                 index = running.pop(future)
                 if index in watch.hung:
                     continue  # its HUNG result is in
-                if isinstance(future.exception(), BrokenProcessPool):
-                    lost.append(index)
+                error = future.exception()
+                if isinstance(error, BrokenProcessPool | WorkerRetired):
+                    (retired if isinstance(error, WorkerRetired) else lost).append(index)
                     continue
                 watch.ended(index)
                 finished(index, future.result())
-                nxt = None if lost or watch.hung else next(queue, None)
+                nxt = None if lost or watch.hung or retired else next(queue, None)
                 if nxt is not None:
                     submit(nxt)
             for index, result in watch.overdue(specs, running):
@@ -280,7 +294,7 @@ def _pool_round(
         executor.shutdown(wait=True, cancel_futures=True)
         began = watch.close(lost)
     died = _how_it_died(workers) if lost and not watch.hung else ""
-    return _Round(sorted(lost), began, list(queue), sorted(watch.hung), died)
+    return _Round(sorted(lost), began, sorted([*retired, *queue]), sorted(watch.hung), died)
 
 
 def _how_it_died(workers: dict[int, Any] | None) -> str:
@@ -497,7 +511,9 @@ _WORKER: dict[str, Any] = {}
 
 def _watched_episode(index: int, spec: EpisodeSpec) -> EpisodeResult:
     """:func:`run_episode` in a pool worker; in a watched one, its start said to the parent
-    first."""
+    first. Not in a worker an episode left a thread stuck in: :class:`WorkerRetired`."""
+    if threads_left():  # a forked worker starts with none of its parent's threads
+        raise WorkerRetired(f"a thread stuck in a behaviour in worker {os.getpid()}")
     reports = _WORKER.get("reports")
     if reports is None:
         return run_episode(spec)

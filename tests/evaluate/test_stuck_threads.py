@@ -18,15 +18,20 @@ import pytest
 from roomba_bt.evaluate import parallel
 from roomba_bt.runtime import ending
 
-#: a leaf that runs until stopped; its terminate() waits on an Event nobody sets
+#: a leaf that runs until stopped; its terminate() notes its process and how many threads
+#: are stuck in it now, this one's included (``stops.txt`` beside it), then waits on an
+#: Event nobody sets
 HANG_ON_STOP = '''\
+import os
 import threading
+from pathlib import Path
 
 from py_trees.common import Status
 
 from roomba_bt.behaviours import Action, declare
 
 RELEASE = threading.Event()
+STUCK = {"roomba-bt tree stop", "roomba-bt shutdown"}
 
 
 @declare("hang_on_stop", kind="action", params=(), reads=(), sends=())
@@ -37,6 +42,9 @@ class HangOnStop(Action):
         return Status.RUNNING
 
     def terminate(self, new_status):
+        stuck = sum(1 for t in threading.enumerate() if t.name in STUCK and t.is_alive())
+        with open(Path(__file__).with_name("stops.txt"), "a") as noted:
+            noted.write(f"{os.getpid()} {stuck}\\n")
         RELEASE.wait()
 '''
 
@@ -92,3 +100,27 @@ def test_a_sweep_whose_episodes_each_hang_in_terminate_stops_at_the_cap(
         "went on without it), the first: seed "
     ) in err, err
     assert "endless loop" not in err, err
+
+
+def test_a_worker_an_episode_left_a_stuck_thread_in_is_retired_and_replaced(
+    mission: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--jobs 2``: each episode leaves its terminate() stuck in its worker. A worker kept
+    them all (one per episode it ran, each holding its tree and simulator until it ended);
+    now a worker that has one runs no other episode: it is retired, and a new worker takes
+    the rest. Every terminate() began in a worker with no thread stuck from before, and
+    every episode ran, HUNG."""
+    from roomba_bt.cli import main
+
+    monkeypatch.setattr(ending, "TREE_STOP_LIMIT_S", 0.05)  # the forked workers' too
+    code = main([
+        "eval", str(mission), "--runs", "6", "--jobs", "2", "--timeout", "0.2s",
+        "--allow-plugin-files",
+    ])  # fmt: skip
+    out, err = capsys.readouterr()
+    assert code == 4, out + err
+    assert "6 episode(s) hung in a behaviour's terminate() that never returned" in err, err
+    stops = [line.split() for line in (mission.parent / "stops.txt").read_text().splitlines()]
+    assert len(stops) == 6, stops
+    assert {stuck for _, stuck in stops} == {"1"}, stops  # its own alone
+    assert len({pid for pid, _ in stops}) == 6, stops  # each in a worker of its own
