@@ -435,6 +435,7 @@ class _Bounded:
         self.done = threading.Event()
         #: where this thread signalled its own process (:meth:`_called`), "" if it did not
         self.signalled = ""
+        self.began = 0.0  #: when it started (``time.monotonic()``): :meth:`within`
         self.thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def _run(self) -> None:
@@ -456,12 +457,15 @@ class _Bounded:
             self.signalled = behaviour_at(frame)
 
     def within(self, limit_s: float) -> list[str] | None:
-        """Start the work and wait for it ``limit_s`` at most: what each behaviour that
-        failed says, or None if it has not ended by then. A signal's handler runs in this
-        (the main) thread meanwhile: the guard holds it (:class:`InterruptGuard`)."""
-        if self.thread.ident is None:  # else started by a reload, and waited for again
+        """Start the work and wait for it until ``limit_s`` after its start at most: what
+        each behaviour that failed says, or None if it has not ended by then. Started
+        already (a reload's stop that a signal interrupted: :meth:`RunEnding.end_tree`),
+        what is left of that bound. A signal's handler runs in this (the main) thread
+        meanwhile: the guard holds it (:class:`InterruptGuard`)."""
+        if self.thread.ident is None:
+            self.began = time.monotonic()
             self.thread.start()
-        if not self.done.wait(limit_s):
+        if not self.done.wait(max(0.0, self.began + limit_s - time.monotonic())):
             return None
         if self.raised is not None:
             raise self.raised
