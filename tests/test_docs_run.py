@@ -281,6 +281,33 @@ def test_every_mission_in_the_docs_validates(
     assert main(["validate", file, *allow]) == 0, f"{where}: {capsys.readouterr()}"
 
 
+#: Python blocks run as written, in the scratch directory of the docs' missions (the page, and
+#: the heading of the section that holds one block): each makes what it uses (session 37's
+#: stranger met a NameError in missions.md's, which never made its ``robot``). The blocks of
+#: docs/runtime.md are tests/runtime/test_docs_python.py's; the rest are fragments of a
+#: program (an ``except`` clause, a test) or need a robot.
+PYTHON_RUN = [
+    ("docs/missions.md", "## From Python"),
+    ("docs/plugins.md", "### A behaviour in your own program"),
+]
+
+
+def python_block(doc: str, heading: str) -> str:
+    """The first ``python`` block of the section ``heading`` of ``doc``."""
+    text = (ROOT / doc).read_text(encoding="utf-8")
+    assert f"\n{heading}\n" in text, f"{doc} lost its section {heading!r}"
+    block = re.search(r"^```python\n(.*?)^```", text.split(f"\n{heading}\n", 1)[1], re.M | re.S)
+    assert block is not None, f"{doc}: {heading!r} holds no python block"
+    return block[1]
+
+
+@pytest.mark.parametrize(("doc", "heading"), PYTHON_RUN, ids=[h for _, h in PYTHON_RUN])
+def test_the_python_examples_run(doc: str, heading: str, workdir: Path) -> None:
+    namespace: dict[str, object] = {"__name__": "docs_example"}
+    exec(compile(python_block(doc, heading), f"{doc}:{heading}", "exec"), namespace)
+    assert namespace.get("mission") is not None  # each compiled its mission
+
+
 @pytest.mark.parametrize(("where", "file", "text"), WORLDS, ids=[w[0] for w in WORLDS])
 def test_every_world_in_the_docs_loads(where: str, file: str, text: str) -> None:
     from roomba_bt.sim import parse_world
