@@ -82,30 +82,26 @@ WORKER = "## From Python: a run in a worker thread"
 
 
 def test_the_worker_thread_example_runs(capsys: pytest.CaptureFixture[str]) -> None:
-    """Its ``stack`` given (a short mission on the simulator), it runs to its end: the
-    worker's summary printed, the SIGTERM handler it sets put back by the test."""
+    """Its two blocks run as written, one after the other (the ``stack`` the first makes:
+    the recipe's alone stopped with a NameError, session 37's stranger), to the worker's
+    summary printed; the SIGTERM handler it sets is put back by the test. The two sections
+    after it point at this ``stack``."""
     import signal
 
-    import py_trees
-
-    from roomba_bt.behaviours.actions import Drive, Mode
-    from roomba_bt.oi.profiles import CREATE2
-    from roomba_bt.runtime.stack import RunStack, TreeMission
-    from roomba_bt.sim import SimLink, Simulator, load_world
-
-    section = DOC.read_text(encoding="utf-8").split(WORKER, 1)[1].split("\n## ", 1)[0]
-    [block] = re.findall(r"```python\n(.*?)```", section, flags=re.DOTALL)
-    root = py_trees.composites.Sequence("w", memory=True, children=[
-        Mode("safe", {"to": "safe"}), Drive("fwd", {"velocity": "200 mm/s", "distance": "0.2 m"}),
-    ])  # fmt: skip
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(TreeMission(root, "worker"), link, profile=CREATE2, timeout_s=10.0)
+    text = DOC.read_text(encoding="utf-8")
+    section = text.split(WORKER, 1)[1].split("\n## ", 1)[0]
+    made, recipe = re.findall(r"```python\n(.*?)```", section, flags=re.DOTALL)
+    namespace: dict[str, object] = {"__name__": "docs_example"}
     previous = signal.getsignal(signal.SIGTERM)
     try:
-        exec(compile(block, f"{DOC}:worker", "exec"), {"stack": stack})
+        exec(compile(made, f"{DOC}:worker-stack", "exec"), namespace)
+        exec(compile(recipe, f"{DOC}:worker", "exec"), namespace)
     finally:
         signal.signal(signal.SIGTERM, previous)
     assert "outcome      SUCCESS" in capsys.readouterr().out
+    for later in ("## From Python: runs side by side", ASYNCIO):
+        after = text.split(later, 1)[1].split("\n## ", 1)[0]
+        assert 'made as in "a run in a worker thread"' in " ".join(after.split()), later
 
 
 ASYNCIO = "## From Python: asyncio"
