@@ -332,7 +332,8 @@ class NodeParser:
         if absent and not declares:  # theirs, most likely: no "did you mean" a built-in
             return f"{message} (perhaps of {'; '.join(absent)})"
         if not declares:  # a misspelling, perhaps: not when a plugin is known to declare it
-            message += suggestion(word, [*WORDS, *self.ctx.registry.names(), *MODIFIERS])
+            meant = suggestion(word, [*WORDS, *self.ctx.registry.names(), *MODIFIERS])
+            message += meant + _subtree_meant(word) + ("" if meant else _WHAT_IS_ALLOWED)
         if likely:
             failed = "; ".join(str(e) for e in likely[: self._PLUGIN_NOTES])
             more = len(likely) - self._PLUGIN_NOTES
@@ -538,6 +539,22 @@ class NodeParser:
                 continue
             sub.used = True
             self._parse_alone(sub, self.global_env)
+
+
+#: What an unknown node's error says is allowed when no known word is close to it (session
+#: 37's stranger read ``unknown node 'wander'`` and found no word of where they are listed).
+_WHAT_IS_ALLOWED = "; roomba-bt behaviours lists the actions and conditions there are"
+
+
+def _subtree_meant(word: str) -> str:
+    """A word that names a subtree of the shipped library (``dock``, ``undock``): what uses
+    it, beside the "did you mean" (``dock`` is the firmware's ``seek_dock`` there, where a
+    reader of ``roomba-bt run dock`` means the docking subtree that mission uses)."""
+    library = library_defining(word)
+    if library is None:
+        return ""
+    used = f"include: [{library}] and subtree: {{id: {word}}}"
+    return f"; or, for the subtree the shipped missions use: {used}"
 
 
 def _missing_space(word: str, registry: Registry) -> str | None:

@@ -154,3 +154,20 @@ def test_the_cycle_collector_is_paused_while_a_file_is_compiled(
     assert seen == [False] and after is enabled
     said = "internal error while compiling" if fails else "unknown parameter 'velocty'"
     assert said in problems[0].message, problems
+
+
+def test_an_unknown_node_says_what_is_allowed(tmp_path: Path) -> None:
+    """Session 37's stranger: ``wander`` (nothing close) said no more than "unknown node",
+    and ``dock`` offered only the firmware's ``seek_dock``, where a reader of ``roomba-bt run
+    dock`` meant the docking subtree that mission uses: each now says where to look."""
+    path = _mission(
+        tmp_path,
+        "mission: m\ntree:\n  sequence:\n    - mode: safe\n"
+        "    - wander: {speed: 200 mm/s}\n    - dock\n",
+    )
+    assert _problems(path) == [
+        "5:7: unknown node 'wander'; roomba-bt behaviours lists the actions and conditions "
+        "there are",
+        "6:7: unknown node 'dock' (did you mean 'seek_dock'?); or, for the subtree the shipped "
+        "missions use: include: [roomba-bt:lib/docking.yaml] and subtree: {id: dock}",
+    ]
