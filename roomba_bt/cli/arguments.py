@@ -423,7 +423,8 @@ def battery_charge(text: str) -> float:
 
 
 def add_battery_option(parser: Any, what: str = "") -> None:
-    """``--battery`` (``eval``, ``run``): one definition, read by :func:`battery_charge`."""
+    """``--battery`` (``eval``, ``run``, ``sim``): one definition, read by
+    :func:`battery_charge`."""
     parser.add_argument(
         "--battery", type=battery_charge, metavar="FRACTION",
         help=f"{what}initial charge, above 0 up to 1, or a percent (0.5, 50%%; default: the "

@@ -21,7 +21,7 @@ from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 from roomba_bt.robot.connection import no_answer_causes, port_not_opened
 from roomba_bt.robot.discovery import OI_RATES, describe_silence, find_robot, identify_robot
 from roomba_bt.robot.errors import ConnectionFailed
-from roomba_bt.sim import Faults, RealtimeSimLink, SimLink, Simulator, load_world
+from roomba_bt.sim import Faults, RealtimeSimLink, SimLink, Simulator, World, load_world
 from roomba_bt.transport import SerialTransport, Transport, TransportError
 
 DEFAULT_WORLD = "empty-room"
@@ -73,13 +73,19 @@ def make_simulator(
     fraction) instead of the world's if given; raises WorldError if invalid.
     ``coverage``: it tracks the floor cleaned (:mod:`roomba_bt.sim.coverage`); ``trace``: it
     keeps its trajectory (for a plot)."""
-    loaded = load_world(world or DEFAULT_WORLD)
-    if battery is not None:
-        loaded = replace(loaded, battery=battery)
+    loaded = charged_world(world, battery)
     return Simulator(
         loaded, profile, seed, faults, random_start=random_start, coverage=coverage, trace=trace,
         cycle_commands_pause=True,  # as the OI spec says (docs/simulator.md)
     )  # fmt: skip
+
+
+def charged_world(world: str | None, battery: float | None) -> World:
+    """``world`` (a shipped name or a path; None: the default) with its battery at
+    ``battery`` (a fraction, ``--battery``) instead of the world's if given: ``run``,
+    ``eval`` and ``sim`` read the option the same way. Raises WorldError if invalid."""
+    loaded = load_world(world or DEFAULT_WORLD)
+    return loaded if battery is None else replace(loaded, battery=battery)
 
 
 def make_link(simulator: Simulator, fast: bool) -> SimLink:

@@ -22,6 +22,7 @@ from types import FrameType
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
+    add_battery_option,
     add_command,
     add_fault_options,
     add_profile_option,
@@ -76,6 +77,7 @@ def register(sub: Any) -> None:
     add_profile_option(parser, "the model the simulated robot is")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--random-start", action="store_true", help="start in the start region")
+    add_battery_option(parser)
     parser.add_argument(
         "--old-firmware-angle", action="store_true", help="Angle (20) as firmware <= 3.4.0"
     )
@@ -141,10 +143,11 @@ def run_sim(args: argparse.Namespace) -> int:
 def _simulator(args: argparse.Namespace) -> Simulator | int:
     """The simulated robot the options describe (faults, world, rate, firmware, asleep), or
     the exit code after saying which option is wrong."""
+    from roomba_bt.cli.links import charged_world
     from roomba_bt.cli.profile_choice import chosen_profile
     from roomba_bt.oi.identify import parse_firmware
     from roomba_bt.oi.profiles import get_profile
-    from roomba_bt.sim import Simulator, WorldError, load_world
+    from roomba_bt.sim import Simulator, WorldError
 
     problem = chosen_profile(args, "sim")
     if problem is not None:
@@ -157,7 +160,7 @@ def _simulator(args: argparse.Namespace) -> Simulator | int:
     if refused is not None:
         return _fail(refused, ExitCode.INVALID)
     try:
-        world = load_world(args.world)
+        world = charged_world(args.world, args.battery)
         simulator = Simulator(
             world,
             profile,

@@ -63,3 +63,21 @@ def test_the_served_simulator_loses_the_clients_bytes_on_request_and_says_how_ma
     assert "roomba-bt sim: the line lost " in said and "of the bytes from the client" in said
     lost = int(said.split("the line lost ")[1].split()[0])
     assert 60 < lost < 190  # about half of 250
+
+
+@pytest.mark.parametrize(("given", "charge"), [([], 0.7), (["--battery", "15%"], 0.15)])
+def test_sim_takes_battery_as_run_and_eval_do(given: list[str], charge: float) -> None:
+    """``sim --battery`` (session 37's stranger copied a world to try "dock when low" on a
+    served robot: run and eval had the option, sim did not); the apartment's own is 0.7."""
+    args = build_parser().parse_args(["sim", "--pty", "--world", "apartment", *given])
+    simulator = sim_cmd._simulator(args)
+    assert isinstance(simulator, Simulator)
+    assert simulator.world.battery == pytest.approx(charge)
+    assert simulator.battery_charge == pytest.approx(charge * 2696)  # mAh of a full one
+
+
+def test_sim_refuses_an_empty_battery(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exited:
+        main(["sim", "--pty", "--battery", "0"])
+    assert exited.value.code == 2
+    assert "an empty battery switches the simulated robot off" in capsys.readouterr().err
