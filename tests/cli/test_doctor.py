@@ -787,3 +787,18 @@ def test_a_bridge_not_listening_is_named_by_its_address(scheme: str, serves: str
 def test_listen_s_help_names_a_network_bridge_beside_a_cable() -> None:
     help_text = " ".join(_cli("doctor", "--help").stdout.split())
     assert "an intermittent line, a cable or a network bridge's Wi-Fi" in help_text
+
+
+@pytest.mark.parametrize("baud", [19200, 115200])
+def test_the_missions_line_docs_doctor_md_shows_is_what_doctor_prints(baud: int) -> None:
+    """docs/doctor.md's ``missions`` lines, each shipped mission's frame at the baud, as the
+    step prints them (session 37's stranger: the page said ``clean 59`` where doctor printed
+    ``clean 61``)."""
+    from roomba_bt.cli.doctor_cmd import _missions
+    from roomba_bt.oi.profiles import CREATE2
+
+    out = io.StringIO()
+    _missions(CREATE2, baud, Report(out))
+    printed = out.getvalue().splitlines()[0]
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "doctor.md").read_text("utf-8")
+    assert printed in doc.splitlines(), printed
