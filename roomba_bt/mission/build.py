@@ -102,6 +102,10 @@ class CompiledMission:
     plan: Node | None = field(default=None, repr=False, compare=False)
     #: what compiles but is likely a mistake (``Diagnostic.severity == "warning"``)
     warnings: tuple[Diagnostic, ...] = ()
+    #: the ``wait`` leaves longer than the 5 minutes a robot sleeps after in Passive that may
+    #: run there (``file:line:column: wait(10min)``): said when the run starts on a port
+    #: whose keep-awake cannot pulse (:func:`~roomba_bt.mission.checks.waits_past_sleep`)
+    waits_past_sleep: tuple[str, ...] = ()
 
     def rebuilt(self) -> CompiledMission:
         """The same mission with a tree of its own: new behaviours, in their initial state,

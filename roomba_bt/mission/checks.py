@@ -102,7 +102,7 @@ from roomba_bt.oi.frames import (
 )
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, Effect
-from roomba_bt.oi.profiles import DEFAULT_PROFILE, SEND_BAUD, RobotProfile
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, PASSIVE_SLEEP_S, SEND_BAUD, RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 
 #: Packets the runtime always streams, whatever the mission reads: bumps and wheel drops (7),
@@ -973,6 +973,34 @@ def profile_commands(
         else:
             errors.append(node.loc.at(f"{decl.name}: {lacking} {choose}"))
     return errors, warnings
+
+
+def waits_past_sleep(modes: ModeCheck, profile: RobotProfile) -> tuple[str, ...]:
+    """Each ``wait`` longer than the 5 minutes (:data:`~roomba_bt.oi.profiles.PASSIVE_SLEEP_S`)
+    that the mode pass found may run in Passive, said ``file:line:column: wait(10min)``,
+    where ``profile``'s robot sleeps in Passive: with nothing from us, it cannot finish
+    unless keep-awake pulses BRC (the patrol's ``charge_for=10min`` on a port without BRC
+    wiring slept on its charger 5 minutes into it, and the run ended "the robot fell
+    asleep", exit 8). Not a warning of
+    ``validate``: whether the port can pulse is known only when the run starts
+    (:func:`roomba_bt.runtime.long_run.say_waits_past_sleep`)."""
+    found: list[str] = []
+    for node, entry in modes.entered.values():
+        decl = node.decl
+        duration = node.params.get("duration")
+        if (
+            decl is None
+            or decl.name != "wait"
+            or OIMode.PASSIVE not in entry
+            or not isinstance(duration, float)
+            or duration <= PASSIVE_SLEEP_S
+            or not profile.sleeps_in_passive
+        ):
+            continue
+        place = f"{node.loc.file}:{node.loc.line}:{node.loc.column}"
+        if not any(said.startswith(place) for said in found):  # a subtree used twice
+            found.append(f"{place}: {node.name}")
+    return tuple(found)
 
 
 def in_passive(root: Node, modes: ModeCheck) -> list[Diagnostic]:

@@ -44,6 +44,7 @@ from roomba_bt.mission.checks import (
     restarted_runs,
     sensor_ranges,
     undefined_songs,
+    waits_past_sleep,
 )
 from roomba_bt.mission.deadends import dead_ends
 from roomba_bt.mission.diagnostics import (
@@ -250,6 +251,7 @@ def _checked(
         sends=frozenset(sends),
         plan=tree,
         warnings=_said(ctx.warnings, _tree_warnings(tree, modes, profile, ignored), dead_warnings),
+        waits_past_sleep=waits_past_sleep(modes, profile),
     )
     return mission, []
 

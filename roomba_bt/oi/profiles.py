@@ -86,6 +86,10 @@ SEND_BAUD = "in Python, Connection.set_baud(115200) sends Baud (129); no roomba-
 #: The rates a robot's port talks at from power-on, the default first: 115200, or 19200 after
 #: the Clean-button or BRC procedure (both specs, "Serial Port Settings": "Baud: 115200 or
 #: 19200"). The same on every profile; ``robot.discovery`` tries them in this order.
+#: Passive without activity for this long: a robot whose profile ``sleeps_in_passive``
+#: sleeps (600 spec, "Passive Mode"); keep-awake, the mode check's long waits and the
+#: silence's diagnosis read this one value.
+PASSIVE_SLEEP_S = 300.0
 POWER_ON_BAUDS: tuple[int, ...] = (115200, 19200)
 
 #: where both specs say the rates a robot starts at

@@ -427,12 +427,15 @@ class RobotAsleep(LinkDown):
         pulses: bool,
         woken_by: str | None = None,
         profile: RobotProfile = DEFAULT_PROFILE,
+        on_dock: bool = False,
     ) -> None:
         # imported here: validate loads this module, and the transport package pyserial
         from roomba_bt.transport.link_kind import link_of
 
         self.idle_s = idle_s
         self.woken_by = woken_by
+        #: the last frame saw the dock's contacts (charging sources, 34): it slept charging
+        self.on_dock = on_dock
         words = link_of(port)
         if not keep_awake:
             fix = (
@@ -462,6 +465,11 @@ class RobotAsleep(LinkDown):
                 "the robot was asleep: its stream stopped and it answered nothing until a BRC "
                 f"pulse woke it ({woken_by}); it had been {idle} without a command or a pulse "
                 "from us when its stream stopped, and is awake now, in Passive"
+            )
+        if on_dock:  # a wait on the charger (patrol's charge_for) is not a robot in trouble
+            what += (
+                ", on its dock (charging: it sits there still); a wait in Passive longer than "
+                "5 minutes cannot finish without keep-awake"
             )
         super().__init__(
             port,

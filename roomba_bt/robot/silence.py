@@ -79,6 +79,15 @@ if TYPE_CHECKING:
 QUERY_TIMEOUT_S = 0.3
 
 
+def _on_dock(connection: Connection) -> bool:
+    """Whether the last frame saw the dock's contacts (charging sources, 34: the home base):
+    a robot that slept there was charging, as a patrol's ``charge_for`` wait leaves it."""
+    latest = connection.latest
+    if latest is None or 34 not in latest.frame:
+        return False
+    return bool(latest.frame.charging_sources.home_base)
+
+
 def idle_since(connection: Connection) -> float:
     """When we last gave the robot a reason to stay awake: a command or a BRC pulse
     (link clock)."""
@@ -105,7 +114,7 @@ def asleep_by_idle(connection: Connection) -> RobotAsleep | None:
     )
     return RobotAsleep(
         connection.name, idle, keep_awake=connection.keep_awake, pulses=_pulses(connection),
-        profile=connection.profile,
+        profile=connection.profile, on_dock=_on_dock(connection),
     )  # fmt: skip
 
 
@@ -201,7 +210,7 @@ def explain_silence(
                 "to sleep (the OI sleeps after 5 minutes of that)",
             )  # fmt: skip
         return RobotAsleep(
-            connection.name, idle, keep_awake=connection.keep_awake,
+            connection.name, idle, keep_awake=connection.keep_awake, on_dock=_on_dock(connection),
             pulses=_pulses(connection), woken_by=pulse.how, profile=connection.profile,
         )  # fmt: skip
     return lost(

@@ -30,6 +30,7 @@ from collections.abc import Callable
 from contextlib import AbstractContextManager
 from typing import Protocol, runtime_checkable
 
+from roomba_bt.oi.profiles import PASSIVE_SLEEP_S
 from roomba_bt.robot import wording
 from roomba_bt.robot.errors import StreamStalled
 from roomba_bt.transport.link_kind import LinkKind, link_of
@@ -37,7 +38,7 @@ from roomba_bt.transport.link_kind import LinkKind, link_of
 log = logging.getLogger(__name__)
 
 #: Passive without activity for this long: the robot sleeps (600 spec, "Passive Mode").
-SLEEP_AFTER_S = 300.0
+SLEEP_AFTER_S = PASSIVE_SLEEP_S
 #: Seconds between the starts of two pulses (well inside the five minutes).
 PULSE_PERIOD_S = 60.0
 #: Seconds BRC is held low: short enough not to be read as the baud-change gesture.
@@ -85,6 +86,9 @@ class KeepAwake:
         self.period = period
         self.length = length
         self.pulses = 0
+        #: called once, after the warning, when the line turns out unable to pulse (a pty):
+        #: the runtime names the mission's waits that then cannot finish (runtime/long_run.py)
+        self.on_unavailable: Callable[[str], None] | None = None
         self.last_pulse: float | None = None
         #: why the line cannot be driven (then no more pulses), or None
         self.unavailable: str | None = None
@@ -135,6 +139,8 @@ class KeepAwake:
                 "them with --rfc2217; %s says it is meant",
                 exc.strerror or exc, caller.keep_awake_off,
             )  # fmt: skip
+            if self.on_unavailable is not None:
+                self.on_unavailable(words.no_modem_lines)
 
     def _say_the_wake(self) -> None:
         """Said once, at the first pulse the line took: a robot that slept on its dock

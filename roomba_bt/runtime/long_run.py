@@ -373,3 +373,41 @@ class RobotCycleWatch:
         self.summary.robot_cycle = f"{said}; {said_end}"
         log.warning("%s: %s", connection.name, self.summary.robot_cycle)
         return said
+
+
+def say_waits_past_sleep(mission: object, connection: Connection) -> None:
+    """Name, when the run starts, each ``wait`` of ``mission`` that may run in Passive
+    longer than the 5 minutes the robot sleeps after there
+    (:attr:`~roomba_bt.mission.build.CompiledMission.waits_past_sleep`), when keep-awake
+    cannot keep it awake on this connection: off, no modem line, or (known at its first
+    pulse) a port that cannot drive the lines. Session 37's stranger ran ``patrol -p
+    charge_for=10min`` on a pty: it docked, slept 5 minutes into the charge wait, and the
+    run ended "the robot fell asleep" (exit 8), with only keep-awake's own line at the
+    start ("Passive sleeps after 5 min"), which named no wait."""
+    waits: tuple[str, ...] = getattr(mission, "waits_past_sleep", ())
+    if not waits:
+        return
+    from roomba_bt.robot import wording
+    from roomba_bt.transport.link_kind import link_of
+
+    pulse_fix = link_of(connection.name).pulse_fix
+    if not connection.keep_awake:
+        caller = wording.current
+        _say_waits(waits, f"keep-awake is off ({caller.keep_awake_off})", caller.keep_awake_on)
+    elif connection.wake is None:
+        _say_waits(waits, "this link has no modem line to pulse BRC on", pulse_fix)
+    else:
+        connection.wake.on_unavailable = lambda why: _say_waits(
+            waits, f"keep-awake cannot pulse BRC here ({why})", pulse_fix
+        )
+
+
+def _say_waits(waits: tuple[str, ...], why: str, fix: str) -> None:
+    for wait in waits:
+        log.warning(
+            "%s may run in Passive (as on the dock, charging) longer than the 5 minutes the "
+            "robot sleeps after there with nothing from us, and %s: it cannot finish (the "
+            "robot falls asleep 5 minutes into it and the run ends, exit 8); %s, or wait "
+            "5 minutes or less",
+            wait, why, fix,
+        )  # fmt: skip

@@ -39,6 +39,7 @@ from roomba_bt.robot.stall_asks import STREAM_AGAIN_NOTE
 from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.clock import mission_time_after
 from roomba_bt.runtime.given import check_arguments, check_given
+from roomba_bt.runtime.long_run import say_waits_past_sleep
 from roomba_bt.runtime.loop import (
     InnerGate,
     MissionLike,
@@ -332,6 +333,7 @@ class RunStack:
         """:meth:`run` in this thread, without its warning off the main thread (the worker
         of :meth:`ticks`, whose loop in the main thread takes the signals)."""
         self._running_in = threading.current_thread()
+        say_waits_past_sleep(self.runner.mission, self.runner.connection)  # before it starts
         try:
             return self.runner.run(raise_interrupts=raise_interrupts)
         finally:  # an interrupt raised again too: its summary says how the record ended
