@@ -77,6 +77,7 @@ from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.plan import KeyDecl, Node, is_own_key, said_key, written_ref
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.ticks import (
+    OBSTACLES,
     answers,
     at_once,
     combines,
@@ -925,6 +926,56 @@ def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
                 "cliff (until: {cliff: any})"
             ).as_warning()
         )
+    return warnings
+
+
+#: a ``drive``'s own ends: with one of these it stops by itself
+_DRIVE_ENDS = ("distance", "duration", "angle")
+
+
+def pushes_on_walls(root: Node, modes: ModeCheck) -> list[Diagnostic]:
+    """Warnings: each ``drive`` with no end of its own (no ``distance``, ``duration`` or
+    ``angle``) that can run in Safe or Full, under no ``timeout``, and with no bumper, light
+    bumper or odometry read on every tick it runs with a result that ends it (the cliff
+    watch of :func:`blind_in_full`, pointed at :data:`~roomba_bt.mission.ticks.OBSTACLES`).
+    Neither mode stops the wheels at a bump: such a drive meets a wall and pushes on it at
+    its speed until something else ends it (docs/missions.md's ``held`` example, guarded
+    by the battery alone, pushed on the apartment's first wall for the 2 hours of ``--fast``
+    in session 37)."""
+    warnings: list[Diagnostic] = []
+    seen: set[tuple[str, int, int]] = set()
+    pending = [(root, False)]
+    while pending:
+        node, watched = pending.pop()
+        if node.kind != "leaf":
+            watched = watched or node.kind == "timeout"  # a time end of its own
+            pending.extend(reversed(watched_children(node, watched, OBSTACLES)))
+            continue
+        decl, params = node.decl, node.params
+        entered = modes.entered.get(id(node))
+        if (
+            watched
+            or decl is None
+            or decl.name != "drive"
+            or entered is None
+            or entered[1].isdisjoint({OIMode.SAFE, OIMode.FULL})
+            or any(params.get(end) is not None for end in _DRIVE_ENDS)
+            or all(params.get(speed) in (None, 0.0) for speed in ("velocity", "left", "right"))
+            or reads_cliffs(node, OBSTACLES)
+        ):
+            continue
+        where = (str(node.loc.file), node.loc.line, node.loc.column)
+        if where not in seen:
+            seen.add(where)
+            warnings.append(
+                node.loc.at(
+                    f"{node.name} has no end of its own (distance, duration, angle), and no "
+                    "bumper, wall sensor or odometry is read while it runs: Safe and "
+                    "Full do not stop at a wall, so it pushes on the first one it meets; also "
+                    "end it on a bump (until: {fallback: [{bump: any}, ...]}), or give it a "
+                    "distance or a timeout"
+                ).as_warning()
+            )
     return warnings
 
 

@@ -39,6 +39,7 @@ from roomba_bt.mission.checks import (
     parallel_keys,
     parallel_wheels,
     profile_commands,
+    pushes_on_walls,
     restarted_branches,
     restarted_limits,
     restarted_runs,
@@ -276,6 +277,7 @@ def _tree_warnings(
     the commands the profile's firmware ignores (:func:`profile_commands`)."""
     return (
         *blind_in_full(tree, modes),
+        *pushes_on_walls(tree, modes),
         *in_passive(tree, modes),
         *parallel_wheels(tree),
         *parallel_keys(tree),

@@ -45,12 +45,26 @@ from roomba_bt.behaviours.language import (
     Outcomes,
 )
 from roomba_bt.mission.plan import Node
-from roomba_bt.oi.frames import CLIFF_PACKETS
+from roomba_bt.oi.frames import (
+    BUMPS_PACKETS,
+    CLIFF_PACKETS,
+    ENCODER_PACKETS,
+    LIGHT_BUMP_SIGNAL_PACKETS,
+    LIGHT_BUMPER_PACKETS,
+)
 
 _NONE: Outcomes = frozenset()
 _BOTH: Outcomes = frozenset({SUCCESS, FAILURE})
 
 CLIFFS = frozenset(CLIFF_PACKETS)
+#: What ends a drive at a wall or an obstacle, watched as the cliffs are: the bumpers (7),
+#: the light bumper (45) and its signals (46-51), the wall signal (27), stasis (58: not
+#: moving forward, as against a wall), and the encoders (43, 44: an ``odometry`` guard, a
+#: distance end). Any test of one counts (``wall_signal > 5000`` too): the check warns only
+#: of a drive that reads none
+OBSTACLES = frozenset(
+    (*BUMPS_PACKETS, *LIGHT_BUMPER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *ENCODER_PACKETS, 27, 58)
+)
 
 
 def answers(node: Node) -> Answers | None:
@@ -208,10 +222,11 @@ def runs_again(node: Node) -> bool:
     return not at_once(node) or any(runs_again(child) for child in node.children)
 
 
-def reads_cliffs(node: Node) -> bool:
-    """Whether a leaf of ``node``'s subtree reads a cliff sensor (packets 9-12)."""
+def reads_cliffs(node: Node, packets: frozenset[int] = CLIFFS) -> bool:
+    """Whether a leaf of ``node``'s subtree reads a cliff sensor (packets 9-12), or one of
+    ``packets`` (the watch's sensors: :data:`OBSTACLES` for a wall)."""
     return any(
-        n.decl is not None and not CLIFFS.isdisjoint(n.decl.packets(n.params)) for n in node.walk()
+        n.decl is not None and not packets.isdisjoint(n.decl.packets(n.params)) for n in node.walk()
     )
 
 
@@ -239,13 +254,15 @@ def _default(decl: Declaration, name: str) -> object:
     return None if param is None else param.default
 
 
-def _leaf_cliff_ends(node: Node) -> Outcomes:
+def _leaf_cliff_ends(node: Node, packets: frozenset[int]) -> Outcomes:
     """What a cliff seen by a leaf's cliff sensors makes it answer: SUCCESS for ``cliff``
     (its tests say a drop is 1), FAILURE for ``sensor: cliff_left == 0``; either where its
     tests do not say (``cover``, a plugin, a test of a signal strength)."""
-    if not reads_cliffs(node):
+    if not reads_cliffs(node, packets):
         return _NONE
-    tests = [test for _, _, test in packet_tests(node) if test[0] in CLIFFS]
+    if packets is not CLIFFS:  # 1 is no hazard there (stasis 0 is stuck): either result
+        return _BOTH
+    tests = [test for _, _, test in packet_tests(node) if test[0] in packets]
     if not tests:
         return _BOTH
     out: set[str] = set()
@@ -255,26 +272,26 @@ def _leaf_cliff_ends(node: Node) -> Outcomes:
     return frozenset(out)
 
 
-def cliff_ends(node: Node) -> Outcomes:
+def cliff_ends(node: Node, packets: frozenset[int] = CLIFFS) -> Outcomes:
     """The results a cliff makes ``node`` give, read on *every* tick ``node`` is ticked;
     empty where a tick may pass without a cliff read that counts (``oneshot``, a check
     after a ``wait`` in a sequence) or whose result nothing passes on (``force_success``)."""
     kind = node.kind
     if kind == "leaf":
-        return _leaf_cliff_ends(node)
+        return _leaf_cliff_ends(node, packets)
     if kind == "guard":
         ends = SUCCESS if node.options["until"] else FAILURE
-        by_condition = {ends} if ends in cliff_ends(node.children[0]) else set()
-        return frozenset(by_condition) | cliff_ends(node.children[1])
+        by_condition = {ends} if ends in cliff_ends(node.children[0], packets) else set()
+        return frozenset(by_condition) | cliff_ends(node.children[1], packets)
     combination = combines(node)
     if combination is not None:
         if combination.stops is not None:
-            return _chain_ends(node, combination.stops)
-        return frozenset().union(*(branch_ends(node, child) for child in node.children))
+            return _chain_ends(node, combination.stops, packets)
+        return frozenset().union(*(branch_ends(node, child, packets) for child in node.children))
     decorator = answers(node)
     if decorator is None or decorator.alone or decorator.replays:
         return _NONE  # unbuilt; a decorator that may answer without its child's cliff read
-    return _passed_on(decorator, cliff_ends(node.children[0]))
+    return _passed_on(decorator, cliff_ends(node.children[0], packets))
 
 
 def _passed_on(decorator: Answers, child_ends: Outcomes) -> Outcomes:
@@ -292,17 +309,17 @@ def _passed_on(decorator: Answers, child_ends: Outcomes) -> Outcomes:
     return frozenset(out)
 
 
-def _chain_ends(node: Node, stops: str) -> Outcomes:
+def _chain_ends(node: Node, stops: str, packets: frozenset[int]) -> Outcomes:
     """A sequence (``stops`` FAILURE) or fallback (SUCCESS): a child whose cliff result
     ``stops`` it, reached on every tick (every child before it ends at once) and, with
     memory, not skipped for a later child still running (every child after it ends at
     once); a chain of one child answers as that child."""
     children = node.children
     if len(children) == 1:
-        return cliff_ends(children[0])
+        return cliff_ends(children[0], packets)
     again = reactive(node)
     for index, child in enumerate(children):
-        if stops in cliff_ends(child) and (
+        if stops in cliff_ends(child, packets) and (
             again or all(at_once(later) for later in children[index + 1 :])
         ):
             return frozenset({stops})
@@ -311,7 +328,7 @@ def _chain_ends(node: Node, stops: str) -> Outcomes:
     return _NONE
 
 
-def branch_ends(parallel: Node, branch: Node) -> Outcomes:
+def branch_ends(parallel: Node, branch: Node, packets: frozenset[int] = CLIFFS) -> Outcomes:
     """What a cliff read in ``branch`` ends ``parallel`` with, if the branch is ticked on
     every tick the parallel runs: a failure always ends it, a success with ``policy:
     one``. Synchronised (:func:`synchronised`; policies ``all`` and ``selected``) a branch
@@ -320,10 +337,12 @@ def branch_ends(parallel: Node, branch: Node) -> Outcomes:
     ticked = one or not synchronised(parallel) or never_succeeds(branch)
     if not ticked:
         return _NONE
-    return cliff_ends(branch) & (_BOTH if one else {FAILURE})
+    return cliff_ends(branch, packets) & (_BOTH if one else {FAILURE})
 
 
-def watched_children(node: Node, watched: bool) -> list[tuple[Node, bool]]:
+def watched_children(
+    node: Node, watched: bool, packets: frozenset[int] = CLIFFS
+) -> list[tuple[Node, bool]]:
     """Each child of ``node`` and whether a cliff is read on every tick it runs, with a
     result that ends it: the condition of a ``while`` (a failure) or ``until`` (a
     success) around it; an earlier child of a reactive sequence (a failure) or reactive
@@ -336,15 +355,15 @@ def watched_children(node: Node, watched: bool) -> list[tuple[Node, bool]]:
     kind = node.kind
     if kind == "guard":  # children: the condition, the guarded node
         stop = SUCCESS if node.options["until"] else FAILURE
-        return [(children[0], False), (children[1], stop in cliff_ends(children[0]))]
+        return [(children[0], False), (children[1], stop in cliff_ends(children[0], packets))]
     if every_tick(node):
-        watch = [bool(branch_ends(node, child)) for child in children]
+        watch = [bool(branch_ends(node, child, packets)) for child in children]
         return [(c, any(w for j, w in enumerate(watch) if j != i)) for i, c in enumerate(children)]
     if reactive(node):
         stops = FAILURE if goes_on(node) == SUCCESS else SUCCESS
         out, before = [], False
         for child in children:
             out.append((child, before))
-            before = before or stops in cliff_ends(child)
+            before = before or stops in cliff_ends(child, packets)
         return out
     return [(child, False) for child in children]

@@ -665,7 +665,8 @@ TWO_BRANCHES = {
                     "{drive: {velocity: 100 mm/s}, until: {bump: any}}"],
          ["7:12 drive ... turn (line 5)"]),
         ("wheels",
-         ["{turn: 90deg}", "{drive: {velocity: 100 mm/s}}", "{drive: {velocity: 50 mm/s}}"],
+         ["{turn: 90deg}", "{drive: {velocity: 100 mm/s, duration: 1s}}",
+          "{drive: {velocity: 50 mm/s, duration: 1s}}"],
          ["6:12 drive ... turn (line 5)", "7:12 drive ... turn (line 5)"]),
         # one wheel branch; a stop only halts; a sequence runs its drives one after the other
         ("wheels", ["{drive: {velocity: 200 mm/s, duration: 1s}}", "{leds: {dock: true}}",

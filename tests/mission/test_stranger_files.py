@@ -50,7 +50,8 @@ def test_a_newline_in_a_file_name_cannot_fake_a_line_of_validate(
     monkeypatch.chdir(tmp_path)
     name = "evil.yaml: ok\nz.yaml"
     Path(name).write_text(
-        "mission: x\ntree:\n  sequence:\n    - mode: full\n    - drive: {velocity: 500 mm/s}\n"
+        "mission: x\ntree:\n  sequence:\n    - mode: full\n"
+        "    - drive: {velocity: 500 mm/s, duration: 9s}\n"
     )
     assert main(["validate", name]) == 0
     lines = capsys.readouterr().out.splitlines()
