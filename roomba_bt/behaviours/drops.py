@@ -233,6 +233,25 @@ class KnownDrops:
             _ray(edges, x, y, heading + a, reach) < reach for a in _AHEAD_ANGLES
         )
 
+    def away(self, pose: Odometry) -> float | None:
+        """The heading straight away from the nearest known drop (not a guess) near the
+        robot at ``pose``, None when none is near: where ``cover`` turns and drives to when a
+        known drop keeps its next leg from starting (:meth:`.coverage_map.Cover._ended`)."""
+        best: tuple[float, float, float] | None = None
+        x, y = pose.x_mm, pose.y_mm
+        for x0, y0, x1, y1 in self._edges_near(pose, guessed=False):
+            dx, dy = x1 - x0, y1 - y0
+            length_sq = dx * dx + dy * dy
+            t = 0.0 if length_sq == 0.0 else ((x - x0) * dx + (y - y0) * dy) / length_sq
+            t = min(1.0, max(0.0, t))
+            px, py = x0 + t * dx, y0 + t * dy
+            d_sq = (x - px) ** 2 + (y - py) ** 2
+            if best is None or d_sq < best[0]:
+                best = (d_sq, px, py)
+        if best is None or best[0] == 0.0:
+            return None
+        return math.atan2(y - best[2], x - best[1])
+
     def behind(self, pose: Odometry) -> bool:
         """Is a known drop (not a guess: where an edge would go on is no drop met) under the
         back half of the body at ``pose``, or within BEHIND_MARGIN_MM of it: where a

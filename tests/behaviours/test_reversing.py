@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from roomba_bt.behaviours import driving
-from roomba_bt.behaviours.coverage_map import Cover, FloorMap
+from roomba_bt.behaviours.coverage_map import SWEPT, VISITED, Cover, FloorMap
 from roomba_bt.behaviours.reversing import OWN_MM, Trail
 from roomba_bt.robot.interface import Odometry
 from roomba_bt.sim.world import Pose
@@ -128,3 +128,47 @@ def test_the_arc_onto_the_next_lane_does_not_back_blind_onto_the_stairs() -> Non
     lowest = min(point.y for point in simulator.trace)
     assert lowest > 600.0 + 100.0, lowest  # its wheels never neared the edge
     assert max(point.x for point in simulator.trace) > start.x + 250.0  # over to its right
+
+
+class _PathAlongADrop(Cover):
+    """``cover`` where living room seed 2 (1.5 % encoder error) stood 164 s: 15 cm from a
+    drop on its map (its right), the floor it has swept a strip along the drop, unswept
+    floor only at the strip's far end, 1 m ahead. Every leg of the path there runs along
+    the drop, inside a cliff sensor's look-ahead of it (17 cm to the side)."""
+
+    def start(self) -> None:
+        super().start()
+        fmap = self._map
+        for k, x in enumerate(range(-300, 2400, 300)):  # the drop: one straight line
+            fmap.drops.mark(float(x), -150.0, 0.0, 300.0 * k)
+        for x in range(-250, 1000, 50):  # the strip it swept and drove (10 cm cells)
+            for y in range(-50, 500, 50):
+                cell = fmap.cell(float(x), float(y))
+                assert cell is not None
+                fmap.cells[cell] |= SWEPT | VISITED
+            fmap.block(float(x), 550.0)  # a wall along its left
+        for y in range(-50, 500, 50):
+            fmap.block(-350.0, float(y))
+        self._plan.clear()
+        self._decide()
+        self.unstarted = 0
+
+    def _ended(self) -> None:
+        if self._why == "drop" and self._achieved < 20.0:
+            self.unstarted += 1  # a line a known drop ended before it began
+        super()._ended()
+
+
+def test_a_path_along_a_known_drop_first_gets_clear_of_it() -> None:
+    """With back-offs only over floor just driven (session 36) the robot is left nearer a
+    drop: every leg of the path along it ended in the tick it began, the next leg too, and
+    the same floor was planned again (about 2,400 moves of no length in 164 s). Now it turns
+    straight away from the drop, drives 15 cm and plans again: it is along the strip to the
+    unswept floor within seconds, its wheels never near the real edge."""
+    start = Pose(400.0, 600.0 + 190.0, 0.0)  # the real edge 19 cm to its right, the map's 15
+    cover = _PathAlongADrop("cover", {})
+    simulator = run_after_mode(STAIRS_BEHIND, start, "full", cover, "path-along-a-drop", 15.0)
+    assert not simulator.fallen
+    assert min(point.y for point in simulator.trace) > 600.0 + 150.0
+    assert max(point.x for point in simulator.trace) > start.x + 900.0  # at the unswept floor
+    assert cover.unstarted == 1, cover.unstarted  # the first leg; then clear of the drop
