@@ -20,6 +20,7 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from roomba_bt.behaviours import reversing
 from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.blackboard import write_key
 from roomba_bt.behaviours.declare import Param, declare, moving_minimum
@@ -441,9 +442,15 @@ class Drive(Action):
     #: how it ends ("distance", "angle", "duration", or "": never by itself) and its bound
     _end: tuple[str, float] = ("", 0.0)
 
+    def setup(self, **kwargs: Any) -> None:
+        super().setup(**kwargs)
+        reversing.forget_run_trail()  # a new run: no floor driven yet
+
     def start(self) -> None:
         snap = self.snapshot
         odometry = snap.odometry
+        #: the run's trail, fed every tick it drives: what ``back_off`` may back over
+        self._trail = reversing.run_trail()
         self._start_time = snap.time
         self._start_distance = odometry.distance_mm
         self._start_angle = odometry.angle_rad
@@ -483,6 +490,7 @@ class Drive(Action):
         return snap.time - self._start_time >= bound
 
     def update(self) -> Status:
+        self._trail.feed(self.snapshot.odometry)
         # a drive without an end (most ticks: the drive a guard ends) asks nothing of finished()
         if self._end[0] and self.finished():
             self.send(oi.halt())
@@ -526,6 +534,50 @@ class Turn(Drive):
 
     def command(self) -> oi.Command:
         return oi.spin(round(self.value("speed")), clockwise=self.value("angle") < 0)
+
+
+@declare(
+    "back_off",
+    kind="action",
+    params=(
+        Param("distance", DISTANCE, required=True, minimum=0, maximum=1000,
+              doc="how far to back up at most: no further than the floor the robot just "
+                  "drove, its first 6 cm (under its own body) aside"),
+        Param("speed", SPEED, default="150 mm/s", minimum=moving_minimum(),
+              maximum=_VELOCITY.maximum, doc="backing speed"),
+    ),
+    reads=ENCODER_PACKETS,
+    sends=opcodes("drive"),
+    primary="distance",
+)  # fmt: skip
+class BackOff(Drive):
+    """Back up straight, up to ``distance``, only over the floor the robot has just driven
+    (its last 60 cm, faced the way it faces now; the first 6 cm, under its own body, need
+    none), then halt: SUCCESS, at once when none may be backed over.
+
+    Why: a Create 2 (a Roomba) has no sensor behind it, no bumper and no cliff sensor behind
+    the wheels, and a fixed back-off after a turn in place goes over floor it never drove:
+    ``patrol.yaml`` backed 15 cm after a cliff met a few centimetres after its 60 deg turn,
+    along a stair's edge (the drive back is what ``drive: {velocity: -150 mm/s, distance:
+    15cm}`` sends). What it may back over is the run's trail
+    (:mod:`~roomba_bt.behaviours.reversing`), which ``drive``, ``turn``, ``back_off`` and
+    ``wall_follow`` keep as they drive; after a move none of them saw, only the first 6 cm.
+    Its message says how far it backed when that is less than asked."""
+
+    def start(self) -> None:
+        super().start()
+        wanted = self.number("distance")
+        allowed = self._trail.backable(self.snapshot.odometry, wanted)
+        self._end = ("distance", allowed)
+        self.feedback_message = (
+            f"backed {allowed / 10:.0f} cm of {wanted / 10:.0f} cm: the floor further back "
+            "is floor it has not just driven"
+            if allowed < wanted
+            else ""
+        )
+
+    def command(self) -> oi.Command:
+        return oi.drive(-round(self.value("speed")), _RADIUS_WORDS["straight"])
 
 
 @declare(
@@ -994,6 +1046,6 @@ class Mark(Action):
 
 
 ACTIONS: tuple[type[Action], ...] = (
-    Mode, Drive, Turn, Stop, Clean, Spot, MaxClean, SeekDock, Motors, Vacuum, Leds, Song,
+    Mode, Drive, Turn, BackOff, Stop, Clean, Spot, MaxClean, SeekDock, Motors, Vacuum, Leds, Song,
     Play, Wait, Log, SetKey, Mark,
 )  # fmt: skip

@@ -1,5 +1,5 @@
-"""How far ``cover`` and ``home_by_map`` may back up: only over floor just driven, never onto
-a known drop.
+"""How far ``cover``, ``home_by_map``, ``dock_search`` and the ``back_off`` leaf may back up:
+only over floor just driven, never onto a known drop.
 
 Why: a Create 2 sees nothing behind it (no bumper, no cliff sensor behind the wheels), and
 ``cover`` backs up in four places (off a bump, a cliff or a virtual wall's beam; off one
@@ -27,6 +27,15 @@ What a back-off may cover now::
                     behind is floor it never drove); off a hazard ahead, the first OWN_MM
                     need no trail (in Safe mode a cliff showing leaves it no other move)
 
+The missions' own back-offs (``back_off``: ``patrol.yaml`` after a cliff or a beam,
+``bump-and-turn.yaml`` after a bump) and ``dock_search``'s read the run's trail
+(:func:`run_trail`), which the leaves that move the robot (``drive``, ``turn``, ``back_off``,
+``wall_follow``, ``dock_search``) feed on every tick they run. Why: patrol's fixed 15 cm after
+a cliff met a few centimetres after its 60 deg turn in place went back over floor it had never
+driven, toward the stairs' edge beside it. A move no feeding leaf saw (another leaf drove)
+leaves a gap in the path the odometry counts, and the trail starts again after it
+(:meth:`RunTrail.feed`): the floor behind is then not known to be driven.
+
 What the map's cells say is not used: 10 cm cells in a frame the encoders' error drifts
 from the floor (the drop drawn on the wrong side was the map's); the trail is the last metre,
 where odometry is still exact enough. The cost: a comparison per tick (a pose added per
@@ -43,7 +52,14 @@ if TYPE_CHECKING:
     from roomba_bt.behaviours.drops import KnownDrops
     from roomba_bt.robot.interface import Odometry
 
-__all__ = ["NEAR_MM", "OWN_MM", "STEP_MM", "TRAIL_MM", "TURN", "Trail"]
+import py_trees
+
+from roomba_bt.behaviours.blackboard import run_board
+
+__all__ = [
+    "NEAR_MM", "OWN_MM", "STEP_MM", "TRAIL_KEY", "TRAIL_MM", "TURN", "RunTrail", "Trail",
+    "run_trail",
+]  # fmt: skip
 
 #: the trail keeps a pose every this many mm of driving, and a back-off is looked at in
 #: steps of this many mm
@@ -92,13 +108,17 @@ class Trail:
         self._poses.clear()
         self._poses.extend(turned)
 
+    def clear(self) -> None:
+        """Forget the trail: nothing behind is known to be driven."""
+        self._poses.clear()
+
     def reversible(
-        self, pose: Odometry, wanted: float, drops: KnownDrops, own: float = 0.0
+        self, pose: Odometry, wanted: float, drops: KnownDrops | None, own: float = 0.0
     ) -> float:
         """How far (mm, up to ``wanted``) the robot at ``pose`` may back up straight: the
         steps in a row over floor it has driven with no known drop behind (the module's
         table); 0 when the first is not. The first ``own`` mm need no trail (a hazard's
-        back-off: :data:`OWN_MM`), only no known drop."""
+        back-off: :data:`OWN_MM`), only no known drop (``drops`` None: none known)."""
         if wanted <= 0.0:
             return 0.0
         heading = pose.theta_rad
@@ -110,7 +130,7 @@ class Trail:
             x, y = pose.x_mm + d * c, pose.y_mm + d * s
             if d > own and not self._driven(x, y, heading):
                 return (k - 1) * STEP_MM
-            if drops.behind(pose._replace(x_mm=x, y_mm=y)):
+            if drops is not None and drops.behind(pose._replace(x_mm=x, y_mm=y)):
                 return (k - 1) * STEP_MM
         return wanted
 
@@ -135,3 +155,54 @@ class Trail:
             ):
                 return True
         return False
+
+
+#: the run's trail (:func:`run_trail`) on the blackboard
+TRAIL_KEY = "/roomba/trail"
+#: path (mm) the odometry may grow between two feeds of the run's trail: more is a move no
+#: feeding leaf saw (about 7 mm a 15 ms tick at 500 mm/s; a lost frame or two)
+GAP_MM = 40.0
+
+
+class RunTrail(Trail):
+    """The run's trail in the raw odometry's frame, fed by every leaf that moves the robot on
+    the ticks it runs (the module's doc): what a mission's ``back_off`` and ``dock_search``
+    may back over."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._fed_path: float | None = None
+
+    def feed(self, odo: Odometry) -> None:
+        """The odometry this tick, from a leaf that moves the robot: a move since the last
+        feed that no feeding leaf saw (more than :data:`GAP_MM` of path) starts it again."""
+        if self.gap(odo):
+            self.clear()
+        self._fed_path = odo.path_mm
+        self.add(odo)
+
+    def gap(self, odo: Odometry) -> bool:
+        """Has the robot moved since the last feed (a leaf that feeds none drove it)?"""
+        fed = self._fed_path  # (a path shorter than fed: another run's odometry)
+        return fed is None or not 0.0 <= odo.path_mm - fed <= GAP_MM
+
+    def backable(self, odo: Odometry, wanted: float, own: float = OWN_MM) -> float:
+        """How far (mm, up to ``wanted``) the robot at ``odo`` may back up: over the floor
+        its trail shows it just drove, the first ``own`` mm (under its own body) aside."""
+        if self.gap(odo):
+            return min(wanted, own)
+        return self.reversible(odo, wanted, None, own)
+
+
+def run_trail() -> RunTrail:
+    """The run's :class:`RunTrail` (made on first use; each run has its own board)."""
+    storage, name = py_trees.blackboard.Blackboard.storage, run_board().name(TRAIL_KEY)
+    trail = storage.get(name)
+    if not isinstance(trail, RunTrail):
+        trail = storage[name] = RunTrail()
+    return trail
+
+
+def forget_run_trail() -> None:
+    """A new run's set-up: no trail of an earlier run's (a board kept in the process)."""
+    py_trees.blackboard.Blackboard.storage.pop(run_board().name(TRAIL_KEY), None)

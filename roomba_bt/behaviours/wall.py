@@ -31,7 +31,7 @@ from typing import Any
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours import driving
+from roomba_bt.behaviours import driving, reversing
 from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.driving import wheel_speeds
@@ -117,7 +117,13 @@ class WallFollow(Action):
     cases.
     """
 
+    def setup(self, **kwargs: Any) -> None:
+        super().setup(**kwargs)
+        reversing.forget_run_trail()  # a new run: no floor driven yet
+
     def start(self) -> None:
+        #: the run's trail, fed every tick it drives: what ``back_off`` may back over
+        self._trail = reversing.run_trail()
         self._start_time = self.snapshot.time
         self._previous_error: float | None = None
         self._previous_time = self._start_time
@@ -172,6 +178,7 @@ class WallFollow(Action):
 
     def update(self) -> Status:
         snap = self.snapshot
+        self._trail.feed(snap.odometry)
         duration = self.value("duration")
         if duration is not None and snap.time - self._start_time >= float(duration) - 1e-9:
             self.send(commands.halt())
