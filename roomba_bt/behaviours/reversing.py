@@ -1,4 +1,4 @@
-"""How far ``cover``, ``home_by_map``, ``dock_search`` and the ``back_off`` leaf may back up:
+"""How far ``cover``, ``home_by_map`` and the ``back_off`` leaf may back up:
 only over floor just driven, never onto a known drop.
 
 Why: a Create 2 sees nothing behind it (no bumper, no cliff sensor behind the wheels), and
@@ -28,9 +28,9 @@ What a back-off may cover now::
                     need no trail (in Safe mode a cliff showing leaves it no other move)
 
 The missions' own back-offs (``back_off``: ``patrol.yaml`` after a cliff or a beam,
-``bump-and-turn.yaml`` after a bump) and ``dock_search``'s read the run's trail
+``bump-and-turn.yaml`` after a bump) read the run's trail
 (:func:`run_trail`), which the leaves that move the robot (``drive``, ``turn``, ``back_off``,
-``wall_follow``, ``dock_search``) feed on every tick they run. Why: patrol's fixed 15 cm after
+``wall_follow``) feed on every tick they run. Why: patrol's fixed 15 cm after
 a cliff met a few centimetres after its 60 deg turn in place went back over floor it had never
 driven, toward the stairs' edge beside it. A move no feeding leaf saw (another leaf drove)
 leaves a gap in the path the odometry counts, and the trail starts again after it
@@ -165,9 +165,9 @@ GAP_MM = 40.0
 
 
 class RunTrail(Trail):
-    """The run's trail in the raw odometry's frame, fed by every leaf that moves the robot on
-    the ticks it runs (the module's doc): what a mission's ``back_off`` and ``dock_search``
-    may back over."""
+    """The run's trail in the raw odometry's frame, fed by ``drive``, ``turn``, ``back_off``
+    and ``wall_follow`` on the ticks they run (the module's doc): what a mission's
+    ``back_off`` may back over."""
 
     def __init__(self) -> None:
         super().__init__()

@@ -28,7 +28,6 @@ from operator import itemgetter
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours import reversing
 from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
     FROM_DOCK,
@@ -250,12 +249,11 @@ class DockSearch(DockingAction):
 
     #: the stage's own state in slots (see :class:`~.common.DockingAction`)
     __slots__ = (
-        "_avoid", "_back_to", "_back_until", "_bumped", "_cell", "_crumbs", "_escaping",
-        "_follow_bumps", "_follow_cells", "_follow_for", "_follow_hand", "_follow_lost",
-        "_follow_side", "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_lit",
-        "_lit_ahead", "_next_crumb_at", "_old_cells", "_resume_follow", "_reversing",
-        "_signals", "_speed", "_spun", "_target", "_wall_seen_at", "_want_wall", "_way_out",
-        "state",
+        "_avoid", "_back_until", "_bumped", "_cell", "_crumbs", "_escaping", "_follow_bumps",
+        "_follow_cells", "_follow_for", "_follow_hand", "_follow_lost", "_follow_side",
+        "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_lit", "_lit_ahead",
+        "_next_crumb_at", "_old_cells", "_resume_follow", "_signals", "_speed", "_spun", "_target",
+        "_wall_seen_at", "_want_wall", "_way_out", "state",
     )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
@@ -301,10 +299,6 @@ class DockSearch(DockingAction):
         self._kept = None  # the speeds may differ from the last start's
         self.trail.restart()
         self._escaping = False
-        #: the run's trail (:mod:`~roomba_bt.behaviours.reversing`), fed every tick: how far
-        #: a back-off may go
-        self._reversing = reversing.run_trail()
-        self._back_to = 0.0
 
     def bind(self, frame: SensorFrame) -> None:
         super().bind(frame)
@@ -344,7 +338,6 @@ class DockSearch(DockingAction):
             # a crumb of the way (:class:`.escape.Trail`), inline: this runs every tick
             self._next_crumb_at = path + CRUMB_MM
             self._crumbs.append((odo.x_mm, odo.y_mm, now))
-        self._reversing.feed(odo)
         hazard = self._hazard
         if hazard is not None and hazard in STOPS_FOR.get(self.state, ()):
             self._meet(hazard, odo, now)
@@ -386,14 +379,9 @@ class DockSearch(DockingAction):
 
     def _back_off(self, odo: Odometry, now: float, cliff: bool) -> None:
         """Back away from what was met (longer from a drop), and remember the heading it
-        was met at: the next heading chosen turns well away from it. Only over floor just
-        driven, the first 6 cm (under its own body) aside (:mod:`~.reversing`): a leg begins
-        with a turn in place, and a cliff or a beam met in its first centimetres backed 12 cm
-        over floor it had not driven (it has no sensor behind)."""
+        was met at: the next heading chosen turns well away from it."""
         self.state = SearchState.BACK
-        backing = BACK_OFF_CLIFF_S if cliff else BACK_OFF_S
-        self._back_until = now + backing
-        self._back_to = odo.distance_mm - self._reversing.backable(odo, BACK_MM_S * backing)
+        self._back_until = now + (BACK_OFF_CLIFF_S if cliff else BACK_OFF_S)
         self._avoid = odo.theta_rad
         if cliff:
             self._want_wall = False  # a drop is no wall: wander away from it
@@ -425,7 +413,7 @@ class DockSearch(DockingAction):
         return None
 
     def _back(self, snap: Snapshot) -> Status | None:
-        if snap.time < self._back_until and snap.odometry.distance_mm > self._back_to:
+        if snap.time < self._back_until:
             self.wheels(-BACK_MM_S, -BACK_MM_S)
             return RUNNING
         if self._escaping:
