@@ -449,7 +449,7 @@ class Drive(Action):
     def start(self) -> None:
         snap = self.snapshot
         odometry = snap.odometry
-        #: the run's trail, fed every tick it drives: what ``back_off`` may back over
+        #: the run's trail, fed every tick it drives: what ``backtrack`` may back over
         self._trail = reversing.run_trail()
         self._start_time = snap.time
         self._start_distance = odometry.distance_mm
@@ -537,7 +537,7 @@ class Turn(Drive):
 
 
 @declare(
-    "back_off",
+    "backtrack",
     kind="action",
     params=(
         Param("distance", DISTANCE, required=True, minimum=0, maximum=1000,
@@ -550,7 +550,7 @@ class Turn(Drive):
     sends=opcodes("drive"),
     primary="distance",
 )  # fmt: skip
-class BackOff(Drive):
+class Backtrack(Drive):
     """Back up straight, up to ``distance``, only over the floor the robot has just driven
     (its last 60 cm, faced the way it faces now; the first 6 cm, under its own body, need
     none), then halt: SUCCESS, at once when none may be backed over.
@@ -560,7 +560,7 @@ class BackOff(Drive):
     ``patrol.yaml`` backed 15 cm after a cliff met a few centimetres after its 60 deg turn,
     along a stair's edge (the drive back is what ``drive: {velocity: -150 mm/s, distance:
     15cm}`` sends). What it may back over is the run's trail
-    (:mod:`~roomba_bt.behaviours.reversing`), which ``drive``, ``turn``, ``back_off`` and
+    (:mod:`~roomba_bt.behaviours.reversing`), which ``drive``, ``turn``, ``backtrack`` and
     ``wall_follow`` keep as they drive; after a move none of them saw, only the first 6 cm.
     Its message says how far it backed when that is less than asked."""
 
@@ -1046,6 +1046,6 @@ class Mark(Action):
 
 
 ACTIONS: tuple[type[Action], ...] = (
-    Mode, Drive, Turn, BackOff, Stop, Clean, Spot, MaxClean, SeekDock, Motors, Vacuum, Leds, Song,
+    Mode, Drive, Turn, Backtrack, Stop, Clean, Spot, MaxClean, SeekDock, Motors, Vacuum, Leds, Song,
     Play, Wait, Log, SetKey, Mark,
 )  # fmt: skip

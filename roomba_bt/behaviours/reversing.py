@@ -1,4 +1,4 @@
-"""How far ``cover``, ``home_by_map`` and the ``back_off`` leaf may back up:
+"""How far ``cover``, ``home_by_map`` and the ``backtrack`` leaf may back up:
 only over floor just driven, never onto a known drop.
 
 Why: a Create 2 sees nothing behind it (no bumper, no cliff sensor behind the wheels), and
@@ -27,9 +27,9 @@ What a back-off may cover now::
                     behind is floor it never drove); off a hazard ahead, the first OWN_MM
                     need no trail (in Safe mode a cliff showing leaves it no other move)
 
-The missions' own back-offs (``back_off``: ``patrol.yaml`` after a cliff or a beam,
+The missions' own back-offs (``backtrack``: ``patrol.yaml`` after a cliff or a beam,
 ``bump-and-turn.yaml`` after a bump) read the run's trail
-(:func:`run_trail`), which the leaves that move the robot (``drive``, ``turn``, ``back_off``,
+(:func:`run_trail`), which the leaves that move the robot (``drive``, ``turn``, ``backtrack``,
 ``wall_follow``) feed on every tick they run. Why: patrol's fixed 15 cm after
 a cliff met a few centimetres after its 60 deg turn in place went back over floor it had never
 driven, toward the stairs' edge beside it. A move no feeding leaf saw (another leaf drove)
@@ -165,9 +165,9 @@ GAP_MM = 40.0
 
 
 class RunTrail(Trail):
-    """The run's trail in the raw odometry's frame, fed by ``drive``, ``turn``, ``back_off``
+    """The run's trail in the raw odometry's frame, fed by ``drive``, ``turn``, ``backtrack``
     and ``wall_follow`` on the ticks they run (the module's doc): what a mission's
-    ``back_off`` may back over."""
+    ``backtrack`` may back over."""
 
     def __init__(self) -> None:
         super().__init__()

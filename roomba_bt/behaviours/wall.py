@@ -122,7 +122,7 @@ class WallFollow(Action):
         reversing.forget_run_trail()  # a new run: no floor driven yet
 
     def start(self) -> None:
-        #: the run's trail, fed every tick it drives: what ``back_off`` may back over
+        #: the run's trail, fed every tick it drives: what ``backtrack`` may back over
         self._trail = reversing.run_trail()
         self._start_time = self.snapshot.time
         self._previous_error: float | None = None

@@ -20,5 +20,5 @@ EXAMPLE_PARAMS: dict[str, dict[str, Any]] = {
     "turn": {"angle": 90.0},
     "motors": {"main_brush": True},
     "drive": {"velocity": 100.0},
-    "back_off": {"distance": 100.0},
+    "backtrack": {"distance": 100.0},
 }

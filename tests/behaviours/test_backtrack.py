@@ -1,4 +1,4 @@
-"""``back_off`` (roomba_bt/behaviours/actions.py): a mission's back-off goes only over the floor
+"""``backtrack`` (roomba_bt/behaviours/actions.py): a mission's back-off goes only over the floor
 the robot has just driven, read from the run's trail (roomba_bt/behaviours/reversing.py), as
 ``cover``'s do. ``patrol.yaml`` backed a fixed 15 cm after a cliff met a few centimetres past
 its 60 deg turn in place: over floor it had never driven, beside a stair's edge."""
@@ -9,7 +9,7 @@ import math
 
 import py_trees
 
-from roomba_bt.behaviours.actions import BackOff, Drive, Mode, Turn
+from roomba_bt.behaviours.actions import Backtrack, Drive, Mode, Turn
 from roomba_bt.behaviours.reversing import OWN_MM, RunTrail
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.interface import Odometry
@@ -42,7 +42,7 @@ def _run(*leaves: py_trees.behaviour.Behaviour) -> list[tuple[float, float]]:
 def test_after_a_straight_drive_it_backs_the_whole_distance_over_it() -> None:
     trace = _run(
         Drive("ahead", {"velocity": 150.0, "distance": 400.0}),
-        BackOff("back", {"distance": 150.0, "speed": 150.0}),
+        Backtrack("back", {"distance": 150.0, "speed": 150.0}),
     )
     farthest = max(x for x, _ in trace)
     assert farthest > 2380.0
@@ -58,7 +58,7 @@ def test_after_a_turn_in_place_it_backs_only_under_its_own_body() -> None:
         Drive("ahead", {"velocity": 150.0, "distance": 400.0}),
         Turn("left", {"angle": 90.0, "speed": 100.0}),
         Drive("a little", {"velocity": 150.0, "distance": 20.0}),
-        BackOff("back", {"distance": 150.0, "speed": 150.0}),
+        Backtrack("back", {"distance": 150.0, "speed": 150.0}),
     )
     turned_at = trace[0][1]  # the east leg's line, where it turned
     assert min(y for _, y in trace) > turned_at - OWN_MM + 20.0 - 15.0
