@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import gc
 import random
+import re
 import shutil
 import sys
 import tempfile
@@ -84,12 +85,16 @@ class Tally:
 
 
 def _kept() -> int:
-    """Traced bytes still held: after a collection, and with the interpreter's method cache
+    """Traced bytes still held: after a collection, with the interpreter's method cache
     emptied (it holds up to 4,096 attribute-name strings, keyed by their address: the ones
     the io module builds per open file, "incrementaldecoder", would count as growth until it
-    is full)."""
+    is full) and with ``re``'s cache of compiled patterns emptied: bounded at 512, it is
+    filled by the patterns a compile builds from a mutant's names (``mission/nodes.py``), so
+    its growth was whatever room the tests run before this one in the same process had left
+    it (52 B a compile in an xdist worker of ``make test``, under the bar in one process)."""
     gc.collect()
     sys._clear_type_cache()
+    re.purge()
     return tracemalloc.get_traced_memory()[0]
 
 
