@@ -490,14 +490,15 @@ class Drive(Action):
         return snap.time - self._start_time >= bound
 
     def update(self) -> Status:
-        self._trail.feed(self.snapshot.odometry)
+        robot = self.robot  # the snapshot read once a tick (the property's call costs)
+        snap = robot.snapshot if robot is not None else self.snapshot
+        self._trail.feed(snap.odometry)
         # a drive without an end (most ticks: the drive a guard ends) asks nothing of finished()
         if self._end[0] and self.finished():
             self.send(oi.halt())
             self._started_motion = False
             return _OK
-        robot = self.robot
-        mode = (robot.snapshot if robot is not None else self.snapshot).mode
+        mode = snap.mode
         if mode not in DRIVING_MODES:  # the firmware stopped the wheels if it fell
             self._last_mode = mode  # (the command is sent again once back)
             return self.wait_for_driving_mode()

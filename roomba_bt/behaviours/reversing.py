@@ -90,16 +90,18 @@ class Trail:
     def __init__(self) -> None:
         self._poses: deque[tuple[float, float, float]] = deque(maxlen=int(TRAIL_MM / STEP_MM) + 1)
 
-    def add(self, pose: Odometry) -> None:
-        """The pose after this tick: kept when it is :data:`STEP_MM` from the last kept."""
+    def add(self, pose: Odometry) -> bool:
+        """The pose after this tick: kept (True) when it is :data:`STEP_MM` from the last
+        kept."""
         poses = self._poses
         x, y = pose.x_mm, pose.y_mm
         if poses:
             last = poses[-1]
             dx, dy = x - last[0], y - last[1]
             if dx * dx + dy * dy < STEP_MM * STEP_MM:
-                return
+                return False
         poses.append((x, y, pose.theta_rad))
+        return True
 
     def turned(self, by: float) -> None:
         """The pose's heading was turned ``by`` (rad) where it stands (re-anchored on a
@@ -172,14 +174,31 @@ class RunTrail(Trail):
     def __init__(self) -> None:
         super().__init__()
         self._fed_path: float | None = None
+        #: the path (mm) at the last pose kept (:meth:`Trail.add`), -inf when none is
+        self._kept_path = -math.inf
 
     def feed(self, odo: Odometry) -> None:
         """The odometry this tick, from a leaf that moves the robot: a move since the last
-        feed that no feeding leaf saw (more than :data:`GAP_MM` of path) starts it again."""
-        if self.gap(odo):
+        feed that no feeding leaf saw (more than :data:`GAP_MM` of path) starts it again.
+
+        Called on every tick a ``drive`` or ``wall_follow`` runs: on most, the centre has
+        gone less than :data:`STEP_MM` of path since the last pose kept, so it is no
+        :data:`STEP_MM` away from it either (a path is never shorter than the line) and
+        ``add`` would keep nothing: that is settled by one subtraction, without ``add``'s
+        distance (a call and a pose read cost 6,000 instructions a bump-and-turn tick)."""
+        path = odo.path_mm
+        fed = self._fed_path
+        self._fed_path = path
+        if fed is None or not 0.0 <= path - fed <= GAP_MM:  # self.gap(odo), inline
             self.clear()
-        self._fed_path = odo.path_mm
-        self.add(odo)
+        elif path - self._kept_path < STEP_MM:
+            return
+        if self.add(odo):
+            self._kept_path = path
+
+    def clear(self) -> None:
+        super().clear()
+        self._kept_path = -math.inf
 
     def gap(self, odo: Odometry) -> bool:
         """Has the robot moved since the last feed (a leaf that feeds none drove it)?"""

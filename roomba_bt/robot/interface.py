@@ -303,7 +303,9 @@ class Outbox:
     are both written, back to back: until session 32 the first was dropped (Play was a
     state of the "speaker"), and ``play: 0`` then ``play: 1`` played only song 1. The
     order of the flush is the order in which each surviving command was first queued in
-    this tick, so a ``safe`` queued before a ``drive`` is written before it.
+    this tick, so a ``safe`` queued before a ``drive`` is written before it; but a state
+    queued again after a mode command (``halt``, ``safe``, then the next leaf's ``drive``)
+    moves after it, as the mode command would otherwise undo it (:meth:`_mode_change_after`).
 
     A behaviour that ends stops what it set moving with :meth:`send_stop`, which yields to a
     command another behaviour queued on that channel in this tick. A fallback that switches
@@ -352,10 +354,28 @@ class Outbox:
         spec = command.spec
         channel = spec.channel
         key: object = channel if spec.delivery is _STATE else object()
-        self._queue[key] = command
+        queue = self._queue
+        if key in queue and self._mode_change_after(key):
+            del queue[key]  # its place is after the mode command: at the end
+        queue[key] = command
         if channel is not None:
             self._senders[channel] = sender
             self._last[channel] = command
+
+    def _mode_change_after(self, key: object) -> bool:
+        """Is a mode command (Safe, Full, Start...: its row's ``leads_to``) queued after the
+        command under ``key``? A state that replaces one queued before a mode command is
+        written after that command, not in the old one's place: a plugin that ends with
+        ``halt``, ``safe`` and SUCCESS, and the next leaf's first Drive in the same tick,
+        wrote Drive then Safe, and the Safe stopped the wheels the Drive had just set going
+        (session 37's verifier: a 2 s drive went 4 cm). Only on a replacement, a few
+        commands at most: most ticks queue nothing."""
+        after = False
+        for queued_key, queued in self._queue.items():
+            if after and queued.spec.leads_to is not None:
+                return True
+            after = after or queued_key == key
+        return False
 
     def queued_by(self) -> list[tuple[Command, object]]:
         """Each command queued on a channel (the wheels, the motors...) with who queued it:

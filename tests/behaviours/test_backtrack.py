@@ -73,3 +73,34 @@ def test_a_move_no_leaf_of_the_trail_saw_leaves_only_the_bodys_own() -> None:
     moved = Odometry(x_mm=400.0, y_mm=300.0, path_mm=800.0)  # another leaf drove it
     assert trail.backable(moved, 150.0) == OWN_MM
     assert trail.backable(Odometry(theta_rad=math.pi), 150.0) == OWN_MM  # a new run's
+
+
+def test_the_trail_fed_a_tick_at_a_time_keeps_what_each_pose_added_would() -> None:
+    """``RunTrail.feed`` skips ``add`` while the path since the last pose kept is under a
+    step (a path is never shorter than the line): the poses kept, and the gaps that start the
+    trail again, are those of feeding every tick through ``gap`` and ``add`` (random walks,
+    with turns in place, stops, a jump no feeding leaf saw and the odometry of a new run)."""
+    import random
+
+    for seed in range(20):
+        rng = random.Random(seed)
+        fast, slow = RunTrail(), RunTrail()
+        x = y = theta = path = 0.0
+        for tick in range(3000):
+            roll = rng.random()
+            if roll < 0.01:
+                step = rng.uniform(50.0, 300.0)  # a move no feeding leaf saw
+            elif roll < 0.2:
+                step, theta = 0.0, theta + rng.uniform(-0.2, 0.2)  # turning in place
+            else:
+                step = rng.uniform(0.0, 7.5)
+            x, y, path = x + step * math.cos(theta), y + step * math.sin(theta), path + step
+            if rng.random() < 0.001:  # a new run's odometry
+                x = y = path = 0.0
+            odo = Odometry(x_mm=x, y_mm=y, theta_rad=theta, path_mm=path)
+            fast.feed(odo)
+            if slow.gap(odo):  # the feed before the shortcut, step by step
+                slow.clear()
+            slow._fed_path = odo.path_mm
+            slow.add(odo)
+            assert list(fast._poses) == list(slow._poses), (seed, tick)

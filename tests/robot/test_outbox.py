@@ -23,6 +23,23 @@ def test_last_command_per_channel_wins_in_first_queued_order() -> None:
     assert len(box) == 0
 
 
+def test_a_state_queued_again_after_a_mode_command_is_written_after_it() -> None:
+    """A plugin that passes through Full ends with ``halt``, ``safe`` and SUCCESS; the next
+    leaf's first Drive in the same tick took the halt's place, before the Safe, and the Safe
+    stopped the wheels it had just set going (session 37's verifier: a 2 s drive went 4 cm).
+    The Drive now comes after the Safe; a replacement with no mode command after it keeps
+    its place (the test above), and an event after it (a Play) moves nothing."""
+    box = Outbox()
+    box.send(commands.halt(), OLD)
+    box.send(commands.safe(), OLD)
+    box.send(commands.drive(100, 0), NEW)
+    assert [c.data for c in box.drain()] == [commands.safe().data, commands.drive(100, 0).data]
+    box.send(commands.drive(100, 0), OLD)
+    box.send(commands.play(0), OLD)
+    box.send(commands.drive(200, 0), NEW)
+    assert [c.name for c in box.drain()] == ["drive", "play"]
+
+
 EVENTS_IN_ONE_TICK = {
     "two plays": [commands.play(0), commands.play(1)],
     "the same play twice": [commands.play(2), commands.play(2)],

@@ -347,6 +347,9 @@ def test_a_plugin_that_passes_through_full_as_declared_runs(
     assert "--> dash [✓] -- drove 3 ticks in Full" in out, out
     assert "outcome      SUCCESS" in out
     assert " 0 refused by the mode guard" in out
+    # the drive after it moves: its first Drive, queued in the tick dash sent halt and Safe,
+    # is written after the Safe (written before it, the Safe stopped it: 0.01 m in all)
+    assert "distance     0.07 m" in out, out
 
 
 OS_ERRORS = [
