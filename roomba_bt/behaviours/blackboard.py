@@ -53,6 +53,9 @@ _log = logging.getLogger("roomba_bt.mission")
 SNAPSHOT_KEY = "/roomba/snapshot"
 #: The declared type of each mission key, by name (:func:`declare_keys`): not a key of its own.
 KEY_TYPES_KEY = "/roomba/key_types"
+#: The run's trail, the floor it has just driven (``behaviours/reversing.py``: what
+#: ``backtrack`` may back over): the run's own bookkeeping, no key a user wrote or reads.
+TRAIL_KEY = "/roomba/trail"
 #: Mission blackboard keys live under this namespace: ``leg`` is ``/mission/leg``.
 MISSION_NAMESPACE = "/mission/"
 #: A run that starts while another goes on in the process keeps its keys under this
@@ -213,9 +216,9 @@ class RunBoard:
 
     def shown(self) -> dict[str, Any]:
         """What the monitor shows of the blackboard: every key by the name a user knows
-        (``/mission/leg``, this run's prefix taken off), the snapshot and the declared types
-        (not keys) left out; with the plain names, a program's own keys too, but no key of
-        another run."""
+        (``/mission/leg``, this run's prefix taken off), the snapshot, the declared types
+        (not keys) and the run's trail left out; with the plain names, a program's own keys
+        too, but no key of another run."""
         storage = py_trees.blackboard.Blackboard.storage
         if self.prefix:
             start, cut = self.prefix + "/", len(self.prefix)
@@ -228,6 +231,7 @@ class RunBoard:
                     del board[name]
         board.pop(SNAPSHOT_KEY, None)
         board.pop(KEY_TYPES_KEY, None)
+        board.pop(TRAIL_KEY, None)
         return board
 
     def values(self) -> dict[str, Any]:

@@ -54,7 +54,7 @@ if TYPE_CHECKING:
 
 import py_trees
 
-from roomba_bt.behaviours.blackboard import run_board
+from roomba_bt.behaviours.blackboard import TRAIL_KEY, run_board
 
 __all__ = [
     "NEAR_MM", "OWN_MM", "STEP_MM", "TRAIL_KEY", "TRAIL_MM", "TURN", "RunTrail", "Trail",
@@ -159,8 +159,6 @@ class Trail:
         return False
 
 
-#: the run's trail (:func:`run_trail`) on the blackboard
-TRAIL_KEY = "/roomba/trail"
 #: path (mm) the odometry may grow between two feeds of the run's trail: more is a move no
 #: feeding leaf saw (about 7 mm a 15 ms tick at 500 mm/s; a lost frame or two)
 GAP_MM = 40.0

@@ -66,6 +66,7 @@ tree:
   sequence:
     - mode: safe
     - drive: {velocity: 100 mm/s, radius: 200 mm}
+      until: {bump: any}  # no warning before the run (validate's wall check)
 """
 
 

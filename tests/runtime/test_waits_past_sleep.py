@@ -10,6 +10,7 @@ import pytest
 
 from roomba_bt.cli import main
 from roomba_bt.mission import load_mission, load_mission_text
+from roomba_bt.mission.shipped import find_mission
 from roomba_bt.robot.errors import RobotAsleep
 
 WAIT_IN_SAFE = """
@@ -22,9 +23,23 @@ tree:
 """
 
 
+def _charge_wait() -> str:
+    """Where patrol.yaml's charge wait stands, ``patrol.yaml:LINE:COL`` (read from the file:
+    an edit above it moves it)."""
+    path = find_mission("patrol").path
+    assert path is not None
+    lines = path.read_text().splitlines()
+    [(line, col)] = [
+        (number, text.index("wait:") + 1)
+        for number, text in enumerate(lines, 1)
+        if 'wait: "${charge_for}"' in text
+    ]
+    return f"patrol.yaml:{line}:{col}"
+
+
 def test_the_long_waits_that_may_run_in_passive_are_known_at_compile_time() -> None:
     (said,) = load_mission("patrol", {"charge_for": "10min"}).waits_past_sleep
-    assert said.endswith("patrol.yaml:128:17: wait(10min)"), said
+    assert said.endswith(f"{_charge_wait()}: wait(10min)"), said
     assert load_mission("patrol", {"charge_for": "5min"}).waits_past_sleep == ()
     assert load_mission_text(WAIT_IN_SAFE).waits_past_sleep == ()  # Safe does not sleep
 
@@ -41,7 +56,7 @@ def test_the_run_names_the_wait_at_its_start_and_the_dock_at_its_end(
     out = capsys.readouterr().out
     assert code == 8, out
     [said] = [r.getMessage() for r in caplog.records if "may run in Passive" in r.getMessage()]
-    assert "patrol.yaml:128:17: wait(10min) may run in Passive" in said
+    assert f"{_charge_wait()}: wait(10min) may run in Passive" in said
     assert "keep-awake is off (--no-keep-awake): it cannot finish" in said
     assert "the robot fell asleep: 300 s in Passive" in out
     assert "on its dock (charging: it sits there still)" in out
