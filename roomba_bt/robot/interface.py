@@ -30,6 +30,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, Delivery, Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+from roomba_bt.robot.hazards import sets_going
 
 # the 15 ms slot is the protocol's (oi.frames); plugins that took it from here, beside what
 # a behaviour sees, still find it, with a DeprecationWarning until 0.3.0
@@ -304,8 +305,9 @@ class Outbox:
     state of the "speaker"), and ``play: 0`` then ``play: 1`` played only song 1. The
     order of the flush is the order in which each surviving command was first queued in
     this tick, so a ``safe`` queued before a ``drive`` is written before it; but a state
-    queued again after a mode command (``halt``, ``safe``, then the next leaf's ``drive``)
-    moves after it, as the mode command would otherwise undo it (:meth:`_mode_change_after`).
+    that sets something going, queued again after a mode command (``halt``, ``safe``, then
+    the next leaf's ``drive``), moves after it, as the mode command would otherwise undo it
+    (:meth:`_mode_change_after`).
 
     A behaviour that ends stops what it set moving with :meth:`send_stop`, which yields to a
     command another behaviour queued on that channel in this tick. A fallback that switches
@@ -355,7 +357,7 @@ class Outbox:
         channel = spec.channel
         key: object = channel if spec.delivery is _STATE else object()
         queue = self._queue
-        if key in queue and self._mode_change_after(key):
+        if key in queue and sets_going(command) and self._mode_change_after(key):
             del queue[key]  # its place is after the mode command: at the end
         queue[key] = command
         if channel is not None:
@@ -364,12 +366,13 @@ class Outbox:
 
     def _mode_change_after(self, key: object) -> bool:
         """Is a mode command (Safe, Full, Start...: its row's ``leads_to``) queued after the
-        command under ``key``? A state that replaces one queued before a mode command is
-        written after that command, not in the old one's place: a plugin that ends with
-        ``halt``, ``safe`` and SUCCESS, and the next leaf's first Drive in the same tick,
-        wrote Drive then Safe, and the Safe stopped the wheels the Drive had just set going
-        (session 37's verifier: a 2 s drive went 4 cm). Only on a replacement, a few
-        commands at most: most ticks queue nothing."""
+        command under ``key``? A state that sets something going and replaces one queued
+        before a mode command is written after that command, not in the old one's place: a
+        plugin that ends with ``halt``, ``safe`` and SUCCESS, and the next leaf's first Drive
+        in the same tick, wrote Drive then Safe, and the Safe stopped the wheels the Drive
+        had just set going (session 37's verifier: a 2 s drive went 4 cm). A stop keeps the
+        earlier place: a leaf's halt after its Stop (173) is refused in Off, so the halt goes
+        first. Only on a replacement, a few commands at most: most ticks queue nothing."""
         after = False
         for queued_key, queued in self._queue.items():
             if after and queued.spec.leads_to is not None:

@@ -38,6 +38,10 @@ def test_a_state_queued_again_after_a_mode_command_is_written_after_it() -> None
     box.send(commands.play(0), OLD)
     box.send(commands.drive(200, 0), NEW)
     assert [c.name for c in box.drain()] == ["drive", "play"]
+    box.send(commands.halt(), OLD)  # a stop keeps its place: a halt after Stop is refused in Off
+    box.send(commands.stop(), OLD)
+    box.send(commands.halt(), OLD)
+    assert [c.name for c in box.drain()] == ["drive", "stop"]
 
 
 EVENTS_IN_ONE_TICK = {
