@@ -20,7 +20,7 @@ from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.oi.stream import stream_budget
-from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, ExitCode
+from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, ExitCode, Outcome
 
 if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
@@ -60,7 +60,8 @@ def register(sub: Any) -> None:
         a second; at a rate too slow for that stream (19200, 38400) each table is one Query
         List (149) of them instead. The robot stays in Passive and is left there.
         Without --port, the built-in simulator. Exit codes: 0 done (--count reached), 2
-        invalid option, 3 connection or stream failure, {INTERNAL_ERROR_SAID}, 130 interrupted.
+        invalid option or a wrong profile (the robot's frames are another model's, as run
+        says it), 3 connection or stream failure, {INTERNAL_ERROR_SAID}, 130 interrupted.
         """,
     )
     add_far_end_options(
@@ -158,7 +159,13 @@ def sensors_command(args: argparse.Namespace) -> int:
                 return ExitCode.INVALID
         link = far_end(args.port, args.baud, simulator, opened=opened)
         _show_live(link, profile, args, group == ALL_SENSORS)
-    except (ConnectionFailed, LinkDown) as exc:
+    except LinkDown as exc:
+        if exc.mismatch is not None:  # another model's frames: a setting, as run says it
+            print(f"roomba-bt: {Outcome.WRONG_PROFILE.value}: {exc}", file=sys.stderr)
+            return Outcome.WRONG_PROFILE.exit_code
+        print(f"roomba-bt: {exc}", file=sys.stderr)
+        return ExitCode.CONNECTION
+    except ConnectionFailed as exc:
         print(f"roomba-bt: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
     # a Ctrl-C or a signal goes on to main, which says "roomba-bt: interrupted" (by what) and
