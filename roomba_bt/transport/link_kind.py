@@ -187,12 +187,21 @@ _PTY_GONE = (
 )
 
 
+#: What a pty that failed most likely means: the program that held its other end (the
+#: simulator, socat) ended or closed it. A run on ``sim --pty`` whose simulator was killed
+#: ended "the port is gone (the cable was pulled or the adapter reset)" in its outcome, while
+#: the advice under it (:data:`_PTY_GONE`) already spoke of the simulator.
+_PTY_ENDED = (
+    "the program at its other end, the simulator or a bridge such as socat, ended or closed it"
+)
+
+
 def _cable_words(kind: LinkKind, reopens: bool, port: str) -> LinkWords:
     """A serial adapter's link (a device path, a pty, ``loop://``): its cable and adapter."""
     return LinkWords(
         kind=kind,
         between="the cable",
-        gone="the cable was pulled or the adapter reset",
+        gone=_PTY_ENDED if kind is LinkKind.PTY else "the cable was pulled or the adapter reset",
         line="the cable",
         froze="a frozen adapter or cable?",
         gap_fix="",

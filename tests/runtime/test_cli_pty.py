@@ -306,8 +306,9 @@ def _run_on(port: str, tmp_path: Path, *options: str) -> subprocess.CompletedPro
 def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undelivered(
     served_sim: Callable[..., Any], tmp_path: Path
 ) -> None:
-    """The cable pulled: exit 8 naming the port gone, the stop reported undeliverable with
-    what the robot was last seen doing, logged once (close() tries the stop again)."""
+    """The simulator on a pty killed: exit 8 naming the port gone, the stop reported
+    undeliverable with what the robot was last seen doing, logged once (close() tries the
+    stop again)."""
     sim = served_sim("--pty")
     proc, _ = _driving(sim.address, tmp_path)
     sim.proc.kill()
@@ -319,8 +320,12 @@ def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undeliv
     assert f"NOT DELIVERED: {report}: the port is gone" in out
     assert err.count(report) == 1, err
     assert "Traceback" not in err
-    # in a hobbyist's words, and what to do now (pyserial's words alone said neither)
-    assert "the port is gone (the cable was pulled or the adapter reset)" in err
+    # in a hobbyist's words, and what to do now (pyserial's words alone said neither); a
+    # pty's words, the outcome's as the advice's: it said "the cable was pulled or the
+    # adapter reset" of a simulator that was killed
+    gone = "the port is gone (the program at its other end, the simulator or a bridge such as "
+    assert gone in err and "outcome      CONNECTION LOST (" + f"{sim.address}: {gone}" in out
+    assert "cable" not in out + err, (out, err)
     advice = "the robot may still be moving: pick it up or press its Clean or power button"
     # a pty's own path never comes back (its number, reused, is another program's line):
     # neither reopened for the stop nor handed to doctor, which would talk to that program

@@ -107,3 +107,13 @@ def test_a_stop_not_delivered_sends_a_pty_s_user_to_no_path_that_may_be_another_
     for port in ("/dev/ttyUSB0", "/dev/serial/by-id/usb-FTDI_X-if00-port0"):
         assert link_of(port).reach == f"reseat the cable, then roomba-bt doctor --port {port}"
     assert link_of(BRIDGES[0]).reach.endswith(f"then roomba-bt doctor --port {BRIDGES[0]}")
+
+
+def test_a_pty_that_failed_is_said_its_program_s_end_not_a_cable() -> None:
+    """A run whose simulator (``sim --pty``) was killed ended "the port is gone (the cable was
+    pulled or the adapter reset)" while the advice under it spoke of the simulator: one
+    table, the link's kind, words both."""
+    pty = link_of("/dev/pts/3").gone
+    assert "the simulator or a bridge such as socat" in pty and "cable" not in pty
+    for port in ("/dev/ttyUSB0", "/dev/serial/by-id/usb-FTDI_X-if00-port0"):
+        assert link_of(port).gone == "the cable was pulled or the adapter reset"
