@@ -18,6 +18,7 @@ replay`` does the acts through the same session (:func:`operator_replay`), witho
 
 from __future__ import annotations
 
+import logging
 from collections import deque
 from collections.abc import Callable
 from datetime import datetime
@@ -74,18 +75,21 @@ def replay_into_feed(
         label=record.label,
     )  # fmt: skip
     feed.set_tree(mission.root)
-    summary, transport = replay_record(
-        record, mission, profile=profile, packets=packets, baud=baud, name=name,
-        gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
-        raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
-        progress=progress, until=until,
-    )  # fmt: skip
+    with ReplayStopReports(f"replay:{name}") as stop_reports:
+        summary, transport = replay_record(
+            record, mission, profile=profile, packets=packets, baud=baud, name=name,
+            gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
+            raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
+            progress=progress, until=until,
+        )  # fmt: skip
     for t, note in record.notes:
         # the tick guard's: shown as the run had it (the end note: below, with the end)
         if not isinstance(note.get("tick"), int) and ENDED not in note:
             feed.event("force" if "force" in note else "note", _note_text(note), t)
     # a difference past where the recorded run's link failed is none (replay's own words)
     lost = past_the_link_loss(transport, transport.first_difference(), record.ending)
+    if lost is None:  # any other ending: the replay's stop is said as before
+        stop_reports.say()
     difference = diverged(summary, transport) if lost is None else None
     if difference is not None and diverged_at is not None:
         diverged_at(difference)
@@ -101,6 +105,48 @@ def replay_into_feed(
     unended = told and record.ending is None and record.end_said() is not None
     feed.end(finished, Ending.of(summary) if whole else None, NO_END if unended else None)
     return feed, summary
+
+
+class ReplayStopReports(logging.Filter):
+    """The replay's own safe stop's reports (``robot/ending.py``'s log, naming the replay's
+    link, ``link``), held back while a record is replayed for the page: :meth:`say` lets
+    them out, and a replay that leaves without it drops them. A record whose run lost its
+    link holds nothing past there, so the replay's stop, written to no robot, is always
+    "written but unconfirmed": ``monitor RECORD`` printed that ERROR on stderr, of a robot
+    "last seen spinning", under a view that said in its own words that the recorded run
+    lost its link (its banner, its event log: what each side wrote past there), and whose
+    recorded run's stop had gone into a failed port, not been "unconfirmed". A replay
+    that ends in any other way says them as before (:meth:`say`); one left by an exception
+    too."""
+
+    LOGGER = "roomba_bt.robot.ending"
+
+    def __init__(self, link: str) -> None:
+        super().__init__()
+        self.prefix = f"{link}: "
+        self.held: list[logging.LogRecord] = []
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.getMessage().startswith(self.prefix):
+            self.held.append(record)
+            return False
+        return True
+
+    def __enter__(self) -> ReplayStopReports:
+        logging.getLogger(self.LOGGER).addFilter(self)
+        return self
+
+    def __exit__(self, kind: object, *_: object) -> None:
+        logging.getLogger(self.LOGGER).removeFilter(self)
+        if kind is not None:
+            self.say()
+
+    def say(self) -> None:
+        """Log what was held, as it would have been logged."""
+        logger = logging.getLogger(self.LOGGER)
+        held, self.held = self.held, []
+        for record in held:
+            logger.handle(record)
 
 
 #: the world the page draws for a record and where its robot started there (mm, mm, rad:

@@ -4,6 +4,7 @@ another, every ending checked on the bytes the run wrote (its --record)."""
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import re
 import signal
@@ -304,18 +305,19 @@ def _run_on(port: str, tmp_path: Path, *options: str) -> subprocess.CompletedPro
 
 
 def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undelivered(
-    served_sim: Callable[..., Any], tmp_path: Path
+    served_sim: Callable[..., Any], tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     """The simulator on a pty killed: exit 8 naming the port gone, the stop reported
     undeliverable with what the robot was last seen doing, logged once (close() tries the
     stop again)."""
     sim = served_sim("--pty")
-    proc, _ = _driving(sim.address, tmp_path)
+    proc, record = _driving(sim.address, tmp_path)
     sim.proc.kill()
     sim.proc.communicate()  # its pipes closed
     out, err = ended(proc)
     assert proc.returncode == 8, err
     assert "the port is gone" in err
+    _the_record_view_says_no_stop_of_its_own(record, caplog)
     report = "last seen in Safe spinning left at 100 mm/s; the stop was not delivered"
     assert f"NOT DELIVERED: {report}: the port is gone" in out
     assert err.count(report) == 1, err
@@ -333,6 +335,30 @@ def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undeliv
     assert "start the simulator or bridge again and use the path it prints" in out
     assert "roomba-bt doctor" not in out and "reseat" not in out
     assert "came back" not in out
+
+
+def _the_record_view_says_no_stop_of_its_own(
+    record: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """``roomba-bt monitor RECORD`` of that run's record (its replay into the page's feed, as
+    the command does it): the view says the recorded run lost its link; the replay's own
+    stop, written to no robot with nothing recorded past the loss to confirm it, printed
+    "ERROR ... last seen in Safe spinning left at 100 mm/s; the stop was written but is
+    unconfirmed" on stderr, which docs/monitor.md says nothing of."""
+    from roomba_bt.cli import build_parser
+    from roomba_bt.cli.run_cmd import load_recorded
+    from roomba_bt.monitor.recorded import replay_into_feed
+
+    recorded = load_recorded(build_parser().parse_args(["monitor", str(record)]))
+    assert not isinstance(recorded, int)
+    caplog.clear()
+    feed, _ = replay_into_feed(
+        recorded.record, recorded.mission, recorded.profile, recorded.packets, recorded.baud,
+        str(record),
+    )  # fmt: skip
+    assert (feed.finished or "").startswith("the recorded run lost its link"), feed.finished
+    said = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+    assert not any("unconfirmed" in text or "not delivered" in text for text in said), said
 
 
 def test_a_port_that_comes_back_within_the_grace_gets_the_stop_not_the_mission(
