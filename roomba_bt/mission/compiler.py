@@ -62,7 +62,7 @@ from roomba_bt.mission.shipped import find_mission, shipped_name
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.values import Context
 from roomba_bt.oi.modes import ALL_MODES, OIMode
-from roomba_bt.oi.profiles import CREATE2, RobotProfile
+from roomba_bt.oi.profiles import CREATE2, PROFILES, RobotProfile, get_profile
 from roomba_bt.robot.safety import signal_interrupt
 
 __all__ = [
@@ -92,21 +92,52 @@ def compile_mission(
     path: str | Path,
     params: Mapping[str, str] | None = None,
     *,
-    profile: RobotProfile = CREATE2,
+    profile: RobotProfile | str | None = CREATE2,
     baud: int | None = None,
     registry: Registry | None = None,
     require_tree: bool = True,
     permissions: Permissions = NO_PERMISSIONS,
     text: MissionText | None = None,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
-    """Compile and check; ``(mission or None, diagnostics)``. Never raises for bad input.
+    """Compile and check; ``(mission or None, diagnostics)``. Never raises for bad input (a
+    ``profile=`` that names no model is a bad argument: :func:`profile_given`).
     ``permissions`` (none by default) says whether the file's plugin files may be imported
     and where else it may include from. ``text``: the mission's YAML as given, read in
     place of the file at ``path`` (which then only places its includes and names it)."""
+    model = profile_given(profile, "compile_mission")
     mission, diagnostics, _ = _compile(
-        Path(path), params, profile, baud, registry, require_tree, permissions, text
+        Path(path), params, model, baud, registry, require_tree, permissions, text
     )
     return mission, diagnostics
+
+
+def profile_given(profile: RobotProfile | str | None, caller: str) -> RobotProfile:
+    """The model a mission function was given as ``profile=``: a :class:`RobotProfile`, its
+    name (``"roomba500"``, as ``Connection.open`` and ``configured_profile()``'s answer give
+    it), or None, which is ``create2`` as no argument is (docs/robot.md, Which robot: the
+    library reads no setting of the command line's). ``profile=None`` was an internal error
+    ("'NoneType' object has no attribute 'command_unavailable'") inside a mission's
+    diagnostics, a name the same with 'str'; anything else is refused naming ``caller``."""
+    if profile is None:
+        return CREATE2
+    if isinstance(profile, RobotProfile):
+        return profile
+    known = ", ".join(PROFILES)
+    if isinstance(profile, str):
+        if profile == "auto":  # the command line's, which identifies the robot on its port
+            raise ValueError(
+                f"{caller}(profile='auto'): a mission is compiled for one model, and 'auto' "
+                "names none here (the command line identifies the robot on its port first: "
+                f"roomba_bt.robot.discovery.identify_robot); give one of {known}"
+            )
+        try:
+            return get_profile(profile)
+        except ValueError as exc:
+            raise ValueError(f"{caller}(profile={profile!r}): {exc}") from None
+    raise TypeError(
+        f"{caller}(profile=...) takes a RobotProfile (roomba_bt.CREATE2, ...), a profile's "
+        f"name ({known}) or None, not {type(profile).__name__}"
+    )
 
 
 @dataclass(frozen=True)
@@ -309,7 +340,7 @@ def load_mission(
     path: str | Path,
     params: Mapping[str, str] | None = None,
     *,
-    profile: RobotProfile = CREATE2,
+    profile: RobotProfile | str | None = CREATE2,
     baud: int = 115200,
     registry: Registry | None = None,
     permissions: Permissions = NO_PERMISSIONS,
@@ -341,7 +372,8 @@ def load_mission(
         raise MissionError([Diagnostic(shown, 1, 1, problem)])
     found = lookup.path or path
     mission, diagnostics = compile_mission(
-        found, params, profile=profile, baud=baud, permissions=permissions,
+        found, params, profile=profile_given(profile, "load_mission"), baud=baud,
+        permissions=permissions,
         registry=_with_behaviours(registry, behaviours),
     )  # fmt: skip
     if mission is None:
@@ -355,7 +387,7 @@ def load_mission_text(
     *,
     name: str = "<string>",
     base_dir: str | Path | None = None,
-    profile: RobotProfile = CREATE2,
+    profile: RobotProfile | str | None = CREATE2,
     baud: int = 115200,
     registry: Registry | None = None,
     permissions: Permissions = NO_PERMISSIONS,
@@ -380,8 +412,9 @@ def load_mission_text(
         raise ValueError(f"load_mission_text(base_dir={str(base_dir)!r}): no such folder")
     stands_at = folder.resolve() / (Path(name).name or "mission")
     given = MissionText(text, name, stands_at)
+    model = profile_given(profile, "load_mission_text")
     mission, diagnostics = compile_mission(
-        stands_at, params, profile=profile, baud=baud, permissions=permissions,
+        stands_at, params, profile=model, baud=baud, permissions=permissions,
         registry=_with_behaviours(registry, behaviours), text=given,
     )  # fmt: skip
     if mission is None:
@@ -416,7 +449,7 @@ def validate_file(
     path: str | Path,
     params: Mapping[str, str] | None = None,
     *,
-    profile: RobotProfile = CREATE2,
+    profile: RobotProfile | str | None = CREATE2,
     baud: int = 115200,
     registry: Registry | None = None,
     permissions: Permissions = NO_PERMISSIONS,
@@ -426,8 +459,9 @@ def validate_file(
     includes names the include chain that reached it (``included_from``; ``checked_file``
     is then ``path``)."""
     path = Path(path)
+    model = profile_given(profile, "validate_file")
     mission, diagnostics, loader = _compile(
-        path, params, profile, baud, registry, _has_tree(path), permissions
+        path, params, model, baud, registry, _has_tree(path), permissions
     )
     warnings = mission.warnings if mission is not None else ()
     if loader is None:
@@ -439,18 +473,19 @@ def validate_files(
     paths: Iterable[str | Path],
     params: Mapping[str, str] | None = None,
     *,
-    profile: RobotProfile = CREATE2,
+    profile: RobotProfile | str | None = CREATE2,
     baud: int = 115200,
     registry: Registry | None = None,
     permissions: Permissions = NO_PERMISSIONS,
 ) -> list[Diagnostic]:
     """Every diagnostic of every file (:func:`validate_file`'s): an error in a library
     shared by several of ``paths`` comes once for each of them."""
+    model = profile_given(profile, "validate_files")
     return [
         diagnostic
         for path in paths
         for diagnostic in validate_file(
-            path, params, profile=profile, baud=baud, registry=registry, permissions=permissions
+            path, params, profile=model, baud=baud, registry=registry, permissions=permissions
         ).diagnostics
     ]
 

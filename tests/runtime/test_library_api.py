@@ -15,6 +15,7 @@ import sys
 import textwrap
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import py_trees
 import pytest
@@ -263,6 +264,36 @@ def test_a_texts_includes_are_found_from_its_base_dir(tmp_path: Path) -> None:
     assert mission.files == ((tmp_path / "lib.yaml").resolve(),)
     with pytest.raises(roomba_bt.MissionError, match=r"\ncell:5:11: included file 'lib.yaml' not"):
         roomba_bt.load_mission_text(text, name="cell", base_dir=tmp_path / "..")
+
+
+@pytest.mark.parametrize(
+    "load",
+    [
+        lambda **kw: roomba_bt.load_mission_text(TO_THE_WALL, name="lab.yaml", **kw),
+        lambda **kw: roomba_bt.load_mission("dock", **kw),
+    ],
+    ids=["load_mission_text", "load_mission"],
+)
+def test_profile_none_is_create2_and_a_name_its_profile(load: Callable[..., Any]) -> None:
+    """``profile=None`` was an internal error inside a MissionError ("'NoneType' object has
+    no attribute 'command_unavailable'"), ``profile='roomba500'`` (the name
+    ``configured_profile()`` returns for it) the same with 'str'. None is ``create2``, as
+    no argument is (docs/robot.md: the library reads no setting); a name is its profile."""
+    from roomba_bt.oi.profiles import ROOMBA500
+
+    none, default = load(profile=None), load()
+    assert none.sends == default.sends and none.packets == default.packets
+    named, given = load(profile="roomba500"), load(profile=ROOMBA500)
+    assert named.sends == given.sends and named.packets == given.packets
+
+
+def test_a_profile_that_names_no_model_is_refused_naming_the_function() -> None:
+    with pytest.raises(ValueError, match=r"^load_mission_text\(profile='create3'\): unknown robot"):
+        roomba_bt.load_mission_text(TO_THE_WALL, profile="create3")
+    with pytest.raises(ValueError, match=r"^validate_file\(profile='auto'\): a mission is com"):
+        roomba_bt.mission.validate_file("dock.yaml", profile="auto")
+    with pytest.raises(TypeError, match=r"^load_mission\(profile=...\) takes a RobotProfile"):
+        roomba_bt.load_mission("dock", profile=2)  # type: ignore[arg-type]
 
 
 def test_load_mission_given_yaml_text_says_to_use_load_mission_text() -> None:
@@ -588,7 +619,7 @@ def test_a_signal_raised_again_is_typed_and_still_terminated() -> None:
 
 def test_signatures_show_a_shipped_profile_by_its_name() -> None:
     shown = str(inspect.signature(roomba_bt.load_mission))
-    assert "profile: 'RobotProfile' = roomba_bt.CREATE2" in shown
+    assert "profile: 'RobotProfile | str | None' = roomba_bt.CREATE2" in shown
     assert "slow_baud_how" not in shown and len(shown) < 400
     import dataclasses
 
