@@ -9,6 +9,7 @@ custom tag is an error, never executed.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -122,7 +123,13 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
             problem = f"{cause[2]} ({problem} at {line}:{column})"
             line, column = cause[0], cause[1]
         elif not tab and (context := yamlsource.syntax_context(exc, text)) is not None:
-            problem, began = f"{problem} ({context[0]})", context[1]
+            began = context[1]
+            misplaced = misplaced_key(text.split("\n"), line, began[0], problem)
+            if misplaced is not None:  # the language's words for what YAML calls syntax
+                return None, [Diagnostic(display, line, misplaced[0], misplaced[1], began_at=began)]
+            problem = f"{problem} ({context[0]})"
+        elif not tab and (misplaced := misplaced_key(text.split("\n"), line, 1, problem)):
+            return None, [Diagnostic(display, line, misplaced[0], misplaced[1])]
         said = f"YAML syntax error: {problem}"
         return None, [Diagnostic(display, line, column, said, began_at=began)]
     except yaml.YAMLError as exc:
@@ -130,6 +137,101 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
     if node is None:
         return None, [Diagnostic(display, 1, 1, "the mission file is empty")]
     return node, [*duplicate_keys(node, display), *yaml12_text_numbers(node, display)]
+
+
+#: a line's key: ``until:``, ``velocity: 100 mm/s``
+_KEY = re.compile(r"([A-Za-z_][A-Za-z0-9_-]*)[ \t]*:(?:[ \t]|$)")
+
+
+def misplaced_key(lines: list[str], line: int, first: int, problem: str) -> tuple[int, str] | None:
+    """A node's modifier or option indented under no node, said in the mission language's
+    words: the column of the key and the message, or None when line ``line`` (1-based; where
+    YAML's syntax error ``problem`` is) holds no key, or no list item's node stands above it
+    (down to line ``first``, where the broken structure began) with the key in its block.
+    YAML says only "did not find expected key", "... expected '-' indicator" or "mapping
+    values are not allowed in this context" of an ``until:`` one column out of line; the
+    nodes the key most likely belongs to are the list items above it (``- drive: ...``, and
+    the ones that hold it): a modifier (:data:`~roomba_bt.behaviours.language.MODIFIERS`)
+    goes beside its node's word, in its column, an option in the column of the node's other
+    options."""
+    from roomba_bt.behaviours.language import MODIFIERS
+    from roomba_bt.mission.loader import TOP_LEVEL  # imported here: the loader imports this
+
+    if not 0 < line <= len(lines):
+        return None
+    broke = lines[line - 1]
+    stripped = broke.lstrip(" ")
+    match = _KEY.match(stripped)
+    if match is None or match.group(1) in TOP_LEVEL:  # a section: not a node's
+        return None
+    key, column = match.group(1), len(broke) - len(stripped) + 1
+    nodes, options = _nodes_above(lines, line, first)
+    if not nodes:
+        return None
+    (at, word, word_column), outer = nodes[0], nodes[1:]
+    if column == word_column or (options is not None and column == options[2]):
+        return None  # in line with them: the cause is elsewhere
+    found = f"{key}: in column {column} is in no node's mapping (YAML: {problem})"
+    node = f"the node above, {word} (line {at})"
+    others = "".join(f", {w}'s (line {n}) column {c}" for n, w, c in outer)
+    if key in MODIFIERS and outer:
+        return column, (
+            f"{found}: {key} is a modifier, written beside its node's word in the same "
+            f"column: {word}'s (line {at}) is column {word_column}{others}; write {key}: in "
+            "the column of the node it belongs to"
+        )
+    if key in MODIFIERS:
+        return column, (
+            f"{found}: {key} is a modifier, written beside its node's word in the same "
+            f"column: {node}, has its word in column {word_column}; write {key}: there, "
+            f"indented {word_column - 1} spaces"
+        )
+    modifiers = ", ".join(MODIFIERS)
+    if options is not None:
+        return column, (
+            f"{found}: {node}, has its options in column {options[2]} ({options[1]}, line "
+            f"{options[0]}) and its modifiers ({modifiers}) beside its word, in column "
+            f"{word_column}: write {key}: in the column of the ones it belongs with"
+        )
+    return column, (
+        f"{found}: {node}, takes its options in its value ({word}: {{...}}) and its "
+        f"modifiers ({modifiers}) beside its word, in column {word_column}: write {key}: "
+        f"in its value, or in column {word_column} if it is a modifier"
+    )
+
+
+#: a list item that is a node: ``- drive: {...}``, ``- stop``
+_ITEM = re.compile(r"- +([A-Za-z_][A-Za-z0-9_-]*)[ \t]*(?::(?:[ \t]|$)|$)")
+
+
+def _nodes_above(
+    lines: list[str], line: int, first: int
+) -> tuple[list[tuple[int, str, int]], tuple[int, str, int] | None]:
+    """The list items' nodes above line ``line`` (down to ``first``) whose blocks hold the
+    lines between, innermost first, each as its line, word and the word's column; and the
+    innermost one's option key nearest to ``line`` (line, key, column) where its options are
+    a block under it, else None."""
+    nodes: list[tuple[int, str, int]] = []
+    options: tuple[int, str, int] | None = None
+    least: int | None = None  # the least indentation of the lines passed
+    for number in range(line - 1, max(first, 1) - 1, -1):
+        text = lines[number - 1]
+        content = text.lstrip(" ")
+        if not content or content.startswith("#"):
+            continue
+        indent = len(text) - len(content)
+        if least is not None and indent >= least:
+            continue  # inside a block passed already, or beside a line of it
+        item = _ITEM.match(content)
+        if item is not None:
+            word_column = indent + item.start(1) + 1
+            if not nodes and options is not None and options[2] <= word_column:
+                options = None  # not under the word: another mapping's
+            nodes.append((number, item.group(1), word_column))
+        elif not nodes and options is None and (key := _KEY.match(content)) is not None:
+            options = (number, key.group(1), indent + 1)
+        least = indent
+    return nodes, options
 
 
 def duplicate_keys(root: yaml.Node, display: str) -> list[Diagnostic]:

@@ -85,14 +85,6 @@ STRUCTURE_ERRORS = [
         f"indented 5 spaces, the list item on line 4 above it 4: {LINE_UP}",
         id="a list item a space in",
     ),
-    pytest.param(
-        "mission: m\ntree:\n  sequence:\n    - turn:\n        angle: 90deg\n"
-        "       speed: 100 mm/s\n",
-        (6, 8, (4, 7)),
-        "did not find expected key (in the mapping that starts at 4:7; line 6 is indented 7 "
-        f"spaces, the key on line 5 above it 8: {LINE_UP}",
-        id="a key a space out",
-    ),
 ]
 
 
@@ -113,6 +105,85 @@ def test_a_structure_error_says_where_the_structure_began(
     [diagnostic] = json.loads(capsys.readouterr().out)["diagnostics"]
     assert (diagnostic["line"], diagnostic["column"]) == (line, column)
     assert diagnostic["began_at"] == {"line": began[0], "column": began[1]}
+
+
+#: a node's option or modifier out of line (session 38): (the tree's lines under ``tree:``,
+#: the diagnostic's line and column, where YAML's broken structure began or None, the message)
+MISPLACED = [
+    pytest.param(
+        "  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n        until: bump\n",
+        (6, 9, (5, 7)),
+        "until: in column 9 is in no node's mapping (YAML: did not find expected key): until "
+        "is a modifier, written beside its node's word in the same column: the node above, "
+        "drive (line 5), has its word in column 7; write until: there, indented 6 spaces",
+        id="until under a word's value",
+    ),
+    pytest.param(
+        "  sequence:\n    - mode: safe\n    - drive:\n        velocity: 100 mm/s\n   until: bump\n",
+        (7, 4, (3, 3)),
+        "until: in column 4 is in no node's mapping (YAML: did not find expected key): until "
+        "is a modifier, written beside its node's word in the same column: the node above, "
+        "drive (line 5), has its word in column 7; write until: there, indented 6 spaces",
+        id="until out of its node",
+    ),
+    pytest.param(
+        "  sequence:\n    - mode: safe\n        while: bump\n",
+        (5, 9, None),
+        "while: in column 9 is in no node's mapping (YAML: mapping values are not allowed in "
+        "this context): while is a modifier, written beside its node's word in the same "
+        "column: the node above, mode (line 4), has its word in column 7; write while: there, "
+        "indented 6 spaces",
+        id="while under a word's text",
+    ),
+    pytest.param(
+        "  sequence:\n    - fallback:\n        - bump: any\n        - cliff: any\n"
+        "       until: {bump: any}\n",
+        (7, 8, (4, 7)),
+        "until: in column 8 is in no node's mapping (YAML: did not find expected key): until "
+        "is a modifier, written beside its node's word in the same column: cliff's (line 6) "
+        "is column 11, fallback's (line 4) column 7; write until: in the column of the node "
+        "it belongs to",
+        id="until between two nodes",
+    ),
+    pytest.param(
+        "  sequence:\n    - turn:\n        angle: 90deg\n       speed: 100 mm/s\n",
+        (6, 8, (4, 7)),
+        "speed: in column 8 is in no node's mapping (YAML: did not find expected key): the "
+        "node above, turn (line 4), has its options in column 9 (angle, line 5) and its "
+        "modifiers (name, while, until) beside its word, in column 7: write speed: in the "
+        "column of the ones it belongs with",
+        id="an option a space out",
+    ),
+]
+
+
+@pytest.mark.parametrize(("tree", "where", "problem"), MISPLACED)
+def test_a_modifier_or_option_out_of_line_is_said_in_the_language_s_words(
+    tree: str,
+    where: tuple[int, int, tuple[int, int] | None],
+    problem: str,
+    tmp_path: Path,
+    capsys: Capsys,
+) -> None:
+    """An ``until:`` indented under no node got YAML's words alone ("did not find expected
+    key"): now what was found (the key and its column), what is allowed (its node's word's
+    column, or its options') and the fix, at the key's place; ``began_at`` as before."""
+    line, column, began = where
+    text = f"mission: m\ntree:\n{tree}"
+    assert _problems(tmp_path, text.encode()) == [f"{line}:{column}: {problem}"]
+    assert main(["validate", "--format", "json", str(tmp_path / "m.yaml")]) == 2
+    [diagnostic] = json.loads(capsys.readouterr().out)["diagnostics"]
+    assert (diagnostic["line"], diagnostic["column"]) == (line, column)
+    expected = None if began is None else {"line": began[0], "column": began[1]}
+    assert diagnostic["began_at"] == expected
+
+
+def test_a_key_out_of_line_under_no_list_item_keeps_yaml_s_words(tmp_path: Path) -> None:
+    """A subtree's ``tree:`` a space in has no node above it to name: YAML's message stays."""
+    text = "mission: m\nsubtrees:\n  go:\n    doc: hi\n     tree: {stop}\ntree:\n  stop\n"
+    assert _problems(tmp_path, text.encode()) == [
+        "5:10: YAML syntax error: mapping values are not allowed in this context"
+    ]
 
 
 @pytest.mark.parametrize(
