@@ -301,14 +301,18 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
     sets = _variant_sets(args, params)
     if isinstance(sets, str):
         return sets
+    from roomba_bt.mission.shipped import mission_label
+
     out = []
     for mission in args.missions:
         for extra, given_as in sets:
             merged = {**params, **extra}
             kept = [f"-p {k}={v}" for k, v in params.items() if k not in extra]
-            label = " ".join([mission, *kept, *(f"-p {k}={v}" for k, v in extra.items())])
             path = getattr(args, "mission_paths", {}).get(mission, mission)
             name = results_name(mission, path)
+            # a shipped mission as --from labels its records: dock, however it was named
+            shown = mission_label(name)
+            label = " ".join([shown, *kept, *(f"-p {k}={v}" for k, v in extra.items())])
             out.append(Variant(label, name, tuple(sorted(merged.items())), path,
                                tuple(extra.items()), given_as))  # fmt: skip
     if len({v.label for v in out}) < len(out):

@@ -161,7 +161,12 @@ def _left_out(cut: list[CutShort]) -> None:
 
 
 def _label(mission: str, params: tuple[tuple[str, str], ...]) -> str:
-    return " ".join([mission, *(f"-p {name}={value}" for name, value in params)])
+    """A variant's label as ``eval`` gave it when it ran: a shipped mission by its name
+    (``dock``: it said ``roomba-bt:dock.yaml``, the records' name, where the run said
+    ``dock``), then its parameters."""
+    from roomba_bt.mission.shipped import mission_label
+
+    return " ".join([mission_label(mission), *(f"-p {name}={value}" for name, value in params)])
 
 
 def _profile_said(results: list[EpisodeResult], given: str | None) -> str:

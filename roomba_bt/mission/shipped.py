@@ -131,6 +131,17 @@ def shipped_name(resolved: Path) -> str | None:
     return SHIPPED_PREFIX + resolved.relative_to(SHIPPED_DIR).as_posix()
 
 
+def mission_label(name: str) -> str:
+    """How a report labels the mission ``name`` (a results record's, :func:`shipped_name`'s
+    for a shipped one): a shipped mission by the name ``roomba-bt missions`` lists and
+    ``run`` takes (``dock`` for ``roomba-bt:dock.yaml``), any other name as it is. ``eval``
+    said ``variant dock`` and ``eval --from`` of its results ``variant roomba-bt:dock.yaml``."""
+    relative = name.removeprefix(SHIPPED_PREFIX)
+    if relative == name or "/" in relative or not relative.endswith(".yaml"):
+        return name
+    return relative.removesuffix(".yaml") if (SHIPPED_DIR / relative).is_file() else name
+
+
 def in_shipped_library(target: Path) -> bool:
     """``target`` (a resolved path) is a file of the shipped directory: what a
     ``roomba-bt:PATH`` name may designate."""

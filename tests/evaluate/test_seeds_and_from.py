@@ -100,6 +100,23 @@ def test_from_reports_the_records_as_the_run_did(
     assert f"6 episode(s) of 2 variant(s) read from {out}; none run" in err
 
 
+@pytest.mark.parametrize("named", ["bump-and-turn", "roomba-bt:bump-and-turn.yaml"])
+def test_from_labels_a_shipped_mission_as_the_run_did(
+    named: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``eval dock`` said ``variant dock`` and ``A = dock``, and ``eval --from`` of its
+    results ``roomba-bt:dock.yaml`` (the records' name) for both: one label now, the name
+    ``roomba-bt missions`` lists, however the run named it."""
+    out = tmp_path / "ab.jsonl"
+    run = ["eval", named, "--sweep", "duration=1s,2s", "--no-progress", "--reproducible"]
+    assert main([*run, "--runs", "1", "--out", str(out)]) == 0
+    report = capsys.readouterr().out
+    assert "variant      bump-and-turn -p duration=1s\n" in report, report
+    assert "A = bump-and-turn -p duration=1s" in report
+    assert main(["eval", "--from", str(out)]) == 0
+    assert capsys.readouterr().out == report
+
+
 def test_from_merges_files_each_episode_once(
     ran: tuple[Path, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
