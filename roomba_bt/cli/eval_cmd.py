@@ -442,18 +442,21 @@ def _stopped(
 def _paths_read_back(
     args: argparse.Namespace, evaluated: Evaluated, specs: list[list[EpisodeSpec]], engine: Engine
 ) -> Evaluated | int:
-    """``evaluated`` with the paths of the episodes ``--resume`` read back (``specs``), for
-    ``--plot``: a results file keeps no trajectory, and the plot of a resumed sweep drew
-    only the episodes run in its last invocation. Each episode is decided by its spec alone,
-    so each runs again for its path, the same as an uninterrupted sweep's; its record stays
-    the one read back (the summary and ``--out`` are not touched). One that runs otherwise
-    now (an option the records do not carry, ``--timeout``, ``--battery``..., given
-    otherwise) is said. An exit code when the runs again were stopped: no plot then."""
+    """``evaluated`` with the paths of the episodes ``--resume`` read back without one
+    (``specs``), for ``--plot``: a record written under ``--plot`` keeps its path (the
+    ``path`` column, :func:`~roomba_bt.evaluate.records.kept_path`) and is drawn from it,
+    but one written without (or before roomba-bt kept them) has none, and the plot of a
+    resumed sweep drew only the episodes run in its last invocation. Each episode is
+    decided by its spec alone, so each such one runs again for its path, the same as an
+    uninterrupted sweep's; its record stays the one read back (the summary and ``--out``
+    are not touched). One that runs otherwise now (an option the records do not carry,
+    ``--timeout``, ``--battery``..., given otherwise) is said. An exit code when the runs
+    again were stopped: no plot then."""
     count = sum(len(batch) for batch in specs)
     if not count:
         return evaluated
-    print(f"roomba-bt eval: --plot: the {count} episode(s) read back run again for their paths "
-          "(a results file keeps none)", file=sys.stderr)  # fmt: skip
+    print(f"roomba-bt eval: --plot: the {count} episode(s) read back without a path run again "
+          "for theirs (their records were written without --plot)", file=sys.stderr)  # fmt: skip
     again = _run(args, evaluated.chosen, specs, engine)
     if isinstance(again, int):
         return again
@@ -462,7 +465,7 @@ def _paths_read_back(
               "read back ran again for their paths; the summary and the records are above",
               file=sys.stderr)  # fmt: skip
         return ExitCode.INTERRUPTED
-    from roomba_bt.evaluate.records import written_record
+    from roomba_bt.evaluate.records import same_episode
 
     paths = [{r.seed: r for r in e.results} for e in again]
     done, otherwise = [], []
@@ -473,7 +476,7 @@ def _paths_read_back(
             if now is None:  # run in this invocation: its path is there
                 results.append(result)
                 continue
-            if written_record(now, reproducible=True) != written_record(result, reproducible=True):
+            if not same_episode(now, result):
                 otherwise.append(result.seed)
             results.append(replace(result, trajectory=now.trajectory))
         done.append(replace(e, results=results))
@@ -1025,10 +1028,17 @@ def _world_digest(args: argparse.Namespace) -> str | None:
 
 def _plot(out: str, world: World, evaluated: Evaluated) -> int | None:
     """Every variant's trajectories drawn to ``out``, a panel each side by side (one variant:
-    one picture); an exit code if that failed."""
+    one picture), each as its record keeps it (:func:`~roomba_bt.evaluate.records.kept_path`):
+    an episode read back by ``--resume`` is drawn as one run now; an exit code if that
+    failed."""
     from roomba_bt.evaluate.plot import PlotUnavailableError, plot_variants
+    from roomba_bt.evaluate.records import kept_path
 
-    chosen, summaries, done = evaluated.chosen, evaluated.summaries, evaluated.done
+    chosen, summaries = evaluated.chosen, evaluated.summaries
+    done = [
+        replace(e, results=[replace(r, trajectory=kept_path(r.trajectory)) for r in e.results])
+        for e in evaluated.done
+    ]
     if len(chosen) == 1:
         said = " ".join([Path(chosen[0].path).stem, *(f"-p {k}={v}" for k, v in chosen[0].params)])
         titles = [f"{said} in {world.name}: {summaries[0].successes}/{summaries[0].runs}"]

@@ -56,7 +56,7 @@ def read_variants(
     by another run with ``--reproducible``, its wall-clock columns aside): it counts once;
     another one is refused, naming both places. Given ``cut``, a file's last record cut
     short (a killed sweep's partial file) is left out and put there instead of refused."""
-    from roomba_bt.evaluate.records import ResultsFileError, read_rows, written_record
+    from roomba_bt.evaluate.records import ResultsFileError, read_rows, same_episode
 
     found: dict[tuple[str, tuple[tuple[str, str], ...]], dict[int, tuple[str, EpisodeResult]]] = {}
     worlds: list[tuple[str, str, str | None]] = []  # the first record's: place, name, SHA-256
@@ -70,10 +70,7 @@ def read_variants(
             where = f"{path}:{line}"
             _one_world(worlds, where, result.world, row.get("world_sha256") or None)
             first = episodes.setdefault(result.seed, (where, result))
-            same = written_record(first[1], reproducible=True) == written_record(
-                result, reproducible=True
-            )
-            if not same:
+            if not same_episode(first[1], result):
                 raise FromFilesError(f"{where}: seed {result.seed} of {result.mission} is at "
                                      f"{first[0]} too, with other results: two runs made "
                                      "otherwise (count each file alone)")  # fmt: skip

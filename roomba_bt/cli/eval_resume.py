@@ -82,10 +82,12 @@ class Resumed:
                 partial.add(result)
 
     def read_back(self, planned: list[list[EpisodeSpec]]) -> list[list[EpisodeSpec]]:
-        """Per variant, the specs of the episodes read back (in the plan's order): what
-        ``--plot`` runs again for their paths, which a results file does not keep."""
+        """Per variant, the specs of the episodes read back without a path (in the plan's
+        order): what ``--plot`` runs again for their paths. A record written under
+        ``--plot`` keeps its path (``records.kept_path``) and is drawn from it: a resumed
+        sweep ran every finished episode again to draw it."""
         return [
-            [batch[places[result.seed]] for result in earlier]
+            [batch[places[result.seed]] for result in earlier if not result.trajectory]
             for batch, earlier, places in zip(planned, self.earlier, self.places, strict=True)
         ]
 

@@ -13,22 +13,26 @@ exactly). In pandas::
 Columns (:data:`COLUMNS`): ``outcome`` is the word the run summary prints (``SUCCESS``,
 ``FAILURE``, ``TIMEOUT``, ...); times in seconds, positions and distances in metres, headings
 in degrees. ``params`` is an object in JSON Lines and ``name=value;name=value`` in CSV. The
-trajectory (plots) and the per-bump contact steps are not written: they are for figures, not
-tables. Readers should ignore columns they do not know: later versions add columns, never
+per-bump contact steps are not written: they are for figures, not tables. An episode run for a
+plot (``eval --plot``) has a ``path`` column: its trajectory as the plot draws it
+(:func:`kept_path`: to the mm, the points a straight line passes within 5 mm of left out;
+``[[x, y], ...]`` in metres, ``x:y;x:y`` in CSV), so that ``eval --resume --plot`` draws the
+episodes read back from it instead of running them again; absent (an empty cell in CSV) without
+``--plot``. Readers should ignore columns they do not know: later versions add columns, never
 rename or drop one. ``falls`` counts the robot's own falls to Passive (the run summary's
 ``falls`` line: a cliff or a wheel drop in Safe, the charger) and ``falls_by_cause`` splits
-them (``{"cliff": 4}``; ``cliff=4;wheel drop=1`` in CSV); ``hazard_falls`` counts those of
-them that were no docking (every cause but ``charger``: a dock mission that docks in Safe falls
-to Passive on the charger in every episode, which ``falls > 0`` read as a hazard); a file
-written before they were recorded reads back as episodes without a fall. ``mission_said`` is
-the mission's last words (``run``'s ``mission said`` line; empty when it said nothing, and in
-files written before it was recorded): which way it ended, e.g. a patrol's ``patrol done (laps:
-1)`` or its docking on a low battery, both a ``SUCCESS``. ``profile`` is the robot model the
-mission ran as (``create2``, ``roomba600``...; empty in files written before it was recorded).
+them (``{"cliff": 4}``; ``cliff=4;wheel drop=1`` in CSV); ``hazard_falls`` counts those of them
+that were no docking (every cause but ``charger``: a dock mission that docks in Safe falls to
+Passive on the charger in every episode, which ``falls > 0`` read as a hazard); a file written
+before they were recorded reads back as episodes without a fall. ``mission_said`` is the
+mission's last words (``run``'s ``mission said`` line; empty when it said nothing, and in files
+written before it was recorded): which way it ended, e.g. a patrol's ``patrol done (laps: 1)``
+or its docking on a low battery, both a ``SUCCESS``. ``profile`` is the robot model the mission
+ran as (``create2``, ``roomba600``...; empty in files written before it was recorded).
 ``undeclared_keys`` holds each blackboard key a behaviour wrote that the mission does not
-declare, with who wrote it first and where (``{"secret": "by 'probe' at lab.py:17"}``; its
-JSON text in CSV; empty or absent: none, or a file written before it was recorded): the
-warning ``run`` says, which the summary of a resumed run or of ``eval --from`` says again.
+declare, with who wrote it first and where (``{"secret": "by 'probe' at lab.py:17"}``; its JSON
+text in CSV; empty or absent: none, or a file written before it was recorded): the warning
+``run`` says, which the summary of a resumed run or of ``eval --from`` says again.
 
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
@@ -125,6 +129,11 @@ COVERAGE_COLUMNS: dict[str, str] = {
 #: {"version": "0.3.1", "sha256": ...}}``; in CSV ``name=version:SHA-256;...``), as a
 #: record's header has them. Empty in a file written before, and in rows written without them
 PROVENANCE_COLUMNS = ("roomba_bt_version", "world_sha256", "sources", "plugins")
+#: the trajectory as a plot draws it (:func:`kept_path`), in an episode run for one
+PATH_COLUMN = "path"
+#: how far (m) a kept path may stray from the trajectory: under a pixel of ``eval --plot``'s
+#: figure (8 inches at 110 dpi for a room of 4 m or more: about 5 mm a pixel)
+PATH_TOLERANCE_M = 0.005
 #: the columns ``--reproducible`` leaves empty: measured on the wall clock, or naming a
 #: process, they differ on every run of the same episodes
 MEASURED_COLUMNS = ("wall_time", "cpu_time", "worker")
@@ -164,8 +173,72 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
             value = dict(value)
         out[column] = value
     out.update(_coverage_record(result))
+    if result.trajectory:  # an episode run for a plot: what the plot draws of it
+        out[PATH_COLUMN] = [[x, y] for x, y in kept_path(result.trajectory)]
     out.update((KEY_PREFIX + name, value) for name, value in result.keys)
     return out
+
+
+def kept_path(trajectory: Iterable[tuple[float, float]]) -> tuple[tuple[float, float], ...]:
+    """``trajectory`` (m) as a results record keeps it and ``eval --plot`` draws it: each
+    point to the mm, a point the same as the one before left out, then the points a straight
+    line between those kept passes within :data:`PATH_TOLERANCE_M` of left out
+    (Ramer-Douglas-Peucker, the farthest point kept first). A 20-minute episode's 40 000
+    points (one every two ticks) keep a few hundred, drawn the same. The same path given
+    again is given back as it is (the farthest point of a part is kept, and what it left out
+    is not there to be found again), so a record read back and written again, or drawn,
+    is the same path."""
+    points: list[tuple[float, float]] = []
+    for x, y in trajectory:
+        point = (round(x, 3), round(y, 3))
+        if not points or points[-1] != point:
+            points.append(point)
+    if len(points) < 3:
+        return tuple(points)
+    keep = [False] * len(points)
+    keep[0] = keep[-1] = True
+    parts = [(0, len(points) - 1)]
+    tolerance = PATH_TOLERANCE_M * PATH_TOLERANCE_M
+    while parts:
+        first, last = parts.pop()
+        (ax, ay), (bx, by) = points[first], points[last]
+        dx, dy = bx - ax, by - ay
+        chord = dx * dx + dy * dy
+        farthest, at = -1.0, -1
+        for i in range(first + 1, last):
+            px, py = points[i]
+            if chord == 0.0:  # a loop back to where the part began: from that point
+                far = (px - ax) ** 2 + (py - ay) ** 2
+            else:
+                cross = dx * (py - ay) - dy * (px - ax)
+                far = cross * cross / chord
+            if far > farthest:
+                farthest, at = far, i
+        if farthest > tolerance:
+            keep[at] = True
+            parts += [(first, at), (at, last)]
+    return tuple(point for point, kept in zip(points, keep, strict=True) if kept)
+
+
+def _path_from(raw: Any) -> tuple[tuple[float, float], ...]:
+    """A record's ``path`` as a trajectory: a list of ``[x, y]`` in JSON Lines, ``x:y;...``
+    in CSV; none when the column is empty or absent (an episode run without ``--plot``)."""
+    if raw is None or raw == "":
+        return ()
+    if isinstance(raw, str):
+        raw = [point.split(":") for point in raw.split(";") if point]
+    if not isinstance(raw, list):
+        raise ValueError(f"path {raw!r}: expected [x, y] points")
+    return tuple((float(x), float(y)) for x, y in raw)
+
+
+def same_episode(one: EpisodeResult, other: EpisodeResult) -> bool:
+    """Whether two records are of the same episode, made alike: their rows the same but for
+    the wall-clock columns and the ``path`` (one written under ``--plot``, the other not)."""
+    rows = [written_record(r, reproducible=True) for r in (one, other)]
+    for row in rows:
+        row.pop(PATH_COLUMN, None)
+    return rows[0] == rows[1]
 
 
 def coverage_at(result: EpisodeResult, seconds: float) -> float | None:
@@ -245,8 +318,9 @@ def _read_column(values: dict[str, Any], name: str, kind: str, raw: Any) -> None
 
 
 def from_record(record: dict[str, Any]) -> EpisodeResult:
-    """The inverse of :func:`to_record` (trajectory and contact steps empty); values may be
-    strings (CSV). KeyError/ValueError on a missing column or a bad value."""
+    """The inverse of :func:`to_record` (contact steps empty; the trajectory the ``path``
+    kept, or none); values may be strings (CSV). KeyError/ValueError on a missing column or
+    a bad value."""
     values: dict[str, Any] = {"start": [0.0] * 3, "end": [0.0] * 3}
     for column, (name, kind) in COLUMNS.items():
         if kind == "float?":  # a column later versions added: absent from older files
@@ -272,7 +346,8 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
             raise ValueError(f"column {column!r}: found {raw!r}; expected {expected}") from None
     values["start"], values["end"] = tuple(values["start"]), tuple(values["end"])
     known = {f.name for f in fields(EpisodeResult)}
-    defaults = {"contact_steps": (), "trajectory": ()}
+    defaults = {"contact_steps": ()}
+    values["trajectory"] = _path_from(record.get(PATH_COLUMN))
     values["coverage"] = _coverage_from(record)
     values["keys"] = tuple(
         (column.removeprefix(KEY_PREFIX), _key_value(raw))
@@ -382,7 +457,8 @@ def write_results(
                 out.write(json.dumps(record) + "\n")
         else:
             keys = dict.fromkeys(c for r in records for c in r if c.startswith(KEY_PREFIX))
-            names = [*COLUMNS, *COVERAGE_COLUMNS, *PROVENANCE_COLUMNS, *keys]
+            paths = [PATH_COLUMN] if any(PATH_COLUMN in r for r in records) else []
+            names = [*COLUMNS, *COVERAGE_COLUMNS, *PROVENANCE_COLUMNS, *paths, *keys]
             writer = csv.DictWriter(out, fieldnames=names)
             writer.writeheader()
             for record in records:
@@ -445,6 +521,8 @@ def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
         cells["plugins"] = ";".join(
             f"{n}={p['version']}:{p['sha256']}" for n, p in record["plugins"].items()
         )
+    if record.get(PATH_COLUMN) is not None:
+        cells[PATH_COLUMN] = ";".join(f"{x!r}:{y!r}" for x, y in record[PATH_COLUMN])
     if record["coverage_by_area"] is not None:
         cells["coverage_by_area"] = ";".join(
             f"{a}={c!r}" for a, c in record["coverage_by_area"].items()

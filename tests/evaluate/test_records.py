@@ -14,6 +14,7 @@ from roomba_bt.evaluate.records import (
     CutShort,
     ResultsFileError,
     from_record,
+    kept_path,
     read_results,
     read_rows,
     results_format,
@@ -63,19 +64,55 @@ def test_a_record_keeps_the_profile_and_the_undeclared_keys(
         .startswith("write_key('secret') by 'probe' at a;b=c.py:17: blackboard key 'secret'")
     )
     older = {k: v for k, v in to_record(odd).items() if k not in ("profile", "undeclared_keys")}
-    assert from_record(older) == replace(odd, undeclared=(), profile="", trajectory=())
+    kept = kept_path(odd.trajectory)
+    assert from_record(older) == replace(odd, undeclared=(), profile="", trajectory=kept)
 
 
 def test_a_record_has_the_columns_a_script_needs(results: list[EpisodeResult]) -> None:
     from roomba_bt.evaluate.records import COVERAGE_COLUMNS
 
     record = to_record(results[0])
-    assert list(record) == [*COLUMNS, *COVERAGE_COLUMNS]
+    assert list(record) == [*COLUMNS, *COVERAGE_COLUMNS, "path"]  # run with a trace: a path
+    assert list(to_record(replace(results[0], trajectory=()))) == [*COLUMNS, *COVERAGE_COLUMNS]
     assert record["seed"] == 4 and record["world"] == "apartment"
     assert record["outcome"] in ("SUCCESS", "FAILURE", "TIMEOUT")
     assert record["params"] == {"duration": "4s"}
     assert record["commands_sent"] > 0 and record["worker"]
     json.dumps(record)  # plain data
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_a_record_keeps_the_path_a_plot_draws(
+    tmp_path: Path, results: list[EpisodeResult], suffix: str
+) -> None:
+    """``eval --resume --plot`` ran every episode read back again for its path: a record of
+    an episode run for a plot keeps it (``path``), as the plot draws it, a few points where
+    the trajectory has hundreds, none of them more than 5 mm (and the mm it is rounded to)
+    from the line kept, and read back and kept again it is the same path."""
+    import itertools
+    import math
+
+    traced = results[0]
+    path = tmp_path / f"results{suffix}"
+    write_results(path, [traced, replace(results[1], trajectory=())])
+    again = read_results(path)
+    kept = again[0].trajectory
+    assert kept == kept_path(traced.trajectory) == kept_path(kept)
+    assert again[1].trajectory == ()  # run without a trace: no path, an empty cell in CSV
+    assert 2 <= len(kept) < len(traced.trajectory) / 4, (len(kept), len(traced.trajectory))
+    assert kept[0] == tuple(round(v, 3) for v in traced.trajectory[0])
+
+    def off(point: tuple[float, float]) -> float:
+        """How far ``point`` is from the kept path's nearest segment."""
+        far = math.inf
+        for (ax, ay), (bx, by) in itertools.pairwise(kept):
+            dx, dy = bx - ax, by - ay
+            t = max(0.0, min(1.0, ((point[0] - ax) * dx + (point[1] - ay) * dy)
+                             / ((dx * dx + dy * dy) or 1.0)))  # fmt: skip
+            far = min(far, math.dist(point, (ax + t * dx, ay + t * dy)))
+        return far
+
+    assert max(off(p) for p in traced.trajectory) <= 0.005 + 0.001
 
 
 def test_a_failure_names_its_stage() -> None:
@@ -130,7 +167,7 @@ def test_coverage_is_in_the_records_and_reads_back(tmp_path: Path, suffix: str) 
     assert summary is not None  # the same, and the episode that never cleaned counted
     assert summarize_coverage(again) == replace(summary, never_cleaned=1)
     record = to_record(cleaned[0])
-    assert list(record) == [*COLUMNS, *COVERAGE_COLUMNS]
+    assert list(record) == [*COLUMNS, *COVERAGE_COLUMNS, "path"]
     assert record["coverage"] is not None and 0 < record["coverage"] <= 1
     # cut by the 40 s timeout: what it would have cleaned by 5 min is unknown, not carried
     assert cleaned[0].outcome == "timeout" and record["coverage_5min"] is None
