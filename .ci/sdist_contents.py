@@ -55,7 +55,11 @@ def sdist_problems(tree: Path, sdist: Path, clutter: list[str]) -> list[str]:
         members = [m for m in archive.getmembers() if not m.isdir()]
     top = PurePosixPath(members[0].name).parts[0]
     held = {PurePosixPath(m.name).relative_to(top).as_posix() for m in members}
-    expected = {f for f in tree_files(tree) if not f.startswith(NOT_IN_SDIST)} - set(clutter)
+    # a leftover is one through a linked folder too (roomba_bt/docs is docs/, by a link)
+    expected = {
+        f for f in tree_files(tree)
+        if not f.startswith(NOT_IN_SDIST) and not any(f.endswith(f"/{c}") for c in clutter)
+    } - set(clutter)  # fmt: skip
     problems = [f"the tests read {name}, and the sdist lacks it" for name in TESTS_READ
                 if name not in held]  # fmt: skip
     problems += [f"a working tree's {name} is in the sdist" for name in clutter if name in held]

@@ -130,7 +130,7 @@ def _split_the_song(count: int) -> str:
     )
     return (
         f"a song has at most {most} notes, got {count}: split it into {slots} songs played "
-        f'one after the other: {songs}, then {plays} (docs/missions.md, "Songs")'
+        f'one after the other: {songs}, then {plays} (roomba-bt docs missions, "Songs")'
     )
 
 

@@ -172,8 +172,8 @@ def _plain_py_trees_hint(cls: object) -> str:
         return (
             f"; {cls.__qualname__} is a plain py_trees behaviour, which a mission's YAML cannot "
             "name, but a tree built in Python runs as it is: "
-            "roomba_bt.TreeMission(root, name) (docs/runtime.md, From Python: a tree built "
-            "by hand)"
+            "roomba_bt.TreeMission(root, name) (roomba-bt docs runtime, From Python: a tree "
+            "built by hand)"
         )
     return ""
 

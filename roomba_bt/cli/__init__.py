@@ -39,6 +39,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "roomba_bt.cli.doctor_cmd",
     "roomba_bt.cli.eval_cmd",
     "roomba_bt.cli.monitor_cmd",
+    "roomba_bt.cli.docs_cmd",
 )
 
 

@@ -146,7 +146,8 @@ def register(sub: Any) -> None:
     output.add_argument(
         "--markdown",
         action="store_true",
-        help="each as its entry in docs/missions.md's reference (its text and parameter table)",
+        help="each as its entry in the missions page's reference (roomba-bt docs missions: its "
+        "text and parameter table)",
     )
     output.add_argument(
         "--words",

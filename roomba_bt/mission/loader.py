@@ -1183,7 +1183,7 @@ def _module_named(text: str, target: Path) -> str | None:
         f"plugin file {path_written(text)} not found: {path_written(text)} looks like a "
         "module name, and plugins: takes files (a path to a .py file, relative to the file "
         "naming it); an installed package's behaviours are found by its entry point in the "
-        "group roomba_bt.behaviours, with no plugins: entry (docs/plugins.md, Package it; "
+        "group roomba_bt.behaviours, with no plugins: entry (roomba-bt docs plugins, Package it; "
         "roomba-bt behaviours lists them)"
     )
 

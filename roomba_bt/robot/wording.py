@@ -99,7 +99,7 @@ UNATTENDED = replace(
     wake_asleep=(
         "unattended, a BRC pulse wakes it: BRC wired to the port's RTS or DTR, as iRobot's "
         "cable does, and keep-awake left on; else check the dock's power and the battery: "
-        "docs/unattended.md, BRC"
+        "roomba-bt docs unattended, BRC"
     ),
 )
 

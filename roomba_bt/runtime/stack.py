@@ -401,8 +401,8 @@ class RunStack:
         log.warning(
             "%s: this run is in thread %r, not the main thread: Ctrl-C and SIGTERM do not reach "
             "it, and the robot would drive on after them; end it from the main thread with "
-            "stack.stop() or stack.close() (in a finally:, see roomba-bt's repository: "
-            "docs/runtime.md, From Python: a run in a worker thread)",
+            "stack.stop() or stack.close() (in a finally:, see roomba-bt docs runtime, From "
+            "Python: a run in a worker thread)",
             self.connection.name, thread.name,
         )  # fmt: skip
 

@@ -29,13 +29,17 @@ def test_what_a_shipped_file_says_an_installed_user_can_follow(
 ) -> None:
     """``roomba-bt missions dock`` showed ``roomba-bt run missions/dock.yaml --fast``, exit 2
     in any folder but a checkout's, and sent its reader to ``docs/routines.md``, a file the
-    wheel does not ship: its commands name shipped missions by name, and a page of the docs
-    is named as the project repository's."""
+    wheel did not ship, then to "roomba-bt's repository: docs/routines.md", with no address:
+    its commands name shipped missions by name, and a page of the docs by the command that
+    prints it as installed, ``roomba-bt docs routines``."""
+    from roomba_bt.cli.docs_cmd import pages
+
     monkeypatch.chdir(tmp_path)  # an empty folder, as an installed user's
     text = path.read_text(encoding="utf-8")
     for mission in re.findall(r"^#\s+roomba-bt (?:run|eval) (\S+)", text, re.M):
         assert find_mission(mission).path is not None, mission
-    assert re.findall(r"(?<!roomba-bt's repository: )docs/\S*", text) == []
+    assert re.findall(r"docs/\S*|repository", text) == []
+    assert set(re.findall(r"roomba-bt docs ([\w-]+)", text)) <= set(pages())
 
 
 def test_a_library_file_is_printed_and_an_unknown_name_is_refused(

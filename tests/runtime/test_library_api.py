@@ -361,7 +361,7 @@ def test_a_plain_py_trees_behaviour_given_as_behaviours_is_told_of_tree_mission(
     assert str(refused.value).endswith(
         "; Noop is a plain py_trees behaviour, which a mission's YAML cannot name, but a "
         "tree built in Python runs as it is: roomba_bt.TreeMission(root, name) "
-        "(docs/runtime.md, From Python: a tree built by hand)"
+        "(roomba-bt docs runtime, From Python: a tree built by hand)"
     )
     with pytest.raises(roomba_bt.DeclarationError) as other:
         roomba_bt.load_mission_text(FAR_ENOUGH, behaviours=[Mine])  # type: ignore[list-item]
