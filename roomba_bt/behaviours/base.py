@@ -107,6 +107,9 @@ class UnkeptDeclaration(TypeError):
         #: the behaviour, and the status it returned where that broke it (a SUCCESS in a
         #: mode it only passes through): the run's error names the ``return`` that gave it
         self.node, self.returned = behaviour, returned
+        #: what the tree drawn after the run says beside the leaf, where the run refused
+        #: what it returned (``its SUCCESS refused: it ended in Full, not Safe``); "" else
+        self.refusal = ""
         cls = type(behaviour)
         where = ""
         with contextlib.suppress(OSError, TypeError):
@@ -254,7 +257,7 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         ended = declared.label if declared is not None else "the mode it leads to"
         passed = command.spec.leads_to
         assert passed is not None  # a mode command: the one that took it there
-        raise UnkeptDeclaration(
+        refused = UnkeptDeclaration(
             self,
             command,
             f"leads_to={ended}, passes_through={visits}, and it returned SUCCESS with no mode "
@@ -262,6 +265,8 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             f"command that takes it to {ended} before it succeeds",
             _SUCCESS,
         )
+        refused.refusal = f"its SUCCESS refused: it ended in {passed.label}, not {ended}"
+        raise refused
 
     #: whether the last wheel command it sent set them turning (:meth:`send` notes it)
     _started_motion = False
@@ -538,6 +543,9 @@ class Action(RobotBehaviour):
             self._end_what_terminate_left(new_status)
         if self._passing is not None:  # a mode it passes through: not where it may succeed
             if new_status is _SUCCESS:
+                # the run decided it failed: the tree drawn after it showed [✓] beside the
+                # refusal (py_trees' stop had set the SUCCESS it returned)
+                self.status = _FAILURE
                 self._left_passing()
             self._passing = None
 

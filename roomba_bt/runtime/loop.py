@@ -36,6 +36,7 @@ from typing import Any, NoReturn, Protocol, cast
 
 import py_trees
 
+from roomba_bt.behaviours.base import UnkeptDeclaration
 from roomba_bt.behaviours.blackboard import RunBoard, check_alone, claim_board, running_on
 from roomba_bt.behaviours.lean import Direct
 from roomba_bt.behaviours.reasons import failure_reason, running_in
@@ -842,7 +843,13 @@ def tree_left(runner: MissionRunner, exc: BaseException | None) -> TreeStatuses:
         except Exception:  # the behaviour's error is the run's; this one only logged
             log.debug("the observer raised after a behaviour's exception", exc_info=True)
     left = TreeStatuses()
-    left.take(runner.mission.root, (raiser, type(exc).__name__) if raiser is not None else None)
+    if raiser is None:
+        left.take(runner.mission.root)
+        return left
+    what = type(exc).__name__
+    if isinstance(exc, UnkeptDeclaration) and exc.refusal:  # it returned, and was refused
+        what = f"{what} ({exc.refusal})"
+    left.take(runner.mission.root, (raiser, what))
     return left
 
 

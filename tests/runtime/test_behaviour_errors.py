@@ -295,6 +295,31 @@ def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
     assert "invalid status" not in out + err
 
 
+def test_a_success_refused_in_a_mode_passed_through_is_drawn_as_the_run_decided(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """The tree drawn after the run showed ``stays_full [✓]`` (py_trees' stop had set the
+    SUCCESS it returned) above the refusal of that very SUCCESS: it shows the failure the
+    run decided, with the reason; the status log says FAILURE too."""
+    (tmp_path / "plugin.py").write_text(STAYS_FULL)
+    mission = tmp_path / "m.yaml"
+    mission.write_text("plugins: [./plugin.py]\ntree:\n  sequence: [{mode: safe}, stays_full]\n")
+    argv = _run(mission)
+    argv[argv.index("--display") + 1] = "tree"
+    assert main(argv) == ExitCode.BEHAVIOUR_ERROR
+    out = capsys.readouterr().out
+    assert (
+        "--> stays_full [✕] -- raised UnkeptDeclaration (its SUCCESS refused: it ended in Full, "
+        "not Safe)\n" in out
+    ), out
+    assert "stays_full [✓]" not in out
+    argv[argv.index("--display") + 1] = "log"
+    with caplog.at_level("INFO", logger="roomba_bt.run"):
+        assert main(argv) == ExitCode.BEHAVIOUR_ERROR
+    said = [r.getMessage() for r in caplog.records if r.getMessage().startswith("stays_full")]
+    assert said == ["stays_full -> FAILURE"], said
+
+
 #: an honest action that passes through Full: Full, a drive there, then Safe
 DASH = '''
 from py_trees.common import Status
