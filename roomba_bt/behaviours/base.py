@@ -51,6 +51,13 @@ _HALTS_ONLY = (
     "one sets the wheels, a cycle or a motor going; the Full-mode warning passes a halts_only "
     "leaf by: drop halts_only=True if it drives"
 )
+#: what a mode_first leaf whose first command was no mode command is told
+_MODE_FIRST = (
+    "mode_first=True (each time it starts, its first command is one of its mode commands), "
+    "and this one came before any since it started: validate judged only its mode commands "
+    "where it is reached (Passive, say) and this one in the mode they lead to; send its Safe "
+    "or Full first, or drop mode_first=True and put mode: safe before it in the mission"
+)
 
 _RUNNING, _SUCCESS, _FAILURE = (
     py_trees.common.Status.RUNNING, py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
@@ -195,6 +202,9 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             raise UnkeptDeclaration(self, command, _HALTS_ONLY)
         if spec.leads_to is not None:  # the static mode check reads leads_to=
             self._hold_to_leads_to(command, spec.leads_to)
+            self._mode_sent = True
+        elif declaration.mode_first and not self._mode_sent:  # validate read mode_first=
+            raise UnkeptDeclaration(self, command, _MODE_FIRST)
         if spec.drives_wheels:  # what it set turning is stopped when it ends (terminate)
             self._started_motion = turns_wheels(command)
         elif spec.effect is _BUILTIN_CYCLE:  # ended when it is halted or fails (terminate)
@@ -276,6 +286,9 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
     _passing: Command | None = None
     #: whether it sent a built-in cycle (Clean, Spot, Max, Seek Dock) not yet ended by it
     _started_cycle = False
+    #: whether it sent a mode command since it started (a ``mode_first`` leaf's first
+    #: command is one: :meth:`send`); cleared as it stops (:meth:`Action.stop`)
+    _mode_sent = False
 
     def value(self, name: str) -> Any:
         """The parameter ``name`` for this run (blackboard references resolved at start)."""
@@ -539,6 +552,8 @@ class Action(RobotBehaviour):
         children, and the run's end (:func:`~roomba_bt.runtime.teardown.stop_nodes`)."""
         self._terminated = False
         super().stop(new_status)
+        self._mode_sent = False  # its next start sends its mode command first again (not
+        # before its terminate: a halt sent there comes after this start's mode command)
         if self._started_motion or (self._started_cycle and new_status is not _SUCCESS):
             self._end_what_terminate_left(new_status)
         if self._passing is not None:  # a mode it passes through: not where it may succeed

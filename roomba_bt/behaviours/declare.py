@@ -304,6 +304,12 @@ class Declaration:
     #: or to ``leads_to``, and the static mode check takes it that the leaf may fail or be
     #: halted in any of them. It succeeds in ``leads_to`` alone (held to when it succeeds)
     passes_through: tuple[OIMode, ...] = ()
+    #: each time it starts, its first command is one of its mode commands (Safe or Full:
+    #: ``mode_first=True``), so the static mode check judges only those where the leaf is
+    #: reached, and its other commands in the modes they take it to: a leaf that sends its
+    #: own Safe may be reached in Passive. Held to at ``send()``: another command first is
+    #: refused (:class:`~roomba_bt.behaviours.base.UnkeptDeclaration`)
+    mode_first: bool = False
     #: the packet tests its answer is, where a parameter names one by a word (``stasis:
     #: dirty`` is ``stasis == 2``): the per-profile range check reads them as it reads a
     #: ``sensor:`` test's, so a test the chosen robot cannot pass is said either way
@@ -363,6 +369,22 @@ class Declaration:
         """Modes in which every command it sends with ``params`` is accepted (``mode:
         passive`` sends Start alone, accepted in Off too)."""
         return _accepted_in(self.sent(params))
+
+    def sent_first(self, params: Mapping[str, Any]) -> tuple[int, ...]:
+        """The commands it may send in the mode it is reached in, with ``params``: all it
+        sends, or, for a ``mode_first`` leaf, its mode commands (its others come after one
+        of those, in the mode it took the robot to). The static mode check holds the modes
+        a leaf is reached in to these."""
+        sent = self.sent(params)
+        if not self.mode_first:
+            return sent
+        first = tuple(op for op in sent if COMMANDS[op].leads_to is not None)
+        return first or sent  # with these parameters it sends no mode command: all, then
+
+    def reached_in(self, params: Mapping[str, Any]) -> frozenset[OIMode]:
+        """Modes it may be reached in with ``params``: those that take every command of
+        :meth:`sent_first` (a ``mode_first`` leaf that sends Safe: Passive, Safe, Full)."""
+        return _accepted_in(self.sent_first(params))
 
     @property
     def turns_wheels(self) -> bool:
@@ -484,6 +506,8 @@ class Declaration:
         problem = _powers_down(self.sends)
         if problem is None:
             problem = _passes_through_problem(self)
+        if problem is None:
+            problem = _mode_first_problem(self)
         if problem is not None:
             raise DeclarationError(problem)
         if self.kind == "condition" and self.sends:
@@ -561,6 +585,37 @@ def _passes_through_problem(decl: Declaration) -> str | None:
         return (
             f"passes_through={said}, leads_to={decl.leads_to.label}, but none of its sends= "
             f"leads to {decl.leads_to.label}: add the mode command that takes it there"
+        )
+    return None
+
+
+def _mode_first_problem(decl: Declaration) -> str | None:
+    """What is wrong with ``decl``'s ``mode_first=True``, or None: it sends a mode command
+    (one that could come first), says the mode its mode commands end in where they lead to
+    several (else ``send()`` refuses each), and each of its other commands is taken in one
+    of the modes its mode commands lead to (else it can never be sent where it was judged)."""
+    if not decl.mode_first:
+        return None
+    leads = {COMMANDS[op].leads_to for op in decl.sends if op in COMMANDS} - {None}
+    if not leads:
+        return (
+            "mode_first=True, but none of its sends= is a mode command (safe (131), full "
+            "(132), ...) to come first: add the one it sends first, or drop mode_first="
+        )
+    if decl.leads_to is None and len(leads) > 1:
+        return (
+            "mode_first=True, and no leads_to= says the mode it ends in (its mode commands "
+            "lead to several): declare leads_to=OIMode.SAFE, say, and passes_through= the "
+            "modes it leaves again"
+        )
+    for op in decl.sends:
+        spec = COMMANDS.get(op)
+        if spec is None or spec.leads_to is not None or leads & spec.modes:
+            continue
+        modes = ", ".join(sorted(m.label for m in leads if m is not None))
+        return (
+            f"mode_first=True, but {spec.name} ({op}) is accepted in none of the modes its "
+            f"mode commands lead to ({modes}): it could only be refused after them"
         )
     return None
 
@@ -741,6 +796,7 @@ def declare(
     sends: tuple[int, ...] = (),
     leads_to: OIMode | ModeOf | None = None,
     passes_through: OIMode | tuple[OIMode, ...] = (),
+    mode_first: bool = False,
     primary: str | None = None,
     writes_keys: tuple[str, ...] | Mapping[str, ValueType] = (),
     reads_keys: tuple[str, ...] | Mapping[str, ValueType] = (),
@@ -763,6 +819,9 @@ def declare(
     tuple) its own mode commands take the robot to on the way to the one it leads to (an
     action that sends Full, drives, then sends Safe passes through Full and leads to Safe):
     ``send()`` refused its Full where ``leads_to=OIMode.SAFE`` was all it could say.
+    ``mode_first=True`` says that each time it starts its first command is one of its mode
+    commands (Safe, Full): validate then lets it be reached in Passive (it was refused there
+    for its drive, which its own Safe came before), and ``send()`` refuses another first.
     ``halts_only=True`` says that its wheel commands only stop the wheels (``stop``): the
     Full-mode warning passes it by. ``at_once=True``
     says that it returns SUCCESS on the tick it starts, every time in the modes its commands
@@ -795,6 +854,7 @@ def declare(
             compares=compares, sends_by=sends_by, at_once=at_once, may_succeed=may_succeed,
             never_fails=never_fails, needs=needs, needs_only_warns=needs_only_warns,
             in_passive=in_passive, stops_only=stops_only, passes_through=visits,
+            mode_first=mode_first,
         )  # fmt: skip
         return cls
 
@@ -824,10 +884,10 @@ def declare_like(
     function of the parameters).
 
     Carried: the kind; the parameters (without ``drop_params``, then ``add_params``, one of
-    a parent's name in its place); the packets read (then ``add_reads``, after a parent's
-    function's too) and the commands sent (then ``add_sends``); ``leads_to``, ``sends_by``,
-    ``compares``, ``halts_only``, ``needs``; the cross-parameter rules (``add_constraints``
-    too: both run, a dropped parameter not given to the parent's); the key parameters still
+    a parent's name in its place); the packets read (``add_reads`` after, a function's too),
+    the commands sent (``add_sends`` after), ``leads_to``, ``passes_through``, ``mode_first``,
+    ``sends_by``, ``compares``, ``halts_only``, ``needs``; the rules (``add_constraints`` too:
+    both run, a dropped parameter not given to the parent's); the key parameters still
     declared (and ``writes_keys`` / ``reads_keys``); ``primary`` unless dropped or given.
     Not carried: ``at_once`` and ``may_succeed``, which say when ``update`` succeeds, what
     a subclass changes (the parent's "only with a ``duration``" would say a ``distance``

@@ -587,6 +587,9 @@ def describe_behaviours(
                 "leads_to": _leads_to(decl),
                 # the modes its own mode commands take it to on the way (passes_through=)
                 "passes_through": [m.label for m in decl.passes_through],
+                # its first command each time it starts is one of its mode commands: it may
+                # be reached in a mode its other commands are refused in (mode_first=True)
+                "mode_first": decl.mode_first,
             }
         )
     return out
@@ -739,6 +742,8 @@ def _print_behaviour(entry: dict[str, Any]) -> None:
     head = f"{entry['name']}  ({entry['kind']}"
     if len(entry["modes"]) < 4:
         head += f"; needs {modes}"
+        if entry["mode_first"]:
+            head += ", which its own first command sets (mode_first)"
     if entry["passes_through"]:
         head += f"; passes through {' and '.join(entry['passes_through'])}"
     if entry["leads_to"]:

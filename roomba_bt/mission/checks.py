@@ -101,7 +101,7 @@ from roomba_bt.oi.frames import (
     ENCODER_PACKETS,
     HAZARD_PACKETS,
 )
-from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PASSIVE_SLEEP_S, SEND_BAUD, RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
@@ -248,15 +248,15 @@ class ModeCheck:
                 return
             # the Passive of a cycle refuses it as plain Passive does: said as Passive
             said = frozenset(m if isinstance(m, OIMode) else OIMode.PASSIVE for m in bad)
-            sent = decl.sent(node.params)
+            sent = decl.sent_first(node.params)
             refused = [COMMANDS[op] for op in sent if said - COMMANDS[op].modes]
             sends = ", ".join(f"{c.title} ({c.opcode})" for c in refused)
-            taken = decl.modes_for(node.params)
+            taken = decl.reached_in(node.params)
             self.errors.append(
                 node.loc.at(
                     f"{decl.name} sends {sends}, accepted only in {_label(taken)} mode, "
                     f"but it can be reached in {_label(said)} mode: put a mode change (mode: "
-                    "safe or mode: full) before it on every path"
+                    f"safe or mode: full) before it on every path{_own_mode_first(decl, said)}"
                 )
             )
 
@@ -266,7 +266,7 @@ class ModeCheck:
         with its parameters, the Passive of a cycle with Passive, and plain Passive too for
         a leaf that only stops what Passive has stopped (``stop``: its ``stops_only``); not
         one whose parameters did not parse (``node.decl`` None): what it asks is not known."""
-        allowed: Modes = decl.modes_for(node.params)
+        allowed: Modes = decl.reached_in(node.params)
         if OIMode.PASSIVE in allowed:
             return allowed | _CYCLE_DRIVING
         if node.decl is not None and decl.stops_only is not None and decl.stops_only(node.params):
@@ -409,10 +409,33 @@ def _leads_to_within(node: Node) -> Modes:
     return frozenset(out)
 
 
+def _own_mode_first(decl: Declaration, refused_in: Modes) -> str:
+    """The error's word to a plugin leaf that sends a mode command of its own that is taken
+    in ``refused_in``, where the check could not know it comes first: ``mode_first=True``
+    says it (held to at ``send()``); "" for a built-in, or a leaf that says it already."""
+    if decl.origin == "builtin" or decl.mode_first:
+        return ""
+    own = [
+        COMMANDS[op]
+        for op in decl.sends
+        if COMMANDS[op].leads_to in DRIVING_MODES and not refused_in - COMMANDS[op].modes
+    ]
+    if not own:
+        return ""
+    names = " or ".join(f"{c.title} ({c.opcode})" for c in own)
+    return (
+        f"; or, if {decl.name} sends its own {names} before any other command each time it "
+        "starts, say so in its @declare with mode_first=True (held to when it runs)"
+    )
+
+
 def _visited(decl: Declaration, after: OIMode | None) -> Modes:
     """The modes a leaf that passes through some (``passes_through=``) may fail in besides
-    those it was entered in: those, and the one it leads to (``after``), once there. Empty
-    for every other leaf: it fails where it was entered."""
+    those it was entered in: those, and the one it leads to (``after``), once there; a
+    ``mode_first`` leaf's, in the one its first command took it to too. Empty for every
+    other leaf: it fails where it was entered."""
+    if decl.mode_first and after is not None:
+        return frozenset({after, *decl.passes_through})
     if not decl.passes_through:
         return _EMPTY
     return frozenset(decl.passes_through) | (frozenset({after}) if after is not None else _EMPTY)

@@ -199,11 +199,19 @@ def test_a_failure_or_a_halt_on_the_way_is_no_broken_declaration(ending: str) ->
          "passes_through=Full, leads_to=Passive, but none of its sends= leads to Passive"),
         ({**DASH, "passes_through": ("full",)},
          "passes_through= names OI modes (OIMode.FULL, ...), got 'full'"),
+        ({"sends": opcodes("drive"), "mode_first": True},
+         "mode_first=True, but none of its sends= is a mode command"),
+        ({"sends": opcodes("safe", "full", "drive"), "mode_first": True},
+         "mode_first=True, and no leads_to= says the mode it ends in"),
+        ({"sends": opcodes("start", "drive"), "mode_first": True},
+         "mode_first=True, but drive (137) is accepted in none of the modes its mode "
+         "commands lead to (Passive)"),
     ],
     ids=["a mode it cannot reach", "the mode it ends in", "no end", "an end it cannot reach",
-         "not a mode"],
+         "not a mode", "mode_first: no mode command", "mode_first: no end",
+         "mode_first: refused where it leads"],
 )  # fmt: skip
-def test_a_passes_through_that_cannot_be_kept_is_refused_when_registered(
+def test_a_mode_declaration_that_cannot_be_kept_is_refused_when_registered(
     declared: dict[str, object], said: str
 ) -> None:
     with pytest.raises(DeclarationError) as raised:
@@ -259,3 +267,57 @@ def test_power_in_sends_is_refused_when_registered() -> None:
     with pytest.raises(DeclarationError, match=r"sends power \(133\), which roomba-bt never "
                        r"sends: the robot falls asleep"):  # fmt: skip
         Registry(entry_point_group=None).register(DoPower, "test")
+
+
+#: a leaf that sends its own Safe before it drives, and says so
+SAFE_FIRST = dict(sends=opcodes("safe", "drive"), mode_first=True)
+HONEST = [commands.safe(), commands.drive(200, 32767)]
+
+
+def _starts(*starts: list[Command], **declared: object) -> Action:
+    """A leaf that sends ``starts[n]`` on the first tick of its n-th start, and succeeds."""
+
+    class Dash(_Scripted):
+        """Sends, each start, the next start's commands."""
+
+        def start(self) -> None:
+            self.ticks = iter([(next(self.starts), Status.SUCCESS)])
+
+    Dash.starts = iter(starts)  # type: ignore[attr-defined]
+    declared_cls = declare("dash", kind="action", **declared)(Dash)  # type: ignore[arg-type]
+    Registry(entry_point_group=None).register(declared_cls, "test")
+    leaf: Action = declared_cls("dash")
+    leaf.setup(robot=StubRobot())
+    return leaf
+
+
+def test_a_mode_first_leaf_that_sends_its_mode_first_runs_again_and_again() -> None:
+    """Each start sends its mode command first: the second start too (the flag that its
+    mode command came is cleared as it stops, so a start without one is caught)."""
+    leaf = _starts(HONEST, HONEST, **SAFE_FIRST)
+    assert leaf.robot is not None
+    for _ in range(2):
+        leaf.tick_once()
+        assert leaf.status is Status.SUCCESS
+        assert leaf.robot.outbox.drain()[0] == commands.safe()  # the drive halted since
+
+
+@pytest.mark.parametrize("which", ["its first start", "a later start"])
+def test_a_mode_first_leaf_whose_first_command_is_another_is_refused(which: str) -> None:
+    """Validate let it be reached in Passive on its word: a drive first would be refused
+    there by the mode guard, or, entered in Safe from a mode: safe the word replaced, run
+    where the mission had not put one. The runtime holds it to its word every start."""
+    lie = [commands.drive(200, 32767), commands.safe()]
+    leaf = (
+        _starts(lie, **SAFE_FIRST)
+        if which == "its first start"
+        else _starts(HONEST, lie, **SAFE_FIRST)
+    )
+    if which == "a later start":
+        leaf.tick_once()
+        assert leaf.status is Status.SUCCESS
+    with pytest.raises(UnkeptDeclaration, match=r"dash sent drive \(137\) 89 00 c8 7f ff, but "
+                       r"its @declare \(at .*\) says mode_first=True \(each time it starts, its "
+                       r"first command is one of its mode commands\), and this one came before "
+                       r"any since it started"):  # fmt: skip
+        leaf.tick_once()

@@ -514,6 +514,84 @@ def test_a_leaf_that_passes_through_full_is_judged_in_the_modes_it_may_end_in(
     assert [m.split(",")[0] for m in said] == warned, said
 
 
+#: an action that sends its own Safe, then drives: reached in Passive, its Safe comes first
+SAFE_FIRST = """
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.opcodes import opcodes
+
+
+@declare("creep_safe", kind="action", sends=opcodes("safe", "drive"){declared})
+class CreepSafe(Action):
+    \"\"\"Takes Safe itself, then creeps.\"\"\"
+
+    def start(self):
+        self.send(commands.safe())
+
+    def update(self):
+        self.send(commands.drive_straight(100))
+        return Status.RUNNING
+"""
+
+
+@pytest.mark.parametrize(
+    ("declared", "tree", "said"),
+    [
+        ("", "sequence: [creep_safe]",  # refused: the check cannot know the Safe comes first
+         ["3:14: creep_safe sends Drive (137), accepted only in Safe or Full mode, but it can "
+          "be reached in Passive mode: put a mode change (mode: safe or mode: full) before it "
+          "on every path; or, if creep_safe sends its own Safe (131) before any other command "
+          "each time it starts, say so in its @declare with mode_first=True (held to when it "
+          "runs)"]),
+        (", mode_first=True", "sequence: [creep_safe]", []),
+        # a drive on the fallback after its failure: it may have failed in its own Safe, or
+        # before its Safe, in the Passive it was reached in
+        (", mode_first=True", f"selector: [creep_safe, {{{AFTER_DASH}}}]",
+         ["3:27: drive sends Drive (137), Drive Direct (145), accepted only in Safe or Full "
+          "mode, but it can be "
+          "reached in Passive mode: put a mode change (mode: safe or mode: full) before it on "
+          "every path"]),
+        (", mode_first=True", f"sequence: [creep_safe, {{{AFTER_DASH}}}]", []),
+    ],
+    ids=["undeclared", "mode_first", "a drive after its failure", "a drive after its success"],
+)  # fmt: skip
+def test_a_mode_first_leaf_may_be_reached_in_passive(
+    mission_file: Callable[..., Path],
+    errors_of: Callable[..., list[str]],
+    declared: str,
+    tree: str,
+    said: list[str],
+) -> None:
+    """A plugin leaf that sends its own Safe first was refused in Passive for its drive:
+    the check cannot know the order of what a leaf sends. ``mode_first=True`` says it (held
+    to at ``send()``), and the check judges its Safe where it is reached, its drive in Safe;
+    the leaves after it as before. A leaf that does not say it is refused as before, and
+    told of the word."""
+    mission_file(SAFE_FIRST.format(declared=declared), "creep.py")
+    got = errors_of(
+        f"plugins: [./creep.py]\ntree:\n  {tree}\n", permissions=Permissions(plugin_files=True)
+    )
+    assert got == said
+
+
+def test_a_drive_after_a_mode_first_leaf_s_failure_is_judged_in_its_mode_too(
+    mission_file: Callable[..., Path],
+) -> None:
+    """A ``mode_first`` leaf may fail after its first command: in the mode that took it to
+    (Full, here), where the drive on the fallback after it then runs, warned of as in Full."""
+    full_first = SAFE_FIRST.replace('"safe", "drive"', '"full", "drive"')
+    mission_file(full_first.format(declared=", reads=(9, 10, 11, 12), mode_first=True"), "c.py")
+    path = mission_file(
+        f"plugins: [./c.py]\ntree:\n  sequence: [{{mode: safe}}, selector: [creep_safe, "
+        f"{{{AFTER_DASH}}}]]\n"
+    )
+    mission = load_mission(path, permissions=Permissions(plugin_files=True))
+    said = [f"{w.line}:{w.column}: {w.message.split(',')[0]}" for w in mission.warnings]
+    assert said == ["3:52: drive can turn the wheels in Full mode"], said
+
+
 SENSOR_UNTIL = (
     "tree:\n  sequence:\n    - mode: safe\n    - drive: {{velocity: 100 mm/s}}\n"
     "      until: {{sensor: '{test}'}}\n"

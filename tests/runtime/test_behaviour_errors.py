@@ -352,6 +352,22 @@ class Dash(Action):
 '''
 
 
+def _validated_dash(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], plugin: str, before: str = ""
+) -> Path:
+    """A mission of ``before``, the plugin's ``dash`` and a drive after it, which validates
+    under ``--strict``."""
+    (tmp_path / "dash.py").write_text(plugin)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        f"plugins: [./dash.py]\ntree:\n  sequence:\n{before}    - dash\n"
+        "    - drive: {velocity: 100 mm/s, duration: 0.5s}\n    - mode: passive\n"
+    )
+    assert main(["validate", str(mission), "--allow-plugin-files", "--strict"]) == 0
+    capsys.readouterr()
+    return mission
+
+
 def test_a_plugin_that_passes_through_full_as_declared_runs(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -359,14 +375,7 @@ def test_a_plugin_that_passes_through_full_as_declared_runs(
     could (``leads_to=Safe``), was refused at its Full (session 37): declared with
     ``passes_through=OIMode.FULL``, it validates, runs in Full and hands the drive after it
     Safe; the mode guard refuses none of its commands."""
-    (tmp_path / "dash.py").write_text(DASH)
-    mission = tmp_path / "m.yaml"
-    mission.write_text(
-        "plugins: [./dash.py]\ntree:\n  sequence:\n    - mode: safe\n    - dash\n"
-        "    - drive: {velocity: 100 mm/s, duration: 0.5s}\n    - mode: passive\n"
-    )
-    assert main(["validate", str(mission), "--allow-plugin-files", "--strict"]) == 0
-    capsys.readouterr()
+    mission = _validated_dash(tmp_path, capsys, DASH, "    - mode: safe\n")
     assert main([*_run(mission), "--strict", "--display", "tree"]) == 0
     out = capsys.readouterr().out
     assert "--> dash [✓] -- drove 3 ticks in Full" in out, out
@@ -375,6 +384,38 @@ def test_a_plugin_that_passes_through_full_as_declared_runs(
     # the drive after it moves: its first Drive, queued in the tick dash sent halt and Safe,
     # is written after the Safe (written before it, the Safe stopped it: 0.01 m in all)
     assert "distance     0.07 m" in out, out
+
+
+#: DASH that says its Full comes first, reached in Passive
+DASH_FIRST = DASH.replace("leads_to=OIMode.SAFE)", "leads_to=OIMode.SAFE, mode_first=True)")
+#: DASH_FIRST whose start drives before its Full: the lie is caught, not run
+DASH_LIAR = DASH_FIRST.replace(
+    "        self.send(commands.full())\n",
+    "        self.send(commands.drive(300, 32767))\n        self.send(commands.full())\n",
+)
+
+
+@pytest.mark.parametrize(("plugin", "exit_code"), [(DASH_FIRST, 0), (DASH_LIAR, 4)])
+def test_a_mode_first_plugin_runs_from_passive_and_a_liar_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], plugin: str, exit_code: int
+) -> None:
+    """Reached in Passive, ``dash`` was refused by validate for its drive, though its own
+    Full came first: ``mode_first=True`` says so, it validates and runs with no mode guard
+    refusal. One that said so and drove first ends the run at that send as its error,
+    naming the leaf, its declaration and its line, before the drive is queued."""
+    mission = _validated_dash(tmp_path, capsys, plugin)
+    assert main([*_run(mission), "--strict"]) == exit_code
+    out, err = capsys.readouterr()
+    if exit_code == 0:
+        assert " 0 refused by the mode guard" in out and "distance     0.07 m" in out, out
+        return
+    said = (
+        f"behaviour sequence / dash raised UnkeptDeclaration: dash sent drive (137) 89 01 2c "
+        f"7f ff, but its @declare (at {tmp_path / 'dash.py'}:10) says mode_first=True"
+    )
+    assert said in err, err
+    assert f"in its start() (at {tmp_path / 'dash.py'}:16)" in err, err
+    assert "commands     0 written" in out, out
 
 
 OS_ERRORS = [
