@@ -45,7 +45,12 @@ from roomba_bt.behaviours.base import RobotBehaviour
 from roomba_bt.behaviours.declare import Declaration, DeclarationError
 from roomba_bt.behaviours.language import RESERVED
 from roomba_bt.behaviours.units import closest
-from roomba_bt.robot.safety import code_failure, failure_said, interrupts_told_apart
+from roomba_bt.robot.safety import (
+    code_failure,
+    failure_said,
+    interrupts_told_apart,
+    note_interrupted_in,
+)
 
 ENTRY_POINT_GROUP = "roomba_bt.behaviours"
 #: the package a mission writes before ``:`` to name a built-in (``roomba-bt:drive``), as
@@ -405,6 +410,7 @@ class Registry:
             provider = ep.load()
         except BaseException as exc:  # any import-time failure of third-party code
             if not code_failure(exc):  # a Ctrl-C (not the plugin's KeyboardInterrupt)
+                _cut_short(exc, f"importing plugin {_origin(ep)}", _package_of(ep))
                 raise
             failed = (
                 _missing_attribute(ep, exc)
@@ -456,6 +462,7 @@ class Registry:
             except BaseException as exc:  # sys.exit() in it: not ours to exit
                 sys.modules.pop(module_name, None)
                 if not code_failure(exc):  # a Ctrl-C (not the plugin's KeyboardInterrupt)
+                    _cut_short(exc, f"importing plugin {origin}", [path.resolve()])
                     raise
                 failed = _import_failed(exc, [path.resolve()], origin)
                 return copy, [PluginError(origin, failed, imported=False)]
@@ -765,6 +772,23 @@ def _written_at(ep: EntryPoint) -> str:
     written = f'[project.entry-points."{ep.group}"] {ep.name} = "{ep.value}"'
     where = f"in {ep.dist.name}'s pyproject.toml" if ep.dist else "in its distribution's metadata"
     return f"written {where}: {written}"
+
+
+def _cut_short(exc: BaseException, what: str, home: list[Path]) -> None:
+    """Note on a Ctrl-C's interrupt ``exc`` that it cut ``what`` short, and where in the
+    plugin's own code (``home``) it was (:func:`~roomba_bt.robot.safety.note_interrupted_in`)."""
+    where = _raised_at(exc, home)
+    note_interrupted_in(exc, what + (f" (at {where})" if where else ""))
+
+
+def cut_short_in(exc: BaseException, what: str, cls: type) -> None:
+    """:func:`_cut_short` for code of the class ``cls`` (a behaviour built, set up): where
+    in its file's folder the interrupt ``exc`` came."""
+    try:
+        home = [Path(inspect.getsourcefile(cls) or "").resolve().parent]
+    except (OSError, TypeError):
+        home = []
+    _cut_short(exc, what, home)
 
 
 def _raised_at(exc: BaseException, home: list[Path]) -> str | None:

@@ -179,7 +179,11 @@ def _interrupted(exc: KeyboardInterrupt, process: bool) -> int:
 
     if process:
         _answer_given(ExitCode.INTERRUPTED)  # only the last words are left
-    print(f"roomba-bt: interrupted{_by_signal(exc)}", file=sys.stderr)
+    from roomba_bt.robot.safety import interrupted_in
+
+    cut_short = interrupted_in(exc)  # a plugin's import or __init__ it cut short, where
+    said = f" while {cut_short}" if cut_short else ""
+    print(f"roomba-bt: interrupted{_by_signal(exc)}{said}", file=sys.stderr)
     return ExitCode.INTERRUPTED
 
 

@@ -22,6 +22,7 @@ from py_trees.behaviour import Behaviour
 from roomba_bt.behaviours.base import CheckedParams
 from roomba_bt.behaviours.blackboard import declare_keys, unwrite_keys, write_key
 from roomba_bt.behaviours.language import GUARD, WORDS
+from roomba_bt.behaviours.registry import cut_short_in
 from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.plan import Node
@@ -70,6 +71,8 @@ def _built(node: Node) -> Behaviour:
             return node.decl.cls(node.name, CheckedParams(node.params))  # checked here
         except BaseException as exc:
             if not code_failure(exc):
+                building = f"building {node.decl.name} ({node.loc.file}:{node.loc.line})"
+                cut_short_in(exc, building, node.decl.cls)
                 raise
             raise BuildError(node, exc) from exc
     children = [_built(child) for child in node.children]

@@ -272,6 +272,27 @@ class RunAborted(BaseException):
     happened to land in (any other exception a behaviour raises is its error: exit 4)."""
 
 
+#: the attribute of a signal's interrupt that says what it cut short in a plugin's code
+INTERRUPTED_IN = "_roomba_bt_interrupted_in"
+
+
+def note_interrupted_in(exc: BaseException, what: str) -> None:
+    """Say on the interrupt ``exc`` what it cut short (``importing plugin 'slow' (...) at
+    .../__init__.py:14``), the innermost such place kept: the CLI's ``roomba-bt:
+    interrupted`` said nothing more, and a ``validate`` that a plugin's import (a network
+    call, a loop) held until Ctrl-C named no plugin to look at."""
+    if getattr(exc, INTERRUPTED_IN, None) is None:
+        with contextlib.suppress(AttributeError, TypeError):
+            setattr(exc, INTERRUPTED_IN, what)
+
+
+def interrupted_in(exc: BaseException) -> str | None:
+    """What a signal's interrupt cut short in a plugin's code (:func:`note_interrupted_in`),
+    or None."""
+    what = getattr(exc, INTERRUPTED_IN, None)
+    return what if isinstance(what, str) else None
+
+
 def code_failure(exc: BaseException) -> bool:
     """Whether ``exc``, raised out of a plugin's or a behaviour's code (its import, its
     ``__init__``, a method), is that code's failure, to be said as such with its file:line:

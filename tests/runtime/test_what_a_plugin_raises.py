@@ -219,8 +219,25 @@ def test_a_real_ctrl_c_while_the_plugin_runs_is_still_the_operator_s(
 def test_a_real_ctrl_c_while_the_tree_is_built_is_still_an_interrupt(
     mission: Path, capsys: Capsys
 ) -> None:
+    """Said with the behaviour it cut short, the mission's line and the plugin's: a plugin
+    whose ``__init__`` blocked (a calibration read from the network) got a bare ``roomba-bt:
+    interrupted``, naming nothing to look at."""
     assert main(_run(mission, "ctrl_c", "init")) == ExitCode.INTERRUPTED
-    assert "roomba-bt: interrupted" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert (
+        f"roomba-bt: interrupted while building evil ({mission}:13) (at "
+        f"{mission.parent / 'evil.py'}:27)\n" in err
+    ), err
+
+
+def test_a_real_ctrl_c_while_a_plugin_imports_names_it(mission: Path, capsys: Capsys) -> None:
+    """A plugin whose import blocks holds ``validate`` until Ctrl-C: the interrupt says which
+    plugin, and where its code was."""
+    plugin = mission.parent / "evil.py"
+    plugin.write_text(PLUGIN.replace("\n\n@declare(", "\n\nmisbehave('ctrl_c')\n\n\n@declare(", 1))
+    assert main(["validate", str(mission), "--allow-plugin-files"]) == ExitCode.INTERRUPTED
+    err = capsys.readouterr().err
+    assert f"roomba-bt: interrupted while importing plugin {plugin} (at {plugin}:27)\n" in err, err
 
 
 def _tree(exc: BaseException) -> TreeMission:
