@@ -1033,13 +1033,14 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     granted = replace(
         granted, include_dirs=tuple(dict.fromkeys((*granted.include_dirs, *recorded_dirs)))
     )
-    mission = load(found, params, profile, baud, granted, absent_plugins(header))
+    absent = absent_plugins(header)
+    mission = load(found, params, profile, baud, granted, absent)
     if isinstance(mission, int):
         if not args.mission:  # the errors above say what to write; this, where it goes
-            print(
-                _refused_recorded_mission(header, found, bool(args.allow_plugin_files)),
-                file=sys.stderr,
+            said = _refused_recorded_mission(
+                header, found, bool(args.allow_plugin_files), [p.name for p in absent]
             )
+            print(said, file=sys.stderr)
         return mission
     packets = _recorded_packets(args.record, header, mission, found)
     if isinstance(packets, str):
@@ -1047,7 +1048,9 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     return Recorded(record, mission, profile, baud, packets)
 
 
-def _refused_recorded_mission(header: dict[str, Any], found: str, plugins_allowed: bool) -> str:
+def _refused_recorded_mission(
+    header: dict[str, Any], found: str, plugins_allowed: bool, absent: list[str]
+) -> str:
     """What ``replay`` adds when the record's own mission no longer compiles (a 0.1.0
     mission that this release refuses): that the record is not at fault, and how to replay it
     after fixing the file. The validation errors alone left the upgrader to find
@@ -1055,7 +1058,8 @@ def _refused_recorded_mission(header: dict[str, Any], found: str, plugins_allowe
     its plugin files (the header's ``options.allow_plugin_files``, never honoured: a record
     may come from someone else) is replayed with them only by ``--allow-plugin-files``
     (``plugins_allowed``): that is the fix then, where "fix a copy" sent the user to edit a
-    mission that was whole."""
+    mission that was whole; so is installing the plugin packages the run used that are not
+    here as they were (``absent``, said first with the ``pip install`` that brings each)."""
     from roomba_bt import __version__
     from roomba_bt.runtime.provenance import UPGRADING, made_by_said
     from roomba_bt.runtime.recording import MADE_BY, header_text
@@ -1069,6 +1073,13 @@ def _refused_recorded_mission(header: dict[str, Any], found: str, plugins_allowe
             "told: pass --allow-plugin-files if you trust them (they run as Python code)"
         )
 
+    if absent:  # the mission is whole: its plugin is not here
+        named = " and ".join(absent)
+        return (
+            f"replay: the record's mission {header_text(found)} names behaviours of plugin "
+            f"{named}, not installed here as the record's run had it: install it as said "
+            "above and replay again (the mission needs no fix)"
+        )
     # the upgrade notes only where another release made the record (a file edited since is
     # refused by the release that made it too)
     notes = "" if header.get(MADE_BY) == __version__ else f' (the CHANGELOG\'s "{UPGRADING}")'

@@ -1064,7 +1064,7 @@ def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
     capsys.readouterr()
     _plugin(monkeypatch, site, None)  # pip uninstall bt-far-s29
     assert main([command, str(record)]) == 2
-    first, second, *_ = capsys.readouterr().err.splitlines()
+    first, second, *_, last = capsys.readouterr().err.splitlines()
     assert first == (
         "roomba-bt: this record was made with plugin bt-far-s29 1.0, which is not "
         "installed (pip install bt-far-s29==1.0)"
@@ -1073,6 +1073,12 @@ def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
         "unknown node 'far_s29' (perhaps of plugin bt-far-s29 1.0, not installed) "
         "[tree.sequence[1].selector[0].sequence[0].far_s29]"
     )
+    if command == "replay":  # its last word sent the user to fix a mission that was whole
+        assert last == (
+            f"replay: the record's mission {mission} names behaviours of plugin bt-far-s29, "
+            "not installed here as the record's run had it: install it as said above and "
+            "replay again (the mission needs no fix)"
+        ), last
     header = load_record(record).header
     _plugin(monkeypatch, site, "2.0", far=True)  # another version: said by its version
     [other] = absent_plugins(header)
