@@ -725,6 +725,9 @@ def _unknown_behaviour(name: str, registry: Registry) -> str:
 
     likely, declares = registry.may_have_meant(name)
     said = f"unknown behaviour {escaped(repr(name), ANY_CONTROL)}"
+    why = registry.why_unknown(name)  # package:name: no such package, or no such behaviour
+    if why is not None and not likely:
+        return f"{said}: {escaped(why, ANY_CONTROL)}"
     plugins = escaped(", ".join(error.plugin for error in likely[:3]), ANY_CONTROL)
     if len(likely) > 3:
         plugins += f" and {len(likely) - 3} more"

@@ -206,6 +206,27 @@ def test_behaviours_json_and_unknown_names(capsys: Capsys) -> None:
     assert "did you mean 'drive'" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("name", "said"),
+    [
+        ("roomba-bt-nope:near_wall", "no installed plugin package is called 'roomba-bt-nope' "
+         "(installed: "),
+        ("roomba-bt:drvie", "roomba-bt has no built-in behaviour 'drvie' (did you mean "
+         "'drive'?)"),
+    ],
+)  # fmt: skip
+def test_behaviours_of_a_package_name_says_what_validate_says(
+    capsys: Capsys, name: str, said: str
+) -> None:
+    """``behaviours roomba-bt-lab:near_wall`` of an uninstalled package said "a plugin
+    file's are listed with --plugin-file FILE" (a file has no package), where validate
+    said the package is not installed and named those that are."""
+    assert main(["behaviours", name]) == 2
+    err = capsys.readouterr().err
+    assert f"roomba-bt behaviours: unknown behaviour '{name}': {said}" in err, err
+    assert "--plugin-file" not in err
+
+
 def test_behaviours_lists_a_plugin_files_behaviours_with_plugin_file(capsys: Capsys) -> None:
     """``schema`` took ``--plugin-file``; ``behaviours`` had no way to show a file's."""
     assert main(["behaviours", "near_wall"]) == 2
