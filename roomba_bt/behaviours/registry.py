@@ -301,11 +301,14 @@ class Registry:
             said = " and ".join([", ".join(who for who, _ in claimants[:-1]), claimants[-1][0]])
             if ":" in name:
                 return "error", f"{name!r} is declared twice in its package, by {said}"
-            choose = (
-                f"write {' or '.join(repr(s) for s in spellings)} to choose"
-                if len(spellings) == len(claimants)
-                else "uninstall one, or rename its behaviour"
-            )
+            unspelled = [who for who, spelled in claimants if not spelled]  # a plugin file's
+            choose = f"write {' or '.join(repr(s) for s in spellings)} to choose"
+            if unspelled:  # a file has no package: only a rename reaches it
+                files = ", ".join(unspelled)
+                reach = f"{choose} an installed one; " if spellings else ""
+                choose = (
+                    f"{reach}rename the behaviour of {files} (a plugin file has no package:name)"
+                )
             return "error", (
                 f"{name!r} is declared by {_count(len(claimants))} plugins, {said}: which one "
                 "is meant "
@@ -442,9 +445,7 @@ class Registry:
         classes that did not register (the others did)."""
         copy = self.copy()
         origin = str(path)
-        module_name = "roomba_bt_mission_plugin_" + "".join(
-            c if c.isalnum() else "_" for c in str(path.resolve())
-        )
+        module_name = _FILE_MODULE + "".join(c if c.isalnum() else "_" for c in str(path.resolve()))
         module = sys.modules.get(module_name)
         stamp = file_version(path)
         # imported once per version of the file: a mission reloaded (run --watch) after its
@@ -719,8 +720,17 @@ def _where(cls: type) -> str:
     return f"{cls.__qualname__} ({file}:{line})"
 
 
+#: the prefix of the module name a plugin file is imported as (:meth:`Registry.with_file`)
+_FILE_MODULE = "roomba_bt_mission_plugin_"
+
+
 def _qualname(cls: object) -> str:
-    return f"{getattr(cls, '__module__', '?')}.{getattr(cls, '__qualname__', repr(cls))}"
+    """``roomba_bt_dirt.DirtDetect``; a plugin file's class by its name alone, which its
+    origin (the file) follows: its module's name is the file's path mangled
+    (``roomba_bt_mission_plugin__tmp_lab_mine_py.MySense``), no name a user wrote."""
+    module = getattr(cls, "__module__", "?")
+    qualname = getattr(cls, "__qualname__", repr(cls))
+    return qualname if str(module).startswith(_FILE_MODULE) else f"{module}.{qualname}"
 
 
 def _import_failed(exc: BaseException, home: list[Path], origin: str) -> str:

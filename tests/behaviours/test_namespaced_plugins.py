@@ -66,6 +66,34 @@ def test_a_name_two_plugins_declare_names_both_packages_and_how_to_choose(
     assert "write 'bt-ns-alpha:sense' or 'bt-ns-beta:sense'" in error.message
 
 
+def test_a_name_a_plugin_file_declares_too_says_which_can_be_chosen(
+    tmp_path: Path, registry: Registry
+) -> None:
+    """A mission's plugin file that declares ``sense`` too: the error said "uninstall one,
+    or rename its behaviour", though each installed one is reached by its package:name and
+    uninstalling one of three helped nothing; only the file's cannot be chosen."""
+    from roomba_bt.mission import Permissions
+
+    (tmp_path / "mine.py").write_text(
+        "from roomba_bt.behaviours import Condition, declare\n\n\n"
+        '@declare("sense", kind="condition")\nclass MySense(Condition):\n'
+        '    """Mine."""\n\n    def check(self, snapshot):\n        return True\n'
+    )
+    path = tmp_path / "m.yaml"
+    path.write_text("plugins: [./mine.py]\ntree:\n  sequence:\n    - sense\n")
+    mission, diagnostics = compile_mission(
+        path, {}, registry=registry, permissions=Permissions(plugin_files=True)
+    )
+    said = [d.message for d in diagnostics if d.line == 4]
+    assert mission is None and len(said) == 1, diagnostics
+    assert "'sense' is declared by three plugins" in said[0]
+    assert said[0].endswith(
+        "(write 'bt-ns-alpha:sense' or 'bt-ns-beta:sense' to choose an installed one; rename "
+        f"the behaviour of MySense ({tmp_path / 'mine.py'}) (a plugin file has no "
+        "package:name))"
+    ), said[0]
+
+
 def test_package_colon_name_picks_one_plugin(tmp_path: Path, registry: Registry) -> None:
     mission, diagnostics = _compile(
         tmp_path, registry, "    - bt-ns-alpha:sense\n    - bt-ns-beta:sense\n"
