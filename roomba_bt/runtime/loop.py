@@ -68,6 +68,7 @@ from roomba_bt.robot.safety import (
     RunAborted,
     Terminated,
     interrupt_reason,
+    interrupted_in,
 )
 from roomba_bt.runtime.clock import (
     StreamClock,
@@ -784,7 +785,8 @@ def run_ended_by(
     summary = runner.summary
     if isinstance(exc, KeyboardInterrupt) and not behaviours_interrupt(exc):
         why = interrupt_reason(exc)
-        cut = f" {summary.cut_short}" if summary.cut_short else ""
+        cut_in = summary.cut_short or (f"while {said}" if (said := interrupted_in(exc)) else "")
+        cut = f" {cut_in}" if cut_in else ""  # a tick (cut_short), or a plugin's setup()
         summary.outcome, summary.reason = Outcome.INTERRUPTED, why + cut
         return exc, None
     # answered: a frame came; wrote: a command since the start-up (a wrong profile's 2 or 8)

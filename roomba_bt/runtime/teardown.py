@@ -41,7 +41,9 @@ from roomba_bt.robot.safety import (
     code_failure,
     failure_said,
     interrupt_reason,
+    note_interrupted_in,
     signal_delivered,
+    signal_interrupt,
 )
 from roomba_bt.runtime.recording import UNDELIVERED_STOP
 from roomba_bt.runtime.summary import Outcome, RunSummary
@@ -443,6 +445,11 @@ def setup_tree(root: py_trees.behaviour.Behaviour, setup: Callable[[], None]) ->
     except BaseException as exc:
         failed = _setup_raised(exc, set(nodes))
         _SET_UP[id(root)] = (root, nodes[: nodes.index(failed)] if failed is not None else [])
+        if failed is not None and signal_interrupt(exc) is not None:
+            # the operator's Ctrl-C cut a setup() short (a plugin's that blocked): said in
+            # the run's reason, which named nothing (--wall-limit named the behaviour)
+            _, where = stuck_in(list(traceback.walk_tb(exc.__traceback__)))
+            note_interrupted_in(exc, f"setting up, {where}" if where else "setting up")
         raise
     _SET_UP[id(root)] = (root, nodes)
 

@@ -214,6 +214,9 @@ def test_a_real_ctrl_c_while_the_plugin_runs_is_still_the_operator_s(
     out = capsys.readouterr().out
     assert "outcome      INTERRUPTED (Ctrl-C" in out
     assert "safe stop    sent" in out
+    if where == "setup":  # a setup() that blocked was named by --wall-limit, not by Ctrl-C
+        assert "(SIGINT) while setting up, in behaviour outer / timeout / evil" in out, out
+        assert f"(at {mission.parent / 'evil.py'}:27))" in out, out
 
 
 def test_a_real_ctrl_c_while_the_tree_is_built_is_still_an_interrupt(
