@@ -604,8 +604,22 @@ class LinkLostAfter(AfterTickGate):
         super().__init__(inner, transport)
         self.tick = tick
 
+    def before_tick(self, runner: MissionRunner) -> bool:
+        """A frame the tree is not ticked in (the operator's pause, a step's end) marks the
+        loss too: a run paused when its robot fell asleep, or its cable was pulled, ticked
+        its tree last minutes before its end note's tick, and the replay, marking only after
+        a tick, called the run's asking after the sleeping robot its first difference."""
+        ticks = super().before_tick(runner)
+        if not ticks:
+            self._mark(runner)
+        return ticks
+
     def after_tick(self, runner: MissionRunner) -> None:
         super().after_tick(runner)
+        self._mark(runner)
+
+    def _mark(self, runner: MissionRunner) -> None:
+        """What the tree had written by the end note's tick, once the replay reaches it."""
         transport = self.transport
         if (
             runner.snapshot.tick >= self.tick

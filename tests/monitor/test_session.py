@@ -45,7 +45,7 @@ from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.recording import load_record
 from roomba_bt.runtime.stack import Recording, RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
-from roomba_bt.sim import SimLink, Simulator, load_world
+from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 from roomba_bt.sim import robot as sim_robot
 
 HERE = Path(__file__).resolve().parent
@@ -98,10 +98,11 @@ class Rig:
         thin_pauses: bool = False,
         link: Callable[[Simulator], SimLink] = SimLink,
         plugin_files: bool = False,
+        faults: Faults | None = None,
     ) -> None:
         allowed = Permissions(plugin_files=plugin_files)
         self.mission = load_mission(mission, {}, profile=CREATE2, permissions=allowed)
-        self.sim = Simulator(load_world(world), CREATE2, 0)
+        self.sim = Simulator(load_world(world), CREATE2, 0, faults)
         recording = Recording(record, str(SHUTTLE)) if record is not None else None
         self.stack = RunStack(
             self.mission,
@@ -124,15 +125,17 @@ class Rig:
         self.gate = PacedGate(self.session)
         self.runner.gate = self.gate
 
-    def run_with(self, operator: Callable[[Rig], None]) -> RunSummary:
+    def run_with(self, operator: Callable[[Rig], None], *, ended: bool = False) -> RunSummary:
         """Run; ``operator`` acts from another thread, as the page would. The run then goes
         on to its own end, however long a loaded machine takes over it (a stop after 10 s of
         wall time ended runs INTERRUPTED that would have succeeded); one whose operator
-        failed is stopped at once."""
+        failed is stopped at once. ``ended``: run as ``roomba-bt run`` does, through the
+        stack, whose record then ends with the run's end note (the runner's own run writes
+        none)."""
         result: list[RunSummary] = []
 
         def run() -> None:
-            result.append(self.runner.run())
+            result.append(self.stack.run_here() if ended else self.runner.run())
             self.ended.set()
 
         thread = threading.Thread(target=run)
@@ -1013,6 +1016,49 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
     assert summary.safe_stop.startswith("NOT DELIVERED: last seen in Passive stopped; ")
     assert "the stop was written but is unconfirmed: the robot was asleep" in summary.safe_stop
     assert "no valid frame" not in summary.safe_stop
+
+
+@pytest.mark.parametrize("lost", ["asleep", "port gone"])
+def test_the_record_of_a_link_lost_while_paused_replays_to_its_loss_not_a_difference(
+    lost: str,
+    tmp_path: Path,
+    until: Callable[..., None],
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A run paused (the tree frozen) whose robot fell asleep, or whose cable was pulled,
+    before the resume: its tree's last tick came long before the link's end, and the
+    replay, which marked the link's loss only after a tick of the tree, never marked it.
+    ``roomba-bt replay`` said "first difference" (exit 1) at the run's asking after the
+    sleeping robot, and ``roomba-bt monitor RECORD`` "replay diverged from the record",
+    read as a broken record or a changed mission."""
+    monkeypatch.setattr(silence, "SLEEP_AFTER_S", 3.0)
+    monkeypatch.setattr(sim_robot, "PASSIVE_SLEEP_SECONDS", 3.0)
+    record_path = tmp_path / "lost.jsonl"
+    faults = Faults(disconnect_at=2.5) if lost == "port gone" else None
+    rig = Rig(record=record_path, keep_awake=False, faults=faults)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 50)
+        rig.session.request("pause")
+        rig.ended.wait(30)
+
+    summary = rig.run_with(operator, ended=True)
+    rig.stack.close()
+    assert summary.outcome is Outcome.CONNECTION_LOST, summary.reason
+    assert summary.pauses == 1
+    capsys.readouterr()
+    assert main(["replay", str(record_path)]) == 0
+    out = capsys.readouterr().out
+    assert "replay: the recorded run lost its link at mission time" in out, out
+    assert "first difference" not in out
+    diverged: list[str] = []
+    feed, _ = replay_into_feed(
+        load_record(record_path), load_mission(SHUTTLE, {}, profile=CREATE2), CREATE2,
+        rig.packets, 115200, "x", diverged_at=diverged.append,
+    )  # fmt: skip
+    assert diverged == []
+    assert feed.finished is not None and "the recorded run lost its link" in feed.finished
 
 
 def test_the_board_shows_the_mission_s_keys_not_their_declared_types(
