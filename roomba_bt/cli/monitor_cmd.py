@@ -41,6 +41,10 @@ if TYPE_CHECKING:  # loaded when a world is drawn
 
 log = logging.getLogger("roomba_bt.monitor")
 KEYS_HELP = "keys: p pause, r resume, n step, q stop"
+#: said once (in the log and the page's event log) when the run's terminal hangs up
+KEYS_HUNG_UP = (
+    "monitor: keys: off (the terminal hung up: an SSH session dropped?); the page's controls work"
+)
 #: after the page's URL when the token is the operator's (``--monitor-token``)
 CHOSEN_TOKEN = " (add ?token= and your --monitor-token, or open your bookmark)"
 #: after the view-only URL when its token is the operator's (``--monitor-view-token``)
@@ -502,6 +506,12 @@ class LiveMonitor:
 
     # ---------------------------------------------------------------- terminal keys
     def _keys(self) -> None:
+        """Read the operator's keys until the run ends or the terminal goes. A terminal that
+        hung up (an SSH session dropped, its window closed) reads as the end of the file, at
+        once and for ever: each empty read was taken for a key that "does nothing", said on
+        its own log line, about 6 000 a second (10 MB of log in 15 s, a core busy) for as
+        long as the run went on without its terminal (SIGHUP ignored), and giving the
+        terminal back its settings then raised in this thread (a traceback in the log)."""
         import termios
         import tty
 
@@ -518,12 +528,17 @@ class LiveMonitor:
                 if not ready:
                     continue
                 try:
-                    key = os.read(fd, 1).decode(errors="replace").lower()
+                    read = os.read(fd, 1)
                 except OSError:  # the terminal gone, or read from the background (EIO)
                     return
+                if not read:
+                    log.warning(KEYS_HUNG_UP)
+                    return
+                key = read.decode(errors="replace").lower()
                 self._key(key, actions.get(key))
         finally:
-            termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+            with contextlib.suppress(termios.error):  # a terminal gone has nothing to restore
+                termios.tcsetattr(fd, termios.TCSADRAIN, saved)
 
     def _key(self, key: str, action: str | None) -> None:
         """One key's request; a key that does nothing (one not listed, ``r`` while running)

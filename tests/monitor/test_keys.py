@@ -6,9 +6,12 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import select
+import signal
 import sys
 import time
+import urllib.request
 from pathlib import Path
 
 import pytest
@@ -22,10 +25,16 @@ SHUTTLE = Path(__file__).resolve().parent / "missions" / "shuttle.yaml"  # drive
 class Terminal:
     """The CLI on a pty of its own (``pty.fork``: its session, its controlling terminal)."""
 
-    def __init__(self, *args: str, cwd: Path) -> None:
+    def __init__(self, *args: str, cwd: Path, stderr: Path | None = None) -> None:
+        """``stderr``: the run's log into that file, its hang-ups ignored (``trap '' HUP``:
+        a run meant to outlive its SSH session), so that what it says once its terminal is
+        gone can be read."""
         self.pid, self.fd = pty.fork()
         if self.pid == 0:  # the child: the run, in the terminal's foreground
             os.chdir(cwd)
+            if stderr is not None:
+                signal.signal(signal.SIGHUP, signal.SIG_IGN)  # kept ignored across exec
+                os.dup2(os.open(stderr, os.O_WRONLY | os.O_CREAT | os.O_APPEND), 2)
             os.execv(sys.executable, [sys.executable, "-m", "roomba_bt.cli", *args])
         self.screen = ""
 
@@ -52,6 +61,14 @@ class Terminal:
     def wait(self) -> int:
         _, status = os.waitpid(self.pid, 0)
         return os.waitstatus_to_exitcode(status)
+
+
+def _until_in(log: Path, text: str, timeout: float = 30.0) -> None:
+    """Wait until ``text`` is in the file ``log`` (a run's stderr)."""
+    deadline = time.monotonic() + timeout
+    while text not in log.read_text(errors="replace"):
+        assert time.monotonic() < deadline, log.read_text(errors="replace")[-2000:]
+        time.sleep(0.05)
 
 
 def _acts(record: Path) -> list[str]:
@@ -135,3 +152,46 @@ def test_a_read_only_page_leaves_the_keys_to_the_operator(tmp_path: Path) -> Non
     run.type("q")
     run.until("outcome      INTERRUPTED (stopped by the operator)")
     assert run.wait() == 130
+
+
+def test_a_terminal_that_hangs_up_turns_the_keys_off_once(tmp_path: Path) -> None:
+    """An SSH session dropped under a run that outlives it (SIGHUP ignored): its terminal
+    reads as the end of the file, at once and for ever. Each empty read was taken for a key
+    that "does nothing", a log line each, about 6 000 a second for the rest of the run (10 MB
+    of log in 15 s, a core busy), and the keys' thread raised as it ended (a traceback in
+    the log). The keys go off, said once; the page's stop still ends the run."""
+    log = tmp_path / "stderr.log"
+    run = Terminal(
+        "run", str(SHUTTLE), "--monitor", "127.0.0.1:0", "--display", "log",
+        "--timeout", "60s", cwd=tmp_path, stderr=log,
+    )  # fmt: skip
+    run.until("keys: p pause, r resume, n step, q stop")
+    port = re.search(r"monitor: http://127\.0\.0\.1:(\d+)/", run.screen)
+    assert port, run.screen
+    # the keys are read once a key typed is said (typed before their thread set the
+    # terminal up, it is flushed: typed again until then)
+    deadline = time.monotonic() + 30
+    while "key 'x' does nothing" not in log.read_text(errors="replace"):
+        assert time.monotonic() < deadline, log.read_text(errors="replace")[-2000:]
+        run.type("x")
+        run.read(0.5)
+    typed = log.read_text(errors="replace").count("does nothing")
+    os.close(run.fd)  # the terminal hangs up
+    _until_in(log, "keys: off (the terminal hung up")
+    time.sleep(1.0)  # a spinning reader writes thousands of lines meanwhile
+    said = log.read_text(errors="replace")
+    assert said.count("keys: off (the terminal hung up") == 1
+    assert said.count("does nothing") == typed, said.count("does nothing")
+    assert "Traceback" not in said and "Exception in thread" not in said
+    base = f"http://127.0.0.1:{port.group(1)}"
+    with urllib.request.urlopen(f"{base}/api/state", timeout=10) as answer:
+        run_id = json.load(answer)["header"]["run"]["id"]
+    stop = urllib.request.Request(
+        f"{base}/api/control", data=json.dumps({"action": "stop", "run": run_id}).encode(),
+        headers={"Content-Type": "application/json"}, method="POST",
+    )  # fmt: skip
+    with urllib.request.urlopen(stop, timeout=10) as answer:
+        assert answer.status == 202
+    assert run.wait() == 130
+    said = log.read_text(errors="replace")
+    assert "Traceback" not in said and "Exception in thread" not in said, said[-3000:]
