@@ -434,6 +434,37 @@ def test_after_the_run_the_robot_panel_shows_it_stopped_in_passive(page: Any, ch
     assert banner.startswith("the run ended: interrupted: stopped by the operator"), banner
 
 
+def test_an_ended_run_s_timeline_says_it_reads_no_more_and_a_drag_does_not_stay(
+    page: Any, child: Child
+) -> None:
+    """A page left open after its run: the timeline still took a drag, the slider stayed
+    where it was dropped, and the label said ``live`` over the panels of the run's end: the
+    seek went to a monitor that had closed with the run, and nothing said so. The timeline
+    is off and says why."""
+    proc = child(monitored_run(BRUSHES))
+    page.goto(_url_from(proc))
+    _wait_for_wheels_turning(page)
+    page.click("#stop")
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    page.wait_for_selector('#link:text("ended")', timeout=WAIT_MS)
+    page.wait_for_selector("#timeline:disabled", timeout=WAIT_MS)
+    label = page.inner_text("#timeline-label")
+    assert label.startswith("last tick "), label
+    assert "the monitor has closed: no rewinding here" in label, label
+    last = page.eval_on_selector("#timeline", "t => t.value")
+    # a drag all the same (the slider is off; a script's input event): the seek finds no
+    # monitor, and the slider goes back to the tick the panels show
+    page.eval_on_selector(
+        "#timeline", "t => { t.value = t.min; t.dispatchEvent(new Event('input')); }"
+    )
+    page.wait_for_function(
+        f"document.querySelector('#timeline').value === {json.dumps(last)}", timeout=WAIT_MS
+    )
+    title = page.inner_text("#robot-panel h2")
+    assert title.lower() == "robot after the run ended: stopped, passive", title
+
+
 def test_a_run_s_label_leads_the_tab_s_title_and_the_header(page: Any) -> None:
     """Several robots' pages in one browser were told apart by their ports alone (the tabs
     all read the mission's name): ``run --label`` leads the title and shows in the header."""

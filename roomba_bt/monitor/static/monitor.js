@@ -660,15 +660,25 @@ function robotTitle() {
   if (h2.textContent !== title) h2.textContent = title;
 }
 
+// what the timeline says once the monitor that served it has closed (the run ended, or a
+// record's view was ended): it answers no seek, and a drag moved the slider and showed nothing
+const CLOSED_TIMELINE = "the monitor has closed: no rewinding here (roomba-bt monitor FILE "
+  + "rewinds a run recorded with --record)";
+
 function updateTimeline() {
   const t = $("timeline");
   t.min = view.window[0]; t.max = view.window[1];
   if (view.live) t.value = view.window[1];
-  t.disabled = view.header === null;
+  // the run's server gone (ended, or another run served there): nothing to seek
+  const closed = view.ended;
+  t.disabled = view.header === null || closed;
+  t.title = closed ? CLOSED_TIMELINE : "";
   // the stream's ticks and time (they go on while paused), named so beside the header's
   // mission time (which does not)
-  $("timeline-label").textContent = view.live ? `live · tick ${view.window[1]}`
+  const where = view.live ? `live · tick ${view.window[1]}`
     : `tick ${view.shownTick} · stream ${(view.shownTick * SLOT).toFixed(3)} s`;
+  $("timeline-label").textContent = closed
+    ? (view.live ? `last tick ${view.window[1]}` : where) + " · " + CLOSED_TIMELINE : where;
   $("live").disabled = view.live || (view.header && view.header.source === "record");
 }
 
@@ -687,7 +697,13 @@ const otherRunsAnswer = (body) => !body || (body.header && body.header.run && bo
 
 async function showTick(tick) {
   const body = await getJSON(`api/state?tick=${tick}`);
-  if (otherRunsAnswer(body)) return;
+  if (otherRunsAnswer(body)) {
+    // not shown (the run's server gone, or another run's): the slider back to the tick the
+    // panels show, not left where it was dragged to over the end of the run
+    $("timeline").value = view.shownTick;
+    updateTimeline();
+    return;
+  }
   if (body.header) { view.window = [body.header.first_tick, body.header.last_tick]; }
   if (JSON.stringify(body.tree) !== JSON.stringify(view.tree)) buildTree(body.tree);
   view.events = body.events; view.session = body.session || view.session;
@@ -741,7 +757,7 @@ function connect() {
   ws.onclose = mine((ev) => {
     view.connected = false;
     if (view.finished && ev.code === GOING_AWAY) {  // the run is over: nothing to connect to
-      view.ended = true; setBadge("ended", false); updateControls(); return;
+      view.ended = true; setBadge("ended", false); updateControls(); updateTimeline(); return;
     }
     if (view.droppedAt === null) view.droppedAt = new Date();
     setBadge("disconnected", false);
