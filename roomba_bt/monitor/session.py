@@ -50,6 +50,10 @@ log = logging.getLogger(__name__)
 STEP = "one step"
 #: the pause's reason after a step's tick
 STEPPED = "stepped one tick"
+#: the pause's reason when ``--watch`` reloads the mission while a step is under way
+RELOADED_IN_A_STEP = (
+    "the mission reloaded during a step: held; the new tree starts from its root at the resume"
+)
 FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
 #: an OI robot's sleep after this long in Passive (keep-awake's BRC pulses prevent it)
 ROBOT_SLEEPS_S = 300.0
@@ -525,7 +529,12 @@ class MonitorSession:
         was_paused = self.state.paused
         # a replay cannot go on past this point: the record has no copy of the new mission
         _note(runner, {"reload": mission.name, "at": "before"})
-        if not was_paused:
+        if not was_paused and self._steps_left is not None:
+            # a step under way: its pause to come, which the reload's own safe stop dropped
+            # (the run went on unpaused, the new tree driving the robot), held now instead
+            self._pause(runner, RELOADED_IN_A_STEP)
+            was_paused = True
+        elif not was_paused:
             self._pause(runner, "reload", noted=False)
         # the old tree stopped, then what it opened closed, each bounded as at the run's end
         runner.retire_tree(mission.name)  # (past it the run ends HUNG: RetireHung)

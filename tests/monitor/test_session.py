@@ -590,6 +590,36 @@ def test_a_reload_while_paused_resumes_into_the_new_tree_from_passive_with_no_ol
     assert resumes == ["resume (resumed by the operator): mode unchanged; the tree goes on"]
 
 
+def test_a_reload_during_a_step_leaves_the_run_paused_not_driving(
+    until: Callable[..., None],
+) -> None:
+    """A step pressed as ``--watch`` reloads (a save a moment before): the reload's own
+    safe stop dropped the step's pause to come, and the run went on unpaused, the new tree
+    driving the robot though the operator had asked for one tick and a pause. The run stays
+    paused; the resume starts the new tree from its root."""
+    rig = Rig()
+    new = load_mission(SHUTTLE, {}, profile=CREATE2)  # drives at once
+    ticks = rig.after_each_tick(lambda runner: runner.mission is new)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100 and bool(rig.sim.left_speed))
+        rig.session.request("pause")
+        until(lambda: rig.session.state.paused)
+        rig.session.request("step")
+        rig.session.reload(new)
+        until(lambda: rig.stack.mission is new)
+        frames = rig.ticks(ticked=False) + rig.ticks(ticked=True)
+        until(lambda: rig.ticks(ticked=False) + rig.ticks(ticked=True) > frames + 60)
+        assert rig.session.state.paused
+        assert rig.session.state.pause_reason.startswith("the mission reloaded during a step")
+        assert rig.robot() == (OIMode.PASSIVE, 0.0, 0.0)
+        assert not any(ticks), "the new tree ticked while the run was held"
+        rig.session.request("stop")
+
+    summary = rig.run_with(operator)
+    assert summary.outcome is Outcome.INTERRUPTED, summary.reason
+
+
 def test_a_pause_during_seek_dock_resumes_the_cycle(until: Callable[..., None]) -> None:
     """dock-builtin: Seek Dock (143) drives the robot in Passive. The pause's safe stop ends
     the cycle (Safe, drive 0, Start); the resume sent nothing back (the robot was in
