@@ -1348,7 +1348,11 @@ def command_at(stream: bytes | bytearray, offset: int) -> str:
 
 
 def _bytes_at(stream: bytes | bytearray, offset: int) -> str:
-    return f"bytes {stream[offset : offset + 8].hex(' ')}"
+    """Up to 8 bytes of ``stream`` from ``offset``, or ``nothing`` past its end: a replay
+    that wrote nothing there was said to have sent ``bytes `` (the record of a robot that
+    fell asleep in a pause: ``the replay's own ending sent bytes ``)."""
+    shown = stream[offset : offset + 8]
+    return f"bytes {shown.hex(' ')}" if shown else "nothing"
 
 
 #: Seconds of the record's clock a replay waits, past the robot's next recorded bytes, for

@@ -140,3 +140,22 @@ def test_a_change_of_the_tree_before_the_link_failed_is_still_a_difference(
     out = capsys.readouterr().out
     assert "first difference at mission time" in out
     assert "lost its link" not in out
+
+
+def test_a_replay_that_wrote_nothing_past_bytes_that_are_no_commands_says_nothing(
+    tmp_path: Path,
+) -> None:
+    """The record of a robot that fell asleep in a pause holds, after the stop's zeros (no
+    OI commands: the difference is shown as bytes), the run's asking after it; the replay
+    wrote nothing there, and was said to have ``sent bytes `` (nothing after the word)."""
+    lines = [
+        {"t": 0.0, "d": "out", "b": "80"},
+        {"t": 0.1, "d": "out", "b": "0000"},
+        {"t": 0.2, "d": "out", "b": "9503231522"},
+        {"t": 0.3, "d": "end"},
+    ]
+    record = load_record(_record(tmp_path / "asleep.jsonl", *lines))
+    transport = ReplayTransport(record)
+    transport.write(b"\x80")
+    transport.write(b"\x00\x00")
+    assert transport.first_difference() == (3, "bytes 95 03 23 15 22", "nothing")
