@@ -310,9 +310,17 @@ def late_control(feed: RunFeed, action: str, seen: object, by: str | None) -> we
     still safe), or no ``seen`` (an API client that shows no view)."""
     if seen is None:
         return None
-    if not isinstance(seen, int | float) or isinstance(seen, bool) or not math.isfinite(seen):
+    now = time.monotonic()
+    # a stamp this clock cannot have given (below 0, ahead of it): a 409 said "your page
+    # was 1000...(309 digits) s behind the run" of -1e308, in the event log too
+    if (
+        not isinstance(seen, int | float)
+        or isinstance(seen, bool)
+        or not math.isfinite(seen)
+        or not 0 <= seen <= now + 1.0
+    ):
         return _error(400, f'seen {seen!r}: allowed the "sent" of the last update the page had')
-    behind = time.monotonic() - seen
+    behind = now - seen
     if action not in MOTION_CONTROLS or behind <= STALE_VIEW_S:
         return None
     said = f"{behind:.0f} s behind the run"

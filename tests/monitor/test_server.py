@@ -166,6 +166,21 @@ def test_a_control_that_sets_the_robot_going_from_a_page_behind_the_run_is_refus
     assert (got, body) == (202, {"accepted": action})
 
 
+@pytest.mark.parametrize("seen", [-1e308, -1.0, 1e308])
+def test_a_stamp_the_server_never_gave_is_a_bad_request(server: MonitorServer, seen: float) -> None:
+    """``"seen": -1e308`` was refused as "your page was 1000...(309 digits) s behind the
+    run", a line as long in the event log; a stamp below 0 or ahead of the server's clock is
+    none it sent: 400, nothing queued, nothing in the event log."""
+    assert server.session is not None
+    server.session.state.paused = True
+    events = len(server.feed.events)
+    got, body = _control(server, {"action": "resume", "seen": seen})
+    assert got == 400, body
+    assert body["error"] == f'seen {seen!r}: allowed the "sent" of the last update the page had'
+    assert server.session._requests.empty()
+    assert len(server.feed.events) == events
+
+
 def test_a_late_pause_or_stop_is_applied_it_stops_the_robot(server: MonitorServer) -> None:
     """Late, a pause or a stop still stops the robot: safe whenever it arrives."""
     assert server.session is not None
