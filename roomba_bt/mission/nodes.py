@@ -46,7 +46,7 @@ from roomba_bt.mission.values import (
 )
 from roomba_bt.mission.wording import Wording
 from roomba_bt.printable import path_written
-from roomba_bt.yamlsource import NOT_PLAIN_SPACES, named_character
+from roomba_bt.yamlsource import NOT_PLAIN_SPACES, FileTooLarge, named_character, read_text
 
 #: How deep a tree may nest, counted in nodes from the root, subtrees expanded. A mission
 #: written by hand nests a dozen or so; a file nested hundreds deep (a generator gone wrong)
@@ -621,7 +621,7 @@ def _unknown_subtree_hint(ctx: Context, name: str, at: Loc, granted: Iterable[Pa
     library = None if hint else library_defining(name)
     if hint or library is not None:  # the shipped docking subtree, used without its include
         return hint or f" (the shipped {library} defines it: include: [{library}])"
-    defining = _files_defining(name, granted, at.file)
+    defining = _files_defining_once(ctx, name, granted, at.file)
     if defining:
         files = " and ".join(defining)
         return f" ({files} define{'s' if len(defining) == 1 else ''} it: include it)"
@@ -637,6 +637,21 @@ def _unknown_subtree_hint(ctx: Context, name: str, at: Loc, granted: Iterable[Pa
 _SUBTREES_SECTION = re.compile(r"^subtrees\s*:", re.MULTILINE)
 
 
+#: the unknown subtree names a compile looks for in the granted folders' files (the errors
+#: past the first hundred are not shown: a file of 100,000 unknown subtrees read the
+#: folder's files for each)
+HINTS_LOOKED_UP = 20
+
+
+def _files_defining_once(ctx: Context, name: str, granted: Iterable[Path], using: str) -> list[str]:
+    """:func:`_files_defining`, once a name and for at most :data:`HINTS_LOOKED_UP` names a
+    compile (``ctx.files_defining``); none for the names past them."""
+    memo = ctx.files_defining
+    if name not in memo:
+        memo[name] = [] if len(memo) >= HINTS_LOOKED_UP else _files_defining(name, granted, using)
+    return memo[name]
+
+
 def _files_defining(name: str, granted: Iterable[Path], using: str, limit: int = 3) -> list[str]:
     """Up to ``limit`` YAML files of the ``granted`` folders (:func:`granted_files`) with a
     ``subtrees:`` section that has a key ``name`` (read as text: a hint, not a compile),
@@ -649,8 +664,12 @@ def _files_defining(name: str, granted: Iterable[Path], using: str, limit: int =
         if path.suffix not in (".yaml", ".yml"):
             continue
         try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError):  # a file not to read: no hint from it
+            # a pipe named *.yaml in the folder hung the compile in open() (a device such as
+            # /dev/zero linked there was read without end): regular files only, 1 MiB at most
+            if not path.is_file():
+                continue
+            text = read_text(path)
+        except (OSError, UnicodeDecodeError, FileTooLarge):  # a file not to read: no hint
             continue
         shown = Path(os.path.relpath(path)).as_posix()
         if shown != using and _SUBTREES_SECTION.search(text) and key.search(text):

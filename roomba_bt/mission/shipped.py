@@ -16,6 +16,7 @@ shipped missions' directory.
 from __future__ import annotations
 
 import errno
+import functools
 import os
 import re
 from dataclasses import dataclass
@@ -98,6 +99,18 @@ def shipped_library_files() -> tuple[str, ...]:
 def library_defining(subtree: str) -> str | None:
     """The include name of the shipped library file that defines ``subtree`` (``dock`` ->
     ``roomba-bt:lib/docking.yaml``), or None: what an unknown subtree's error suggests."""
+    for name, subtrees in _library_subtrees():
+        if subtree in subtrees:
+            return name
+    return None
+
+
+@functools.lru_cache(maxsize=1)
+def _library_subtrees() -> tuple[tuple[str, frozenset[str]], ...]:
+    """Each shipped library file's include name with the names of its subtrees, read once
+    a process: every unknown node's error asks (a mission of 100,000 unknown nodes parsed
+    the library's YAML 100,000 times, for hours), and the installed files do not change."""
+    found = []
     for name in shipped_library_files():
         path = shipped_file(name)
         if path is None:
@@ -107,9 +120,9 @@ def library_defining(subtree: str) -> str | None:
         except (OSError, yaml.YAMLError):
             continue
         subtrees = data.get("subtrees") if isinstance(data, dict) else None
-        if isinstance(subtrees, dict) and subtree in subtrees:
-            return name
-    return None
+        if isinstance(subtrees, dict):
+            found.append((name, frozenset(str(key) for key in subtrees)))
+    return tuple(found)
 
 
 def shipped_file(text: str) -> Path | None:

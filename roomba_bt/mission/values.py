@@ -466,6 +466,11 @@ class Context:
     #: ``diagnostics`` as a set: an error is reported once, and looking it up in the list
     #: made N errors cost N**2/2 comparisons (20,000 aliases took 40 s to validate)
     _reported: set[Diagnostic] = field(default_factory=set, init=False, repr=False)
+    #: the files that define each unknown subtree's name, by the name (``nodes``'s hint,
+    #: which reads the granted folders' files): looked up once a name, and for at most
+    #: ``HINTS_LOOKED_UP`` names a compile (100,000 unknown subtrees read the folder's
+    #: files 100,000 times)
+    files_defining: dict[str, list[str]] = field(default_factory=dict, init=False, repr=False)
 
     def error(self, diagnostic: Diagnostic) -> None:
         reported = self._reported

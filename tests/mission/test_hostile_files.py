@@ -5,6 +5,8 @@ wrote, never a traceback."""
 from __future__ import annotations
 
 import errno
+import os
+import threading
 from pathlib import Path
 
 import pytest
@@ -300,3 +302,68 @@ def test_includes_that_are_no_library_say_what_they_are_at_the_include(
         f"roomba-bt schema: --plugin-file {tmp_path}: a directory, not a file",
         "roomba-bt schema: --plugin-file pipe.yaml: not a regular file",
     ]
+
+
+def test_a_pipe_beside_the_mission_is_not_opened_for_an_unknown_subtrees_hint(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The hint of ``unknown subtree 'x'`` reads the mission folder's YAML files for one that
+    defines it; a pipe named ``fifo.yaml`` there hung ``validate`` in ``open()`` for ever. A
+    writer waits on the pipe here: had the compile opened it, the writer would have given
+    it a library defining ``x`` and the hint would name the pipe."""
+    monkeypatch.chdir(tmp_path)
+    fifo = tmp_path / "fifo.yaml"
+    os.mkfifo(fifo)
+    (tmp_path / "lib.yaml").write_text("subtrees:\n  x: {tree: {wait: 1s}}\n")
+    mission = tmp_path / "m.yaml"
+    mission.write_text("mission: m\ntree: {subtree: {id: x}}\n")
+    opened = threading.Event()
+
+    def write() -> None:
+        with open(fifo, "w") as pipe:  # blocks until a reader opens it
+            opened.set()
+            pipe.write("subtrees:\n  x: {tree: {wait: 1s}}\n")
+
+    writer = threading.Thread(target=write, daemon=True)
+    writer.start()
+    try:
+        _, problems = compile_mission(mission)
+    finally:
+        was_opened = opened.is_set()
+        if not was_opened:  # the writer let go: a reader that reads nothing
+            os.close(os.open(fifo, os.O_RDONLY | os.O_NONBLOCK))
+        writer.join()
+    (problem,) = problems
+    assert not was_opened
+    assert problem.message == "unknown subtree 'x' (lib.yaml defines it: include it)"
+
+
+def test_a_file_of_thousands_of_unknown_names_reads_the_library_and_the_folder_a_few_times(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each unknown node's error parsed the shipped library's YAML to see whether it names a
+    subtree there, and each unknown subtree walked and read the mission's folder: a file of
+    100,000 unknown nodes took hours to validate. The library is read once a process, and
+    the folder for the first :data:`HINTS_LOOKED_UP` names of a compile."""
+    from roomba_bt.mission import nodes, shipped
+
+    monkeypatch.chdir(tmp_path)
+    shipped._library_subtrees.cache_clear()
+    parsed: list[object] = []
+    real_load = shipped.yaml.safe_load
+    monkeypatch.setattr(shipped.yaml, "safe_load", lambda t: parsed.append(t) or real_load(t))
+    walked: list[object] = []
+    real_granted = nodes.granted_files
+    monkeypatch.setattr(nodes, "granted_files", lambda r: walked.append(r) or real_granted(r))
+    (tmp_path / "lib.yaml").write_text("subtrees:\n  x0: {tree: {wait: 1s}}\n")
+    mission = tmp_path / "m.yaml"
+    uses = [f"{{subtree: {{id: x{i}}}}}" for i in range(60)] + [f"bogus{i}" for i in range(60)]
+    mission.write_text(f"mission: m\ntree: {{sequence: [{', '.join(uses)}]}}\n")
+    _, problems = compile_mission(mission)
+    assert len(problems) == 120
+    assert problems[0].message == "unknown subtree 'x0' (lib.yaml defines it: include it)"
+    assert problems[60].message.startswith("unknown node 'bogus0'")
+    assert len(parsed) == len(shipped.shipped_library_files())  # once each, not 60 times
+    assert len(walked) == nodes.HINTS_LOOKED_UP
+    assert compile_mission(mission)[1] == problems  # the same errors the second time
+    assert len(parsed) == len(shipped.shipped_library_files())
