@@ -890,10 +890,13 @@ def _yaml_problem(exc: yaml.YAMLError, text: str, source: str) -> WorldProblem:
     sentence after the position."""
     line, col = yamlsource.error_position(exc) or (0, 0)
     problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or str(exc)
-    tab = yamlsource.tab_hint(text, line, col)
+    refused = isinstance(exc, yamlsource.Refused)
+    # a refusal (an alias, a tag) is no syntax error: no tab to name, and the hint, which
+    # splits the whole text, made a file of 100,000 aliases take hours (as a mission's does)
+    tab = "" if refused else yamlsource.tab_hint(text, line, col)
     problem = str(problem) + tab
-    kind = "" if isinstance(exc, yamlsource.Refused) else "YAML syntax error"
-    cause = None if kind == "" or tab else yamlsource.lookalike_cause(text, line, col)
+    kind = "" if refused else "YAML syntax error"
+    cause = None if refused or tab else yamlsource.lookalike_cause(text, line, col)
     if cause is not None:  # a typographic quote, a no-break space: named at its place
         problem = f"{cause[2]} ({problem} at {line}:{col})"
         line, col = cause[0], cause[1]

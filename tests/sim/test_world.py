@@ -309,6 +309,25 @@ def test_every_alias_tag_and_control_character_of_a_world_is_refused_at_once() -
     ]
 
 
+def test_a_world_of_many_aliases_reads_its_text_once_not_once_an_alias(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Each refused alias or tag was given the syntax error's tab hint and look-alike cause,
+    which split the whole text into lines: a 600 KB world of 100,000 aliases took hours to
+    refuse (``run --world``, ``validate``). A refusal is no syntax error: neither is asked."""
+    split: list[int] = []
+    real_hint = yamlsource.tab_hint
+    monkeypatch.setattr(
+        yamlsource, "tab_hint", lambda t, ln, c: split.append(ln) or real_hint(t, ln, c)
+    )
+    monkeypatch.setattr(yamlsource, "lookalike_cause", lambda t, ln, c: split.append(ln))
+    found = problems("r: &r [[0, 0], [3, 0], [3, 3], [0, 3]]\nrooms: [" + "*r, " * 2000 + "*r]\n")
+    assert len(found) == 2001 and split == []
+    assert found[-1].startswith("w.yaml:2:8009: alias *r is not allowed")
+    [tab] = problems("rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\n\tname: x\n")
+    assert tab.endswith("(a tab: YAML indents with spaces)") and split == [2]
+
+
 @pytest.mark.parametrize(
     "text",
     [
