@@ -9,6 +9,7 @@ import os
 import re
 import subprocess
 import sys
+import tracemalloc
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -263,6 +264,29 @@ def test_a_malformed_line_before_the_last_or_ended_is_still_an_error(
                                     lines[50][:20]]), encoding="utf-8")  # fmt: skip
     assert main(["replay", str(damaged)]) == 2
     assert f"{damaged}:41: malformed chunk" in capsys.readouterr().err
+
+
+def test_a_long_chunk_line_is_read_in_memory_near_its_size(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A stranger's record with a line of 40 MB of hex ended ``replay`` in a MemoryError
+    (exit 70) after 2.7 GB: the chunk's pattern kept a mark for every byte pair it matched.
+    A line of 2 MB of hex is read with less than 4 bytes held for each of its characters
+    (120 before); one of an odd number of digits is a malformed chunk, as before."""
+    lines = _recorded_run(tmp_path, capsys)
+    long = '{"t": 0.000000, "d": "in", "b": "' + "00" * 1_000_000 + '"}\n'
+    record = tmp_path / "long.jsonl"
+    record.write_text("".join([lines[0], long, *lines[1:]]), encoding="utf-8")
+    tracemalloc.start()
+    try:
+        load_record(record)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 4 * len(long), peak
+    record.write_text("".join([lines[0], long.replace('00"', '0"', 1), *lines[1:]]))
+    assert main(["replay", str(record)]) == 2
+    assert f"{record}:2: malformed chunk (ValueError: non-hexadecimal" in capsys.readouterr().err
 
 
 def _replayed(
