@@ -1006,6 +1006,13 @@ UNENDED = (
 )
 
 
+#: The blank lines a record may hold (run --record writes none; an editor may add a few).
+#: Each costs a read of the file's lines as a chunk does, 2 us, for one byte: a stranger's
+#: 1 MB .gz of a gigabyte of line ends kept ``replay`` and ``monitor`` reading for most of
+#: an hour (16 MB of them, 40 s).
+MAX_BLANK_LINES = 10_000
+
+
 def load_record(path: str | Path) -> Record:
     """Check a record whole and return it (its chunks are read again when replayed, not
     kept); :class:`RecordError` names the file and line of anything malformed.
@@ -1019,8 +1026,16 @@ def load_record(path: str | Path) -> Record:
     _, first, _, size = next(lines)
     record = Record(_header(path, first), path, size=size)
     last = 0.0
+    blank = 0
     for number, line, whole, end in _up_to_damage(path, lines):
         if not line.strip():
+            blank += 1
+            if blank > MAX_BLANK_LINES:
+                raise RecordError(
+                    f"{path}:{number}: {blank:,} blank lines; allowed: at most "
+                    f"{MAX_BLANK_LINES:,} (run --record writes none: a file damaged, or no "
+                    "record)"
+                )
             continue
         if record.ended:
             raise RecordError(f"{path}:{number}: a line after the run's end line")

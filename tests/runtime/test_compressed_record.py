@@ -27,6 +27,7 @@ from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.recording import (
     FLUSH_EVERY_S,
     GZIP_MAGIC,
+    MAX_BLANK_LINES,
     RecordingTransport,
     RecordNotStarted,
     RecordSize,
@@ -506,3 +507,23 @@ def test_a_compressed_record_s_text_size_is_its_trailer_s_and_unknown_without_on
     assert f"({size / 1e6:.1f} MB compressed, its record's own size known once read)" in notice
     monkeypatch.setattr(monitor_cmd, "READING_NOTICE_BYTES", 10 * size + 1)
     assert monitor_cmd.reading_notice(str(killed)) is None
+
+
+def test_a_record_of_blank_lines_is_refused_at_the_first_too_many(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A stranger's 1 MB ``.gz`` of a gigabyte of line ends (a blank line costs the read of
+    a chunk, for one byte) kept ``replay`` and ``monitor`` reading for most of an hour.
+    :data:`MAX_BLANK_LINES` of them are read past, as an editor may leave a few; the next
+    is refused at its line, exit 2."""
+    lines = gzip.decompress(_record(tmp_path / "run.jsonl.gz", capsys).read_bytes())
+    header, rest = lines.split(b"\n", 1)
+    for blanks, rc in ((MAX_BLANK_LINES, 0), (MAX_BLANK_LINES + 1, 2)):
+        path = tmp_path / f"blank{blanks}.jsonl.gz"
+        path.write_bytes(gzip.compress(header + b"\n" * (blanks + 1) + rest))
+        assert main(["replay", str(path)]) == rc
+        err = capsys.readouterr().err
+        assert (rc == 2) == (
+            f"{path}:{MAX_BLANK_LINES + 2}: 10,001 blank lines; allowed: at most 10,000 "
+            "(run --record writes none: a file damaged, or no record)" in err
+        ), err
