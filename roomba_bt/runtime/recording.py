@@ -124,7 +124,7 @@ from roomba_bt.oi.encode import BAUD_CODES, command_size, decode_command
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, escaped, shortened
 from roomba_bt.robot import wording
 from roomba_bt.robot.safety import interrupts_deferred
 from roomba_bt.runtime.claimed import ClaimedFile, held_by_a_writer
@@ -1013,6 +1013,11 @@ UNENDED = (
 MAX_BLANK_LINES = 10_000
 
 
+#: the most packet ids a stream request holds (its count is one byte): a header's ``packets``
+#: with more was replayed until the request was encoded, an ERROR with exit 1
+MAX_STREAM_IDS = 255
+
+
 def load_record(path: str | Path) -> Record:
     """Check a record whole and return it (its chunks are read again when replayed, not
     kept); :class:`RecordError` names the file and line of anything malformed.
@@ -1339,8 +1344,15 @@ def header_problem(header: dict[str, Any]) -> str | None:
     if not isinstance(packets, list) or not packets:
         return 'the header lists no stream packets ("packets")'
     unknown = [p for p in packets if type(p) is not int or p not in PACKETS]
-    if unknown:
-        return f"header field 'packets' holds {unknown}, not sensor packet ids"
+    if unknown:  # each once, the first few (a stranger's list of 100,000 said 500 KB of it)
+        said = list(dict.fromkeys(shortened(repr(p), 40) for p in unknown))
+        more = f" and {len(said) - 10:,} more" if len(said) > 10 else ""
+        return f"header field 'packets' holds [{', '.join(said[:10])}]{more}, not sensor packet ids"
+    if len(packets) > MAX_STREAM_IDS:  # the Stream command's count is one byte
+        return (
+            f"header field 'packets' lists {len(packets):,} ids; allowed: at most "
+            f"{MAX_STREAM_IDS} (a stream's request), as run --record writes them"
+        )
     return None
 
 

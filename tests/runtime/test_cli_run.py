@@ -261,7 +261,12 @@ HEADER = {"format": "roomba-bt-record", "version": 1, "profile": "create2", "bau
      ("parameters", ["speed"], "header field 'parameters' is ['speed']; expected {name: value}"),
      ("packets", [7, "35"], "header field 'packets' holds ['35'], not sensor packet ids"),
      ("packets", [7, 99], "header field 'packets' holds [99]"),
-     ("packets", [], 'the header lists no stream packets ("packets")')],
+     ("packets", [], 'the header lists no stream packets ("packets")'),
+     # 100,000 ids were replayed up to the stream's request: an ERROR, exit 1
+     ("packets", [7] * 100_000, "header field 'packets' lists 100,000 ids; allowed: at most 255"),
+     # each unknown id once, the first ten (100,000 of them were said whole: 500 KB)
+     ("packets", [7, *range(300, 100_000)], "header field 'packets' holds [300, 301, 302, "
+      "303, 304, 305, 306, 307, 308, 309] and 99,690 more, not sensor packet ids")],
 )  # fmt: skip
 def test_a_hand_edited_header_is_named_field_by_field(
     command: str,
