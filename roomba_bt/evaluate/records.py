@@ -63,6 +63,7 @@ from typing import Any
 from roomba_bt.evaluate.episode import Coverage, EpisodeResult
 from roomba_bt.evaluate.keys import KEY_PREFIX
 from roomba_bt.runtime.claimed import ClaimedFile
+from roomba_bt.runtime.recording import long_number
 from roomba_bt.runtime.summary import falls_in_order, hazard_falls
 
 FORMATS = (".jsonl", ".csv")
@@ -572,6 +573,8 @@ def _json_row(path: str | Path, n: int, text: str) -> dict[str, Any]:
         ) from None
     except RecursionError:  # json's decoder recurses: nested thousands deep
         raise ResultsFileError(f"{path}:{n}: nested too deeply for a result") from None
+    except ValueError as exc:  # a number too long to read: said without the file before
+        raise ResultsFileError(f"{path}:{n}: {long_number(exc)}") from None
     if not isinstance(record, dict):
         found = _JSON_KINDS.get(type(record).__name__, "value")
         raise ResultsFileError(f"{path}:{n}: found a JSON {found}; expected an object per "
@@ -607,7 +610,7 @@ class CutShort:
 
 #: a record's first columns as a JSON line holds them (json.dumps' separators), each ended
 _JSON_MISSION = re.compile(r'^\{"mission": ("(?:[^"\\]|\\.)*"),')
-_JSON_SEED = re.compile(r'"seed": (\d+),')
+_JSON_SEED = re.compile(r'"seed": (\d{1,20}),')  # a longer one is no seed int() reads
 
 
 def _cut_json(path: str | Path, line: int, text: str) -> CutShort:

@@ -109,6 +109,7 @@ import os
 import re
 import stat
 import struct
+import sys
 import time
 import zlib
 from collections import deque
@@ -1210,6 +1211,23 @@ def _line_text(path: Path, number: int, data: bytes) -> str:
         ) from None
 
 
+#: what ``int`` says of a number longer than it reads (4,300 digits by default): its
+#: advice, ``sys.set_int_max_str_digits()``, is a programmer's
+_TOO_LONG = "integer string conversion"
+
+
+def long_number(exc: ValueError) -> str:
+    """What a reader of a stranger's JSON says of ``exc``, the ``ValueError`` of
+    ``json.loads``: a number too long (``a number of more than 4,300 digits; ...``), else
+    its own words."""
+    if _TOO_LONG not in str(exc):
+        return str(exc)
+    return (
+        f"a number of more than {sys.get_int_max_str_digits():,} digits; its numbers are a "
+        "few digits long"
+    )
+
+
 def _header(path: Path, line: str) -> dict[str, Any]:
     """The record's first line: its header, every field checked (:func:`header_problem`)."""
     try:
@@ -1218,6 +1236,8 @@ def _header(path: Path, line: str) -> dict[str, Any]:
         raise RecordError(f"{path}:1:{exc.colno}: header is not JSON: {exc.msg}") from None
     except RecursionError:  # json's decoder recurses: a line nested thousands deep
         raise RecordError(f"{path}:1: header nested too deeply to be a record's") from None
+    except ValueError as exc:  # a number too long to read: it was an internal error, exit 70
+        raise RecordError(f"{path}:1: header holds {long_number(exc)}") from None
     if not isinstance(header, dict) or header.get("format") != RECORD_FORMAT:
         raise RecordError(f"{path}:1: not a {RECORD_FORMAT} file (header format field)")
     if header.get("version") not in READ_VERSIONS:
@@ -1266,8 +1286,9 @@ def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dic
     except RecursionError:
         raise RecordError(f"{path}:{number}: a chunk nested too deeply to be one") from None
     except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+        said = long_number(exc) if _TOO_LONG in str(exc) else f"{type(exc).__name__}: {exc}"
         raise RecordError(
-            f"{path}:{number}: malformed chunk ({type(exc).__name__}: {exc}); expected "
+            f"{path}:{number}: malformed chunk ({said}); expected "
             '{"t": seconds, "d": "in"|"out", "b": hex}'
         ) from None
     if problem is not None:

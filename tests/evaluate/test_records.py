@@ -255,3 +255,25 @@ def test_a_last_record_cut_inside_a_character_is_cut_short_not_bad_utf8(
     path.write_bytes(data[:20] + b"\xff" + data[20:])
     with pytest.raises(ResultsFileError, match=r"not UTF-8 text \(byte 0xff\)"):
         read_rows(path, [])
+
+
+def test_a_number_too_long_to_read_is_placed_not_said_in_pythons_words(
+    tmp_path: Path, results: list[EpisodeResult]
+) -> None:
+    """A seed of 5,000 digits was ``--from Exceeds the limit (4300 digits) for integer string
+    conversion ...; use sys.set_int_max_str_digits()``: no file, no line, a programmer's
+    advice. A whole line and one a kill cut short alike."""
+    path = tmp_path / "r.jsonl"
+    write_results(path, results)
+    lines = path.read_text().splitlines(keepends=True)
+    long = lines[1].replace('"seed": 5,', f'"seed": {"9" * 5000},')
+    path.write_text(lines[0] + long + lines[2])
+    with pytest.raises(ResultsFileError) as said:
+        read_rows(path, [])
+    assert str(said.value) == (
+        f"{path}:2: a number of more than 4,300 digits; its numbers are a few digits long"
+    )
+    path.write_text(lines[0] + lines[1] + long[:-30])  # the last line, cut: left out
+    cut: list[CutShort] = []
+    assert [row[2].seed for row in read_rows(path, cut)] == [4, 5]
+    assert cut == [CutShort(str(path), 3, None, BUMP)]

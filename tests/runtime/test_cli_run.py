@@ -286,6 +286,24 @@ def test_a_hand_edited_header_is_named_field_by_field(
     assert "Traceback" not in out + err
 
 
+@pytest.mark.parametrize("command", READERS)
+def test_a_number_too_long_to_read_is_placed_not_an_internal_error(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A header's number of 5,000 digits was ``internal error: ValueError: Exceeds the limit
+    (4300 digits) ...``, exit 70; in a chunk, Python's advice
+    (``sys.set_int_max_str_digits()``) in the malformed chunk's words."""
+    record = tmp_path / "long.jsonl"
+    header = json.dumps(HEADER).replace('"version": 1', f'"version": {"1" * 5000}')
+    record.write_text(header + '\n{"t": 0.0, "d": "out", "b": "80"}\n')
+    assert main([command, str(record)]) == 2
+    said = "a number of more than 4,300 digits; its numbers are a few digits long"
+    assert capsys.readouterr().err.endswith(f"{record}:1: header holds {said}\n")
+    record.write_text(json.dumps(HEADER) + f'\n{{"t": {"1" * 5000}, "d": "out", "b": "80"}}\n')
+    assert main([command, str(record)]) == 2
+    assert f"{record}:2: malformed chunk ({said}); expected" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("line", [1, 2])
 def test_a_line_nested_thousands_deep_is_placed_not_a_traceback(
     line: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
