@@ -13,6 +13,8 @@ shows them)."""
 
 from __future__ import annotations
 
+import errno
+import os
 import re
 
 __all__ = [
@@ -108,6 +110,21 @@ def path_written(text: str) -> str:
     backslash as the file writes it. ``'lib\\moves.yaml'``, doubled, sent a student searching
     the file for two, and a Windows path ``'C:\\lab\\x.py'`` read as no path they wrote."""
     return repr_written(text)
+
+
+#: what :func:`broken_link` says of a link that leads back to itself
+LINK_LOOP = "a symbolic link loop (it leads back to itself)"
+
+
+def broken_link(link: os.PathLike[str]) -> str:
+    """What a symbolic link that leads to no file is, a mission's or a world's: a loop
+    (:data:`LINK_LOOP`), or a link to nothing (a world's said "no such file")."""
+    try:
+        os.stat(link)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return LINK_LOOP
+    return f"a broken symbolic link (to {os.readlink(link)!r}, which does not exist)"
 
 
 def repr_written(value: object) -> str:

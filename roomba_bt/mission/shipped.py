@@ -15,9 +15,7 @@ shipped missions' directory.
 
 from __future__ import annotations
 
-import errno
 import functools
-import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,6 +26,7 @@ import yaml
 from roomba_bt.behaviours.units import closest
 from roomba_bt.mission.values import substituted
 from roomba_bt.mission.wording import COMMAND_LINE, Wording
+from roomba_bt.printable import LINK_LOOP, broken_link
 
 #: Where the shipped missions live: the package's data directory (a sibling of ``mission/``).
 SHIPPED_DIR = Path(__file__).resolve().parent.parent / "missions"
@@ -219,12 +218,8 @@ def _find_mission(text: str, given: Path, wording: Wording) -> ShippedLookup:
 
 def _broken_link(link: Path) -> str:
     """What a symbolic link that leads to no file is: a loop, or a link to nothing."""
-    try:
-        link.stat()
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            return "a symbolic link loop (it leads back to itself), not a mission file"
-    return f"a broken symbolic link (to {os.readlink(link)!r}, which does not exist)"
+    said = broken_link(link)
+    return f"{said}, not a mission file" if said == LINK_LOOP else said
 
 
 def _with_defaults(text: str, params: tuple[ShippedParameter, ...]) -> str:

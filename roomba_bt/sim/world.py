@@ -45,7 +45,7 @@ from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.bits import BUTTON_NAMES, OVERCURRENT_BITS, PRESS_SECONDS
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import BODY_RADIUS_MM
-from roomba_bt.printable import listed
+from roomba_bt.printable import broken_link, listed
 from roomba_bt.sim.geometry import (
     Point,
     Polygon,
@@ -1354,6 +1354,8 @@ def _no_such_world(path: pathlib.Path, given: str) -> WorldProblem:
         if path.is_dir()
         else "a device or a pipe, not a file"
         if path.exists()
+        else broken_link(path)
+        if path.is_symlink()
         else f"no such file or world in {WORLDS_VARIABLE}'s folders or the shipped ones"
         if own
         else "no such file or shipped world"
@@ -1390,10 +1392,14 @@ def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
     except UnicodeDecodeError as exc:
         line, col = yamlsource.undecodable_position(exc)
         byte = bytes(exc.object)[exc.start]
+        # UTF-16 text (Notepad's "Unicode"), a Word file: said as a mission's is ("byte 0xff")
+        whole = exc.reason in yamlsource.WHOLE_REASONS
+        found = (
+            exc.reason.removeprefix("this is ") if whole else f"byte 0x{byte:02x}, not UTF-8 text"
+        )
         raise WorldError(
-            [WorldProblem(str(path), line, col, "world", f"byte 0x{byte:02x}, not UTF-8 text",
-                          "a UTF-8 YAML file")]
-        ) from None  # fmt: skip
+            [WorldProblem(str(path), line, col, "world", found, "a UTF-8 YAML file")]
+        ) from None
     except OSError as exc:
         raise WorldError(
             [

@@ -233,6 +233,8 @@ def read_text(path: Path) -> str:
         data = file.read(MAX_FILE_BYTES + 1)
     if len(data) > MAX_FILE_BYTES:  # grew since, or a size the file system does not give
         raise FileTooLarge(len(data))
+    if data[:4] in UTF32_MARKS:  # before UTF-16's: its little-endian mark begins with FF FE
+        raise UnicodeDecodeError("utf-8", data, 0, 1, UTF32)
     if looks_utf16(data):  # Notepad's "Unicode": "byte 0xff" or "U+0000" said nothing of it
         raise UnicodeDecodeError("utf-8", data, 0, 1, UTF16)
     for signature, what in DOCUMENT_SIGNATURES:  # a word processor's file, named as one
@@ -250,6 +252,9 @@ def read_text(path: Path) -> str:
 
 #: the reason of the :class:`UnicodeDecodeError` :func:`read_text` raises for UTF-16 text
 UTF16 = "this is UTF-16 text: save it as UTF-8"
+#: and for UTF-32 text, which starts with its byte-order mark (it was called UTF-16)
+UTF32 = "this is UTF-32 text: save it as UTF-8"
+UTF32_MARKS = (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")
 #: how files that are no text start, and the reason :func:`read_text` gives for each (a
 #: teacher's class handed in TextEdit's RTF and Word's .docx as missions: "byte 0x8e" and a
 #: YAML syntax error in line 2 said nothing of what the file was)
@@ -261,7 +266,7 @@ DOCUMENT_SIGNATURES: tuple[tuple[bytes, str], ...] = (
     (b"\x89PNG", "this is a PNG image: a mission is a plain text file, UTF-8"),
 )  # fmt: skip
 #: the reasons that say the whole of what is wrong (no byte of a text to show)
-WHOLE_REASONS = frozenset({UTF16, *(what for _, what in DOCUMENT_SIGNATURES)})
+WHOLE_REASONS = frozenset({UTF16, UTF32, *(what for _, what in DOCUMENT_SIGNATURES)})
 
 
 def legacy_encoding(data: bytes, exc: UnicodeDecodeError) -> str:

@@ -159,6 +159,18 @@ def test_a_utf16_file_is_named_as_such(tmp_path: Path, encoding: str) -> None:
     ]
 
 
+@pytest.mark.parametrize("encoding", ["utf-32", "utf-32-be"])
+def test_a_utf32_file_is_named_as_such(tmp_path: Path, encoding: str) -> None:
+    """Its byte-order mark (FF FE 00 00 in little-endian) begins as UTF-16's: it was called
+    UTF-16 text."""
+    path = tmp_path / "m.yaml"
+    path.write_bytes(("\ufeff" if encoding.endswith("be") else "") .encode(encoding)
+                     + "mission: m\ntree: {log: x}\n".encode(encoding))  # fmt: skip
+    assert _problems(path) == [
+        "1:1: mission file is not UTF-8 text: this is UTF-32 text: save it as UTF-8"
+    ]
+
+
 def test_a_second_document_is_named_where_it_starts(tmp_path: Path) -> None:
     """It was PyYAML's fragment "but found another document"."""
     path = _mission(tmp_path, "mission: m\ntree: {log: x}\n---\nmission: n\n")

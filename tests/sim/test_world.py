@@ -737,3 +737,29 @@ def test_a_shipped_worlds_start_warns_of_nothing(name: str) -> None:
     world = load_world(name)
     assert world.warnings == ()
     assert world.nearest_drop(world.start)[1] >= world_module.ROBOT_RADIUS_MM
+
+
+def test_a_utf16_world_and_a_link_to_no_world_say_what_they_are(
+    tmp_path: pathlib.Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A world saved as Notepad's "Unicode" was "found byte 0xff, not UTF-8 text", where a
+    mission's says UTF-16; a link that loops or leads nowhere was "no such file or shipped
+    world", where a mission's says which."""
+    monkeypatch.chdir(tmp_path)
+    pathlib.Path("w16.yaml").write_bytes("name: x\n".encode("utf-16"))
+    pathlib.Path("loop.yaml").symlink_to("loop.yaml")
+    pathlib.Path("gone.yaml").symlink_to("moved.yaml")
+    said = {}
+    for name in ("w16.yaml", "loop.yaml", "gone.yaml"):
+        with pytest.raises(WorldError) as info:
+            load_world(name)
+        said[name] = str(info.value.problems[0])
+    assert said["w16.yaml"] == (
+        "w16.yaml:1:1: world: found UTF-16 text: save it as UTF-8; allowed: a UTF-8 YAML file"
+    )
+    assert said["loop.yaml"].startswith(
+        "loop.yaml: world: found a symbolic link loop (it leads back to itself); allowed: "
+    )
+    assert said["gone.yaml"].startswith(
+        "gone.yaml: world: found a broken symbolic link (to 'moved.yaml', which does not exist)"
+    )
