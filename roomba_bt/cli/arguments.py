@@ -588,7 +588,8 @@ def _written_over_only(
     try:
         with opener(path) as file:  # a header line, parameters and all
             first = file.readline(1 << 16).decode("utf-8", errors="replace")
-    except (OSError, EOFError, zlib.error):  # unreadable, or compressed and damaged
+    # unreadable, compressed and damaged, or compressed otherwise (open_record's RecordError)
+    except (OSError, EOFError, zlib.error, ValueError):
         first = ""
     if not is_kind(first):
         raise argparse.ArgumentTypeError(f"found {text!r}: a file that is not {refusal}")

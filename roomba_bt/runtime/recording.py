@@ -1131,10 +1131,32 @@ def open_record(path: Path) -> io.BufferedIOBase:
     lost on the way), anything else is read as it is, a ``.gz`` name or not (decided: the
     bytes are the record, the name only a hint; a wrong one costs the user nothing)."""
     with path.open("rb") as file:
-        compressed = file.read(len(GZIP_MAGIC)) == GZIP_MAGIC
-    if compressed:
+        start = file.read(8)
+    if start.startswith(GZIP_MAGIC):
         return gzip.open(path, "rb")
+    for signature, what in NOT_A_RECORD:
+        if start.startswith(signature):
+            raise RecordError(f"{path}:1: {what}")
     return path.open("rb")
+
+
+#: How files that are no record's text start, and what is said of each: they were "byte
+#: 0xff, not UTF-8 text" at 1:1 (a record compressed with another tool than gzip, or saved
+#: again by an editor as UTF-16).
+NOT_A_RECORD: tuple[tuple[bytes, str], ...] = (
+    (b"BZh", "a bzip2-compressed file; records are read plain or gzip-compressed (.gz): "
+     "bunzip2 it first"),
+    (b"\xfd7zXZ\x00", "an xz-compressed file; records are read plain or gzip-compressed "
+     "(.gz): unxz it first"),
+    (b"\x28\xb5\x2f\xfd", "a zstd-compressed file; records are read plain or "
+     "gzip-compressed (.gz): unzstd it first"),
+    (b"PK\x03\x04", "a ZIP archive; unzip the record (run --record's .jsonl or .jsonl.gz) "
+     "from it"),
+    (b"\xff\xfe", "UTF-16 text (saved again by an editor?); records are UTF-8 JSON lines, as "
+     "run --record writes them"),
+    (b"\xfe\xff", "UTF-16 text (saved again by an editor?); records are UTF-8 JSON lines, as "
+     "run --record writes them"),
+)  # fmt: skip
 
 
 #: the bytes a zlib sync flush ends with (an empty stored block): the end of a compressed
@@ -1230,8 +1252,8 @@ def long_number(exc: ValueError) -> str:
 
 def _header(path: Path, line: str) -> dict[str, Any]:
     """The record's first line: its header, every field checked (:func:`header_problem`)."""
-    try:
-        header = json.loads(line)
+    try:  # a byte-order mark an editor wrote before it: read past, as a mission's is
+        header = json.loads(line.removeprefix("\ufeff"))
     except json.JSONDecodeError as exc:
         raise RecordError(f"{path}:1:{exc.colno}: header is not JSON: {exc.msg}") from None
     except RecursionError:  # json's decoder recurses: a line nested thousands deep
@@ -1240,7 +1262,7 @@ def _header(path: Path, line: str) -> dict[str, Any]:
         raise RecordError(f"{path}:1: header holds {long_number(exc)}") from None
     if not isinstance(header, dict) or header.get("format") != RECORD_FORMAT:
         raise RecordError(f"{path}:1: not a {RECORD_FORMAT} file (header format field)")
-    if header.get("version") not in READ_VERSIONS:
+    if type(header.get("version")) is not int or header["version"] not in READ_VERSIONS:
         raise RecordError(
             f"{path}:1: record version {header.get('version')!r}; this roomba-bt reads "
             f"versions {', '.join(map(str, READ_VERSIONS))}"

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import bz2
 import json
 import logging
+import lzma
 import os
 import re
 import subprocess
@@ -340,6 +342,47 @@ def test_a_record_with_a_byte_that_is_not_utf8_is_placed_not_a_traceback(
         f"roomba-bt {command}: {record}:2:12: byte 0xff, not UTF-8 text; expected the JSON "
         "lines of a roomba-bt-record file (run --record)"
     )
+
+
+@pytest.mark.parametrize("command", READERS)
+@pytest.mark.parametrize(
+    ("packed", "said"),
+    [(lambda text: bz2.compress(text), "a bzip2-compressed file; records are read plain or "
+      "gzip-compressed (.gz): bunzip2 it first"),
+     (lambda text: lzma.compress(text), "an xz-compressed file; records are read plain or "
+      "gzip-compressed (.gz): unxz it first"),
+     (lambda text: text.decode().encode("utf-16"), "UTF-16 text (saved again by an editor?); "
+      "records are UTF-8 JSON lines, as run --record writes them")],
+)  # fmt: skip
+def test_a_record_packed_otherwise_says_what_it_is(
+    command: str,
+    packed: Callable[[bytes], bytes],
+    said: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Each was ``1:1: byte 0xff, not UTF-8 text`` (0x42, 0xfd): nothing of what the file
+    was, or what to do."""
+    record = tmp_path / "packed.jsonl"
+    record.write_bytes(
+        packed(json.dumps(HEADER).encode() + b'\n{"t": 0.0, "d": "out", "b": "80"}\n')
+    )
+    assert main([command, str(record)]) == 2
+    assert capsys.readouterr().err.strip() == f"roomba-bt {command}: {record}:1: {said}"
+
+
+def test_a_header_an_editor_began_with_a_bom_is_read_and_a_boolean_version_is_not(
+    tmp_path: Path,
+) -> None:
+    """Notepad's byte-order mark was ``header is not JSON: Unexpected UTF-8 BOM (decode using
+    utf-8-sig)``, Python's advice; ``"version": true`` was read as version 1 (True == 1)."""
+    record = tmp_path / "edited.jsonl"
+    chunk = '\n{"t": 0.0, "d": "out", "b": "80"}\n'
+    record.write_text("\ufeff" + json.dumps(HEADER) + chunk, encoding="utf-8")
+    assert load_record(record).header["version"] == 1
+    record.write_text(json.dumps({**HEADER, "version": True}) + chunk)
+    with pytest.raises(ValueError, match=":1: record version True; this roomba-bt reads"):
+        load_record(record)
 
 
 def test_a_record_is_read_a_line_at_a_time_and_a_device_refused(
