@@ -1179,7 +1179,10 @@ def record_size(path: Path) -> RecordSize:
     text size is its gzip trailer's (the last 4 bytes: the text's length modulo 2**32),
     unknown where the file does not end with one (a run killed, or writing it still: it
     ends with its last sync flush, :data:`SYNC_FLUSH_END`) or holds 4 GiB of text or more
-    (the trailer's length then smaller than the file). OSError when it cannot be read."""
+    (the trailer's length then smaller than the file). OSError when it cannot be read, or
+    is no regular file (``monitor fifo.jsonl`` waited in ``open`` for a writer, for ever)."""
+    if not stat.S_ISREG(path.stat().st_mode):
+        raise OSError(f"{path}: not a regular file")
     with path.open("rb") as file:
         size = os.fstat(file.fileno()).st_size
         if file.read(len(GZIP_MAGIC)) != GZIP_MAGIC:
