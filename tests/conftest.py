@@ -24,6 +24,7 @@ import select
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Generator, Iterator, Sequence
 from pathlib import Path
@@ -370,3 +371,43 @@ def mypy_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
     roomba_bt's analysis from the first. The cache holds only what mypy derived from the
     same files with the same options, so what each run reports is unchanged."""
     return tmp_path_factory.mktemp("mypy-cache")
+
+
+#: What :func:`pipe_read` gives: the reader's result (or what it raised) and whether it
+#: opened the pipe.
+PipeRead = Callable[[Path, Callable[[], object]], tuple[object, bool]]
+
+
+def _read_beside_a_writer(fifo: Path, read: Callable[[], object]) -> tuple[object, bool]:
+    """What ``read()`` gives (or raises), and whether it opened the pipe ``fifo``, which a
+    writer waits on: a reader that opens a pipe waits for a writer, for ever, and here one
+    comes, so a reader that opens it ends (the test fails, it does not hang)."""
+    opened = threading.Event()
+
+    def write() -> None:
+        with open(fifo, "w"):  # blocks until a reader opens it
+            opened.set()
+
+    writer = threading.Thread(target=write, daemon=True)
+    writer.start()
+    try:
+        try:
+            given = read()
+        except Exception as exc:  # what a refusal raises is the test's to look at
+            given = exc
+    finally:
+        was_opened = opened.is_set()
+        # a reader held until the writer is done: its open() ends whenever it comes
+        reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
+        try:
+            writer.join()
+        finally:
+            os.close(reader)
+    return given, was_opened
+
+
+@pytest.fixture
+def pipe_read() -> PipeRead:
+    """:func:`_read_beside_a_writer`: a test's check that a command never opens a pipe it
+    was given (``validate``'s hint, ``monitor``'s record, ``eval --from``'s results)."""
+    return _read_beside_a_writer

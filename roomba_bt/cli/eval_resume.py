@@ -113,13 +113,20 @@ def earlier_files(out: str) -> list[Path]:
 def _holds_records(path: Path) -> bool:
     """Whether ``path`` holds a line after a CSV's header (or any JSON line): an episode,
     or something that is not one, which is not written over either."""
+    header = 1 if path.suffix.lower() == ".csv" else 0
+    found = 0
+    # a pipe (open() waits for a writer, for ever) or a device holds no records: not opened.
+    # Read up to the first record, a line at most 64 KiB at a time: the whole file was read
+    # into a list, and an --out linked to /dev/zero was a MemoryError, exit 70
+    if path.exists() and not path.is_file():
+        return False
     try:
         with path.open(encoding="utf-8", errors="replace") as text:
-            lines = [line for line in text if line.strip()]
+            while found <= header and (line := text.readline(1 << 16)):
+                found += bool(line.strip())
     except (FileNotFoundError, IsADirectoryError):
         return False
-    header = 1 if path.suffix.lower() == ".csv" else 0
-    return len(lines) > header
+    return found > header
 
 
 def refused_over(args: argparse.Namespace) -> str | None:

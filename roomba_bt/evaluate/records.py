@@ -679,6 +679,10 @@ def read_rows(
     if Path(path).is_dir():  # said as what it is: not "Is a directory", not "no suffix"
         raise ResultsFileError(f"{path}: a directory; {expected}")
     fmt = results_format(path)
+    # a pipe waited in open() for a writer for ever; a device (/dev/zero linked as
+    # results.jsonl) was read without end: the file is read whole
+    if Path(path).exists() and not Path(path).is_file():
+        raise ResultsFileError(f"{path}: a device or a pipe, not a file; {expected}")
     text, tail = _text(path, cut)
     if fmt == ".csv":
         rows = _csv_rows(path, text, cut)

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 
@@ -277,3 +279,22 @@ def test_a_number_too_long_to_read_is_placed_not_said_in_pythons_words(
     cut: list[CutShort] = []
     assert [row[2].seed for row in read_rows(path, cut)] == [4, 5]
     assert cut == [CutShort(str(path), 3, None, BUMP)]
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_a_pipe_given_as_results_is_never_opened(
+    tmp_path: Path, suffix: str, pipe_read: Callable[..., tuple[object, bool]]
+) -> None:
+    """``eval --from results.jsonl`` (a pipe) and ``eval --out results.jsonl --resume`` waited
+    in open() for a writer, for ever; a link to /dev/zero was read whole, a MemoryError."""
+    from roomba_bt.cli.eval_resume import earlier_files
+
+    fifo = tmp_path / f"results{suffix}"
+    os.mkfifo(fifo)
+    refused, opened = pipe_read(fifo, lambda: read_rows(fifo, []))
+    assert (str(refused), opened) == (
+        f"{fifo}: a device or a pipe, not a file; expected results as eval --out writes them "
+        "(.jsonl or .csv)",
+        False,
+    )
+    assert pipe_read(fifo, lambda: earlier_files(str(fifo))) == ([], False)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import errno
 import os
-import threading
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -305,36 +305,19 @@ def test_includes_that_are_no_library_say_what_they_are_at_the_include(
 
 
 def test_a_pipe_beside_the_mission_is_not_opened_for_an_unknown_subtrees_hint(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, pipe_read: Callable[..., tuple[object, bool]]
 ) -> None:
     """The hint of ``unknown subtree 'x'`` reads the mission folder's YAML files for one that
-    defines it; a pipe named ``fifo.yaml`` there hung ``validate`` in ``open()`` for ever. A
-    writer waits on the pipe here: had the compile opened it, the writer would have given
-    it a library defining ``x`` and the hint would name the pipe."""
+    defines it; a pipe named ``fifo.yaml`` there hung ``validate`` in ``open()`` for ever."""
     monkeypatch.chdir(tmp_path)
     fifo = tmp_path / "fifo.yaml"
     os.mkfifo(fifo)
     (tmp_path / "lib.yaml").write_text("subtrees:\n  x: {tree: {wait: 1s}}\n")
     mission = tmp_path / "m.yaml"
     mission.write_text("mission: m\ntree: {subtree: {id: x}}\n")
-    opened = threading.Event()
-
-    def write() -> None:
-        with open(fifo, "w") as pipe:  # blocks until a reader opens it
-            opened.set()
-            pipe.write("subtrees:\n  x: {tree: {wait: 1s}}\n")
-
-    writer = threading.Thread(target=write, daemon=True)
-    writer.start()
-    try:
-        _, problems = compile_mission(mission)
-    finally:
-        was_opened = opened.is_set()
-        if not was_opened:  # the writer let go: a reader that reads nothing
-            os.close(os.open(fifo, os.O_RDONLY | os.O_NONBLOCK))
-        writer.join()
-    (problem,) = problems
-    assert not was_opened
+    compiled, opened = pipe_read(fifo, lambda: compile_mission(mission))
+    assert not opened
+    (problem,) = compiled[1]  # type: ignore[index]
     assert problem.message == "unknown subtree 'x' (lib.yaml defines it: include it)"
 
 

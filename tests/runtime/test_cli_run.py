@@ -11,7 +11,6 @@ import os
 import re
 import subprocess
 import sys
-import threading
 from collections.abc import Callable
 from pathlib import Path
 
@@ -410,29 +409,16 @@ def test_a_record_is_read_a_line_at_a_time_and_a_device_refused(
 
 @pytest.mark.parametrize("command", READERS)
 def test_a_pipe_given_as_a_record_is_refused_before_it_is_opened(
-    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    command: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    pipe_read: Callable[..., tuple[object, bool]],
 ) -> None:
     """``monitor fifo.jsonl`` waited in ``open()`` for a writer, for ever: the size it says
-    before reading a long record was asked of the pipe first. A writer waits on the pipe
-    here: had it been opened, the writer would have gone on."""
+    before reading a long record was asked of the pipe first."""
     fifo = tmp_path / "fifo.jsonl"
     os.mkfifo(fifo)
-    opened = threading.Event()
-
-    def write() -> None:
-        with open(fifo, "w"):  # blocks until a reader opens it
-            opened.set()
-
-    writer = threading.Thread(target=write, daemon=True)
-    writer.start()
-    try:
-        rc = main([command, str(fifo)])
-    finally:
-        was_opened = opened.is_set()
-        if not was_opened:  # the writer let go: a reader that reads nothing
-            os.close(os.open(fifo, os.O_RDONLY | os.O_NONBLOCK))
-        writer.join()
-    assert (rc, was_opened) == (2, False)
+    assert pipe_read(fifo, lambda: main([command, str(fifo)])) == (2, False)
     assert capsys.readouterr().err.splitlines() == [
         f"roomba-bt {command}: {fifo}: not a regular file; a record is a file run --record wrote"
     ]
