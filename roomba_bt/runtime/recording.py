@@ -1241,7 +1241,7 @@ def _line_text(path: Path, number: int, data: bytes) -> str:
 _TOO_LONG = "integer string conversion"
 
 
-def long_number(exc: ValueError) -> str:
+def long_number(exc: Exception) -> str:
     """What a reader of a stranger's JSON says of ``exc``, the ``ValueError`` of
     ``json.loads``: a number too long (``a number of more than 4,300 digits; ...``), else
     its own words."""
@@ -1386,7 +1386,11 @@ def header_problem(header: dict[str, Any]) -> str | None:
             f"header field {PLUGINS!r} is {plugins!r}; expected "
             '{distribution: {"version": text, "sha256": SHA-256}}'
         )
-    packets = header.get("packets")
+    return _packets_problem(header.get("packets"))
+
+
+def _packets_problem(packets: object) -> str | None:
+    """What is wrong with a header's ``packets``, the stream's packet ids, or None."""
     if not isinstance(packets, list) or not packets:
         return 'the header lists no stream packets ("packets")'
     unknown = [p for p in packets if type(p) is not int or p not in PACKETS]
