@@ -62,7 +62,7 @@ from roomba_bt.mission.shipped import find_mission, shipped_name
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.values import Context
 from roomba_bt.oi.modes import ALL_MODES, OIMode
-from roomba_bt.oi.profiles import CREATE2, PROFILES, RobotProfile, get_profile
+from roomba_bt.oi.profiles import CREATE2, RobotProfile, profile_given
 from roomba_bt.robot.safety import signal_interrupt
 
 __all__ = [
@@ -109,35 +109,6 @@ def compile_mission(
         Path(path), params, model, baud, registry, require_tree, permissions, text
     )
     return mission, diagnostics
-
-
-def profile_given(profile: RobotProfile | str | None, caller: str) -> RobotProfile:
-    """The model a mission function was given as ``profile=``: a :class:`RobotProfile`, its
-    name (``"roomba500"``, as ``Connection.open`` and ``configured_profile()``'s answer give
-    it), or None, which is ``create2`` as no argument is (docs/robot.md, Which robot: the
-    library reads no setting of the command line's). ``profile=None`` was an internal error
-    ("'NoneType' object has no attribute 'command_unavailable'") inside a mission's
-    diagnostics, a name the same with 'str'; anything else is refused naming ``caller``."""
-    if profile is None:
-        return CREATE2
-    if isinstance(profile, RobotProfile):
-        return profile
-    known = ", ".join(PROFILES)
-    if isinstance(profile, str):
-        if profile == "auto":  # the command line's, which identifies the robot on its port
-            raise ValueError(
-                f"{caller}(profile='auto'): a mission is compiled for one model, and 'auto' "
-                "names none here (the command line identifies the robot on its port first: "
-                f"roomba_bt.robot.discovery.identify_robot); give one of {known}"
-            )
-        try:
-            return get_profile(profile)
-        except ValueError as exc:
-            raise ValueError(f"{caller}(profile={profile!r}): {exc}") from None
-    raise TypeError(
-        f"{caller}(profile=...) takes a RobotProfile (roomba_bt.CREATE2, ...), a profile's "
-        f"name ({known}) or None, not {type(profile).__name__}"
-    )
 
 
 @dataclass(frozen=True)

@@ -364,3 +364,35 @@ def get_profile(name: str) -> RobotProfile:
         raise ValueError(
             f"unknown robot profile {name!r}; known profiles: {', '.join(PROFILES)}"
         ) from None
+
+
+def profile_given(profile: RobotProfile | str | None, caller: str) -> RobotProfile:
+    """The model a public function was given as ``profile=``: a :class:`RobotProfile`, its
+    name (``"roomba500"``, as ``configured_profile()``'s answer gives it), or None, which is
+    ``create2`` as no argument is (docs/robot.md, Which robot: the library reads no setting
+    of the command line's). One rule for every entry that takes a model (the mission
+    functions, ``Connection``, ``Connection.open``, ``RunStack``, ``Simulator``), so each
+    takes the same spellings: ``profile=None`` was an internal error inside a mission's
+    diagnostics, a name the same with 'str', and ``RunStack(..., profile="create2")`` an
+    AttributeError ('str' object has no attribute 'name'). Anything else is refused naming
+    ``caller``."""
+    if profile is None:
+        return CREATE2
+    if isinstance(profile, RobotProfile):
+        return profile
+    known = ", ".join(PROFILES)
+    if isinstance(profile, str):
+        if profile == "auto":  # the command line's, which identifies the robot on its port
+            raise ValueError(
+                f"{caller}(profile='auto'): 'auto' names no model here (the command line "
+                "identifies the robot on its port first: "
+                f"roomba_bt.robot.discovery.identify_robot); give one of {known}"
+            )
+        try:
+            return get_profile(profile)
+        except ValueError as exc:
+            raise ValueError(f"{caller}(profile={profile!r}): {exc}") from None
+    raise TypeError(
+        f"{caller}(profile=...) takes a RobotProfile (roomba_bt.CREATE2, ...), a profile's "
+        f"name ({known}) or None, not {type(profile).__name__}"
+    )

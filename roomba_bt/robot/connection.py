@@ -34,7 +34,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_CODES, Command, turns_wheels
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
-from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, profile_given
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth, stream_period
 from roomba_bt.robot.discovery import drain
 from roomba_bt.robot.ending import EndMode, SafeStop, link_round_trip
@@ -172,7 +172,7 @@ class Connection:
     def __init__(
         self,
         transport: Transport,
-        profile: RobotProfile | str = DEFAULT_PROFILE,
+        profile: RobotProfile | str | None = DEFAULT_PROFILE,
         *,
         watchdog: float = DEFAULT_WATCHDOG,
         end_in: EndMode = "passive",
@@ -184,7 +184,7 @@ class Connection:
             raise ValueError(f"end_in must be 'passive' or 'stop', got {end_in!r}")
         if watchdog < 0:
             raise ValueError(f"watchdog must be >= 0 seconds, got {watchdog!r}")
-        self.profile = get_profile(profile) if isinstance(profile, str) else profile
+        self.profile = profile_given(profile, "Connection")
         self.settle = settle
         if end_in == "stop" and not self.profile.has_command("stop"):
             log.warning(
@@ -233,7 +233,7 @@ class Connection:
         cls,
         url: str,
         baud: int = DEFAULT_BAUD,
-        profile: RobotProfile | str = DEFAULT_PROFILE,
+        profile: RobotProfile | str | None = DEFAULT_PROFILE,
         *,
         watchdog: float = DEFAULT_WATCHDOG,
         end_in: EndMode = "passive",
@@ -249,6 +249,7 @@ class Connection:
         if baud not in BAUD_CODES:
             rates = ", ".join(str(rate) for rate in BAUD_CODES)
             raise ValueError(f"baud {baud!r}: the OI talks at {rates}")
+        profile = profile_given(profile, "Connection.open")  # before the port is opened
         try:
             transport = SerialTransport.open(url, baud, write_timeout=write_timeout)
         except TransportError as exc:

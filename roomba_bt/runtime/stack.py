@@ -31,7 +31,7 @@ from py_trees.behaviour import Behaviour
 from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.lean import check_updates
 from roomba_bt.mission.build import blackboard_within, set_up_tree
-from roomba_bt.oi.profiles import PROFILES, RobotProfile
+from roomba_bt.oi.profiles import PROFILES, RobotProfile, profile_given
 from roomba_bt.robot import wording
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG, ConnectionClosed
@@ -238,7 +238,7 @@ class RunStack:
         mission: MissionLike,
         link: Transport | Connection,
         *,
-        profile: RobotProfile | None = None,
+        profile: RobotProfile | str | None = None,
         baud: int | None = None,
         packets: Sequence[int] | None = None,
         watchdog: float | None = None,
@@ -451,10 +451,14 @@ class RunStack:
 
 
 def _given(
-    link: Transport | Connection, profile: RobotProfile | None, made: Mapping[str, Any]
+    link: Transport | Connection, given: RobotProfile | str | None, made: Mapping[str, Any]
 ) -> tuple[Connection | None, RobotProfile, int, Transport]:
     """What :class:`RunStack` was given: a connection to take over (None: a link, the stack
-    makes its own), the profile, the baud and the link under it."""
+    makes its own), the profile, the baud and the link under it. ``profile=`` is read as
+    every public entry reads it (:func:`~roomba_bt.oi.profiles.profile_given`: a profile or
+    its name, ``"create2"``; it was an AttributeError, 'str' object has no attribute
+    'name'), but a link still needs one: None there is the TypeError below."""
+    profile = None if given is None else profile_given(given, "RunStack")
     if isinstance(link, Connection):
         connection = _taken_over(link, profile, made)
         return connection, connection.profile, connection.baud, connection.transport

@@ -30,7 +30,7 @@ import math
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import WHEEL_SPEED_STEP_MM_S
 from roomba_bt.oi.opcodes import COMMANDS, opcodes
-from roomba_bt.oi.profiles import CREATE2, RobotProfile
+from roomba_bt.oi.profiles import CREATE2, RobotProfile, profile_given
 from roomba_bt.sim.coverage import ALL_BRUSHES, SweptArea
 from roomba_bt.sim.cycles import BuiltinCycle
 from roomba_bt.sim.faults import Faults
@@ -81,7 +81,7 @@ class Simulator(OIProtocol):
     def __init__(
         self,
         world: World,
-        profile: RobotProfile = CREATE2,
+        profile: RobotProfile | str | None = CREATE2,
         seed: int = 0,
         faults: Faults | None = None,
         *,
@@ -98,8 +98,9 @@ class Simulator(OIProtocol):
         #: stays flat however long the run (12.7 MB per robot-hour with it)
         self.keeps_trace = trace
         super().__init__(
-            world, profile, seed, faults, start, random_start, old_firmware_angle, mode
-        )
+            world, profile_given(profile, "Simulator"), seed, faults, start, random_start,
+            old_firmware_angle, mode,
+        )  # fmt: skip
         self._init_sensing()
         self._init_motion()
         self._init_power()

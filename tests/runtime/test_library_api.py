@@ -290,7 +290,7 @@ def test_profile_none_is_create2_and_a_name_its_profile(load: Callable[..., Any]
 def test_a_profile_that_names_no_model_is_refused_naming_the_function() -> None:
     with pytest.raises(ValueError, match=r"^load_mission_text\(profile='create3'\): unknown robot"):
         roomba_bt.load_mission_text(TO_THE_WALL, profile="create3")
-    with pytest.raises(ValueError, match=r"^validate_file\(profile='auto'\): a mission is com"):
+    with pytest.raises(ValueError, match=r"^validate_file\(profile='auto'\): 'auto' names no"):
         roomba_bt.mission.validate_file("dock.yaml", profile="auto")
     with pytest.raises(TypeError, match=r"^load_mission\(profile=...\) takes a RobotProfile"):
         roomba_bt.load_mission("dock", profile=2)  # type: ignore[arg-type]

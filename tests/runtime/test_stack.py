@@ -242,3 +242,40 @@ def test_a_link_needs_its_profile(tmp_path: Path) -> None:
     link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
     with pytest.raises(TypeError, match=r"needs profile=, the robot's model: .*create2"):
         RunStack(_mission(tmp_path), link)
+
+
+def test_runstack_takes_a_profile_by_its_name_as_connection_open_does(tmp_path: Path) -> None:
+    """``RunStack(mission, link, profile="create2")`` was an AttributeError ('str' object has
+    no attribute 'name') where ``Connection.open(port, profile="create2")`` took the name:
+    every public entry now reads ``profile=`` by one rule (``oi.profiles.profile_given``)."""
+    link = SimLink(Simulator(load_world("empty-room"), "create2", seed=0))
+    with RunStack(_mission(tmp_path), link, profile="create2", timeout_s=60.0) as stack:
+        summary = stack.run()
+    assert summary.outcome is Outcome.SUCCESS, summary
+    assert stack.connection.profile is CREATE2 and link.simulator.profile is CREATE2
+    # the connection's own name and the stack's agree, so a handed-over one is taken
+    connection = Connection(SimLink(Simulator(load_world("empty-room"), seed=0)), "create2")
+    assert RunStack(_mission(tmp_path), connection, profile="create2").connection is connection
+    connection.close()
+
+
+@pytest.mark.parametrize(
+    ("make", "said"),
+    [
+        (lambda m, link: RunStack(m, link, profile="auto"), r"^RunStack\(profile='auto'\): "),
+        (lambda m, link: RunStack(m, link, profile="create3"), r"^RunStack\(profile='creat"),
+        (lambda _, link: Connection(link, "create3"), r"^Connection\(profile='create3'\): un"),
+        (lambda _, link: Connection(link, 2), r"^Connection\(profile=...\) takes a RobotProf"),
+        (lambda *_: Simulator(load_world("empty-room"), "auto"), r"^Simulator\(profile='auto'"),
+    ],
+    ids=["runstack-auto", "runstack-unknown", "connection-unknown", "connection-int", "sim-auto"],
+)
+def test_a_profile_that_names_no_model_is_refused_naming_the_entry(
+    make: Any, said: str, tmp_path: Path
+) -> None:
+    """The refusal names the entry and the models, as the mission functions' did: it was an
+    AttributeError from RunStack, and an int given to Connection failed later, inside."""
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    with pytest.raises((ValueError, TypeError), match=said) as refused:
+        make(_mission(tmp_path), link)
+    assert "create2" in str(refused.value)
