@@ -1209,10 +1209,9 @@ def shipped_mission_at(path: object) -> str | None:
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    from roomba_bt.monitor.recorded import operator_replay
+    from roomba_bt.monitor.recorded import operator_replay, replay_judged
     from roomba_bt.runtime.display import StatusChangeLogger, TreeAsTicked
     from roomba_bt.runtime.recording import ending_text
-    from roomba_bt.runtime.stack import replay_record
 
     window = parse_window(args)
     if isinstance(window, str):
@@ -1224,7 +1223,8 @@ def replay_command(args: argparse.Namespace) -> int:
     # the tree as its last tick left it: a replay ended by a difference stops it (all INVALID)
     as_ticked = TreeAsTicked() if args.display == "tree" else None
     observer = StatusChangeLogger() if args.display == "log" else as_ticked
-    summary, transport = replay_record(
+    # a record whose run lost its link: its summary says that run's end, not the replay's stop
+    summary, transport, lost = replay_judged(
         record, recorded.mission, profile=recorded.profile, packets=recorded.packets,
         baud=recorded.baud, name=args.record, raise_interrupts=False,
         progress=replay_progress("replay", record),
@@ -1237,23 +1237,27 @@ def replay_command(args: argparse.Namespace) -> int:
     if args.display == "tree":
         print(_render_tree(recorded.mission, status=True, as_ticked=as_ticked))
     print(summary)
-    code = _replay_verdict(summary, transport, recorded)
+    code = _replay_verdict(summary, transport, recorded, lost)
     ending = record.ending  # its end note, said last (a record made before has none)
-    if ending is not None:
+    if ending is not None and lost is None:  # a lost link's: the summary's outcome said it
         print(f"replay: {ending_text(ending)}")
     return code
 
 
-def _replay_verdict(summary: RunSummary, transport: ReplayTransport, recorded: Recorded) -> int:
+def _replay_verdict(
+    summary: RunSummary,
+    transport: ReplayTransport,
+    recorded: Recorded,
+    lost: tuple[str, str] | None,
+) -> int:
     """What ``replay`` says of the bytes the tree wrote against the record's, printed, and
-    its exit code: the same (0), the same up to where the recorded run's link failed (0),
-    or the first difference, with what changed since the record was made (1)."""
+    its exit code: the same (0), the same up to where the recorded run's link failed
+    (``lost``: :func:`~roomba_bt.runtime.stack.past_the_link_loss`'s sentences; 0), or the
+    first difference, with what changed since the record was made (1)."""
     from roomba_bt.runtime.provenance import changed_plugins, changed_sources, drift_line
-    from roomba_bt.runtime.stack import past_the_link_loss
 
     record, mission = recorded.record, recorded.mission
     difference = transport.first_difference()
-    lost = past_the_link_loss(transport, difference, record.ending)
     if lost is not None:  # the same up to where the recorded run's link failed
         print(*(f"replay: {line}" for line in lost), sep="\n")
         return ExitCode.OK

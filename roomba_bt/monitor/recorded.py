@@ -43,7 +43,7 @@ from roomba_bt.runtime.recording import (
     recorded_path,
 )
 from roomba_bt.runtime.stack import past_the_link_loss, replay_record
-from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.runtime.summary import Outcome, RunSummary
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
@@ -75,21 +75,16 @@ def replay_into_feed(
         label=record.label,
     )  # fmt: skip
     feed.set_tree(mission.root)
-    with ReplayStopReports(f"replay:{name}") as stop_reports:
-        summary, transport = replay_record(
-            record, mission, profile=profile, packets=packets, baud=baud, name=name,
-            gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
-            raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
-            progress=progress, until=until,
-        )  # fmt: skip
+    summary, transport, lost = replay_judged(
+        record, mission, profile=profile, packets=packets, baud=baud, name=name,
+        gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
+        raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
+        progress=progress, until=until,
+    )  # fmt: skip
     for t, note in record.notes:
         # the tick guard's: shown as the run had it (the end note: below, with the end)
         if not isinstance(note.get("tick"), int) and ENDED not in note:
             feed.event("force" if "force" in note else "note", _note_text(note), t)
-    # a difference past where the recorded run's link failed is none (replay's own words)
-    lost = past_the_link_loss(transport, transport.first_difference(), record.ending)
-    if lost is None:  # any other ending: the replay's stop is said as before
-        stop_reports.say()
     difference = diverged(summary, transport) if lost is None else None
     if difference is not None and diverged_at is not None:
         diverged_at(difference)
@@ -107,10 +102,56 @@ def replay_into_feed(
     return feed, summary
 
 
+def replay_judged(
+    record: Record, mission: Any, *, name: str, **replayed: Any
+) -> tuple[RunSummary, ReplayTransport, tuple[str, str] | None]:
+    """``record`` replayed (:func:`~roomba_bt.runtime.stack.replay_record`, given
+    ``replayed``), with what ``replay`` and ``monitor RECORD`` both say of its end: ``lost``,
+    the two sentences of :func:`~roomba_bt.runtime.stack.past_the_link_loss` where the
+    recorded run lost its link (None for any other ending). There the replay's own stop is
+    no robot's: its reports are dropped (:class:`ReplayStopReports`) and the summary says
+    how the recorded run ended (:func:`recorded_loss_said`). ``replay`` printed ``ERROR ...
+    the stop was written but is unconfirmed`` and ``outcome CONNECTION LOST (the safe stop
+    did not reach the robot ...)`` of a replay that reaches no robot, where the monitor
+    already said neither: one rule for both."""
+    with ReplayStopReports(f"replay:{name}") as stop_reports:
+        summary, transport = replay_record(record, mission, name=name, **replayed)
+    # a difference past where the recorded run's link failed is none (replay's own words)
+    lost = past_the_link_loss(transport, transport.first_difference(), record.ending)
+    if lost is None:  # any other ending: the replay's stop is said as before
+        stop_reports.say()
+    elif record.ending is not None:
+        recorded_loss_said(summary, record.ending)
+    return summary, transport, lost
+
+
+#: the summary's ``safe stop`` line of a replay whose recorded run lost its link
+NO_STOP_REPLAYED = (
+    "not replayed: the recorded run's stop went into its failed link, and the record holds "
+    "nothing past there (the replay's own stop reached no robot)"
+)
+
+
+def recorded_loss_said(summary: RunSummary, ending: dict[str, Any]) -> None:
+    """The summary of a replay whose recorded run lost its link (``ending``: the record's end
+    note) says that run's ending, in its outcome and reason, and that its stop is not in
+    the record; the final mode is the recorded run's last seen, its stop not delivered.
+    It said the replay's own: "CONNECTION LOST (the safe stop did not reach the robot (the
+    run had ended: input ended: end of the record))", "NOT DELIVERED: ... written but is
+    unconfirmed"."""
+    ended, reason = ending.get(ENDED), ending.get("reason")
+    outcomes = {outcome.value: outcome for outcome in Outcome}
+    summary.outcome = outcomes.get(str(ended), summary.outcome)
+    summary.reason = f"the recorded run's: {reason}" if isinstance(reason, str) and reason else ""
+    summary.safe_stop = NO_STOP_REPLAYED
+    summary.stop_delivered = False
+
+
 class ReplayStopReports(logging.Filter):
     """The replay's own safe stop's reports (``robot/ending.py``'s log, naming the replay's
-    link, ``link``), held back while a record is replayed for the page: :meth:`say` lets
-    them out, and a replay that leaves without it drops them. A record whose run lost its
+    link, ``link``), held back while a record is replayed (:func:`replay_judged`: the page's
+    and ``replay``'s): :meth:`say` lets them out, and a replay that leaves without it drops
+    them. A record whose run lost its
     link holds nothing past there, so the replay's stop, written to no robot, is always
     "written but unconfirmed": ``monitor RECORD`` printed that ERROR on stderr, of a robot
     "last seen spinning", under a view that said in its own words that the recorded run

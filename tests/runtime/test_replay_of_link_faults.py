@@ -4,6 +4,7 @@ clock, and says what the recorded run's link did rather than "first difference".
 from __future__ import annotations
 
 import json
+import logging
 from pathlib import Path
 
 import pytest
@@ -69,6 +70,7 @@ def test_a_wait_under_the_clocks_last_bit_at_the_record_s_end_still_moves_it(
 def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and_exits_0(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
+    caplog: pytest.LogCaptureFixture,
     faults: Faults,
     profile: RobotProfile,
     mission: str,
@@ -81,12 +83,32 @@ def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and
     link = SimLink(Simulator(load_world("empty-room"), profile, 0, faults))
     record = record_run(tmp_path, link, mission)
     capsys.readouterr()
+    caplog.clear()
     assert main(["replay", str(record)]) == 0
     out = capsys.readouterr().out
     assert verdict in out, out
     assert "first difference" not in out
-    ended = "wrong profile" if profile is ROOMBA500 else "connection lost"
-    assert f"replay: the recorded run ended in {ended}" in out
+    if "lost its link" not in verdict:
+        ended = "wrong profile" if profile is ROOMBA500 else "connection lost"
+        assert f"replay: the recorded run ended in {ended}" in out
+        return
+    _says_the_recorded_loss_not_its_own_stop(out, caplog)
+
+
+def _says_the_recorded_loss_not_its_own_stop(out: str, caplog: pytest.LogCaptureFixture) -> None:
+    """A replay whose recorded run lost its link says how that run ended, in its summary's
+    outcome (once: not again on a last line), and no stop of its own: it printed "ERROR ...
+    the stop was written but is unconfirmed", "outcome CONNECTION LOST (the safe stop did
+    not reach the robot (the run had ended: input ended: end of the record))" and "safe
+    stop NOT DELIVERED" of a replay that reaches no robot (``monitor RECORD``'s rule)."""
+    from roomba_bt.monitor.recorded import NO_STOP_REPLAYED
+
+    assert "outcome      CONNECTION LOST (the recorded run's: " in out, out
+    assert f"safe stop    {NO_STOP_REPLAYED}" in out, out
+    assert "did not reach the robot" not in out and "NOT DELIVERED" not in out
+    assert "the recorded run ended in" not in out
+    said = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+    assert not any("unconfirmed" in text or "not delivered" in text for text in said), said
 
 
 def test_a_followed_baud_change_replays_its_listen_and_its_stop_as_the_run_did(
