@@ -13,7 +13,7 @@ can cross it (:attr:`LinkWords.modem_lines`).
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 #: the network URLs: a bridge (ser2net, esp-link, an ESP8266's raw TCP port) or ``roomba-bt
 #: sim --tcp`` / ``--rfc2217``
@@ -196,12 +196,47 @@ _PTY_ENDED = (
 )
 
 
+def _pty_words(port: str) -> LinkWords:
+    """A pty's own path: a serial adapter's words where a bridge such as socat may carry the
+    bytes to one, the program at its other end's where the simulator is there: its end
+    (:data:`_PTY_ENDED`), the way back to it (:data:`_PTY_GONE`), and the line where a
+    message names it (what to check, what loses bytes, what stalled): ``sim --pty``, whose
+    fault options lose and damage bytes on purpose and which stalls on a busy computer, or
+    the cable behind a bridge, both said. A run on ``sim --pty --host-drop-rate 0.05`` said
+    "(a loose or noisy cable?)", "so the cable is a likely cause" and "check the cable and
+    its adapter" of a simulator told to drop bytes."""
+    bridge = "a bridge such as socat"
+    behind = f"behind {bridge}"
+    host_faults = "the simulator's --host-drop-rate or --host-corrupt-rate"
+    return replace(
+        _cable_words(LinkKind.PTY, reopens=False, port=port),
+        gone=_PTY_ENDED,
+        reach=_PTY_GONE.format(port=port),
+        line=f"the program at the pty's other end (the simulator, or {bridge} and the "
+        "cable behind it)",
+        froze=f"a stalled simulator, or the adapter or cable {behind}?",
+        check=(
+            "check what is at the pty's other end: the simulator's fault options (--drop-rate, "
+            f"--host-drop-rate and the like lose bytes on purpose), or the cable and adapter "
+            f"{behind}"
+        ),
+        lossy=f"the simulator's --host-drop-rate, or a loose or noisy cable {behind}",
+        bad_line=f"a lossy line behind the pty ({host_faults}, or a bad cable {behind})",
+        byte_check=(
+            "the simulator's fault options (--host-drop-rate, --host-corrupt-rate), or the "
+            f"cable and adapter {behind}"
+        ),
+        serial_side=f"the line behind the pty ({host_faults}, or the cable {behind})",
+    )
+
+
 def _cable_words(kind: LinkKind, reopens: bool, port: str) -> LinkWords:
-    """A serial adapter's link (a device path, a pty, ``loop://``): its cable and adapter."""
+    """A serial adapter's link (a device path, ``loop://``; a pty's words start from
+    these, :func:`_pty_words`): its cable and adapter."""
     return LinkWords(
         kind=kind,
         between="the cable",
-        gone=_PTY_ENDED if kind is LinkKind.PTY else "the cable was pulled or the adapter reset",
+        gone="the cable was pulled or the adapter reset",
         line="the cable",
         froze="a frozen adapter or cable?",
         gap_fix="",
@@ -228,9 +263,7 @@ def _cable_words(kind: LinkKind, reopens: bool, port: str) -> LinkWords:
             "the wrong device",
         ),
         pulse_fix="use a USB cable with BRC on RTS or DTR, or an rfc2217:// bridge",
-        reach=_PTY_GONE.format(port=port)
-        if kind is LinkKind.PTY
-        else f"reseat the cable, then roomba-bt doctor --port {port}",
+        reach=f"reseat the cable, then roomba-bt doctor --port {port}",
         reopened="the port",
         # never said: a device path's silence is the stream's or the robot's (the port
         # itself fails when the adapter goes), and a pty's never comes back
@@ -252,5 +285,5 @@ def link_of(port: str) -> LinkWords:
     if "://" in port:
         return _cable_words(LinkKind.OTHER, reopens=False, port=port)
     if port.startswith(PTY_DEVICES):
-        return _cable_words(LinkKind.PTY, reopens=False, port=port)
+        return _pty_words(port)
     return _cable_words(LinkKind.DEVICE, reopens=True, port=port)

@@ -117,3 +117,35 @@ def test_a_pty_that_failed_is_said_its_program_s_end_not_a_cable() -> None:
     assert "the simulator or a bridge such as socat" in pty and "cable" not in pty
     for port in ("/dev/ttyUSB0", "/dev/serial/by-id/usb-FTDI_X-if00-port0"):
         assert link_of(port).gone == "the cable was pulled or the adapter reset"
+
+
+#: the fields that name the line: on a pty, the simulator first, and a cable only behind a
+#: bridge such as socat (which may carry the bytes to a real adapter)
+PTY_LINE = ("line", "froze", "check", "lossy", "bad_line", "byte_check", "serial_side")
+
+
+@pytest.mark.parametrize("name", PTY_LINE)
+def test_a_pty_s_line_is_the_simulator_or_a_cable_behind_a_bridge(name: str) -> None:
+    """A run on ``sim --pty --host-drop-rate 0.05`` said "(a loose or noisy cable?)", "so the
+    cable is a likely cause" and "check the cable and its adapter" of a simulator told to
+    drop bytes; socat to a real adapter is a pty too, so both are said. A device path keeps
+    the cable's words."""
+    pty = _texts(link_of("/dev/pts/3"))[name]
+    assert "simulator" in pty and "socat" in pty, pty
+    assert pty.index("simulator") < pty.index("cable"), pty
+    device = _texts(link_of("/dev/ttyUSB0"))[name]
+    assert "cable" in device and "simulator" not in device, device
+
+
+def test_a_pty_s_stream_that_froze_and_a_silent_robot_name_the_simulator_first() -> None:
+    """The outcome's words, where a pty's user read of a cable: a stream that stopped and
+    came back, and one that stopped for good."""
+    from roomba_bt.robot.errors import StreamLost
+
+    froze = str(StreamLost("/dev/pts/3", 2.5, 2.0, 0, watchdog=0.1, halted=True, came_back=3.1))
+    assert "came back (a stalled simulator, or the adapter or cable behind a bridge" in froze
+    silent = str(StreamLost("/dev/pts/3", 2.5, 2.0, 0, watchdog=0.1, halted=True))
+    assert "or the program at the pty's other end (the simulator, or a bridge such" in silent
+    assert "(a frozen adapter or cable?)" in str(
+        StreamLost("/dev/ttyUSB0", 2.5, 2.0, 0, watchdog=0.1, halted=True, came_back=3.1)
+    )
