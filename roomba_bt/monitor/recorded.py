@@ -75,12 +75,13 @@ def replay_into_feed(
         label=record.label,
     )  # fmt: skip
     feed.set_tree(mission.root)
-    summary, transport, lost = replay_judged(
-        record, mission, profile=profile, packets=packets, baud=baud, name=name,
-        gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
-        raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
-        progress=progress, until=until,
-    )  # fmt: skip
+    with QuietReplayStart(f"replay:{name}"):  # the page says the start; stderr is for trouble
+        summary, transport, lost = replay_judged(
+            record, mission, profile=profile, packets=packets, baud=baud, name=name,
+            gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
+            raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
+            progress=progress, until=until,
+        )  # fmt: skip
     for t, note in record.notes:
         # the tick guard's: shown as the run had it (the end note: below, with the end)
         if not isinstance(note.get("tick"), int) and ENDED not in note:
@@ -145,6 +146,32 @@ def recorded_loss_said(summary: RunSummary, ending: dict[str, Any]) -> None:
     summary.reason = f"the recorded run's: {reason}" if isinstance(reason, str) and reason else ""
     summary.safe_stop = NO_STOP_REPLAYED
     summary.stop_delivered = False
+
+
+class QuietReplayStart(logging.Filter):
+    """The replay's connection's INFO lines (``replay:FILE: iRobot Create 2 in Passive,
+    streaming [...]``, a mode change by itself) kept off stderr while ``monitor RECORD``
+    replays: its page and banner say them, and a user opening a record wants a quiet
+    terminal unless something is wrong (docs/monitor.md says what stderr shows). A warning
+    or worse is said as before, and so is everything at ``-v``."""
+
+    LOGGER = "roomba_bt.robot.connection"
+
+    def __init__(self, link: str) -> None:
+        super().__init__()
+        self.prefix = f"{link}: "
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno >= logging.WARNING or logging.getLogger().isEnabledFor(logging.DEBUG):
+            return True
+        return not record.getMessage().startswith(self.prefix)
+
+    def __enter__(self) -> QuietReplayStart:
+        logging.getLogger(self.LOGGER).addFilter(self)
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        logging.getLogger(self.LOGGER).removeFilter(self)
 
 
 class ReplayStopReports(logging.Filter):

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import ipaddress
 import json
+import logging
 import queue
 import re
 import signal
@@ -677,11 +678,39 @@ def test_a_wildcard_address_and_the_virtual_clock_are_said(
 def test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c(
     tmp_path: Path, served_record: ServedRecord
 ) -> None:
-    """SIGTERM killed ``roomba-bt monitor RECORD``: exit 143 and no word (Ctrl-C gave 0)."""
+    """SIGTERM killed ``roomba-bt monitor RECORD``: exit 143 and no word (Ctrl-C gave 0).
+    Nothing is wrong with the record, so nothing is said on stderr: it said "INFO
+    roomba_bt.robot.connection: replay:run.jsonl: iRobot Create 2 in Passive, streaming
+    [...]" for every record (docs/monitor.md says what stderr shows)."""
     record = tmp_path / "run.jsonl"
     _record_the_shuttle(record)
-    out, _ = served_record(record)  # up to its URL, then SIGTERM
+    out, err = served_record(record)  # up to its URL, then SIGTERM
     assert "monitor: ended by SIGTERM" in out
+    assert err == "", err
+
+
+@pytest.mark.parametrize("level", [logging.INFO, logging.DEBUG], ids=["default", "-v"])
+def test_a_record_view_says_its_replay_s_start_only_at_v(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, level: int
+) -> None:
+    """The replay's connection's INFO lines (its start, "streaming [...]") are the page's to
+    show, not stderr's; ``-v`` (the DEBUG level) still says them, as it says the rest."""
+    from roomba_bt.cli import build_parser
+    from roomba_bt.cli.run_cmd import load_recorded
+    from roomba_bt.monitor.recorded import replay_into_feed
+
+    record = tmp_path / "run.jsonl"
+    _record_the_shuttle(record)
+    recorded = load_recorded(build_parser().parse_args(["monitor", str(record)]))
+    assert not isinstance(recorded, int)
+    caplog.clear()
+    caplog.set_level(level)
+    replay_into_feed(
+        recorded.record, recorded.mission, recorded.profile, recorded.packets, recorded.baud,
+        str(record),
+    )  # fmt: skip
+    started = [r for r in caplog.records if "streaming [" in r.getMessage()]
+    assert len(started) == (level == logging.DEBUG), caplog.text
 
 
 def test_monitor_of_a_record_on_a_wildcard_address_says_the_machine_s_name(
