@@ -557,3 +557,31 @@ def test_a_parameter_the_declaration_lacks_is_named_when_read() -> None:
                        "'bare' does not have; it declares: timeout"):  # fmt: skip
         Bare("bare").number("speed")
     assert Bare("bare").number("timeout") == 60.0
+
+
+def test_a_leg_wedged_with_no_bump_shown_is_met_as_a_bump(robot: StubRobot, make: Make) -> None:
+    """A leg ends by distance: driven with the body's side against a wall's end, beyond the
+    bumper, the wheels stalled, the odometry stood still and no bump showed, and the leg went
+    on until the time limit (seed 326 of the apartment, with the search backing along its
+    arc, session 38: 500 s at the end of the bedroom's wall by the kitchen door). A leg that
+    gets no 5 mm further in a second now backs off as from a bump; a leg that moves does not."""
+    search = make(DockSearch, spin_first=False)
+    robot.set_frame(frame())
+    search.tick_once()
+    left, right = last_wheels(robot)
+    assert left > 0 and right > 0  # the leg, forward
+    counts = 0
+    for _ in range(6):  # 1.8 s, 13 mm every 0.3 s: moving
+        counts += 30
+        robot.set_frame({**frame(), 43: counts, 44: counts}, ticks=20)
+        search.tick_once()
+        assert search.state is SearchState.FORWARD  # type: ignore[attr-defined]
+    still = {**frame(), 43: counts, 44: counts}
+    robot.set_frame(still, ticks=40)  # 0.6 s without a move
+    search.tick_once()
+    assert search.state is SearchState.FORWARD  # type: ignore[attr-defined]
+    robot.flush()
+    robot.set_frame(still, ticks=40)  # 1.2 s: wedged
+    search.tick_once()
+    assert search.state is SearchState.BACK  # type: ignore[attr-defined]
+    assert last_wheels(robot) == (-150, -150)

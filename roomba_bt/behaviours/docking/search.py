@@ -89,6 +89,11 @@ STEER_LIMIT_MM_S = 40.0
 BACK_MM_S = 150
 BACK_OFF_CLIFF_S = 0.8
 BACK_OFF_S = 0.4
+#: a leg that gets no WEDGED_MM further in WEDGED_S is wedged: a bump no bumper shows (its
+#: body's side against a wall's end, beyond the bumper: the wheels stall, the odometry
+#: stands still, and a leg, which ends by distance, went on until the time limit)
+WEDGED_MM = 5.0
+WEDGED_S = 1.0
 #: an obstacle ahead is taken as a wall to follow after this much floor crossed (mm)
 CROSSED_BEFORE_WALL_MM = 500.0
 
@@ -252,8 +257,8 @@ class DockSearch(DockingAction):
         "_avoid", "_back_until", "_bumped", "_cell", "_crumbs", "_escaping", "_follow_bumps",
         "_follow_cells", "_follow_for", "_follow_hand", "_follow_lost", "_follow_side",
         "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_lit", "_lit_ahead",
-        "_next_crumb_at", "_old_cells", "_resume_follow", "_signals", "_speed", "_spun", "_target",
-        "_wall_seen_at", "_want_wall", "_way_out", "state",
+        "_moved_at", "_moved_mark", "_next_crumb_at", "_old_cells", "_resume_follow", "_signals",
+        "_speed", "_spun", "_target", "_wall_seen_at", "_want_wall", "_way_out", "state",
     )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
@@ -299,6 +304,7 @@ class DockSearch(DockingAction):
         self._kept = None  # the speeds may differ from the last start's
         self.trail.restart()
         self._escaping = False
+        self._moved_mark, self._moved_at = -math.inf, 0.0  # a leg's progress: none yet
 
     def bind(self, frame: SensorFrame) -> None:
         super().bind(frame)
@@ -456,7 +462,8 @@ class DockSearch(DockingAction):
             self._target += math.copysign(BLOCKED_NUDGE_RAD, err or 1.0)
             return self._forward(snap)
         self.state = SearchState.FORWARD
-        self._distance_mark = snap.odometry.distance_mm  # self.mark_distance()
+        self._distance_mark = self._moved_mark = snap.odometry.distance_mm  # mark_distance()
+        self._moved_at = snap.time
         return None
 
     def _forward(self, snap: Snapshot) -> Status | None:
@@ -468,6 +475,14 @@ class DockSearch(DockingAction):
             self.state = SearchState.TURN
             self._distance_mark = odo.distance_mm  # self.mark_distance()
             return RUNNING
+        if self.state is SearchState.FORWARD:
+            if odo.distance_mm > self._moved_mark + WEDGED_MM:
+                self._moved_mark, self._moved_at = odo.distance_mm, snap.time
+            elif snap.time - self._moved_at > WEDGED_S:
+                # wedged with no bump shown (a wall's end against the body's side, beyond
+                # the bumper): the wheels stall, the odometry stands still; met as a bump
+                self._meet(Hazard.BUMP, odo, snap.time)
+                return None
         speed = self._speed
         err = math.remainder(self._target - odo.theta_rad, math.tau)
         # max(-STEER_LIMIT_MM_S, min(STEER_LIMIT_MM_S, ...)) as comparisons, on every
