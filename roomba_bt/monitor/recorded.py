@@ -44,6 +44,7 @@ from roomba_bt.runtime.recording import (
 )
 from roomba_bt.runtime.stack import past_the_link_loss, replay_record
 from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.runtime.tick_guard import STILL_NOTE
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
@@ -333,12 +334,16 @@ def recorded_start(record: Record) -> datetime | None:
 
 def recorded_acts(record: Record) -> list[dict[str, Any]]:
     """The operator's acts ``record`` notes with the tick they were done at (pause, resume, a
-    step, a force, a reload), in the order they were done; the tick guard's are replayed by
-    the runner's own guard, and the end note by the replay's end."""
+    step, a force, a reload), in the order they were done; the tick guard's (its acts and
+    the still ticks it saw) are replayed by the runner's own guard, and the end note by the
+    replay's end."""
     return [
         note
         for _, note in record.notes
-        if isinstance(note.get("tick"), int) and "tick_guard" not in note and ENDED not in note
+        if isinstance(note.get("tick"), int)
+        and "tick_guard" not in note
+        and STILL_NOTE not in note
+        and ENDED not in note
     ]
 
 

@@ -72,19 +72,29 @@ class StreamClock:
 
 
 def unread_gap(
-    summary: RunSummary, link: str, gap: float, blocked: tuple[float, str] | None = None
+    summary: RunSummary, link: str, gap: float, blocked: tuple[float, str, bool] | None = None
 ) -> None:
     """No frame was read for ``gap`` seconds and the watchdog did not trip: the process did
     not run (a laptop suspended, SIGSTOP, a host starved of CPU), or the watchdog is off and
     the robot was silent. Either way the robot went on with its last command, unwatched:
     counted and said (the frames that waited are dropped as stale).
 
-    ``blocked``: the tick before the gap blocked, and the tick guard sent drive 0 in it
-    (``(seconds it had run then, where)``, :meth:`StallRide.tick_halted`): the gap is that
-    tick's, the wheels at rest from then on. Said as such, and not counted as unread (the
-    summary's tick guard line counts it): it said the process was suspended and the robot
-    went on."""
+    ``blocked``: the tick before the gap blocked past the tick guard's limit (``(seconds it
+    had run when the guard saw it, where, halted)``): the gap is that tick's. Either the
+    guard sent drive 0 in it (``halted``, :meth:`StallRide.tick_halted`), the wheels at rest
+    from then on, or nothing moved (:meth:`StallRide.tick_still`: a plugin's first
+    ``update`` blocking before its first drive), the robot still all along. Said as such,
+    and not counted as unread (the summary's tick guard line counts a halt): it said the
+    process was suspended or starved and the robot went on with its last command, whenever
+    the block came out a second or more."""
     if blocked is not None:
+        if not blocked[2]:
+            log.warning(
+                "%s: no frame was read for %.2f s: a tick blocked (%s) with nothing moving: "
+                "the robot stood still until it returned (the tick guard had nothing to stop)",
+                link, gap, blocked[1],
+            )  # fmt: skip
+            return
         log.warning(
             "%s: no frame was read for %.2f s: a tick blocked (%s); the tick guard had sent "
             "drive 0 once it had run %.2f s, and the wheels stood still until it returned",

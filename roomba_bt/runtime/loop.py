@@ -709,10 +709,13 @@ def guarded_between_ticks(
         return work
     ride = runner.ride
 
-    def halted(seconds: float, _where: str) -> None:
-        ride.tick_halted(tick_guard, seconds, where)
+    def slow(seconds: float, _where: str, halted: bool) -> None:
+        if halted:
+            ride.tick_halted(tick_guard, seconds, where)
+        else:
+            ride.tick_still(seconds, where)
 
-    return tick_guard.guarded(work, halted, lambda: runner.snapshot.tick)
+    return tick_guard.guarded(work, slow, lambda: runner.snapshot.tick)
 
 
 def tree_ended(root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
@@ -868,12 +871,15 @@ def guarded_tick(runner: MissionRunner, root: py_trees.behaviour.Behaviour) -> C
         return tick
     ride = runner.ride
 
-    def halted(seconds: float, where: str) -> None:
+    def slow(seconds: float, where: str, halted: bool) -> None:
+        if not halted:  # nothing moved: nothing to give back, only the gap to say
+            ride.tick_still(seconds, where)
+            return
         # a tick that ended the tree gets nothing of it sent again: the run's end follows
         going = root.status is py_trees.common.Status.RUNNING
         ride.tick_halted(tick_guard, seconds, where, tree_running=going)
 
-    return tick_guard.guarded(tick, halted, lambda: runner.snapshot.tick)
+    return tick_guard.guarded(tick, slow, lambda: runner.snapshot.tick)
 
 
 def visiting_tick(

@@ -10,7 +10,9 @@ reset or switched off: :meth:`~roomba_bt.robot.connection.Connection.check_stall
 
 The tick guard's drive 0 (a tick that blocked: :mod:`roomba_bt.runtime.tick_guard`) is ridden
 through the same way (:meth:`StallRide.tick_halted`): counted, the frames it left unread not
-taken for a gap nobody read, the wheels and the motors given their last commands again.
+taken for a gap nobody read, the wheels and the motors given their last commands again. A
+tick the guard saw past its limit with nothing moving (:meth:`StallRide.tick_still`) sent
+nothing and gets nothing back, but the frames it left unread are its own too.
 """
 
 from __future__ import annotations
@@ -60,10 +62,12 @@ class StallRide:
         #: by the run's clock, :meth:`StreamClock.slots_spanned
         #: <roomba_bt.runtime.clock.StreamClock.slots_spanned>`)
         self.gap_explained = False
-        #: the tick before the next batch blocked and the tick guard stopped the wheels in it
-        #: (how long it had run then, where): the next batch's gap is that tick's, the robot
-        #: at rest (set by :meth:`tick_halted`, read once as ``gap_explained``)
-        self.blocked: tuple[float, str] | None = None
+        #: the tick before the next batch blocked past the tick guard's limit (how long it had
+        #: run when the guard saw it, where, whether the guard stopped the wheels or the
+        #: motors in it: else nothing moved): the next batch's gap is that tick's, the robot
+        #: at rest (set by :meth:`tick_halted` and :meth:`tick_still`, read once as
+        #: ``gap_explained``)
+        self.blocked: tuple[float, str, bool] | None = None
         #: once frames are back, while the frames that waited are read (the stall's
         #: backlog, over several reads): when the last of its batches came (None: not back)
         self._backlog_read_at: float | None = None
@@ -157,9 +161,17 @@ class StallRide:
             tick_guard.limit_s if tick_guard else 0.0, where or "where: unknown",
             " and motors off" if motors_off is not None else "",
         )  # fmt: skip
-        self.blocked = (seconds, summary.tick_halt_last)  # the frames it left unread
+        self.blocked = (seconds, summary.tick_halt_last, True)  # the frames it left unread
         if tree_running:
             self._given_back(motors_off)
+
+    def tick_still(self, seconds: float, where: str) -> None:
+        """The tick that just returned ran past the tick guard's limit with nothing moving
+        (``seconds``: how long it had run when the guard saw it; ``where``: the behaviour and
+        its line): nothing was sent, nothing is given back, nothing counted; the frames it
+        left unread are its own (:attr:`blocked`), not a process that did not run while the
+        robot went on."""
+        self.blocked = (seconds, where or "where: unknown", False)
 
     def _given_back(self, turned_off: Command | None) -> None:
         """After the runtime's own stop (the watchdog's, the tick guard's): the last wheel

@@ -21,6 +21,14 @@ of 5 s ran the brushes and vacuum on the spot for 5 s). When the tick returns, t
 counts it and, as after a watchdog stall, sends the last wheel command and the last Motors
 command again unless the tick queued another: the mission goes on where it was.
 
+A tick past the limit with nothing moving (the robot at rest, no built-in cycle that may
+drive it: a plugin's first ``update`` that blocks before its first drive) has nothing to
+stop, but the guard still notes where it was: the frames the tick leaves unread are then
+its own, the robot still, and the run says so (``runtime/clock.py``, ``unread_gap``), where
+it said the process had been suspended or starved of CPU while the robot went on with its
+last command, and counted an unread gap (whenever the block came out a second or more: a
+plugin's ``time.sleep(1)`` did in 1 of 2 real-time runs).
+
 The run's end is guarded too (:meth:`TickGuard.halt_before_stop`): before the tree's stop,
 whose ``terminate()`` calls may block as an ``update`` may, the runner has the guard send the
 first half of the safe stop (drive 0, motors off) at once, in the main thread; the whole safe
@@ -31,7 +39,9 @@ Only a run on the wall clock has one (a robot's port, the real-time simulator); 
 virtual clock the robot does not move while the host thinks. With ``--record`` each act is a
 note in the record (its tick, how long the tick had run, where; ``"at": "end"`` for the
 halt before the tree's stop), and a replay does it again in the same tick
-(:class:`RecordedTickGuard`): the bytes stay the recorded ones.
+(:class:`RecordedTickGuard`): the bytes stay the recorded ones. A still tick is a note of
+its own (:data:`STILL_NOTE`, which a replay reads to say its gap as the live run did; a
+record made before has none, and its replay says such a gap as before).
 """
 
 from __future__ import annotations
@@ -54,8 +64,15 @@ from roomba_bt.runtime.teardown import where_in
 log = logging.getLogger(__name__)
 
 
-#: ``halted(seconds, where)``: the runner's reaction, in the ticking thread, lock held
-Halted = Callable[[float, str], None]
+#: ``slow(seconds, where, halted)``: the runner's reaction to a tick that ran past the limit,
+#: in the ticking thread, lock held, once the tick is over; ``halted``: the guard stopped
+#: something in it (False: nothing moved, nothing was sent)
+Slow = Callable[[float, str, bool], None]
+
+#: the record's note of a tick that ran past the limit with nothing moving (the value: how
+#: long it had run when the guard saw it); a key of its own, not ``tick_guard``'s, so that an
+#: earlier roomba-bt's replay, which reads only those, sends no drive 0 for it
+STILL_NOTE = "tick_still"
 
 #: where the halt before the tree's stop is noted as done (the record's ``where``)
 AT_THE_END = "the run's end, before the tree's stop"
@@ -119,7 +136,7 @@ class TickGuardLike(Protocol):
     def close(self) -> None: ...
     def halt_before_stop(self, motors_on: bool = False) -> bool: ...
     def guarded(
-        self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
+        self, tick: Callable[[], object], slow: Slow, index: Callable[[], int]
     ) -> Callable[[], None]: ...
 
 
@@ -143,9 +160,10 @@ class TickGuard:
         #: when the running tick began (``clock``), None between ticks
         self._entered: float | None = None
         self._ticks = 0
-        #: the tick whose wheels the guard stopped, how long it had run then, and where it
-        #: was (:meth:`_where`)
-        self._halted: tuple[int, float, str] | None = None
+        #: the last tick the guard saw past the limit: its count, how long it had run then,
+        #: where it was (:meth:`_where`), and whether the guard stopped the wheels or the
+        #: motors in it (False: nothing moved; it may still, and then the stop replaces it)
+        self._slow: tuple[int, float, str, bool] | None = None
         #: the stream's tick index of the running tick (the runner's snapshot), for the note
         self._index: Callable[[], int] = lambda: 0
         self._owner = 0  # the thread that ticks
@@ -184,12 +202,13 @@ class TickGuard:
         return True
 
     def guarded(
-        self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
+        self, tick: Callable[[], object], slow: Slow, index: Callable[[], int]
     ) -> Callable[[], None]:
-        """``tick`` with the lock released around it; ``halted(seconds, where)`` is called in
-        the main thread, lock held, after a tick during which the guard stopped the wheels,
-        whether it returned or raised (``seconds``: how long that tick had run by then;
-        ``where``: :meth:`_where`). ``index()``: the running tick's index in the stream."""
+        """``tick`` with the lock released around it; ``slow(seconds, where, halted)`` is
+        called in the main thread, lock held, after a tick that ran past the limit, whether
+        it returned or raised (``seconds``: how long that tick had run when the guard saw it;
+        ``where``: :meth:`_where`; ``halted``: the guard stopped the wheels or the motors,
+        else nothing moved). ``index()``: the running tick's index in the stream."""
         lock = self.lock
         clock = self.clock
         self._index = index
@@ -203,27 +222,33 @@ class TickGuard:
             finally:  # also when the tick raised or was interrupted: the halt is counted
                 lock.acquire()
                 self._entered = None
-                stopped = self._halted
-                if stopped is not None and stopped[0] == self._ticks:
-                    halted(stopped[1], stopped[2])
+                seen = self._slow
+                if seen is not None and seen[0] == self._ticks:
+                    slow(seen[1], seen[2], seen[3])
 
         return guarded_tick
 
     def _watch(self) -> None:
         period = self.limit_s / 5.0
         while not self._done.wait(period):
-            entered, tick = self._entered, self._ticks
-            if entered is None or (self._halted is not None and self._halted[0] == tick):
-                continue
+            entered, tick, seen = self._entered, self._ticks, self._slow
+            if entered is None or (seen is not None and seen[0] == tick and seen[3]):
+                continue  # between ticks, or this one's wheels already stopped
             ran = self.clock() - entered
             if ran < self.limit_s or not self.lock.acquire(timeout=period):
                 continue
             try:  # lock held: the main thread is inside a tick; is it still that one?
-                if self._entered is not None and self._ticks == tick and self._moving():
+                if self._entered is None or self._ticks != tick:
+                    continue
+                if self._moving():
                     where = self._where()
-                    self._halted = (tick, ran, where)  # once a tick, even if the write fails
+                    self._slow = (tick, ran, where, True)  # once a tick, even if the write fails
                     motors = halt_blocked(self.connection)
                     self._note(ran, where, motors)  # only a stop that went out is replayed
+                elif (seen is None or seen[0] != tick) and not self._cycle():
+                    where = self._where()  # nothing to stop: where it blocked, once a tick
+                    self._slow = (tick, ran, where, False)
+                    self._note_still(ran, where)
             except Exception as exc:  # the port gone, say: the main thread meets it next
                 log.warning("the tick guard could not send drive 0: %s", exc)
             finally:
@@ -242,28 +267,56 @@ class TickGuard:
                 act["motors"] = True
             note(act)
 
+    def _note_still(self, ran: float, where: str) -> None:
+        """A tick past the limit with nothing moving, in the record (:data:`STILL_NOTE`): its
+        replay says the gap that tick left as the live run did. ``"at": "after"``: read after
+        that tick (an earlier roomba-bt's monitor takes it for an operator's act it does not
+        know, and passes it there, holding back no act of the next tick)."""
+        note = getattr(self.connection.transport, "note", None)
+        if callable(note):
+            note({
+                STILL_NOTE: round(ran, 3), "limit": self.limit_s, "where": where,
+                "tick": self._index(), "at": "after",
+            })  # fmt: skip
+
     def _moving(self) -> bool:
         """The wheels move or a brush or the vacuum runs: something to stop."""
         return wheels_moving(self.connection) or motors_running(self.connection)
+
+    def _cycle(self) -> bool:
+        """A built-in cycle may be driving the robot (in Passive: the guard ends none, and the
+        robot is not still while a tick blocks)."""
+        return self.connection.writer.cycle_may_drive
 
     def _where(self) -> str:
         """Where the ticking thread is (:func:`where_in`); "" if the thread is gone."""
         return where_in(sys._current_frames().get(self._owner))
 
 
+def _ticked(notes: Iterable[dict[str, Any]], key: str) -> list[dict[str, Any]]:
+    """The notes that have ``key`` and the tick they were made in."""
+    return [n for n in notes if key in n and isinstance(n.get("tick"), int)]
+
+
 class RecordedTickGuard:
     """A replay's tick guard: the acts of the recorded run's (its notes), each done again in
     the tick it was done in, after that tick (which does not block here) and before its
-    flush, as live: drive 0 where the record has it, then the runner's reaction."""
+    flush, as live: drive 0 where the record has it, then the runner's reaction; and the
+    ticks it saw past the limit with nothing moving (:data:`STILL_NOTE`), told to the runner
+    after that tick, as live (nothing sent)."""
 
     def __init__(self, connection: Connection, notes: Iterable[dict[str, Any]]) -> None:
         self.connection = connection
-        acts = [n for n in notes if "tick_guard" in n and isinstance(n.get("tick"), int)]
+        notes = list(notes)
+        acts = _ticked(notes, "tick_guard")
+        stills = _ticked(notes, STILL_NOTE)
         #: the recorded run sent drive 0 before its tree's stop (:meth:`halt_before_stop`)
         self._at_end = any(n.get("at") == "end" for n in acts)
-        self.limit_s = float(acts[0].get("limit", DEFAULT_TICK_LIMIT)) if acts else 0.0
+        first = (acts or stills)[:1]
+        self.limit_s = float(first[0].get("limit", DEFAULT_TICK_LIMIT)) if first else 0.0
         acts = [n for n in acts if n.get("at") != "end"]
         self._acts = deque(sorted(acts, key=lambda n: int(n["tick"])))
+        self._stills = deque(sorted(stills, key=lambda n: int(n["tick"])))
 
     def start(self) -> None:
         pass
@@ -277,29 +330,40 @@ class RecordedTickGuard:
         return self._at_end and _send_stop_first(self.connection, motors_on)
 
     def guarded(
-        self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
+        self, tick: Callable[[], object], slow: Slow, index: Callable[[], int]
     ) -> Callable[[], None]:
-        acts = self._acts
+        acts, stills = self._acts, self._stills
 
         def replayed_tick() -> None:
             tick()
             now = index()
-            while acts and int(acts[0]["tick"]) < now:
-                acts.popleft()  # a tick the replay did not reach as recorded
-            if acts and int(acts[0]["tick"]) == now:
-                act = acts.popleft()
+            act, still = _this_tick(acts, now), _this_tick(stills, now)
+            if act is not None:  # the stop replaces a still note of the same tick, as live
                 if act.get("motors"):
                     self.connection.send_many(stop_first())
                 else:
                     self.connection.halt()
-                halted(float(act["tick_guard"]), str(act.get("where", "")))
+                slow(float(act["tick_guard"]), str(act.get("where", "")), True)
+            elif still is not None:
+                slow(float(still[STILL_NOTE]), str(still.get("where", "")), False)
 
         return replayed_tick
+
+
+def _this_tick(notes: deque[dict[str, Any]], now: int) -> dict[str, Any] | None:
+    """The note of tick ``now`` at the head of ``notes`` (in tick order), taken off, or None;
+    those of earlier ticks, which the replay did not reach as recorded, are dropped."""
+    while notes and int(notes[0]["tick"]) < now:
+        notes.popleft()
+    if notes and int(notes[0]["tick"]) == now:
+        return notes.popleft()
+    return None
 
 
 def recorded_tick_guard(
     connection: Connection, notes: Iterable[dict[str, Any]]
 ) -> RecordedTickGuard | None:
-    """The record's tick guard, or None when the recorded run's guard never acted."""
+    """The record's tick guard, or None when the recorded run's guard never acted nor saw a
+    tick past its limit."""
     guard = RecordedTickGuard(connection, notes)
-    return guard if guard._acts or guard._at_end else None
+    return guard if guard._acts or guard._stills or guard._at_end else None

@@ -363,6 +363,25 @@ def wait_for_the_guard(robot: Any) -> None:
         time.sleep(0.002)
 
 
+def guard_looks(monkeypatch: Any) -> threading.Event:
+    """An event set each time a tick guard looks where a tick past its limit is
+    (``TickGuard._where``, which it does when it acts, its wheels moving or not): a tick
+    that blocks on it returns only once the guard has seen it, whatever the machine's
+    speed. ``monkeypatch``: the test's, which puts the guard back after it."""
+    from roomba_bt.runtime.tick_guard import TickGuard
+
+    seen = threading.Event()
+    looked = TickGuard._where
+
+    def where(self: TickGuard) -> str:
+        found = looked(self)
+        seen.set()
+        return found
+
+    monkeypatch.setattr(TickGuard, "_where", where)
+    return seen
+
+
 class Raises(py_trees.behaviour.Behaviour):
     """A plain py_trees behaviour (no plugin's): RUNNING, and raises ``exc`` in ``where``
     (setup, initialise, update or terminate); its tenth update raises, or else succeeds (it

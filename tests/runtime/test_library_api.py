@@ -27,7 +27,7 @@ from roomba_bt.robot.interface import Snapshot
 from roomba_bt.robot.testing import StubRobot
 from roomba_bt.sim import Faults
 
-from .simrun import wait_for_the_guard
+from .simrun import guard_looks, wait_for_the_guard
 
 TO_THE_WALL = """\
 mission: lab-exp
@@ -241,6 +241,33 @@ def test_the_tick_guard_watches_the_loops_body_on_the_wall_clock() -> None:
                 break
     assert stack.summary.tick_halts == 1, stack.summary
     assert stack.summary.tick_halt_first.startswith("the program's loop over stack.ticks()")
+
+
+def test_a_loops_body_that_blocks_with_the_robot_still_is_said_as_such(
+    monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A body that blocks before anything moves (Safe, no drive yet) gets nothing from the
+    guard, and the 1.5 s of frames it left unread are said as the loop's, the robot still:
+    not as a process suspended or starved while the robot went on, and not counted as
+    unread. The virtual clock, the guard given: the body waits until the guard has looked
+    where it is (``TickGuard._where``), then has the robot stream on."""
+    seen = guard_looks(monkeypatch)
+    link = SimLink(_simulator())
+    stack = RunStack(roomba_bt.load_mission_text(TO_THE_WALL), link, profile=CREATE2,
+                     timeout_s=30.0, tick_limit=0.02)  # fmt: skip
+    with stack:
+        for index, _ in enumerate(stack.ticks()):
+            if index == 0:  # Safe sent, nothing moving yet
+                seen.wait(10.0)
+                link.advance(1.5)
+            if index == 5:
+                break
+    said = [r.getMessage() for r in caplog.records if "no frame was read" in r.getMessage()]
+    assert len(said) == 1 and "no frame was read for 1.5" in said[0], said
+    assert "a tick blocked (the program's loop over stack.ticks()" in said[0]
+    assert "the robot stood still" in said[0] and "suspended" not in said[0]
+    assert stack.summary.unread_gaps == 0 and stack.summary.tick_halts == 0, stack.summary
+    assert seen.is_set()
 
 
 # ------------------------------------------------------------------ 3. a mission from a string

@@ -6,6 +6,10 @@ acted (at most 10 s), so nothing here depends on the machine's speed."""
 
 from __future__ import annotations
 
+import json
+import sys
+import threading
+import types
 from pathlib import Path
 
 import pytest
@@ -14,9 +18,10 @@ from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.encode import turns_wheels
+from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.runtime.tick_guard import TickGuard
 
-from .simrun import SLOW_TERM, WAITS_FOR_THE_GUARD, RunMission
+from .simrun import SLOW_TERM, WAITS_FOR_THE_GUARD, RunMission, guard_looks
 
 PLUGIN = (
     '''
@@ -389,6 +394,168 @@ def test_the_gap_a_blocked_tick_leaves_is_said_as_the_guards(
     assert "a tick blocked (stuck (Stuck.update at " in said[0]
     assert "the tick guard had sent drive 0" in said[0]
     assert "suspended" not in said[0] and "went on with its last command" not in said[0]
+
+
+#: a leaf that blocks its first tick with nothing moving (Safe, no drive yet) until the test's
+#: gate opens (``still_gate.seen``, at most 10 s), then has the robot stream on for 1.5 s
+STILL_PLUGIN = '''
+import still_gate
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+
+
+@declare("still", kind="action")
+class Still(Action):
+    """Blocks its first tick, the robot at rest, until the test's gate opens."""
+
+    def update(self):
+        if not getattr(self, "waited", False):
+            self.waited = True
+            still_gate.seen.wait(10.0)
+            self.robot.connection.transport.advance(1.5)  # the robot streams on meanwhile
+        return Status.SUCCESS
+'''
+
+STILL_MISSION = """
+plugins: [./still.py]
+tree:
+  sequence:
+    - mode: safe
+    - still
+    - drive: {velocity: 100 mm/s, distance: 2 cm}
+"""
+
+
+@pytest.fixture
+def still_gate(monkeypatch: pytest.MonkeyPatch, plugin_dir: Path) -> threading.Event:
+    """The still leaf's plugin beside the mission, and its gate: opened when the tick guard
+    looks where the blocked tick is (``TickGuard._where``, which it does when it acts on a
+    tick past its limit), so the leaf returns only once the guard has seen it: no wait
+    whose length depends on the machine."""
+    (plugin_dir / "still.py").write_text(STILL_PLUGIN)
+    gate = types.ModuleType("still_gate")
+    gate.seen = seen = guard_looks(monkeypatch)  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "still_gate", gate)
+    return seen
+
+
+def _gaps_said(caplog: pytest.LogCaptureFixture) -> list[str]:
+    return [r.getMessage() for r in caplog.records if "no frame was read" in r.getMessage()]
+
+
+def test_the_gap_a_tick_blocked_with_the_robot_still_leaves_is_said_as_such(
+    run_mission: RunMission,
+    plugin_dir: Path,
+    still_gate: threading.Event,
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A tick that blocks before anything moves gets nothing from the guard (nothing to
+    stop), but the 1.5 s it left unread is its own: said as a tick that blocked, in which
+    behaviour and line, with the robot still; not as a process suspended or starved while
+    the robot went on with its last command, and not counted as an unread gap (it was, in
+    1 of 2 real-time runs of a plugin's 1 s sleep: the gap came out a little over or under
+    the second that is said)."""
+    run = run_mission(
+        STILL_MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0
+    )
+    summary = run.summary
+    assert summary.outcome.value == "success", summary
+    assert summary.tick_halts == 0 and "tick guard" not in str(summary), str(summary)
+    assert summary.unread_gaps == 0 and "unread" not in str(summary), str(summary)
+    said = _gaps_said(caplog)
+    assert len(said) == 1, caplog.text
+    assert "no frame was read for 1.5" in said[0]
+    assert f"a tick blocked (still (Still.update at {plugin_dir / 'still.py'}:" in said[0]
+    assert "with nothing moving: the robot stood still" in said[0]
+    assert "suspended" not in said[0] and "went on with its last command" not in said[0]
+    assert still_gate.is_set()
+    # nothing was stopped behind the tick's back: the drive's own commands alone
+    drives = [data for _, data in run.link.writes if data[:1] == HALT[:1]]
+    assert drives[0] == FORWARD, drives
+
+
+def _replayed_gaps(
+    record_path: Path, plugin_dir: Path, caplog: pytest.LogCaptureFixture
+) -> tuple[RunSummary, list[str]]:
+    """``record_path`` replayed (the still leaf's own block left out: the record's arrivals
+    make the gap), with what it said of the gaps and whether its bytes are the record's."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.recording import load_record
+    from roomba_bt.runtime.stack import replay_record
+
+    source = (plugin_dir / "still.py").read_text()
+    (plugin_dir / "still.py").write_text(
+        source.replace("self.robot.connection.transport.advance(1.5)", "pass")
+    )
+    allowed = Permissions(plugin_files=True)
+    record = load_record(record_path)
+    caplog.clear()
+    summary, transport = replay_record(
+        record, load_mission(plugin_dir / "mission.yaml", permissions=allowed), profile=CREATE2,
+        packets=record.header["packets"], baud=record.header["baud"], name="run.rec",
+    )  # fmt: skip
+    assert transport.first_difference() is None and transport.written == record.out_bytes
+    return summary, _gaps_said(caplog)
+
+
+def test_a_record_of_a_still_tick_replays_its_gap_as_the_run_said_it(
+    run_mission: RunMission,
+    plugin_dir: Path,
+    still_gate: threading.Event,
+    caplog: pytest.LogCaptureFixture,
+    tmp_path: Path,
+) -> None:
+    """The guard notes the still tick in the record (its own key, not the acts' ``tick_guard``,
+    which a replay answers with drive 0); the replay says the gap as the live run did, and
+    writes the recorded bytes. A record made before (no such note: here taken out of this
+    one) replays as before: the gap said as the process's, counted as unread."""
+    from roomba_bt.runtime.tick_guard import STILL_NOTE
+
+    record_path = tmp_path / "run.rec"
+    run = run_mission(STILL_MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True),
+                      timeout=20.0, record=record_path)  # fmt: skip
+    assert run.summary.unread_gaps == 0 and len(_gaps_said(caplog)) == 1
+    lines = record_path.read_text().splitlines(keepends=True)
+    stills = [json.loads(line)["note"] for line in lines if STILL_NOTE in line]
+    assert len(stills) == 1 and "tick_guard" not in stills[0], stills
+    assert stills[0]["where"].startswith("still (Still.update at ")
+    assert isinstance(stills[0]["tick"], int) and stills[0]["at"] == "after"
+
+    summary, said = _replayed_gaps(record_path, plugin_dir, caplog)
+    assert summary.unread_gaps == 0 and summary.tick_halts == 0, str(summary)
+    assert len(said) == 1 and "no frame was read for 1.5" in said[0], said
+    assert "a tick blocked (still (Still.update at " in said[0]
+    assert "the robot stood still" in said[0]
+
+    old = tmp_path / "old.rec"
+    old.write_text("".join(line for line in lines if STILL_NOTE not in line))
+    summary, said = _replayed_gaps(old, plugin_dir, caplog)
+    assert summary.unread_gaps == 1 and "unread       1 gap(s)" in str(summary), str(summary)
+    assert len(said) == 1 and "the process suspended or starved of CPU" in said[0], said
+
+
+def test_a_still_tick_explains_only_the_gap_after_it(
+    run_mission: RunMission,
+    plugin_dir: Path,
+    still_gate: threading.Event,
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A still tick whose gap came out under a second is said nowhere (as any gap that
+    short), and a later gap, the process not running (the link's reading side frozen 2 s),
+    is said and counted as the process's: the still tick's mark is spent on the frames
+    right after it."""
+    (plugin_dir / "still.py").write_text(STILL_PLUGIN.replace("advance(1.5)", "advance(0.5)"))
+    mission = STILL_MISSION.replace("distance: 2 cm", "distance: 20 cm")
+    run = run_mission(mission, tick_limit=0.02, permissions=Permissions(plugin_files=True),
+                      timeout=20.0, freeze=(1.2, 2.0))  # fmt: skip
+    summary = run.summary
+    assert summary.outcome.value == "success", summary
+    assert still_gate.is_set()
+    said = _gaps_said(caplog)
+    assert len(said) == 1 and "the process suspended or starved of CPU" in said[0], said
+    assert summary.unread_gaps == 1, str(summary)
 
 
 #: the brushes and vacuum on, then the drive beside the blocking leaf
