@@ -146,6 +146,13 @@ REOPEN_WITHIN_S = 2.0
 PORT_GONE_ADVICE = (
     "the robot may still be moving: pick it up or press its Clean or power button; {reach}"
 )
+#: What is said of a robot the stop could not reach, last seen stopped in Passive in frames
+#: it sent after it heard every command written (a run the operator paused: the pause's own
+#: stop confirmed), nothing sent since: it stays so unless something else moves it
+SEEN_STOPPED = (
+    "last seen stopped in Passive, in the frames it sent after every command written (it stays "
+    "stopped unless something else moves it: its buttons, a schedule)"
+)
 
 #: Requested wheel velocities (left, right) and the encoders (left, right): what a stop the
 #: robot streams on after says of its wheels.
@@ -476,10 +483,11 @@ class SafeStop:
         self.unheard: str | None = None
         self.confirm: Callable[[], bool] | None = None
         self.closed = False
-        #: the mode and the last wheel command before the stop was written (what is said
-        #: of a stop that did not arrive)
-        self._before: tuple[OIMode, Command | None, str] = (
-            writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by
+        #: the mode, the last wheel command and what stopped the wheels before the stop was
+        #: written, and whether its frames showed it stopped (:func:`seen_stopped`): what is
+        #: said of a stop that did not arrive
+        self._before: tuple[OIMode, Command | None, str, bool] = (
+            writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by, False
         )  # fmt: skip
         #: the mode packet 35 read in frames that came after a stop (it was not heard)
         self._seen: OIMode | None = None
@@ -566,7 +574,8 @@ class SafeStop:
         # once more after a stop not delivered (close()'s), nothing heard since: what was
         # seen before that one (it moved the model on to Passive without the robot)
         if self.safe_stopped is not False or link.index != self._unseen_from:
-            self._before = (writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by)
+            before = (writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by)
+            self._before = (*before, seen_stopped(self))
             self._seen = None
         self._unproven = None
         # before the stream's first frame the wait is the stream request's way to the robot
@@ -801,7 +810,7 @@ class SafeStop:
         doing before the stop was written (the mode and the wheels the model held then, not
         the Passive and drive 0 of the stop itself); False (what :meth:`stop` returns)."""
         writer = self.writer
-        mode, wheels, stopped_by = self._before
+        mode, wheels, stopped_by, still = self._before
         # never told to move and seen in Passive, or never seen at all: nothing was left
         # driving (``sensors``, ``doctor``); the summary or the error says the port's fate
         if self._seen is not None:  # in the frames after the stop: what the robot is in
@@ -809,19 +818,16 @@ class SafeStop:
         heard = self.robot_heard
         idle = wheels is None and (not heard or mode is OIMode.PASSIVE)
         self.nothing_set_going = idle
-        level = logging.DEBUG if idle else logging.ERROR
+        still = still and self._seen is None  # no frame came after the stop to say more
+        level = logging.DEBUG if idle else logging.WARNING if still else logging.ERROR
         if not heard:  # nothing was ever seen of it
             report = why
-        elif self._seen is not None:
-            report = (
-                f"last seen in {mode.label} (the last wheel command written: "
-                f"{describe_activity(wheels, stopped_by)}); {why}"
-            )
         else:
-            report = f"last seen in {mode.label} {describe_activity(wheels, stopped_by)}; {why}"
+            report = last_seen_words(mode, (wheels, stopped_by), self._seen is not None, still)
+            report += f"; {why}"
         if self._gone and not idle:
-            port = writer.link.name
-            report += ": " + PORT_GONE_ADVICE.format(reach=link_of(port).reach)
+            reach = link_of(writer.link.name).reach
+            report += ": " + (reach if still else PORT_GONE_ADVICE.format(reach=reach))
         self._gone = False
         if report != self.stop_report:  # close() tries once more: said once, not twice
             log.log(level, "%s: %s", self.writer.link.name, report)
@@ -850,6 +856,46 @@ class SafeStop:
         if self.safe_stopped is None:
             self.safe_stopped = stopped
         return stopped
+
+
+def seen_stopped(ending: SafeStop) -> bool:
+    """Whether the robot's last frame shows it stopped in Passive with nothing written since
+    that could set it going: the frame was sent after the robot heard the last command (past
+    :meth:`SafeStop.in_flight`), packet 35 reads Passive, no built-in cycle may drive, and
+    its wheels are still (the requested velocities at 0 where streamed, else the last wheel
+    command a drive 0, heard before it went to Passive). A run held paused (the pause's safe
+    stop: drive 0, motors off, Start, confirmed by seconds of frames) whose cable was then
+    pulled was said "may still be moving: pick it up". A robot never told to move is said
+    so (:meth:`SafeStop._undelivered`'s idle). Out of the class for its size."""
+    writer = ending.writer
+    link = writer.link
+    frame, wheels = link.frame, writer.last_wheels
+    if frame is None or wheels is None or OI_MODE_PACKET not in frame or writer.cycle_may_drive:
+        return False
+    if link.arrival <= writer.last_command_at + ending.in_flight(
+        stream_period(link.stream_ids, writer.baud)
+    ):
+        return False  # a command may have come after it: what it did is not seen
+    if writer.modes.detector.interpret(frame[OI_MODE_PACKET]) is not OIMode.PASSIVE:
+        return False
+    if _LEFT_VELOCITY in frame and _RIGHT_VELOCITY in frame:
+        return frame[_LEFT_VELOCITY] == frame[_RIGHT_VELOCITY] == 0
+    return describe_activity(wheels) == "stopped"
+
+
+def last_seen_words(
+    mode: OIMode, wheels: tuple[Command | None, str], after_stop: bool, still: bool
+) -> str:
+    """What a stop not delivered says the robot was last seen doing: in ``mode`` with
+    ``wheels`` (the last wheel command and what stopped them: :func:`describe_activity`),
+    ``after_stop`` in frames that came after the stop, or ``still``, stopped in Passive as
+    its frames showed (:func:`seen_stopped`). A part of :meth:`SafeStop._undelivered`."""
+    activity = describe_activity(*wheels)
+    if after_stop:
+        return f"last seen in {mode.label} (the last wheel command written: {activity})"
+    if still:  # the pause's stop, seen taken: nothing to pick up
+        return SEEN_STOPPED
+    return f"last seen in {mode.label} {activity}"
 
 
 def asked_after(ending: SafeStop, unconfirmed: str) -> str | None:

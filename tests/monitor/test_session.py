@@ -1043,7 +1043,9 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
     assert rig.sim.asleep
     assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 8
     assert "the robot fell asleep" in summary.reason
-    assert summary.safe_stop.startswith("NOT DELIVERED: last seen in Passive stopped; ")
+    assert summary.safe_stop.startswith(
+        "NOT DELIVERED: last seen stopped in Passive, in the frames it sent after every command "
+    )  # the pause's stop, confirmed: it said "last seen in Passive stopped"
     assert "the stop was written but is unconfirmed: the robot was asleep" in summary.safe_stop
     assert "no valid frame" not in summary.safe_stop
 
@@ -1077,6 +1079,10 @@ def test_the_record_of_a_link_lost_while_paused_replays_to_its_loss_not_a_differ
     rig.stack.close()
     assert summary.outcome is Outcome.CONNECTION_LOST, summary.reason
     assert summary.pauses == 1
+    # the pause's stop seen taken for seconds: it said "the robot may still be moving: pick
+    # it up" of a robot last seen stopped in Passive
+    assert "may still be moving" not in summary.safe_stop, summary.safe_stop
+    assert "last seen stopped in Passive" in summary.safe_stop, summary.safe_stop
     capsys.readouterr()
     assert main(["replay", str(record_path)]) == 0
     out = capsys.readouterr().out

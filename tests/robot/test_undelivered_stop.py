@@ -100,6 +100,72 @@ def test_a_stop_not_delivered_to_a_pty_says_its_path_will_not_come_back() -> Non
     )
 
 
+def paused(packets: tuple[int, ...] = PACKETS) -> tuple[Connection, Pullable]:
+    """A connection that drove at 200 mm/s in Safe, then was paused as the monitor pauses a
+    run (drive 0, motors off, Start: :func:`~roomba_bt.monitor.session.pause_sequence`),
+    the stream running on."""
+    link = Pullable(SimLink(Simulator(parse_world(BOX, "<test>"), profile=CREATE2), "sim://"))
+    connection = Connection(link, CREATE2)
+    connection.start("safe", packets)
+    connection.send_many([oi.drive(200, 32767)])
+    while connection.counters.frames < 10:
+        connection.poll(0.05)
+    connection.send_many([oi.halt(), oi.motors_off(), oi.start()])
+    return connection, link
+
+
+def frames_for(connection: Connection, count: int) -> None:
+    """Read ``count`` more frames."""
+    until = connection.counters.frames + count
+    while connection.counters.frames < until:
+        connection.poll(0.05)
+
+
+def stopped_pulled(
+    connection: Connection, link: Pullable, caplog: pytest.LogCaptureFixture
+) -> list[str]:
+    """The cable pulled, then the safe stop (not delivered): the levels it logged at."""
+    link.pulled = True
+    caplog.clear()
+    with caplog.at_level("DEBUG", logger="roomba_bt.robot.ending"):
+        assert connection.safe_stop() is False
+    return [r.levelname for r in caplog.records]
+
+
+@pytest.mark.parametrize("packets", [PACKETS, (*PACKETS, 41, 42)], ids=["encoders", "velocities"])
+def test_a_paused_robot_seen_stopped_in_passive_is_not_said_to_be_moving(
+    packets: tuple[int, ...], caplog: pytest.LogCaptureFixture
+) -> None:
+    """The cable pulled while the operator held the run paused: the summary and the banner
+    said "last seen in Passive stopped; ... the robot may still be moving: pick it up",
+    though the pause's own stop had been seen taken in every frame since."""
+    connection, link = paused(packets)
+    frames_for(connection, 20)  # seconds of a pause, shortened
+    assert stopped_pulled(connection, link, caplog) == ["WARNING"]
+    assert connection.stop_report == (
+        "last seen stopped in Passive, in the frames it sent after every command written (it "
+        "stays stopped unless something else moves it: its buttons, a schedule); the stop was "
+        "not delivered: the port is gone: reseat the cable, then roomba-bt doctor --port "
+        "sim://box"
+    )
+
+
+def test_a_pause_not_yet_seen_taken_is_still_said_to_be_maybe_moving() -> None:
+    """The same words only where frames show it: the cable pulled as the pause's stop is
+    written, no frame since (the robot may not have heard it), or a Safe written after the
+    last frame (a command that could set it going)."""
+    connection, link = paused()
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert "the robot may still be moving: pick it up" in str(connection.stop_report)
+    connection, link = paused()
+    frames_for(connection, 20)
+    connection.send_many([oi.safe()])
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert "the robot may still be moving: pick it up" in str(connection.stop_report)
+
+
 def test_a_delivered_stop_leaves_no_report() -> None:
     connection, _ = driving()
     assert connection.safe_stop() is True
@@ -117,22 +183,13 @@ def test_a_robot_never_told_to_move_has_its_undelivered_stop_said_quietly(
     link = Pullable(SimLink(Simulator(parse_world(BOX, "<test>"), profile=CREATE2)))
     connection = Connection(link, CREATE2)
     connection.start("passive", PACKETS)
-    while connection.counters.frames < 10:
-        connection.poll(0.05)
-    link.pulled = True
-    with caplog.at_level("DEBUG", logger="roomba_bt.robot.ending"):
-        assert connection.safe_stop() is False
+    frames_for(connection, 10)
+    assert stopped_pulled(connection, link, caplog) == ["DEBUG"]
     assert connection.stop_report == (
         "last seen in Passive with its wheels never commanded; the stop was not delivered: "
         "the port is gone"
     )
-    assert [r.levelname for r in caplog.records] == ["DEBUG"]
-    connection, link = driving()
-    link.pulled = True
-    caplog.clear()
-    with caplog.at_level("DEBUG", logger="roomba_bt.robot.ending"):
-        assert connection.safe_stop() is False
-    assert [r.levelname for r in caplog.records] == ["ERROR"]
+    assert stopped_pulled(*driving(), caplog) == ["ERROR"]
 
 
 LEDGE = """
