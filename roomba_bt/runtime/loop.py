@@ -322,10 +322,14 @@ class MissionRunner(BaseHandle):
         self.poll_timeout = poll_timeout
         self.input_ended = input_ended
         self.gate = gate
-        #: the watchdog's trips, ridden through for ``grace`` seconds (0: a trip ends the run),
-        #: and the tick guard's drive 0
-        clock = partial(mission_time_after, self)
-        self._ride = StallRide(connection, self._outbox, self.summary, grace, clock)
+        #: True while the monitor holds the run paused: frames still come and make snapshots
+        #: (the page shows the robot) and the tick index (the stream's) goes on, but mission
+        #: time stands still: a wait, a time limit or the run's timeout does not count the pause
+        self.clock_held = False
+        #: the watchdog's trips, ridden through for ``grace`` seconds (0: a trip ends the run;
+        #: said apart while the monitor holds the run paused), and the tick guard's drive 0
+        clock, held = partial(mission_time_after, self), partial(getattr, self, "clock_held")
+        self._ride = StallRide(connection, self._outbox, self.summary, grace, clock, held)
         #: the stream's slots added up: the tick index, the slots the monitor held
         self._clock = StreamClock(self._ride, self.summary, connection)
         self._odometer = Odometer(profile.wheel_base_mm)
@@ -340,10 +344,6 @@ class MissionRunner(BaseHandle):
         self._guard: InterruptGuard | None = None
         self.snapshot = NO_SNAPSHOT_YET
         self.refusals = Refusals(self.summary)
-        #: True while the monitor holds the run paused: frames still come and make snapshots
-        #: (the page shows the robot) and the tick index (the stream's) goes on, but mission
-        #: time stands still: a wait, a time limit or the run's timeout does not count the pause
-        self.clock_held = False
         #: this run's part of py_trees' blackboard, claimed when it starts (None before):
         #: ``runner.blackboard.values()``, its mission's keys; ``.read("leg")``, one of them
         self.blackboard: RunBoard | None = None

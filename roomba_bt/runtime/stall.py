@@ -33,6 +33,10 @@ from roomba_bt.runtime.tick_guard import TickGuardLike
 
 log = logging.getLogger("roomba_bt.runtime.loop")
 
+#: What frames back after a stall say of a run the monitor holds paused: nothing goes on
+#: until the operator resumes (the wheels and motors were stopped by the pause itself)
+PAUSED_GOES_ON = "the run stays paused (the mission goes on at the resume)"
+
 
 class StallRide:
     """The run's reads, each trip counted in ``summary`` and ridden through for ``grace``
@@ -40,7 +44,9 @@ class StallRide:
     goes into ``outbox`` again (the watchdog's drive 0 had replaced it). ``clock`` is the mission
     time so many seconds after the last valid frame (None before the first): no tick moves
     the mission clock during a stall, so the trip and the frames' return are stamped with
-    their own times, not both with the last frame's."""
+    their own times, not both with the last frame's. ``paused``: whether the monitor holds
+    the run paused (the runner's ``clock_held``): frames back then leave it paused, and the
+    log says so (it said "the mission goes on" of a run nobody had resumed)."""
 
     def __init__(
         self,
@@ -49,8 +55,10 @@ class StallRide:
         summary: RunSummary,
         grace: float,
         clock: Callable[[float], float | None],
+        paused: Callable[[], bool] = lambda: False,
     ) -> None:
         self.connection = connection
+        self.paused = paused
         self.outbox = outbox
         self.summary = summary
         self.grace = grace
@@ -117,9 +125,10 @@ class StallRide:
         self.summary.stalls_ridden += 1
         connection = self.connection
         gap = connection.link.silent_since - silent_since
+        goes_on = PAUSED_GOES_ON if self.paused() else "the mission goes on"
         log.warning(
-            "%s: valid frames are back after %.0f ms; the mission goes on", connection.name,
-            gap * 1000, extra={"mission_time": self._clock(gap)},
+            "%s: valid frames are back after %.0f ms; %s", connection.name, gap * 1000,
+            goes_on, extra={"mission_time": self._clock(gap)},
         )  # fmt: skip
         self._backlog_read_at = connection.link.arrival
 

@@ -1050,6 +1050,37 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
     assert "no valid frame" not in summary.safe_stop
 
 
+def test_a_stall_ridden_through_during_a_pause_says_the_run_stays_paused(
+    until: Callable[..., None], caplog: pytest.LogCaptureFixture
+) -> None:
+    """The stream stalled while the operator held the run paused: the frames' return said
+    "valid frames are back after 705 ms; the mission goes on", of a run nobody had resumed.
+    It stays paused, and says so; a stall while running still says the mission goes on."""
+    caplog.set_level(logging.WARNING, logger="roomba_bt.runtime.loop")
+    rig = Rig(faults=Faults(stream_gap_at=2.0, stream_gap_s=0.8))
+    summary = rig.runner.summary
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 50)
+        rig.session.request("pause")
+        until(lambda: summary.stalls_ridden == 1)
+        until(lambda: rig.ticks(ticked=False) > 200)  # frames back, the tree still frozen
+        ticked = rig.ticks(ticked=True)
+        assert rig.session.state.paused and rig.runner.clock_held
+        assert rig.robot() == (OIMode.PASSIVE, 0.0, 0.0)
+        assert rig.ticks(ticked=True) == ticked
+        rig.session.request("stop")
+
+    assert rig.run_with(operator).stalls == 1
+    [back] = [r.getMessage() for r in caplog.records if "are back" in r.getMessage()]
+    assert back.endswith(" ms; the run stays paused (the mission goes on at the resume)"), back
+    caplog.clear()
+    rig = Rig(faults=Faults(stream_gap_at=2.0, stream_gap_s=0.8))
+    rig.run_with(lambda rig: until(lambda: rig.runner.summary.stalls_ridden == 1))
+    [back] = [r.getMessage() for r in caplog.records if "are back" in r.getMessage()]
+    assert back.endswith("; the mission goes on"), back
+
+
 @pytest.mark.parametrize("lost", ["asleep", "port gone"])
 def test_the_record_of_a_link_lost_while_paused_replays_to_its_loss_not_a_difference(
     lost: str,
