@@ -50,6 +50,8 @@ log = logging.getLogger(__name__)
 STEP = "one step"
 #: the pause's reason after a step's tick
 STEPPED = "stepped one tick"
+#: the reason of a pause the operator asked for (not a breakpoint's, nor a step's end)
+BY_OPERATOR = "paused by the operator"
 #: the pause's reason when ``--watch`` reloads the mission while a step is under way
 RELOADED_IN_A_STEP = (
     "the mission reloaded during a step: held; the new tree starts from its root at the resume"
@@ -315,7 +317,7 @@ class MonitorSession:
         does nothing: the state is checked again here)."""
         state = self.state
         if req.action == "pause" and not state.paused:
-            self._pause(runner, "paused by the operator")
+            self._pause(runner, BY_OPERATOR)
         elif req.action == "resume" and state.paused:
             self._resume(runner, "resumed by the operator")
         elif req.action == "step" and state.paused:
@@ -343,7 +345,10 @@ class MonitorSession:
         frame (before or after its tick) it happened, for the record's replay."""
         if noted:
             _note(runner, {"pause": why, "at": at})
-        self._steps_left = None  # a step's pause, or one that came first (a breakpoint)
+        # a step's own pause, or one that ended it first (a breakpoint on its tick, a reload
+        # in it): the operator's act was the step, counted so (a breakpoint's was a pause)
+        ends_step = self._steps_left is not None and why != BY_OPERATOR
+        self._steps_left = None
         connection = runner.connection
         mode = connection.mode
         self._mode_before_pause = mode if mode in (OIMode.SAFE, OIMode.FULL) else None
@@ -357,7 +362,7 @@ class MonitorSession:
         self.state.paused_tick = runner.snapshot.tick if runner.has_snapshot else 0
         if noted:  # a reload's pause lasts no frame: not one the summary counts
             summary = runner.summary
-            if why == STEPPED:
+            if ends_step:
                 summary.steps += 1
             else:
                 summary.pauses += 1

@@ -443,6 +443,48 @@ def test_a_step_is_one_frame_of_mission_time_live_and_replayed(
     assert _ticks(replayed)[: len(records) - 1] == _ticks(rig.feed)[:-1]
 
 
+def test_a_step_whose_tick_hits_a_breakpoint_is_counted_as_a_step_live_and_replayed(
+    tmp_path: Path, until: Callable[..., None]
+) -> None:
+    """The operator steps through a short wait, a breakpoint on its end: the step whose tick
+    ends it pauses with the breakpoint's reason, and the summary counted that pause as a
+    pause, not a step (``paused ... in 2 pauses, 3 steps`` for one pause and four steps).
+    It counts what the operator did, and the record's replay counts alike."""
+    mission, record_path = tmp_path / "waits.yaml", tmp_path / "stepped.jsonl"
+    mission.write_text(
+        "mission: waits\ntree:\n  sequence:\n    - mode: safe\n"
+        "    - {name: short, wait: 0.05 s}\n    - {name: long, wait: 1 s}\n"
+    )
+    rig = Rig(mission=mission, record=record_path)
+    short = rig.node("short")
+    rig.session.request("break", short, "start")
+    pressed: list[str] = []
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.session.state.paused)
+        rig.session.request("break", short, "success")
+
+        def paused() -> int:
+            return sum(e.text.startswith("pause (") for e in rig.feed.events)
+
+        while not rig.session.state.pause_reason.startswith("breakpoint: short ends"):
+            assert len(pressed) < 20, rig.session.state.pause_reason
+            rig.session.request("step")
+            pressed.append("step")
+            until(lambda: paused() > len(pressed))  # the first pause and one a step
+        rig.session.request("stop")
+
+    summary = rig.run_with(operator)
+    rig.stack.close()
+    assert len(pressed) > 1  # steps through the wait, the last one's tick its end
+    assert (summary.pauses, summary.steps) == (1, len(pressed)), summary.paused_text()
+    _, replayed = replay_into_feed(
+        load_record(record_path), load_mission(mission, {}, profile=CREATE2), CREATE2,
+        rig.packets, 115200, "x",
+    )  # fmt: skip
+    assert (replayed.pauses, replayed.steps) == (1, len(pressed)), replayed.paused_text()
+
+
 def test_a_breakpoint_on_the_last_tick_holds_the_ended_mission_until_the_resume(
     tmp_path: Path, until: Callable[..., None]
 ) -> None:
