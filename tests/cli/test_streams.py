@@ -316,7 +316,11 @@ def test_a_signal_before_the_run_took_it_is_exit_130(
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     by = " by SIGTERM" if signum == signal.SIGTERM else ""  # a Ctrl-C is said as none
-    assert err.endswith(f"roomba-bt: interrupted{by}\n")
+    # the import under way is named, at its line (session 38)
+    plugin = tmp_path / "plugin.py"
+    assert err.endswith(
+        f"roomba-bt: interrupted{by} while importing plugin {plugin} (at {plugin}:3)\n"
+    ), err
     assert "Traceback" not in err
 
 
