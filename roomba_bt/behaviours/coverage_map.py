@@ -131,6 +131,9 @@ _NO_START_MM = 20.0
 #: ... and the robot drives this far (mm) straight away from the drop first: a leg along
 #: the drop then clears it (a cliff sensor's look-ahead reaches 18 cm to the side)
 _CLEAR_MM = 150.0
+#: an edge whose centre has not moved turning more than this (rad) is turning in place, not
+#: held (:meth:`Cover._edge_held`)
+_EDGE_TURNING = math.radians(10.0)
 #: a straight stretch of wall: this long (mm) with the heading within this angle re-anchors
 _ANCHOR_MM, _ANCHOR_SPREAD = 1000.0, math.radians(2.0)
 #: a straight wall this close to the axis (or square to it) re-anchors the heading
@@ -867,6 +870,8 @@ class Cover(Action):
         self._steering = EdgeSteering()
         self._drop_edge = DropEdge(self._map.drops)
         self._bearings.off_wall()
+        odo = self._pose
+        self._edge_mark = (odo.x_mm, odo.y_mm, odo.angle_rad, odo.angle_rad, snap.time)
 
     def _edging(self, frame: SensorFrame) -> tuple[float, float] | None:
         snap = self.snapshot
@@ -878,6 +883,14 @@ class Cover(Action):
         ] > float(self.value("edge_time")):
             self._edge_done()
             self._next()
+            return None
+        held = self._edge_held(odo, snap.time)
+        if held is not None:  # nowhere to go on from here: the edge ends
+            self._edge_done()
+            if held == "stalled":  # off what holds it first, as off a bump
+                self._back(driving.BACK_OFF_MM["bump"])
+            else:
+                self._next()
             return None
         speed = self.number("speed")
         recovery = self._edge_recovery
@@ -911,6 +924,29 @@ class Cover(Action):
         else:
             self._bearings.anchor(odo.path_mm, odo.theta_rad, abs(error) < 15.0)
         return left, right
+
+    def _edge_held(self, odo: Odometry, now: float) -> str | None:
+        """Has the edge stopped getting anywhere? ``"stalled"``: its centre has moved less
+        than :data:`~.driving.PROGRESS_MM` and turned less than :data:`_EDGE_TURNING` for
+        :data:`~.driving.STALL_S`; ``"closed in"``: it has turned a whole turn in place (a
+        wall ahead whichever way it faces); else None.
+
+        Why: an edge ends by the floor it finds (:data:`_EDGE_NO_YIELD_MM` of path) or after
+        ``edge_time``, and neither comes to a robot that does not move. Living room seed 22
+        (exact encoders) stood 180 s with its side against the plant, the wheels driven and
+        held, no bump (session 38); the apartment, seed 0 with 1.5 % error, turned in place
+        for two edges of 180 s each among the stairs' drops on its map, each a wall to the
+        edge whichever way it faced (the 376 s without new floor of session 37)."""
+        x, y, angle, turned, since = self._edge_mark
+        if math.hypot(odo.x_mm - x, odo.y_mm - y) > driving.PROGRESS_MM:
+            self._edge_mark = (odo.x_mm, odo.y_mm, odo.angle_rad, odo.angle_rad, now)
+            return None
+        if abs(odo.angle_rad - angle) >= math.tau:
+            return "closed in"
+        if abs(odo.angle_rad - turned) > _EDGE_TURNING:  # turning in place: not held
+            self._edge_mark = (x, y, angle, odo.angle_rad, now)
+            return None
+        return "stalled" if now - since >= driving.STALL_S else None
 
     def _edge_done(self) -> None:
         """An edge ends: how much new floor it found decides whether another is worth it."""

@@ -297,3 +297,65 @@ def test_cover_fails_at_once_at_the_firmwares_cliff_stop_and_waits_otherwise(
         assert Status.FAILURE not in statuses[:-1], cliff
         if cliff:
             assert "left Safe/Full mode" in cover.feedback_message
+
+
+def _wheels_frame(robot: StubRobot, left: int, right: int, signals: tuple[int, ...]) -> None:
+    """A frame with the encoders at ``left``, ``right`` and the light bumper's ``signals``."""
+    values = dict.fromkeys((*driving.BLOCKED_PACKETS, *IR_PACKETS), 0)
+    values.update(zip(LIGHT_BUMP_SIGNAL_PACKETS, signals, strict=True))
+    values.update({43: left % 65536, 44: right % 65536, 35: int(OIMode.SAFE)})
+    robot.set_frame(values)
+
+
+def _edging(make: Make, robot: StubRobot) -> Cover:
+    cover = make(Cover)
+    _wheels_frame(robot, 0, 0, (0,) * 6)
+    cover.tick_once()  # started: ahead to a wall
+    cover._plan.clear()
+    cover._edge()  # along the wall on its right, from here
+    return cover
+
+
+def test_an_edge_whose_wheels_are_held_ends_and_backs_off(make: Make, robot: StubRobot) -> None:
+    """An edge ended by the floor it found or after ``edge_time`` (3 min): one whose wheels
+    were driven and held (living room seed 22, exact encoders: its side against the plant,
+    no bump) stood 180 s. Now, held for ``STALL_S``, it backs off as from a bump and the
+    edge ends; one that moves goes on."""
+    wall = (0, 0, 0, 0, 0, 3400)  # a wall on its right, at the edge's distance or so
+    cover = _edging(make, robot)
+    counts = 0
+    for _ in range(round(driving.STALL_S / 0.015) + 20):  # driving along it
+        counts += 15
+        _wheels_frame(robot, counts, counts, wall)
+        cover.tick_once()
+    assert cover._phase == "edge"
+    phases = []
+    for _ in range(round(driving.STALL_S / 0.015) + 20):  # the wheels held where it is
+        _wheels_frame(robot, counts, counts, wall)
+        cover.tick_once()
+        phases.append(cover._phase)
+    assert phases[0] == "edge" and phases[-1] == "back", phases[-1]
+    wheels = robot.flush()[-1]
+    assert wheels.opcode == 145 and wheels.args[0] < 0  # backing
+
+
+def test_an_edge_that_turns_a_whole_turn_in_place_ends(make: Make, robot: StubRobot) -> None:
+    """Among the stairs' drops on its drifted map (apartment, seed 0, 1.5 % error), each a
+    wall to an edge, the edge turned in place whichever way it faced: two edges of 180 s,
+    376 s without new floor. An edge that has turned a whole turn without moving ends."""
+    cover = _edging(make, robot)
+    fmap = cover._map
+    for k in range(12):  # a ring of drops 25 cm round it, joined into edges
+        a = k * math.tau / 12
+        fmap.drops.mark(250.0 * math.cos(a), 250.0 * math.sin(a), a + math.pi / 2, 100.0 * k)
+    ended = []
+    cover._edge_done = lambda: ended.append(robot.snapshot.time)  # type: ignore[method-assign]
+    left = right = 0
+    for _ in range(round(10.0 / 0.015)):
+        left, right = left - 10, right + 10  # turning left in place, as its steering asks
+        _wheels_frame(robot, left, right, (0,) * 6)
+        cover.tick_once()
+        if ended:
+            break
+    # a whole turn: about 740 mm a wheel, 1,660 counts, 166 ticks (2.5 s)
+    assert ended and ended[0] < 4.0, ended
