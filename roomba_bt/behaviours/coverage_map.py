@@ -836,6 +836,11 @@ class Cover(Action):
                 self._decide()
             else:
                 self._next()
+        elif kind == "clear":
+            if self._why == "drop" and self._achieved < _NO_START_MM:
+                # away from the drop was no way either: that leg's way is not taken again
+                self._map.avoid.add(self._goto_cell)
+            self._next()
         else:  # seek
             self._next()
 
@@ -849,7 +854,12 @@ class Cover(Action):
         stairs); every leg of the path to unswept floor that ran along the drop then ended
         in its first tick (the drop within a cliff sensor's look-ahead), the path's next leg
         too, and the same path was planned again: living room seed 2 with 1.5 % encoder
-        error stood 164 s without new floor, 656 s in (session 37)."""
+        error stood 164 s without new floor, 656 s in (session 37).
+
+        A move clear that a drop ends before it starts too (a drop, or a guess of one, the
+        other way as well) puts the leg's cell in :attr:`FloorMap.avoid`: the path was planned
+        again through it, leg, turn, no move, for 94 s (living room seed 24, exact encoders,
+        by the stairs; session 38)."""
         away = self._map.drops.away(self._pose)
         if away is None:
             return False

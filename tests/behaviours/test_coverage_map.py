@@ -7,6 +7,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable
+from functools import partial
 
 import py_trees
 import pytest
@@ -359,3 +360,23 @@ def test_an_edge_that_turns_a_whole_turn_in_place_ends(make: Make, robot: StubRo
             break
     # a whole turn: about 740 mm a wheel, 1,660 counts, 166 ticks (2.5 s)
     assert ended and ended[0] < 4.0, ended
+
+
+def test_a_leg_no_move_clear_of_the_drop_can_start_either_is_not_planned_again(
+    make: Make, robot: StubRobot
+) -> None:
+    """A leg a known drop kept from starting turns the robot away from the drop and drives
+    15 cm (session 37); where a drop, or a guess of one, ends that move before it starts
+    too, the same path was planned again, leg, turn, no move, for 94 s (living room seed
+    24, exact encoders, by the stairs). Now that leg's cell is not taken again; a move
+    clear that went is no reason to."""
+    for achieved, why, avoided in ((0.0, "drop", True), (150.0, "limit", False)):
+        cover = _edging(make, robot)
+        cell = cover._map.cell(400.0, 0.0)
+        assert cell is not None
+        decided: list[bool] = []
+        cover._goto_cell = cell
+        cover._kind, cover._why, cover._achieved = "clear", why, achieved
+        cover._plan = [partial(decided.append, True)]  # then it decides again
+        cover._ended()
+        assert (cell in cover._map.avoid) is avoided and decided == [True], why
