@@ -461,3 +461,22 @@ def test_a_leg_no_move_clear_of_the_drop_can_start_either_is_not_planned_again(
         cover._plan = [partial(decided.append, True)]  # then it decides again
         cover._ended()
         assert (cell in cover._map.avoid) is avoided and decided == [True], why
+
+
+def test_a_leg_a_known_drop_keeps_from_starting_is_not_planned_again(
+    make: Make, robot: StubRobot
+) -> None:
+    """After the move clear of the drop, the path planned again led back to the same leg,
+    which the drop kept from starting again: leg, turn, 15 cm, leg, for 514 s (the
+    apartment, seed 9, 1.5 % error, session 38). A leg that a known drop ends before it
+    starts is not planned again; one that went some way and ended short of it is."""
+    for achieved, avoided in ((0.0, True), (78.0, False)):
+        cover = _edging(make, robot)
+        cell = cover._map.cell(400.0, 0.0)
+        assert cell is not None
+        decided: list[bool] = []
+        cover._goto_cell = cell
+        cover._kind, cover._why, cover._achieved = "goto", "drop", achieved
+        cover._plan = [partial(decided.append, True)]  # no drop near on its map: on
+        cover._ended()
+        assert (cell in cover._map.avoid) is avoided and decided == [True], achieved
