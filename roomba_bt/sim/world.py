@@ -565,6 +565,17 @@ class _Checker:
         if any(p is None for p in points):
             return None
         poly = tuple(p for p in points if p is not None)
+        repeated = _repeated_corner(poly)
+        if repeated is not None:
+            i, what = repeated
+            self.error((*path, i), f"[{poly[i][0] / 1000:g}, {poly[i][1] / 1000:g}] again, "
+                       f"{what}",
+                       "each corner once, in order around the polygon")  # fmt: skip
+            return None
+        if _collinear(poly):  # its sides lie over each other: "cross" said nothing of a line
+            self.error(path, "a polygon of zero area (its corners all on one line)",
+                       "a polygon enclosing some floor")  # fmt: skip
+            return None
         crossing = _first_crossing(poly)
         if abs(_area(poly)) < 1.0 and crossing is None:  # a bowtie's halves cancel: it crosses
             self.error(path, "a polygon of zero area", "a polygon enclosing some floor")
@@ -663,6 +674,26 @@ def _first_crossing(poly: Polygon) -> tuple[int, int] | None:
                 if segments_meet(*sides[pair[0]], *sides[pair[1]]):
                     crossings.append(pair)
     return min(crossings) if crossings else None
+
+
+def _repeated_corner(poly: Polygon) -> tuple[int, str] | None:
+    """The first corner of ``poly`` that repeats the one before it, and what it repeats
+    (None: none does). The last corner repeating the first is a polygon closed by hand,
+    which closes by itself: said so. Such a side of no length was said as "sides cross"."""
+    n = len(poly)
+    for i in range(1, n):
+        if poly[i] == poly[i - 1]:
+            return i, f"the corner before it ([{i - 1}])"
+    if poly[0] == poly[-1]:
+        return n - 1, "the first corner ([0]): a polygon closes by itself, leave the last out"
+    return None
+
+
+def _collinear(poly: Polygon) -> bool:
+    """Every corner of ``poly`` on the line through its first two (within a square
+    millimetre of area): a polygon of no floor, whose sides overlap."""
+    (ax, ay), (bx, by) = poly[0], poly[1]
+    return all(abs((bx - ax) * (y - ay) - (by - ay) * (x - ax)) < 2.0 for x, y in poly[2:])
 
 
 def _side(poly: Polygon, i: int) -> str:

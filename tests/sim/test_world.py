@@ -763,3 +763,30 @@ def test_a_utf16_world_and_a_link_to_no_world_say_what_they_are(
     assert said["gone.yaml"].startswith(
         "gone.yaml: world: found a broken symbolic link (to 'moved.yaml', which does not exist)"
     )
+
+
+@pytest.mark.parametrize(
+    ("shape", "said"),
+    [
+        ("[[0, 0], [4, 0], [4, 0], [0, 3]]",
+         "w.yaml:1:26: rooms[0][2]: found [4, 0] again, the corner before it ([1])"),
+        ("[[0, 0], [4, 0], [4, 3], [0, 3], [0, 0]]",
+         "w.yaml:1:42: rooms[0][4]: found [0, 0] again, the first corner ([0]): a polygon "
+         "closes by itself, leave the last out"),
+    ],
+)  # fmt: skip
+def test_a_repeated_corner_is_named_at_its_place_not_said_to_cross(shape: str, said: str) -> None:
+    """A corner written twice made a side of no length, which "met" its neighbours: it read
+    "a polygon whose sides cross ([0, 0]-[4, 0] and [4, 0]-[4, 0])"."""
+    assert problems(f"rooms: [{shape}]\n") == [
+        f"{said}; allowed: each corner once, in order around the polygon"
+    ]
+
+
+@pytest.mark.parametrize("shape", ["[[0, 0], [4, 0], [2, 0], [1, 0]]", "[[0, 0], [1, 1], [3, 3]]"])
+def test_a_room_on_one_line_is_said_to_have_no_area(shape: str) -> None:
+    """Its sides lie over each other: it read "sides cross", which named no mistake."""
+    assert problems(f"rooms: [{shape}]\n") == [
+        "w.yaml:1:9: rooms[0]: found a polygon of zero area (its corners all on one line); "
+        "allowed: a polygon enclosing some floor"
+    ]
