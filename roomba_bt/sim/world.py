@@ -1082,9 +1082,24 @@ def _walls(c: _Checker, value: object) -> tuple[Segment, ...]:
     walls: list[Segment] = []
     for i, w in enumerate(c.items(value, ("walls",))):
         r = c.numbers(w, ("walls", i), 4, _METRES, "a segment [x0, y0, x1, y1] in metres")
-        if r is not None:
-            walls.append((r[0] * 1000.0, r[1] * 1000.0, r[2] * 1000.0, r[3] * 1000.0))
+        if r is None:
+            continue
+        x0, y0, x1, y1 = (n * 1000.0 for n in r)
+        if not _no_length(c, ("walls", i), (x0, y0), (x1, y1), "wall"):
+            walls.append((x0, y0, x1, y1))
     return tuple(walls)
+
+
+def _no_length(c: _Checker, path: PathKey, a: Point, b: Point, what: str) -> bool:
+    """Whether the segment from ``a`` to ``b`` (mm) has no length, said at ``path``: a wall
+    of no length stops nothing and a virtual wall of none shows no beam, yet both loaded
+    without a word."""
+    if a != b:
+        return False
+    at = f"[{a[0] / 1000:g}, {a[1] / 1000:g}]"
+    c.error(path, f"a {what} of no length (both ends at {at})",
+            f"a {what} whose two ends differ")  # fmt: skip
+    return True
 
 
 def _dirt(c: _Checker, value: object) -> tuple[DirtSpec, ...]:
@@ -1111,6 +1126,8 @@ def _virtual_walls(c: _Checker, value: object) -> tuple[VirtualWallSpec, ...]:
         b = c.point(spec["to"], (*path, "to"))
         halo = c.number(spec.get("halo", 0.0), (*path, "halo"), 0.0, 2.0, "m")
         width = c.number(spec.get("width", 0.12), (*path, "width"), 0.02, 1.0, "m")
+        if a and b and _no_length(c, (*path, "to"), a, b, "virtual wall"):
+            continue
         if a and b and halo is not None and width is not None:
             vwalls.append(VirtualWallSpec(a[0], a[1], b[0], b[1], width * 500.0, halo * 1000.0))
     return tuple(vwalls)

@@ -790,3 +790,22 @@ def test_a_room_on_one_line_is_said_to_have_no_area(shape: str) -> None:
         "w.yaml:1:9: rooms[0]: found a polygon of zero area (its corners all on one line); "
         "allowed: a polygon enclosing some floor"
     ]
+
+
+def test_a_wall_or_a_virtual_wall_of_no_length_is_refused_at_its_place() -> None:
+    """Both loaded without a word: a wall from a point to itself stops nothing, and a
+    virtual wall's beam from its emitter to the same point is seen nowhere a user expects."""
+    room = "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\n"
+    assert problems(
+        room + "walls: [[1, 1, 2, 1], [1, 1.5, 1, 1.5]]\n"
+        "virtual_walls:\n  - {from: [1, 1], to: [2, 1]}\n"
+        "  - {from: [3, 2], to: [3, 2], halo: 0.3}\n"
+    ) == [
+        "w.yaml:2:23: walls[1]: found a wall of no length (both ends at [1, 1.5]); allowed: a "
+        "wall whose two ends differ",
+        "w.yaml:5:24: virtual_walls[1].to: found a virtual wall of no length (both ends at "
+        "[3, 2]); allowed: a virtual wall whose two ends differ",
+    ]
+    # a short one is a wall (1 mm)
+    [wall] = parse_world(room + "walls: [[1, 1, 1.001, 1]]\n", "w.yaml").walls
+    assert math.dist(wall[:2], wall[2:]) == pytest.approx(1.0)
