@@ -875,6 +875,12 @@ def _areas(c: _Checker, value: object) -> tuple[AreaSpec, ...]:
 
 
 _REFUSED_TAG = "the tag {tag!r} is not allowed in a world"
+#: What an empty world file (nothing, or only comments) is said to be, and what it needs.
+_EMPTY = (
+    "an empty file (no YAML in it, at most comments)",
+    "a world: at least rooms, a list of floor polygons in metres, e.g. "
+    "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]] (roomba-bt worlds empty-room prints a whole one)",
+)
 
 
 def _compose_world(text: str) -> yaml.Node | None:
@@ -892,16 +898,14 @@ def parse_world(text: str, source: str = "<world>") -> World:
     """Validate a world given as YAML text; :class:`WorldError` lists every problem."""
     try:
         root = _compose_world(text)
-        if root is not None and not yamlsource.holds_some_of(root, _TOP_KEYS):
+        if root is None:  # it said "roomba-bt: FILE: (document): found nothing", no place
+            raise WorldError([WorldProblem(source, 1, 1, "(document)", *_EMPTY)])
+        if not yamlsource.holds_some_of(root, _TOP_KEYS):
             line, col = yamlsource.position(root)
             found = yamlsource.not_a_file_of("this file", "world", _TOP_KEYS)
             raise WorldError([WorldProblem(source, line, col, "", found, "")])
-        duplicates = [] if root is None else yamlsource.every_duplicate_key(root)
-        data, marks = (
-            (None, {})
-            if root is None
-            else yamlsource.to_data(root, _REFUSED_TAG, skip_duplicates=True)
-        )
+        duplicates = yamlsource.every_duplicate_key(root)
+        data, marks = yamlsource.to_data(root, _REFUSED_TAG, skip_duplicates=True)
     except yamlsource.Refused as exc:  # each alias, tag or control character, at once
         raise WorldError([_yaml_problem(each, text, source) for each in exc.every()]) from None
     except yaml.YAMLError as exc:

@@ -115,6 +115,29 @@ def test_a_world_of_thousands_of_errors_lists_the_first_hundred(
     assert any(first in line for line in lines[:2]), lines[:2]  # after "sim: invalid world:"
 
 
+@pytest.mark.parametrize(
+    ("argv", "before"),
+    [
+        (["run", "dock", "--fast", "--display", "none", "--world", "worlds/empty.yaml"], []),
+        (["sim", "--tcp", "0", "--world", "worlds/empty.yaml"], ["roomba-bt sim: invalid world:"]),
+    ],
+    ids=["run", "sim"],
+)
+def test_an_empty_world_is_said_at_its_place_by_run_and_sim(
+    worlds: Path, capsys: Capsys, argv: list[str], before: list[str]
+) -> None:
+    """``run`` said "roomba-bt: worlds/empty.yaml: (document): found nothing", the one world
+    problem not at ``file:line:col``; both say it as every other now."""
+    (worlds / "worlds" / "empty.yaml").write_text("# to be drawn\n")
+    assert main(argv) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[: len(before)] == before
+    assert lines[len(before)].startswith(
+        "worlds/empty.yaml:1:1: (document): found an empty file (no YAML in it, at most "
+        "comments); allowed: a world: at least rooms"
+    ), lines
+
+
 def _world_starting_at(x: float) -> str:
     """A room 5 x 4 m with stairs down from x = 3 m, the robot given a start at ``x``."""
     return (

@@ -809,3 +809,15 @@ def test_a_wall_or_a_virtual_wall_of_no_length_is_refused_at_its_place() -> None
     # a short one is a wall (1 mm)
     [wall] = parse_world(room + "walls: [[1, 1, 1.001, 1]]\n", "w.yaml").walls
     assert math.dist(wall[:2], wall[2:]) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("text", ["", "\n\n", "# my flat, to be drawn\n"])
+def test_an_empty_world_file_is_said_at_1_1_with_what_a_world_needs(text: str) -> None:
+    """It had no place ("roomba-bt: FILE: (document): found nothing; allowed: a mapping with
+    keys ..."), so ``run`` began its line "roomba-bt:" where every other world problem is
+    ``file:line:col``, and it named no example of what to write."""
+    assert problems(text) == [
+        "w.yaml:1:1: (document): found an empty file (no YAML in it, at most comments); "
+        "allowed: a world: at least rooms, a list of floor polygons in metres, e.g. rooms: "
+        "[[[0, 0], [4, 0], [4, 3], [0, 3]]] (roomba-bt worlds empty-room prints a whole one)"
+    ]
