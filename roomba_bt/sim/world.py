@@ -45,7 +45,7 @@ from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.bits import BUTTON_NAMES, OVERCURRENT_BITS, PRESS_SECONDS
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import BODY_RADIUS_MM
-from roomba_bt.printable import broken_link, listed
+from roomba_bt.printable import MAX_FOUND, MAX_LISTED, broken_link, listed, stopped_finding
 from roomba_bt.sim.geometry import (
     Point,
     Polygon,
@@ -417,11 +417,25 @@ class WorldProblem:
 class WorldError(ValueError, RoombaBtError):
     """A world that cannot be loaded; ``problems`` lists every one found, in the file's
     order (those without a place last); its message, the first hundred
-    (:func:`~roomba_bt.printable.listed`: 20,000 bad obstacles were 20,000 lines)."""
+    (:func:`~roomba_bt.printable.listed`: 20,000 bad obstacles were 20,000 lines). A check
+    stops at :data:`~roomba_bt.printable.MAX_FOUND` problems: the last kept is then the note
+    that says so, at the place of the last found, listed as the hundredth (after it, only
+    how many more are said)."""
 
     def __init__(self, problems: list[WorldProblem]) -> None:
-        self.problems = sorted(problems, key=lambda p: (not p.line, p.line, p.column))
+        ordered = sorted(problems, key=lambda p: (not p.line, p.line, p.column))
+        if len(ordered) >= MAX_FOUND:
+            last = ordered[MAX_FOUND - 1]
+            note = WorldProblem(last.source, last.line, last.column, "", stopped_finding(), "")
+            ordered = ordered[: MAX_FOUND - 1]
+            ordered.insert(MAX_LISTED - 1, note)
+        self.problems = ordered
         super().__init__("\n".join(listed([str(p) for p in self.problems])))
+
+
+class _Stopped(Exception):
+    """A world's check found :data:`~roomba_bt.printable.MAX_FOUND` problems: no more are
+    looked for (:class:`WorldError` says so)."""
 
 
 # ----------------------------------------------------------------------------- loading
@@ -462,7 +476,13 @@ class _Checker:
         self.warnings: list[WorldProblem] = []
 
     def error(self, path: PathKey, found: str, allowed: str, at: PathKey | None = None) -> None:
-        self.problems.append(self._placed(path, found, allowed, at))
+        self.add(self._placed(path, found, allowed, at))
+
+    def add(self, problem: WorldProblem) -> None:
+        """One more problem; :class:`_Stopped` at :data:`~roomba_bt.printable.MAX_FOUND`."""
+        self.problems.append(problem)
+        if len(self.problems) >= MAX_FOUND:
+            raise _Stopped
 
     def warn(self, path: PathKey, found: str, allowed: str) -> None:
         """Something that loads but is likely a mistake, said at its place as an error is."""
@@ -907,17 +927,21 @@ def parse_world(text: str, source: str = "<world>") -> World:
         duplicates = yamlsource.every_duplicate_key(root)
         data, marks = yamlsource.to_data(root, _REFUSED_TAG, skip_duplicates=True)
     except yamlsource.Refused as exc:  # each alias, tag or control character, at once
-        raise WorldError([_yaml_problem(each, text, source) for each in exc.every()]) from None
+        every = exc.every()[:MAX_FOUND]
+        raise WorldError([_yaml_problem(each, text, source) for each in every]) from None
     except yaml.YAMLError as exc:
         raise WorldError([_yaml_problem(exc, text, source)]) from None
     c = _Checker(source, marks)
-    for dup in duplicates:  # every one, and then the world's other problems
-        line, col = yamlsource.position(dup.node)
-        first = yamlsource.position(dup.first)[0]
-        c.problems.append(WorldProblem(source, line, col, _dotted(dup.path or ()),
-                                       f"the key {str(dup.key)!r} again (first at line {first})",
-                                       "each key once"))  # fmt: skip
-    return _build_world(c, data, source)
+    try:
+        for dup in duplicates:  # every one, and then the world's other problems
+            line, col = yamlsource.position(dup.node)
+            first = yamlsource.position(dup.first)[0]
+            c.add(WorldProblem(source, line, col, _dotted(dup.path or ()),
+                               f"the key {str(dup.key)!r} again (first at line {first})",
+                               "each key once"))  # fmt: skip
+        return _build_world(c, data, source)
+    except _Stopped:
+        raise WorldError(c.problems) from None
 
 
 def _yaml_problem(exc: yaml.YAMLError, text: str, source: str) -> WorldProblem:

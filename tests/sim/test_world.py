@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from roomba_bt import yamlsource
+from roomba_bt import printable, yamlsource
 from roomba_bt.oi import commands as C
 from roomba_bt.sim import WorldError, load_world, parse_world, shipped_worlds
 from roomba_bt.sim import world as world_module
@@ -821,3 +821,32 @@ def test_an_empty_world_file_is_said_at_1_1_with_what_a_world_needs(text: str) -
         "allowed: a world: at least rooms, a list of floor polygons in metres, e.g. rooms: "
         "[[[0, 0], [4, 0], [4, 3], [0, 3]]] (roomba-bt worlds empty-room prints a whole one)"
     ]
+
+
+def test_a_worlds_check_stops_at_the_cap_and_says_so_among_the_first_listed() -> None:
+    """A world of 150,000 bad points built 150,000 problems (6 s, 350 MB) to list 100: the
+    check stops at MAX_FOUND, the note (the hundredth line, seen) at the last one's place."""
+    points = ", ".join(["[x, 1]"] * 10_500)
+    with pytest.raises(WorldError) as info:
+        parse_world(f"rooms: [[{points}]]\n", "w.yaml")
+    found = info.value.problems
+    assert len(found) == printable.MAX_FOUND
+    assert all(p.field.startswith("rooms[0][") for p in found[:99] + found[100:])
+    note = found[99]
+    assert (note.line, note.column) == (1, 11 + 8 * (printable.MAX_FOUND - 1))  # its x
+    assert str(note).endswith(
+        ": checking stopped here, at 10,000 errors (at most 10,000 are said): the rest of the "
+        "file is not checked (a file generated wrong?)"
+    )
+    lines = str(info.value).splitlines()
+    assert lines[99] == str(note)
+    assert lines[100] == "... and 9,900 more errors (the first 100 are listed)"
+    # duplicate keys and refused aliases stop there too
+    for text in (
+        "rooms: [[[0, 0], [1, 0], [1, 1]]]\n" + "dock: {" + "at: 1, " * 10_500 + "}\n",
+        "rooms: [[[0, 0], [1, 0], [1, 1]]]\nname: &a x\nwalls: [" + "*a, " * 10_500 + "]\n",
+    ):
+        with pytest.raises(WorldError) as info:
+            parse_world(text, "w.yaml")
+        assert len(info.value.problems) == printable.MAX_FOUND
+        assert "checking stopped here, at 10,000 errors" in str(info.value.problems[99])
