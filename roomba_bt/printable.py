@@ -16,6 +16,7 @@ from __future__ import annotations
 import errno
 import os
 import re
+import stat
 
 __all__ = [
     "ANY_CONTROL", "CONTROL", "INVISIBLE", "MAX_FOUND", "MAX_LISTED", "NAME_LIMIT", "TEXT_LIMIT",
@@ -140,6 +141,23 @@ def broken_link(link: os.PathLike[str]) -> str:
         if exc.errno == errno.ELOOP:
             return LINK_LOOP
     return f"a broken symbolic link (to {os.readlink(link)!r}, which does not exist)"
+
+
+def special_file(path: os.PathLike[str]) -> str | None:
+    """What ``path`` is when it is neither a regular file nor a folder (a named pipe, a
+    device, a socket, a broken link or a link loop), None otherwise (one of those, or
+    nothing there): "there is no such directory" was said of a pipe that is there."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return broken_link(path) if os.path.islink(path) else None
+    if stat.S_ISFIFO(mode):
+        return "a named pipe (FIFO)"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return None
 
 
 def repr_written(value: object) -> str:

@@ -23,7 +23,7 @@ from roomba_bt.installation import optional_import_failure
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES, RobotProfile
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, escaped, special_file
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -801,7 +801,8 @@ def add_permission_options(parser: argparse.ArgumentParser) -> None:
 
 def include_dir(text: str) -> Path:
     """An existing folder (``--include-dir``); a file is said to be one, with its folder
-    (``--include-dir lib/escapes.yaml`` was "there is no such directory")."""
+    (``--include-dir lib/escapes.yaml`` was "there is no such directory"), and so is a pipe, a
+    device or a broken link (:func:`~roomba_bt.printable.special_file`)."""
     folder = Path(text)
     if folder.is_file():
         raise argparse.ArgumentTypeError(
@@ -809,7 +810,8 @@ def include_dir(text: str) -> Path:
             f"(--include-dir {folder.parent})"
         )
     if not folder.is_dir():
-        raise argparse.ArgumentTypeError(f"found {text!r}: there is no such directory")
+        what = special_file(folder) or "there is no such directory"
+        raise argparse.ArgumentTypeError(f"found {text!r}: {what}")
     return folder
 
 

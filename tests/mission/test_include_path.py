@@ -243,3 +243,20 @@ def test_include_dir_naming_a_file_says_so(repo: Path, capsys: Capsys) -> None:
         "found 'missions/common/lib/safe_drive.yaml': a file, not a folder; give the folder "
         "that holds it (--include-dir missions/common/lib)"
     ) in capsys.readouterr().err
+
+
+def test_include_dir_naming_a_pipe_or_a_broken_link_says_what_it_is(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """A named pipe given as ``--include-dir`` was "there is no such directory": it is there."""
+    fifo, link = tmp_path / "lib", tmp_path / "gone"
+    os.mkfifo(fifo)
+    link.symlink_to(tmp_path / "nowhere")
+    for given, said in [
+        (fifo, "a named pipe (FIFO)"),
+        (link, f"a broken symbolic link (to {str(tmp_path / 'nowhere')!r}, which does not exist)"),
+        (tmp_path / "none", "there is no such directory"),
+    ]:
+        with pytest.raises(SystemExit):
+            main(["validate", MISSION_PATH, "--include-dir", str(given)])
+        assert f"found {str(given)!r}: {said}" in capsys.readouterr().err
