@@ -1253,10 +1253,41 @@ def long_number(exc: Exception) -> str:
     )
 
 
+class DuplicateKey(ValueError):
+    """A JSON object of a stranger's file holding one key twice (``args[0]``, the key)."""
+
+
+def _each_key_once(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """``json.loads``' object hook: the object, DuplicateKey when a key is in it twice."""
+    found = dict(pairs)
+    if len(found) != len(pairs):  # the rare case: which key, in the order written
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise DuplicateKey(key)
+            seen.add(key)
+    return found
+
+
+def json_read(text: str) -> Any:
+    """``text``, a line of a file roomba-bt wrote (a record's, a results file's), as JSON
+    that holds each key of an object once: ``json.loads`` keeps the last of two, so a chunk
+    line with two ``"b"`` replayed to a difference (exit 1) where it is no line run
+    --record writes. DuplicateKey (a ValueError) names the key."""
+    return json.loads(text, object_pairs_hook=_each_key_once)
+
+
+def twice(exc: DuplicateKey) -> str:
+    """What is said of a key written twice in one object."""
+    return f"the key {json.dumps(exc.args[0])} twice in one object; expected each key once"
+
+
 def _header(path: Path, line: str) -> dict[str, Any]:
     """The record's first line: its header, every field checked (:func:`header_problem`)."""
     try:  # a byte-order mark an editor wrote before it: read past, as a mission's is
-        header = json.loads(line.removeprefix("\ufeff"))
+        header = json_read(line.removeprefix("\ufeff"))
+    except DuplicateKey as exc:
+        raise RecordError(f"{path}:1: header holds {twice(exc)}") from None
     except json.JSONDecodeError as exc:
         raise RecordError(f"{path}:1:{exc.colno}: header is not JSON: {exc.msg}") from None
     except RecursionError:  # json's decoder recurses: a line nested thousands deep
@@ -1292,7 +1323,7 @@ def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dic
         return float(written[1]), written[2], bytes.fromhex(written[3])
     problem: str | None = None
     try:
-        item = json.loads(line)
+        item = json_read(line)
         if not isinstance(item, dict):
             raise TypeError(f"a JSON {type(item).__name__}, not an object")
         if item.get("d") == "end":
@@ -1310,6 +1341,8 @@ def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dic
             t, d, b = float(item["t"]), str(item["d"]), bytes.fromhex(item["b"])
     except RecursionError:
         raise RecordError(f"{path}:{number}: a chunk nested too deeply to be one") from None
+    except DuplicateKey as exc:
+        raise RecordError(f"{path}:{number}: {twice(exc)}, as run --record writes it") from None
     except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
         said = long_number(exc) if _TOO_LONG in str(exc) else f"{type(exc).__name__}: {exc}"
         raise RecordError(

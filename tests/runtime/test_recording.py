@@ -1249,3 +1249,28 @@ def test_a_note_whose_tick_is_no_stream_tick_is_refused_at_its_line(
     assert main(["replay", str(edited)]) == 2
     err = capsys.readouterr().err
     assert f"{edited}:41: a note's tick is {json.dumps(tick)}; expected the stream's tick" in err
+
+
+def test_a_key_written_twice_in_a_line_is_refused_at_its_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A chunk line with two ``"d"`` (JSON keeps the last) replayed to a difference, exit 1:
+    no line run --record writes holds a key twice. A header's alike."""
+    lines = _recorded_run(tmp_path, capsys)
+    chunk = json.loads(lines[40])
+    twice = lines[40].replace('"d": ', f'"d": "{"in" if chunk["d"] == "out" else "out"}", "d": ')
+    damaged = tmp_path / "damaged.jsonl"
+    damaged.write_text("".join([*lines[:40], twice, *lines[41:]]), encoding="utf-8")
+    assert main(["replay", str(damaged)]) == 2
+    assert (
+        capsys.readouterr()
+        .err.strip()
+        .endswith(
+            f'{damaged}:41: the key "d" twice in one object; expected each key once, as run '
+            "--record writes it"
+        )
+    )
+    header = lines[0].replace('{"format": ', '{"format": "x", "format": ')
+    damaged.write_text("".join([header, *lines[1:]]), encoding="utf-8")
+    assert main(["replay", str(damaged)]) == 2
+    assert f'{damaged}:1: header holds the key "format" twice' in capsys.readouterr().err
