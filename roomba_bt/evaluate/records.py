@@ -54,14 +54,16 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from roomba_bt.evaluate.episode import Coverage, EpisodeResult
 from roomba_bt.evaluate.keys import KEY_PREFIX
+from roomba_bt.printable import escaped, shortened
 from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.recording import long_number
 from roomba_bt.runtime.summary import falls_in_order, hazard_falls
@@ -230,7 +232,7 @@ def _path_from(raw: Any) -> tuple[tuple[float, float], ...]:
         raw = [point.split(":") for point in raw.split(";") if point]
     if not isinstance(raw, list):
         raise ValueError(f"path {raw!r}: expected [x, y] points")
-    return tuple((float(x), float(y)) for x, y in raw)
+    return tuple((_finite(x), _finite(y)) for x, y in raw)
 
 
 def same_episode(one: EpisodeResult, other: EpisodeResult) -> bool:
@@ -286,17 +288,109 @@ def _coverage_from(record: dict[str, Any]) -> Coverage | None:
         curve = [p.split(":") for p in curve.split(";") if p]
     return Coverage(
         area=str(record["coverage_area"] or ""),
-        final=float(final),
-        curve=tuple((float(t), float(c)) for t, c in curve),
-        overall=float(record["coverage_overall"]),
-        by_area=tuple((str(a), float(c)) for a, c in by_area.items()),
-        longest_idle_s=float(record["longest_idle"]),
-        cleaning_s=float(record["cleaning_time"]),
+        final=_finite(final),
+        curve=tuple((_finite(t), _finite(c)) for t, c in curve),
+        overall=_finite(record["coverage_overall"]),
+        by_area=tuple((str(a), _finite(c)) for a, c in by_area.items()),
+        longest_idle_s=_finite(record["longest_idle"]),
+        cleaning_s=_finite(record["cleaning_time"]),
     )
 
 
-#: what a column of each kind holds, as a message about a bad value says it
-_EXPECTED = {"int": "a whole number", "params": "the parameters as --out writes them"}
+#: what a column of each kind holds, as a message about a bad value says it (a CSV cell:
+#: the same, as text)
+_EXPECTED = {
+    "str": "a string", "str?": "a string or null", "int": "a whole number",
+    "float": "a finite number", "float?": "a finite number or null",
+    "bool": "true or false (True or False in CSV)",
+    "outcome": "the outcome's word in capitals (SUCCESS, FAILURE, TIMEOUT, ...)",
+    "params": "an object of name: value text (name=value;... in CSV)",
+    "falls total": "a whole number or null", "hazard falls": "a whole number or null",
+    "falls by cause": "an object of cause: count, or null",
+    "undeclared": "an object of key: writer, or null",
+    "coverage": "a finite number or null", "coverage text": "a string or null",
+    "coverage by area": "an object of area: fraction, or null",
+    "coverage curve": "a list of [t, fraction], or null",
+    "provenance text": "a string or null", "provenance map": "an object, or null",
+    "path": "a list of [x, y] points, or null",
+}  # fmt: skip
+
+_NUMBER = frozenset({int, float})
+_NONE = type(None)
+#: each kind's JSON types as eval --out writes them (a bool is no number: ``type`` is
+#: compared, not ``isinstance``); a number is also finite (NaN, and 1e400 read as inf, were
+#: summarised as "median nan s")
+_JSON_TYPES: dict[str, frozenset[type]] = {
+    "str": frozenset({str}), "str?": frozenset({str, _NONE}), "int": frozenset({int}),
+    "float": _NUMBER, "float?": _NUMBER | {_NONE}, "0": _NUMBER, "1": _NUMBER, "2": _NUMBER,
+    "bool": frozenset({bool}), "outcome": frozenset({str}), "params": frozenset({dict}),
+    "falls total": frozenset({int, _NONE}), "hazard falls": frozenset({int, _NONE}),
+    "falls by cause": frozenset({dict, _NONE}), "undeclared": frozenset({dict, _NONE}),
+    "coverage": _NUMBER | {_NONE}, "coverage text": frozenset({str, _NONE}),
+    "coverage by area": frozenset({dict, _NONE}), "coverage curve": frozenset({list, _NONE}),
+    "provenance text": frozenset({str, _NONE}), "provenance map": frozenset({dict, _NONE}),
+    "path": frozenset({list, _NONE}),
+}  # fmt: skip
+_EXPECTED["0"] = _EXPECTED["1"] = _EXPECTED["2"] = _EXPECTED["float"]
+
+#: every column eval --out writes (but ``key:`` ones, of any value) and its kind: the table
+#: a JSON line is checked against; a column not in it is a later version's, and ignored
+_JSON_COLUMNS: dict[str, str] = {
+    **{column: kind for column, (_, kind) in COLUMNS.items()},
+    **{column: "coverage" for column in COVERAGE_COLUMNS},
+    "coverage_area": "coverage text", "coverage_by_area": "coverage by area",
+    "coverage_curve": "coverage curve",
+    "roomba_bt_version": "provenance text", "world_sha256": "provenance text",
+    "sources": "provenance map", "plugins": "provenance map", PATH_COLUMN: "path",
+}  # fmt: skip
+#: an outcome as the writer writes it: the word of an episode's end in capitals (a later
+#: version's new word reads; ``"\x1b[2J"`` does not)
+_OUTCOME = re.compile(r"[A-Z]+(?: [A-Z]+)*")
+
+
+def _found(raw: Any) -> str:
+    """A bad cell's value as a message quotes it: its JSON text, escaped and shortened
+    (``1e400``, which JSON reads as an infinity, said so)."""
+    if type(raw) is float and math.isinf(raw):
+        return f"{'-' if raw < 0 else ''}Infinity (a number too large to hold, such as 1e400)"
+    try:  # a text as before ('z', a CSV cell's too); a JSON value in JSON's words (true)
+        text = repr(raw) if isinstance(raw, str) else json.dumps(raw)
+    except (TypeError, ValueError):  # not JSON's (a test's own object): as Python says it
+        text = repr(raw)
+    return escaped(shortened(text, 60))
+
+
+def check_json_record(record: dict[str, Any]) -> None:
+    """ValueError naming the first column of a JSON Lines record that is not of the type
+    eval --out writes there (:data:`_JSON_COLUMNS`: ``"mission": 5``, ``"params": [1]``,
+    ``"mission_time": NaN``), what was found and what is allowed. :func:`from_record` read
+    them as Python converts them: ``5`` was the mission "5", ``[1]`` the parameter
+    ``-p [1]=``, ``true`` a seed of 1. A CSV row's text is read by the kinds' converters."""
+    for column, kind in _JSON_COLUMNS.items():
+        if column not in record:  # absent: from_record says which are required
+            continue
+        raw: Any = record[column]
+        if type(raw) not in _JSON_TYPES[kind] and not (raw is None and column in MEASURED_COLUMNS):
+            _bad(column, kind, raw)
+        if type(raw) is float and not math.isfinite(raw):
+            _bad(column, kind, raw)
+        if kind == "params" and not all(type(v) is str for v in raw.values()):
+            _bad(column, kind, raw)
+        if kind == "outcome" and not _OUTCOME.fullmatch(raw):
+            _bad(column, kind, raw)
+
+
+def _bad(column: str, kind: str, raw: Any) -> NoReturn:
+    raise ValueError(f"column {column!r}: found {_found(raw)}; expected {_EXPECTED[kind]}")
+
+
+def _finite(raw: Any) -> float:
+    """A number's cell (JSON's number or CSV's text) as a float; ValueError for NaN or an
+    infinity (``nan``, ``inf``, ``1e400``), which no episode measures."""
+    value = float(raw)
+    if not math.isfinite(value):
+        raise ValueError(f"{raw!r} is not a finite number")
+    return value
 
 
 def _read_column(values: dict[str, Any], name: str, kind: str, raw: Any) -> None:
@@ -307,15 +401,19 @@ def _read_column(values: dict[str, Any], name: str, kind: str, raw: Any) -> None
     elif kind == "int":
         values[name] = int(raw)
     elif kind == "float":
-        values[name] = float(raw)
+        values[name] = _finite(raw)
     elif kind == "bool":
-        values[name] = raw if isinstance(raw, bool) else str(raw) == "True"
+        if not isinstance(raw, bool) and raw not in ("True", "False"):
+            raise ValueError(f"{raw!r} is not True or False")
+        values[name] = raw if isinstance(raw, bool) else raw == "True"
     elif kind == "outcome":
-        values[name] = str(raw).lower()
+        if not isinstance(raw, str) or not _OUTCOME.fullmatch(raw):
+            raise ValueError(f"{raw!r} is no outcome")
+        values[name] = raw.lower()
     elif kind == "params":
         values[name] = _params(raw)
     else:
-        values[name][int(kind)] = float(raw)
+        values[name][int(kind)] = _finite(raw)
 
 
 def from_record(record: dict[str, Any]) -> EpisodeResult:
@@ -326,7 +424,10 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
     for column, (name, kind) in COLUMNS.items():
         if kind == "float?":  # a column later versions added: absent from older files
             raw = record.get(column)
-            values[name] = 0.0 if raw is None or raw == "" else float(raw)
+            try:
+                values[name] = 0.0 if raw is None or raw == "" else _finite(raw)
+            except (TypeError, ValueError):
+                _bad(column, kind, raw)
             continue
         if kind == "str?":  # the same, a text
             values[name] = str(record.get(column) or "")
@@ -343,8 +444,7 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
         try:
             _read_column(values, name, kind, raw)
         except (TypeError, ValueError):  # "invalid literal for int()" named no column
-            expected = _EXPECTED.get(kind, "a number")
-            raise ValueError(f"column {column!r}: found {raw!r}; expected {expected}") from None
+            _bad(column, kind, raw)
     values["start"], values["end"] = tuple(values["start"]), tuple(values["end"])
     known = {f.name for f in fields(EpisodeResult)}
     defaults = {"contact_steps": ()}
@@ -700,6 +800,8 @@ def read_rows(
     out = []
     for line, row in rows:
         try:
+            if fmt == ".jsonl":  # typed as written; a CSV cell is text, read by its kind
+                check_json_record(row)
             out.append((line, row, from_record(row)))
         except KeyError as exc:
             raise ResultsFileError(f"{path}:{line}: missing column {exc.args[0]!r}; expected "

@@ -298,3 +298,67 @@ def test_a_pipe_given_as_results_is_never_opened(
         False,
     )
     assert pipe_read(fifo, lambda: earlier_files(str(fifo))) == ([], False)
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "said"),
+    [
+        ("mission_time", "NaN", "found NaN; expected a finite number"),
+        (
+            "mission_time",
+            "1e400",
+            "found Infinity (a number too large to hold, such as 1e400); expected a finite number",
+        ),
+        ("mission", "5", "found 5; expected a string"),
+        ("params", "[1]", "found [1]; expected an object of name: value text"),
+        ("params", '{"side": 10}', 'found {"side": 10}; expected an object of name: value'),
+        ("seed", "true", "found true; expected a whole number"),
+        ("seed", "5.5", "found 5.5; expected a whole number"),
+        ("fell", '"no"', "found 'no'; expected true or false"),
+        ("outcome", '"\\u001b[2J"', "found '\\x1b[2J'; expected the outcome's word"),
+        ("world_sha256", "7", "found 7; expected a string or null"),
+        ("wall_time", "NaN", "found NaN; expected a finite number or null"),
+    ],
+)
+def test_each_column_of_a_json_record_is_checked_as_the_writer_wrote_it(
+    tmp_path: Path, results: list[EpisodeResult], column: str, value: str, said: str
+) -> None:
+    """``eval --from`` summarised ``"mission_time": NaN`` as "median nan s", ``"mission":
+    5`` as a variant "5" and ``"params": [1]`` as ``-p [1]=``: each is refused at its line
+    with the column, what was found and what is allowed."""
+    path = tmp_path / "r.jsonl"
+    write_results(path, results)
+    lines = path.read_text().splitlines(keepends=True)
+    record = json.loads(lines[1])
+    record[column] = "PLACE"
+    bad = json.dumps(record).replace('"PLACE"', value)
+    path.write_text(lines[0] + bad + "\n" + lines[2])
+    with pytest.raises(ResultsFileError) as refused:
+        read_rows(path)
+    assert str(refused.value).startswith(f"{path}:2: bad value (column {column!r}: {said}")
+
+
+@pytest.mark.parametrize(
+    ("column", "cell", "said"),
+    [("mission_time", "nan", "found 'nan'; expected a finite number"),
+     ("end_x", "1e400", "found '1e400'; expected a finite number"),
+     ("docked", "yes", "found 'yes'; expected true or false (True or False in CSV)")],
+)  # fmt: skip
+def test_a_csv_cell_is_read_as_its_column_holds_it(
+    tmp_path: Path, results: list[EpisodeResult], column: str, cell: str, said: str
+) -> None:
+    """A CSV cell is text: ``nan`` read as NaN, ``yes`` as False, before."""
+    import csv
+
+    path = tmp_path / "r.csv"
+    write_results(path, results)
+    with path.open(newline="") as written:
+        rows = list(csv.DictReader(written))
+    rows[0][column] = cell
+    with path.open("w", newline="") as out:
+        writer = csv.DictWriter(out, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    with pytest.raises(ResultsFileError) as refused:
+        read_rows(path)
+    assert str(refused.value) == f"{path}:2: bad value (column {column!r}: {said})"
