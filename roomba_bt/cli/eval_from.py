@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from roomba_bt.evaluate.episode import EpisodeResult
@@ -44,6 +44,11 @@ RUN_ONLY = (
 )  # fmt: skip
 
 
+#: a variant's episodes by seed: where each was first read, its result and the row of it
+#: a record met again is compared with (:func:`~roomba_bt.evaluate.records.compared_row`)
+_Seeds = dict[int, tuple[str, "EpisodeResult", dict[str, Any]]]
+
+
 class FromFilesError(ValueError):
     """Results that cannot be reported on: the message names the file (and line)."""
 
@@ -56,30 +61,44 @@ def read_variants(
     by another run with ``--reproducible``, its wall-clock columns aside): it counts once;
     another one is refused, naming both places. Given ``cut``, a file's last record cut
     short (a killed sweep's partial file) is left out and put there instead of refused."""
-    from roomba_bt.evaluate.records import ResultsFileError, read_rows, same_episode
+    from roomba_bt.evaluate.records import ResultsFileError, iter_rows
 
-    found: dict[tuple[str, tuple[tuple[str, str], ...]], dict[int, tuple[str, EpisodeResult]]] = {}
+    found: dict[tuple[str, tuple[tuple[str, str], ...]], _Seeds] = {}
     worlds: list[tuple[str, str, str | None]] = []  # the first record's: place, name, SHA-256
     for path in files:
-        try:
-            rows = read_rows(path, cut)
+        try:  # read as a stream: a record met again is compared, not kept
+            for line, row, result in iter_rows(path, cut):
+                _found(found, worlds, f"{path}:{line}", row, result)
         except (ResultsFileError, ValueError) as exc:
             raise FromFilesError(str(exc)) from None
-        for line, row, result in rows:
-            episodes = found.setdefault((result.mission, tuple(sorted(result.params))), {})
-            where = f"{path}:{line}"
-            _one_world(worlds, where, result.world, row.get("world_sha256") or None)
-            first = episodes.setdefault(result.seed, (where, result))
-            if not same_episode(first[1], result):
-                raise FromFilesError(f"{where}: seed {result.seed} of {result.mission} is at "
-                                     f"{first[0]} too, with other results: two runs made "
-                                     "otherwise (count each file alone)")  # fmt: skip
     if not found:
         raise FromFilesError(f"{', '.join(files)}: no episode to report on")
     return [
-        (mission, params, [result for _, (_, result) in sorted(episodes.items())])
+        (mission, params, [result for _, (_, result, _) in sorted(episodes.items())])
         for (mission, params), episodes in found.items()
     ]
+
+
+def _found(
+    found: dict[tuple[str, tuple[tuple[str, str], ...]], _Seeds],
+    worlds: list[tuple[str, str, str | None]],
+    where: str,
+    row: dict[str, Any],
+    result: EpisodeResult,
+) -> None:
+    """The record at ``where`` put among ``found`` (its variant's, by seed), FromFilesError
+    when it ran in another world than the first, or its seed is there with other results."""
+    from roomba_bt.evaluate.records import compared_row
+
+    episodes = found.setdefault((result.mission, tuple(sorted(result.params))), {})
+    _one_world(worlds, where, result.world, row.get("world_sha256") or None)
+    first = episodes.get(result.seed)
+    if first is None:  # its row compared kept once: 200,000 lines of one episode made it
+        episodes[result.seed] = (where, result, compared_row(result))  # twice a line
+    elif compared_row(result) != first[2]:
+        raise FromFilesError(f"{where}: seed {result.seed} of {result.mission} is at "
+                             f"{first[0]} too, with other results: two runs made "
+                             "otherwise (count each file alone)")  # fmt: skip
 
 
 def _one_world(

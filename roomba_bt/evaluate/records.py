@@ -56,10 +56,10 @@ import io
 import json
 import math
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import IO, Any, NoReturn
 
 from roomba_bt.evaluate.episode import Coverage, EpisodeResult
 from roomba_bt.evaluate.keys import KEY_PREFIX
@@ -238,10 +238,15 @@ def _path_from(raw: Any) -> tuple[tuple[float, float], ...]:
 def same_episode(one: EpisodeResult, other: EpisodeResult) -> bool:
     """Whether two records are of the same episode, made alike: their rows the same but for
     the wall-clock columns and the ``path`` (one written under ``--plot``, the other not)."""
-    rows = [written_record(r, reproducible=True) for r in (one, other)]
-    for row in rows:
-        row.pop(PATH_COLUMN, None)
-    return rows[0] == rows[1]
+    return compared_row(one) == compared_row(other)
+
+
+def compared_row(result: EpisodeResult) -> dict[str, Any]:
+    """What :func:`same_episode` compares of an episode: its row but for the wall-clock
+    columns and the path (a reader of many records keeps the first's, not every line)."""
+    row = written_record(result, reproducible=True)
+    row.pop(PATH_COLUMN, None)
+    return row
 
 
 def coverage_at(result: EpisodeResult, seconds: float) -> float | None:
@@ -634,7 +639,7 @@ def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
 
 def read_results(path: str | Path) -> list[EpisodeResult]:
     """Read a file :func:`write_results` wrote; ResultsFileError naming file:line otherwise."""
-    return [result for _, _, result in read_rows(path)]
+    return [result for _, _, result in iter_rows(path)]
 
 
 def _csv_row(path: str | Path, n: int, row: dict[str | None, Any]) -> dict[str, Any]:
@@ -729,41 +734,83 @@ def _cut_csv(path: str | Path, line: int, row: dict[str | None, Any]) -> CutShor
                     str(row["mission"]) if "mission" in whole else None)  # fmt: skip
 
 
-def _text(path: str | Path, cut: list[CutShort] | None) -> tuple[str, str]:
-    """The file's text, and apart from it the end of a JSON Lines file after its last end of
-    line when ``cut`` is given (none otherwise: read as a line); ResultsFileError when it is
-    not UTF-8, but for a character cut short at its very end when ``cut`` is given (a kill
-    between the bytes of a character: the record it ends is cut short anyway)."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise ResultsFileError(f"{path}: {exc.strerror or exc}") from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:  # a ValueError: said without the file's name
-        at_the_end = exc.end == len(data) and exc.reason == "unexpected end of data"
-        if cut is None or not at_the_end:
-            raise ResultsFileError(f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x}); "
-                                   "expected results as eval --out writes them (.jsonl or "
-                                   ".csv)") from None  # fmt: skip
-        text = data[: exc.start].decode("utf-8")  # the first error: all before it decodes
-    if cut is None or results_format(path) != ".jsonl":
-        return text, ""
-    end = text.rfind("\n") + 1
-    return text[:end], text[end:]
+#: a byte that is not UTF-8, as the stream's decoder keeps it (``surrogateescape``): no UTF-8
+#: text holds one
+_NOT_UTF8 = re.compile("[\udc80-\udcff]")
+
+
+class _Lines:
+    """The lines of a results file as text, read a line at a time (the file was read whole,
+    decoded whole and split whole: 200,000 lines took 2.2 GB), split as before at any line
+    end (``newline=""``, none translated). ResultsFileError at a byte that is not UTF-8, but
+    for a character cut short at the very end when ``cut`` is given (a kill between the
+    bytes of a character: the record it ends is cut short anyway), which is left out.
+    :attr:`whole` tells, once read through, whether the last line had its end of line."""
+
+    def __init__(self, path: str | Path, file: IO[bytes], cut: list[CutShort] | None) -> None:
+        self.path, self.cut = path, cut
+        self.text = io.TextIOWrapper(file, encoding="utf-8", errors="surrogateescape", newline="")
+        self.whole = True
+
+    def __iter__(self) -> Iterator[str]:
+        for line in self.text:
+            self.whole = line.endswith(("\n", "\r"))
+            yield line if _NOT_UTF8.search(line) is None else self._decoded(line)
+
+    def _decoded(self, line: str) -> str:
+        data = line.encode("utf-8", "surrogateescape")
+        try:
+            return data.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            at_the_end = not self.whole and exc.end == len(data)
+            if self.cut is None or not at_the_end or exc.reason != "unexpected end of data":
+                raise ResultsFileError(f"{self.path}: not UTF-8 text (byte 0x{data[exc.start]:02x}"
+                                       "); expected results as eval --out writes them (.jsonl "
+                                       "or .csv)") from None  # fmt: skip
+            return data[: exc.start].decode("utf-8")  # the first error: all before it decodes
 
 
 def _csv_rows(
-    path: str | Path, text: str, cut: list[CutShort] | None
-) -> list[tuple[int, dict[str, Any]]]:
+    path: str | Path, lines: _Lines, cut: list[CutShort] | None
+) -> Iterator[tuple[int, dict[str, Any]]]:
     """The rows of a CSV results file; with ``cut``, a last row without its end of line (the
     writer ends each: this one was cut, and a cell cut short may read as another value) is
-    dropped into it."""
-    rows = list(enumerate(csv.DictReader(io.StringIO(text, newline="")), 2))
-    if cut is not None and rows and not text.endswith("\n"):
-        line, last = rows.pop()
-        cut.append(_cut_csv(path, line, last))
-    return [(n, _csv_row(path, n, row)) for n, row in rows]
+    dropped into it. A row is held until the next is read: the last is known at the end."""
+    held: tuple[int, dict[str | None, Any]] | None = None
+    n = 1
+    try:
+        for n, row in enumerate(csv.DictReader(lines), 2):
+            if held is not None:
+                yield held[0], _csv_row(path, *held)
+            held = (n, row)
+    except csv.Error as exc:  # a cell longer than csv's limit (128 KiB), a stray quote...
+        raise ResultsFileError(f"{path}:{n + 1}: not CSV as eval --out writes it ({exc})") from None
+    if held is None:
+        return
+    if cut is not None and not lines.whole:
+        cut.append(_cut_csv(path, *held))
+    else:
+        yield held[0], _csv_row(path, *held)
+
+
+def _json_rows(
+    path: str | Path, lines: _Lines, cut: list[CutShort] | None
+) -> Iterator[tuple[int, dict[str, Any]]]:
+    """The records of a JSON Lines results file, blank lines skipped; with ``cut``, a last
+    line without its end of line that is not a whole object (the kill's trace) is dropped
+    into it."""
+    for n, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        if cut is None or lines.whole:
+            yield n, _json_row(path, n, line)
+            continue
+        try:  # the last line, without its end of line
+            row = _json_row(path, n, line)
+        except ResultsFileError:  # never a whole object: the kill's trace
+            cut.append(_cut_json(path, n, line))
+            return
+        yield n, row
 
 
 def read_rows(
@@ -774,38 +821,44 @@ def read_rows(
     which ``eval --resume`` checks); ResultsFileError naming file:line otherwise. Given
     ``cut``, a last record cut short (:class:`CutShort`) is dropped and put there instead
     of refused: a JSON line without its end of line that is not a whole object, a CSV row
-    without its end of line."""
+    without its end of line. :func:`iter_rows` reads them one at a time."""
+    return list(iter_rows(path, cut))
+
+
+def iter_rows(
+    path: str | Path, cut: list[CutShort] | None = None
+) -> Iterator[tuple[int, dict[str, Any], EpisodeResult]]:
+    """:func:`read_rows`' records one at a time, as the file is read: ``eval --from`` keeps
+    only what its report needs (an episode once), not every line."""
     expected = "expected results as eval --out writes them (.jsonl or .csv)"
     if Path(path).is_dir():  # said as what it is: not "Is a directory", not "no suffix"
         raise ResultsFileError(f"{path}: a directory; {expected}")
     fmt = results_format(path)
     # a pipe waited in open() for a writer for ever; a device (/dev/zero linked as
-    # results.jsonl) was read without end: the file is read whole
+    # results.jsonl) was read without end
     if Path(path).exists() and not Path(path).is_file():
         raise ResultsFileError(f"{path}: a device or a pipe, not a file; {expected}")
-    text, tail = _text(path, cut)
-    if fmt == ".csv":
-        rows = _csv_rows(path, text, cut)
-    else:
-        lines = io.StringIO(text, newline="").readlines()
-        rows = [(n, _json_row(path, n, line)) for n, line in enumerate(lines, 1) if line.strip()]
-        if tail.strip():
-            n = len(lines) + 1
+    with _opened(path) as file:
+        lines = _Lines(path, file, cut)
+        rows = _csv_rows(path, lines, cut) if fmt == ".csv" else _json_rows(path, lines, cut)
+        for line, row in rows:
             try:
-                rows.append((n, _json_row(path, n, tail)))
-            except ResultsFileError:  # never a whole object: the kill's trace
-                if cut is None:  # a tail is apart only when cut is given
-                    raise
-                cut.append(_cut_json(path, n, tail))
-    out = []
-    for line, row in rows:
-        try:
-            if fmt == ".jsonl":  # typed as written; a CSV cell is text, read by its kind
-                check_json_record(row)
-            out.append((line, row, from_record(row)))
-        except KeyError as exc:
-            raise ResultsFileError(f"{path}:{line}: missing column {exc.args[0]!r}; expected "
-                                   "a record as eval --out writes it") from None  # fmt: skip
-        except (TypeError, ValueError) as exc:
-            raise ResultsFileError(f"{path}:{line}: bad value ({exc})") from None
-    return out
+                if fmt == ".jsonl":  # typed as written; a CSV cell is text, read by its kind
+                    check_json_record(row)
+                result = from_record(row)
+            except KeyError as exc:
+                raise ResultsFileError(
+                    f"{path}:{line}: missing column {exc.args[0]!r}; "
+                    "expected a record as eval --out writes it"
+                ) from None
+            except (TypeError, ValueError) as exc:
+                raise ResultsFileError(f"{path}:{line}: bad value ({exc})") from None
+            yield line, row, result
+
+
+def _opened(path: str | Path) -> IO[bytes]:
+    """The results file, opened to be read; ResultsFileError saying why it cannot be."""
+    try:
+        return Path(path).open("rb")
+    except OSError as exc:
+        raise ResultsFileError(f"{path}: {exc.strerror or exc}") from None
