@@ -65,7 +65,7 @@ from roomba_bt.evaluate.episode import Coverage, EpisodeResult
 from roomba_bt.evaluate.keys import KEY_PREFIX
 from roomba_bt.printable import escaped, shortened
 from roomba_bt.runtime.claimed import ClaimedFile
-from roomba_bt.runtime.recording import long_number
+from roomba_bt.runtime.recording import DuplicateKey, json_read, long_number, twice
 from roomba_bt.runtime.summary import falls_in_order, hazard_falls
 
 FORMATS = (".jsonl", ".csv")
@@ -669,8 +669,10 @@ def _json_row(path: str | Path, n: int, text: str) -> dict[str, Any]:
     file, line and column, what was found and what a line holds. A line without its end
     of line is said to be cut short: the last one a sweep killed while writing left."""
     cut = "" if text.endswith("\n") else ", the line cut short (the file ends inside it)"
-    try:
-        record = json.loads(text)
+    try:  # each key once: JSON keeps the last of two "seed"s, a record no writer wrote
+        record = json_read(text)
+    except DuplicateKey as exc:
+        raise ResultsFileError(f"{path}:{n}: {twice(exc)}, as eval --out writes it") from None
     except json.JSONDecodeError as exc:
         raise ResultsFileError(
             f"{path}:{n}:{exc.colno}: not JSON ({exc.msg}){cut}; expected "

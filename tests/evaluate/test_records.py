@@ -395,3 +395,19 @@ def test_eval_from_reads_a_file_as_a_stream_its_memory_not_growing_with_it(
     rows = iter_rows(path)  # read as the caller goes: the first record before the file
     assert next(rows)[0] == 1
     rows.close()
+
+
+def test_a_results_line_holding_a_key_twice_is_refused_at_its_line(
+    tmp_path: Path, results: list[EpisodeResult]
+) -> None:
+    """JSON keeps the last of two ``"seed"``: the record was read as an episode of seed 9."""
+    path = tmp_path / "r.jsonl"
+    write_results(path, results)
+    lines = path.read_text().splitlines(keepends=True)
+    path.write_text(lines[0] + lines[1].replace('"seed": 5,', '"seed": 5, "seed": 9,'))
+    with pytest.raises(ResultsFileError) as refused:
+        read_rows(path)
+    assert str(refused.value) == (
+        f'{path}:2: the key "seed" twice in one object; expected each key once, as eval --out '
+        "writes it"
+    )
