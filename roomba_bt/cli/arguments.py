@@ -810,7 +810,8 @@ def include_dir(text: str) -> Path:
             f"(--include-dir {folder.parent})"
         )
     if not folder.is_dir():
-        what = special_file(folder) or "there is no such directory"
+        kind = special_file(folder)
+        what = "there is no such directory" if kind is None else f"{kind}, not a folder"
         raise argparse.ArgumentTypeError(f"found {text!r}: {what}")
     return folder
 

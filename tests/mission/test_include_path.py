@@ -253,8 +253,12 @@ def test_include_dir_naming_a_pipe_or_a_broken_link_says_what_it_is(
     os.mkfifo(fifo)
     link.symlink_to(tmp_path / "nowhere")
     for given, said in [
-        (fifo, "a named pipe (FIFO)"),
-        (link, f"a broken symbolic link (to {str(tmp_path / 'nowhere')!r}, which does not exist)"),
+        (fifo, "a named pipe (FIFO), not a folder"),
+        (
+            link,
+            f"a broken symbolic link (to {str(tmp_path / 'nowhere')!r}, which does not "
+            "exist), not a folder",
+        ),
         (tmp_path / "none", "there is no such directory"),
     ]:
         with pytest.raises(SystemExit):
