@@ -65,7 +65,14 @@ from roomba_bt.evaluate.episode import Coverage, EpisodeResult
 from roomba_bt.evaluate.keys import KEY_PREFIX
 from roomba_bt.printable import escaped, shortened
 from roomba_bt.runtime.claimed import ClaimedFile
-from roomba_bt.runtime.recording import DuplicateKey, json_read, long_number, twice
+from roomba_bt.runtime.recording import (
+    DuplicateKey,
+    bounded_lines,
+    json_read,
+    long_number,
+    over_line_limit,
+    twice,
+)
 from roomba_bt.runtime.summary import falls_in_order, hazard_falls
 
 FORMATS = (".jsonl", ".csv")
@@ -744,7 +751,9 @@ _NOT_UTF8 = re.compile("[\udc80-\udcff]")
 class _Lines:
     """The lines of a results file as text, read a line at a time (the file was read whole,
     decoded whole and split whole: 200,000 lines took 2.2 GB), split as before at any line
-    end (``newline=""``, none translated). ResultsFileError at a byte that is not UTF-8, but
+    end (``newline=""``, none translated), each at most a record's longest
+    (:data:`~roomba_bt.runtime.recording.MAX_RECORD_LINE` characters: one was read whole,
+    however long). ResultsFileError at a byte that is not UTF-8, but
     for a character cut short at the very end when ``cut`` is given (a kill between the
     bytes of a character: the record it ends is cut short anyway), which is left out.
     :attr:`whole` tells, once read through, whether the last line had its end of line."""
@@ -755,7 +764,13 @@ class _Lines:
         self.whole = True
 
     def __iter__(self) -> Iterator[str]:
-        for line in self.text:
+        for number, line in enumerate(bounded_lines(self.text), 1):
+            if over_line_limit(line):  # a 100 MB line was read whole (334 MB), then parsed
+                raise ResultsFileError(
+                    f"{self.path}:{number}: a line of more than {len(line) - 1:,} characters "
+                    "(the rest of it not read); allowed: at most that, as a record's line "
+                    "(eval --out writes an episode a line, a few KB)"
+                )
             self.whole = line.endswith(("\n", "\r"))
             yield line if _NOT_UTF8.search(line) is None else self._decoded(line)
 

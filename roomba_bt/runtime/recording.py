@@ -113,11 +113,11 @@ import sys
 import time
 import zlib
 from collections import deque
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sized
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import IO, Any, Protocol
+from typing import IO, Any, Protocol, TypeVar
 
 from roomba_bt import __version__
 from roomba_bt.errors import RoombaBtError
@@ -1195,6 +1195,31 @@ def record_size(path: Path) -> RecordSize:
     return RecordSize(size, text, compressed=True)
 
 
+_Line = TypeVar("_Line", str, bytes)
+_Read = TypeVar("_Read", str, bytes, covariant=True)
+
+
+class _LineReader(Protocol[_Read]):
+    """A file read a line at a time, text or bytes."""
+
+    def readline(self, size: int = -1, /) -> _Read: ...
+
+
+def bounded_lines(file: _LineReader[_Line]) -> Iterator[_Line]:
+    """``file``'s lines (bytes, or text: each as the file gives them), each read at most
+    :data:`MAX_RECORD_LINE` + 1 long: a longer one is known by its length
+    (:func:`over_line_limit`) before the rest of it is read. A record's lines, and a results
+    file's (``eval --from`` read a 100 MB line whole: 334 MB)."""
+    while data := file.readline(MAX_RECORD_LINE + 1):
+        yield data
+
+
+def over_line_limit(line: Sized) -> bool:
+    """Whether a line :func:`bounded_lines` gave is longer than :data:`MAX_RECORD_LINE`
+    (it was cut there, the rest of it unread)."""
+    return len(line) > MAX_RECORD_LINE
+
+
 def _read_lines(path: Path, file: io.BufferedIOBase) -> Iterator[bytes]:
     """``file``'s lines, each cut at :data:`MAX_RECORD_LINE` + 1 bytes. A compressed record
     that stops short (its run killed, a full disk, or a run writing it still: no gzip
@@ -1202,9 +1227,10 @@ def _read_lines(path: Path, file: io.BufferedIOBase) -> Iterator[bytes]:
     cut line, if any, is not seen. Compressed bytes that do not decompress are a
     :class:`RecordError` at the line they are in (a traceback from zlib before)."""
     number = 0
+    lines = bounded_lines(file)
     while True:
         try:
-            data = file.readline(MAX_RECORD_LINE + 1)
+            data = next(lines, b"")
         except EOFError:  # gzip: "Compressed file ended before the end-of-stream marker"
             return
         except (zlib.error, gzip.BadGzipFile) as exc:
@@ -1222,7 +1248,7 @@ def _read_lines(path: Path, file: io.BufferedIOBase) -> Iterator[bytes]:
 
 def _line_text(path: Path, number: int, data: bytes) -> str:
     """Line ``number`` of a record as text, without its line end."""
-    if len(data) > MAX_RECORD_LINE:
+    if over_line_limit(data):
         raise RecordError(
             f"{path}:{number}: a line of more than {MAX_RECORD_LINE:,} bytes; a {RECORD_FORMAT} "
             "file's lines are a few KB (run --record writes them)"

@@ -411,3 +411,34 @@ def test_a_results_line_holding_a_key_twice_is_refused_at_its_line(
         f'{path}:2: the key "seed" twice in one object; expected each key once, as eval --out '
         "writes it"
     )
+
+
+def test_a_results_line_longer_than_a_records_is_refused_before_it_is_read_whole(
+    tmp_path: Path, results: list[EpisodeResult], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``eval --from`` and ``--resume`` read a results line whole, however long (a 100 MB
+    line took 334 MB): a line longer than a record's longest (``MAX_RECORD_LINE``, made
+    small here) is refused at its line with the limit, only that much of it read."""
+    import tracemalloc
+
+    from roomba_bt.runtime import recording
+
+    monkeypatch.setattr(recording, "MAX_RECORD_LINE", 10_000)
+    path = tmp_path / "r.jsonl"
+    write_results(path, results)
+    lines = path.read_text().splitlines(keepends=True)
+    long = lines[1].replace('"mission_said": ""', '"mission_said": "' + "x" * 5_000_000 + '"')
+    path.write_text(lines[0] + long + lines[2])
+    tracemalloc.start()
+    try:
+        with pytest.raises(ResultsFileError) as refused:
+            read_rows(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert str(refused.value).startswith(
+        f"{path}:2: a line of more than 10,000 characters (the rest of it not read); allowed: "
+    )
+    assert peak < 1_000_000, peak  # the 5 MB line was read whole
+    path.write_text("".join(lines).replace("\n", "\r\n"))  # a line's end is no part of it
+    assert [row[0] for row in read_rows(path)] == [1, 2, 3]
