@@ -56,7 +56,7 @@ import io
 import json
 import math
 import re
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import IO, Any, NoReturn
@@ -77,58 +77,69 @@ from roomba_bt.runtime.summary import falls_in_order, hazard_falls
 
 FORMATS = (".jsonl", ".csv")
 
-#: record column -> (EpisodeResult field, kind); start/end are split into x, y, heading
-COLUMNS: dict[str, tuple[str, str]] = {
-    "mission": ("mission", "str"),
-    "world": ("world", "str"),
-    "seed": ("seed", "int"),
-    "outcome": ("outcome", "outcome"),
-    "reason": ("reason", "str"),
-    "stage": ("stage", "str"),
-    "mission_time": ("time_s", "float"),
-    "wall_time": ("wall_s", "float?"),
-    "ticks": ("ticks", "int"),
-    "start_x": ("start", "0"),
-    "start_y": ("start", "1"),
-    "start_heading": ("start", "2"),
-    "end_x": ("end", "0"),
-    "end_y": ("end", "1"),
-    "end_heading": ("end", "2"),
-    "params": ("params", "params"),
-    "distance": ("distance_m", "float"),
-    "bumps": ("bumps", "int"),
-    "cliffs": ("cliffs", "int"),
-    "fell": ("fell", "bool"),
-    "docked": ("docked", "bool"),
-    "charging": ("charging", "bool"),
-    "violations": ("violations", "int"),
-    "commands_sent": ("commands_sent", "int"),
-    "commands_refused": ("commands_refused", "int"),
-    "loops": ("loops", "float"),
-    "longest_stall": ("longest_stall_s", "float"),
-    "longest_trapped": ("longest_trapped_s", "float?"),
-    "worker": ("worker", "str"),
-    "cpu_time": ("cpu_s", "float?"),
-    "falls": ("falls", "falls total"),
-    "falls_by_cause": ("falls", "falls by cause"),
-    "hazard_falls": ("falls", "hazard falls"),
-    "mission_said": ("said", "str?"),
-    "profile": ("profile", "str?"),
-    "undeclared_keys": ("undeclared", "undeclared"),
+#: The values a number's column allows besides its kind's (both ends included; None: any):
+#: a count, a time or a distance is never below 0, a coverage never above 1 (a results file
+#: of ``"bumps": -3`` or ``"coverage": 1.5`` was summarised as -3.0 bumps an episode)
+Allowed = tuple[float, float] | None
+AT_LEAST_0: Allowed = (0.0, math.inf)
+FRACTION: Allowed = (0.0, 1.0)
+#: how a message says each range
+_ALLOWED_SAID = {AT_LEAST_0: "0 or more", FRACTION: "from 0 to 1"}
+
+#: record column -> (EpisodeResult field, kind, the values it allows); start/end are split
+#: into x, y, heading. The one table :func:`to_record` writes and :func:`from_record` reads
+COLUMNS: dict[str, tuple[str, str, Allowed]] = {
+    "mission": ("mission", "str", None),
+    "world": ("world", "str", None),
+    "seed": ("seed", "int", None),
+    "outcome": ("outcome", "outcome", None),
+    "reason": ("reason", "str", None),
+    "stage": ("stage", "str", None),
+    "mission_time": ("time_s", "float", AT_LEAST_0),
+    "wall_time": ("wall_s", "float?", AT_LEAST_0),
+    "ticks": ("ticks", "int", AT_LEAST_0),
+    "start_x": ("start", "0", None),
+    "start_y": ("start", "1", None),
+    "start_heading": ("start", "2", None),
+    "end_x": ("end", "0", None),
+    "end_y": ("end", "1", None),
+    "end_heading": ("end", "2", None),
+    "params": ("params", "params", None),
+    "distance": ("distance_m", "float", AT_LEAST_0),
+    "bumps": ("bumps", "int", AT_LEAST_0),
+    "cliffs": ("cliffs", "int", AT_LEAST_0),
+    "fell": ("fell", "bool", None),
+    "docked": ("docked", "bool", None),
+    "charging": ("charging", "bool", None),
+    "violations": ("violations", "int", AT_LEAST_0),
+    "commands_sent": ("commands_sent", "int", AT_LEAST_0),
+    "commands_refused": ("commands_refused", "int", AT_LEAST_0),
+    "loops": ("loops", "float", None),
+    "longest_stall": ("longest_stall_s", "float", AT_LEAST_0),
+    "longest_trapped": ("longest_trapped_s", "float?", AT_LEAST_0),
+    "worker": ("worker", "str", None),
+    "cpu_time": ("cpu_s", "float?", AT_LEAST_0),
+    "falls": ("falls", "falls total", AT_LEAST_0),
+    "falls_by_cause": ("falls", "falls by cause", None),
+    "hazard_falls": ("falls", "hazard falls", AT_LEAST_0),
+    "mission_said": ("said", "str?", None),
+    "profile": ("profile", "str?", None),
+    "undeclared_keys": ("undeclared", "undeclared", None),
 }
 
-#: the coverage columns (empty when the episode did not clean): name -> Coverage field
-COVERAGE_COLUMNS: dict[str, str] = {
-    "coverage": "final",
-    "coverage_area": "area",
-    "coverage_5min": "at:300",
-    "coverage_10min": "at:600",
-    "coverage_20min": "at:1200",
-    "coverage_overall": "overall",
-    "coverage_by_area": "by_area",
-    "coverage_curve": "curve",
-    "longest_idle": "longest_idle_s",
-    "cleaning_time": "cleaning_s",
+#: the coverage columns (empty when the episode did not clean): name -> (Coverage field,
+#: the values it allows: each area's and each sample's fraction for ``by_area`` and ``curve``)
+COVERAGE_COLUMNS: dict[str, tuple[str, Allowed]] = {
+    "coverage": ("final", FRACTION),
+    "coverage_area": ("area", None),
+    "coverage_5min": ("at:300", FRACTION),
+    "coverage_10min": ("at:600", FRACTION),
+    "coverage_20min": ("at:1200", FRACTION),
+    "coverage_overall": ("overall", FRACTION),
+    "coverage_by_area": ("by_area", FRACTION),
+    "coverage_curve": ("curve", FRACTION),
+    "longest_idle": ("longest_idle_s", AT_LEAST_0),
+    "cleaning_time": ("cleaning_s", AT_LEAST_0),
 }
 
 
@@ -165,7 +176,7 @@ def results_format(path: str | Path) -> str:
 def to_record(result: EpisodeResult) -> dict[str, Any]:
     """One episode as a flat mapping of :data:`COLUMNS` (params as a mapping)."""
     out: dict[str, Any] = {}
-    for column, (name, kind) in COLUMNS.items():
+    for column, (name, kind, _) in COLUMNS.items():
         value = getattr(result, name)
         if kind == "outcome":
             value = value.upper()
@@ -272,7 +283,7 @@ def coverage_at(result: EpisodeResult, seconds: float) -> float | None:
 def _coverage_record(result: EpisodeResult) -> dict[str, Any]:
     coverage = result.coverage
     out: dict[str, Any] = {}
-    for column, name in COVERAGE_COLUMNS.items():
+    for column, (name, _) in COVERAGE_COLUMNS.items():
         if coverage is None:
             out[column] = None
         elif name.startswith("at:"):
@@ -290,7 +301,8 @@ def _coverage_record(result: EpisodeResult) -> dict[str, Any]:
 
 def _coverage_from(record: dict[str, Any]) -> Coverage | None:
     """The episode's coverage from its record, None when it did not clean (or the file was
-    written before coverage was recorded)."""
+    written before coverage was recorded); ValueError naming the column of a value not a
+    number or out of its range (:data:`COVERAGE_COLUMNS`)."""
     final = record.get("coverage")
     if final is None or final == "":
         return None
@@ -300,13 +312,39 @@ def _coverage_from(record: dict[str, Any]) -> Coverage | None:
         curve = [p.split(":") for p in curve.split(";") if p]
     return Coverage(
         area=str(record["coverage_area"] or ""),
-        final=_finite(final),
-        curve=tuple((_finite(t), _finite(c)) for t, c in curve),
-        overall=_finite(record["coverage_overall"]),
-        by_area=tuple((str(a), _finite(c)) for a, c in by_area.items()),
-        longest_idle_s=_finite(record["longest_idle"]),
-        cleaning_s=_finite(record["cleaning_time"]),
+        final=_coverage_number("coverage", final),
+        curve=tuple(_sample(record, point) for point in curve),
+        overall=_coverage_number("coverage_overall", record["coverage_overall"]),
+        by_area=tuple(
+            (str(a), _coverage_number("coverage_by_area", c, {a: c})) for a, c in by_area.items()
+        ),
+        longest_idle_s=_coverage_number("longest_idle", record["longest_idle"]),
+        cleaning_s=_coverage_number("cleaning_time", record["cleaning_time"]),
     )
+
+
+def _coverage_number(column: str, raw: Any, shown: Any = None) -> float:
+    """A coverage column's number (``shown`` as the value found: an area's ``{area: c}``),
+    in the range :data:`COVERAGE_COLUMNS` gives it."""
+    kind = _JSON_COLUMNS[column]
+    try:
+        value = _finite(raw)
+    except (TypeError, ValueError):
+        _bad(column, kind, raw if shown is None else shown)
+    _within(column, kind, COVERAGE_COLUMNS[column][1], value, raw if shown is None else shown)
+    return value
+
+
+def _sample(record: dict[str, Any], point: Any) -> tuple[float, float]:
+    """A ``coverage_curve`` sample ``[t, c]``: a time 0 or more, a fraction from 0 to 1."""
+    try:
+        t, c = (_finite(v) for v in point)
+    except (TypeError, ValueError):  # not two numbers
+        _bad("coverage_curve", "coverage curve", point)
+    if t < 0 or not 0.0 <= c <= 1.0:
+        expected = f"{_EXPECTED['coverage curve']} (t 0 or more, fraction from 0 to 1)"
+        raise ValueError(f"column 'coverage_curve': found {_found(point)}; expected {expected}")
+    return t, c
 
 
 #: what a column of each kind holds, as a message about a bad value says it (a CSV cell:
@@ -348,7 +386,7 @@ _EXPECTED["0"] = _EXPECTED["1"] = _EXPECTED["2"] = _EXPECTED["float"]
 #: every column eval --out writes (but ``key:`` ones, of any value) and its kind: the table
 #: a JSON line is checked against; a column not in it is a later version's, and ignored
 _JSON_COLUMNS: dict[str, str] = {
-    **{column: kind for column, (_, kind) in COLUMNS.items()},
+    **{column: kind for column, (_, kind, _) in COLUMNS.items()},
     **{column: "coverage" for column in COVERAGE_COLUMNS},
     "coverage_area": "coverage text", "coverage_by_area": "coverage by area",
     "coverage_curve": "coverage curve",
@@ -372,6 +410,36 @@ def _found(raw: Any) -> str:
     return escaped(shortened(text, 60))
 
 
+def _number(value: Any) -> bool:
+    return type(value) in _NUMBER
+
+
+def _pair(value: Any) -> bool:
+    return type(value) is list and len(value) == 2 and all(type(v) in _NUMBER for v in value)
+
+
+#: what each value of an object column, or each item of a list column, is as eval --out
+#: writes it (``{"kitchen": "0.5"}`` was read as the fraction 0.5)
+_JSON_PARTS: dict[str, Callable[[Any], bool]] = {
+    "coverage by area": _number, "coverage curve": _pair, "path": _pair,
+    "falls by cause": lambda value: type(value) is int,
+}  # fmt: skip
+
+
+def _check_parts(column: str, kind: str, raw: dict[str, Any] | list[Any]) -> None:
+    """ValueError naming the first value of an object column, or item of a list column,
+    that is not as :data:`_JSON_PARTS` says, said alone (``{"kitchen": "0.5"}``)."""
+    ok = _JSON_PARTS[kind]
+    if isinstance(raw, dict):
+        for key, value in raw.items():
+            if not ok(value):
+                _bad(column, kind, {key: value})
+    else:
+        for item in raw:
+            if not ok(item):
+                _bad(column, kind, item)
+
+
 def check_json_record(record: dict[str, Any]) -> None:
     """ValueError naming the first column of a JSON Lines record that is not of the type
     eval --out writes there (:data:`_JSON_COLUMNS`: ``"mission": 5``, ``"params": [1]``,
@@ -390,10 +458,19 @@ def check_json_record(record: dict[str, Any]) -> None:
             _bad(column, kind, raw)
         if kind == "outcome" and not _OUTCOME.fullmatch(raw):
             _bad(column, kind, raw)
+        if raw is not None and kind in _JSON_PARTS:  # an object's values, a list's items
+            _check_parts(column, kind, raw)
 
 
 def _bad(column: str, kind: str, raw: Any) -> NoReturn:
     raise ValueError(f"column {column!r}: found {_found(raw)}; expected {_EXPECTED[kind]}")
+
+
+def _within(column: str, kind: str, allowed: Allowed, value: float, raw: Any) -> None:
+    """ValueError when ``value``, read from ``raw``, is outside the column's ``allowed``."""
+    if allowed is not None and not allowed[0] <= value <= allowed[1]:
+        raise ValueError(f"column {column!r}: found {_found(raw)}; expected "
+                         f"{_EXPECTED[kind]} ({_ALLOWED_SAID[allowed]})")  # fmt: skip
 
 
 def _finite(raw: Any) -> float:
@@ -433,21 +510,25 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
     kept, or none); values may be strings (CSV). KeyError/ValueError on a missing column or
     a bad value."""
     values: dict[str, Any] = {"start": [0.0] * 3, "end": [0.0] * 3}
-    for column, (name, kind) in COLUMNS.items():
+    for column, (name, kind, allowed) in COLUMNS.items():
         if kind == "float?":  # a column later versions added: absent from older files
             raw = record.get(column)
             try:
                 values[name] = 0.0 if raw is None or raw == "" else _finite(raw)
             except (TypeError, ValueError):
                 _bad(column, kind, raw)
+            _within(column, kind, allowed, values[name], raw)
             continue
         if kind == "str?":  # the same, a text
             values[name] = str(record.get(column) or "")
             continue
-        if kind in ("falls total", "hazard falls"):  # sums of falls_by_cause, read instead
+        if kind in ("falls total", "hazard falls"):  # sums of falls_by_cause: checked after
             continue
         if kind == "falls by cause":
-            values[name] = _falls(record.get(column))
+            try:
+                values[name] = _falls(record.get(column))
+            except (TypeError, ValueError):  # "-1 is not a count of falls" named no column
+                _bad(column, kind, record.get(column))
             continue
         if kind == "undeclared":
             values[name] = _undeclared(record.get(column))
@@ -457,6 +538,9 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
             _read_column(values, name, kind, raw)
         except (TypeError, ValueError):  # "invalid literal for int()" named no column
             _bad(column, kind, raw)
+        if kind in ("int", "float"):
+            _within(column, kind, allowed, values[name], raw)
+    _falls_add_up(record, dict(values["falls"]))
     values["start"], values["end"] = tuple(values["start"]), tuple(values["end"])
     known = {f.name for f in fields(EpisodeResult)}
     defaults = {"contact_steps": ()}
@@ -502,6 +586,28 @@ def _falls(raw: Any) -> tuple[tuple[str, int], ...]:
         raise ValueError(f"falls_by_cause {raw!r}: expected cause=count pairs")
     counts = {str(cause): _count(times) for cause, times in pairs}
     return falls_in_order({cause: times for cause, times in counts.items() if times})
+
+
+def _falls_add_up(record: dict[str, Any], causes: dict[str, int]) -> None:
+    """ValueError when ``falls`` or ``hazard_falls`` is not what the writer sums of
+    ``falls_by_cause`` (``causes``): ``"falls": 3`` with no cause was 3 falls in the
+    summary's words and none in its table of causes. Absent or empty: a file written before."""
+    sums = {"falls": (sum(causes.values()), "the sum of falls_by_cause's counts"),
+            "hazard_falls": (sum(hazard_falls(causes).values()),
+                             "the sum of falls_by_cause's counts but the charger's")}  # fmt: skip
+    for column, (total, what) in sums.items():
+        raw = record.get(column)
+        if raw is None or raw == "":
+            continue
+        kind, allowed = COLUMNS[column][1:]
+        try:
+            count = int(raw)
+        except (TypeError, ValueError):
+            _bad(column, kind, raw)
+        _within(column, kind, allowed, count, raw)
+        if count != total:
+            raise ValueError(f"column {column!r}: found {_found(raw)}; expected {what}, "
+                             f"{total}")  # fmt: skip
 
 
 def _undeclared(raw: Any) -> tuple[tuple[str, str], ...]:

@@ -221,7 +221,8 @@ def test_a_record_written_before_falls_were_recorded_still_loads(
 def test_a_bad_falls_cell_names_the_line(tmp_path: Path, toward: list[EpisodeResult]) -> None:
     record = to_record(toward[0])
     path = tmp_path / "bad.jsonl"
-    path.write_text(json.dumps({**record, "falls_by_cause": {"cliff": 0}}) + "\n")
+    no_fall = {"falls_by_cause": {"cliff": 0}, "falls": 0, "hazard_falls": 0}  # their sums
+    path.write_text(json.dumps({**record, **no_fall}) + "\n")
     assert read_results(path)[0].falls == ()  # counted 0: no fall
     for bad in ({"cliff": -1}, {"cliff": "often"}, {"cliff": 1.5}, [1]):
         path.write_text(json.dumps({**record, "falls_by_cause": bad}) + "\n", encoding="utf-8")

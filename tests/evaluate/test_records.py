@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -442,3 +444,124 @@ def test_a_results_line_longer_than_a_records_is_refused_before_it_is_read_whole
     assert peak < 1_000_000, peak  # the 5 MB line was read whole
     path.write_text("".join(lines).replace("\n", "\r\n"))  # a line's end is no part of it
     assert [row[0] for row in read_rows(path)] == [1, 2, 3]
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "said"),
+    [
+        ("bumps", "-3", "found -3; expected a whole number (0 or more)"),
+        ("mission_time", "-5.0", "found -5.0; expected a finite number (0 or more)"),
+        ("cpu_time", "-0.5", "found -0.5; expected a finite number or null (0 or more)"),
+        ("falls", "3", "found 3; expected the sum of falls_by_cause's counts, 0"),
+        ("hazard_falls", "1", "found 1; expected the sum of falls_by_cause's counts but the "
+         "charger's, 0"),
+        ("falls_by_cause", '{"cliff": -1}', 'found {"cliff": -1}; expected an object of cause: '
+         "count"),
+        ("falls_by_cause", '{"cliff": "2"}', 'found {"cliff": "2"}; expected an object of '
+         "cause: count"),
+    ],
+)  # fmt: skip
+def test_a_results_value_out_of_its_columns_range_is_refused(
+    tmp_path: Path, results: list[EpisodeResult], column: str, value: str, said: str
+) -> None:
+    """``"bumps": -3`` was summarised as -3.0 bumps an episode and ``"falls": 3`` with no
+    cause as falls the table of causes did not have: each column's range is the writer's
+    table's (``COLUMNS``), refused at its line with what was found and what is allowed."""
+    path = tmp_path / "r.jsonl"
+    write_results(path, results)
+    lines = path.read_text().splitlines(keepends=True)
+    record = json.loads(lines[1])
+    record[column] = "PLACE"
+    path.write_text(lines[0] + json.dumps(record).replace('"PLACE"', value) + "\n")
+    with pytest.raises(ResultsFileError) as refused:
+        read_rows(path)
+    assert str(refused.value).startswith(f"{path}:2: bad value (column {column!r}: {said}")
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+@pytest.mark.parametrize(
+    ("column", "value", "said"),
+    [
+        ("coverage", 1.5, "found 1.5; expected a finite number or null (from 0 to 1)"),
+        ("coverage_overall", -0.1, "found -0.1; expected a finite number or null (from 0 to 1)"),
+        ("longest_idle", -1.0, "found -1.0; expected a finite number or null (0 or more)"),
+        ("coverage_by_area", {"kitchen": 1.25}, 'found {"kitchen": 1.25}; expected an object '
+         "of area: fraction, or null (from 0 to 1)"),
+        ("coverage_curve", [[30.0, 2.0]], "found [30.0, 2.0]; expected a list of [t, fraction],"
+         " or null (t 0 or more, fraction from 0 to 1)"),
+    ],
+)  # fmt: skip
+def test_a_coverage_out_of_its_range_is_refused_in_either_format(
+    tmp_path: Path, suffix: str, column: str, value: Any, said: str
+) -> None:
+    """A coverage over 1 was summarised as 150 % of the floor cleaned."""
+    path = tmp_path / f"r{suffix}"
+    write_results(path, [_cleaned()])
+    if suffix == ".jsonl":
+        record = json.loads(path.read_text())
+        record[column] = value
+        path.write_text(json.dumps(record) + "\n")
+    else:
+        import csv
+
+        with path.open(newline="") as written:
+            row = next(csv.DictReader(written))
+        row[column] = _csv_cell(value)
+        with path.open("w", newline="") as out:
+            writer = csv.DictWriter(out, fieldnames=list(row))
+            writer.writeheader()
+            writer.writerow(row)
+    with pytest.raises(ResultsFileError) as refused:
+        read_rows(path)
+    if suffix == ".csv":  # a cell is text: said as the text it is
+        said = said.replace('{"kitchen": 1.25}', '{"kitchen": "1.25"}').replace(
+            "[30.0, 2.0]", '["30.0", "2.0"]'
+        )
+        said = re.sub(r"found (-?[\d.]+);", r"found '\1';", said)
+    assert (
+        str(refused.value)
+        == f"{path}:{2 if suffix == '.csv' else 1}: bad value (column {column!r}: {said})"
+    )
+
+
+def test_a_coverage_by_area_is_numbers_in_json_not_their_text(tmp_path: Path) -> None:
+    """``"coverage_by_area": {"kitchen": "0.5"}`` was read as the fraction 0.5: JSON Lines
+    hold each area's fraction as a number, as eval --out writes it."""
+    path = tmp_path / "r.jsonl"
+    write_results(path, [_cleaned()])
+    record = json.loads(path.read_text())
+    record["coverage_by_area"] = {"hall": 0.25, "kitchen": "0.5"}
+    path.write_text(json.dumps(record) + "\n")
+    with pytest.raises(ResultsFileError) as refused:
+        read_rows(path)
+    assert str(refused.value) == (
+        f'{path}:1: bad value (column \'coverage_by_area\': found {{"kitchen": "0.5"}}; '
+        "expected an object of area: fraction, or null)"
+    )
+    record["coverage_by_area"] = {"hall": 0.25, "kitchen": 0.5}  # as written: it reads
+    path.write_text(json.dumps(record) + "\n")
+    assert read_rows(path)[0][2].coverage is not None
+
+
+def _cleaned() -> EpisodeResult:
+    """An episode that cleaned (its coverage columns written), of no run."""
+    from roomba_bt.evaluate.episode import Coverage
+
+    coverage = Coverage(area="", final=0.5, curve=((0.0, 0.0), (30.0, 0.5)), overall=0.5,
+                        by_area=(("hall", 0.25), ("kitchen", 0.5)), longest_idle_s=3.0,
+                        cleaning_s=40.0)  # fmt: skip
+    return EpisodeResult(
+        seed=1, outcome="success", reason="", time_s=40.0, wall_s=0.1, ticks=600,
+        start=(1.0, 1.0, 0.0), end=(2.0, 1.0, 90.0), bumps=0, contact_steps=(), docked=False,
+        charging=False, cliffs=0, fell=False, violations=0, loops=0.0, longest_stall_s=1.0,
+        mission="clean.yaml", world="apartment", coverage=coverage,
+    )  # fmt: skip
+
+
+def _csv_cell(value: Any) -> str:
+    """A value as eval --out writes it in a CSV cell."""
+    if isinstance(value, dict):
+        return ";".join(f"{k}={v!r}" for k, v in value.items())
+    if isinstance(value, list):
+        return ";".join(f"{t!r}:{c!r}" for t, c in value)
+    return repr(value)
