@@ -65,9 +65,10 @@ def read_variants(
 
     found: dict[tuple[str, tuple[tuple[str, str], ...]], _Seeds] = {}
     worlds: list[tuple[str, str, str | None]] = []  # the first record's: place, name, SHA-256
+    seen: set[bytes] = set()  # the lines taken: one met again is the same record, skipped
     for path in files:
         try:  # read as a stream: a record met again is compared, not kept
-            for line, row, result in iter_rows(path, cut):
+            for line, row, result in iter_rows(path, cut, seen):
                 _found(found, worlds, f"{path}:{line}", row, result)
         except (ResultsFileError, ValueError) as exc:
             raise FromFilesError(str(exc)) from None
