@@ -107,6 +107,7 @@ import logging
 import math
 import os
 import re
+import shlex
 import stat
 import struct
 import sys
@@ -1225,9 +1226,11 @@ def _read_lines(path: Path, file: io.BufferedIOBase) -> Iterator[bytes]:
     that stops short (its run killed, a full disk, or a run writing it still: no gzip
     trailer yet) ends at what decompresses, as a plain one ends where its file does; its
     cut line, if any, is not seen. Compressed bytes that do not decompress are a
-    :class:`RecordError` at the line they are in (a traceback from zlib before)."""
+    :class:`RecordError` at the line they are in (a traceback from zlib before), and so
+    are more lines than :data:`MAX_LINES_PER_COMPRESSED_BYTE` allows."""
     number = 0
     lines = bounded_lines(file)
+    check_at = DENSITY_CHECKED_FROM if isinstance(file, gzip.GzipFile) else math.inf
     while True:
         try:
             data = next(lines, b"")
@@ -1243,7 +1246,42 @@ def _read_lines(path: Path, file: io.BufferedIOBase) -> Iterator[bytes]:
         if not data:
             return
         number += 1
+        if number >= check_at:  # a compressed record's: not a small file of a great many
+            _lines_compressed(path, number, os.lseek(file.fileno(), 0, os.SEEK_CUR))
+            check_at = number + DENSITY_CHECKED_EVERY
         yield data
+
+
+#: The most lines a compressed record holds for each byte of its file (decided). A line
+#: costs a read and a check, twice (3.5 us each), whatever its length: a stranger's 3 MB
+#: ``.gz`` of 27 million short chunk lines (1 GB of text) kept ``replay`` reading for
+#: minutes. Measured, a record holds one line in 4 of its bytes (``run idle.yaml --fast
+#: --record``: 20 minutes standing still, its most repetitive, 80,016 lines in 341 KB;
+#: ``gzip -9`` of its text one in 3; a moving robot's one in 13): 1 is three times that.
+#: Bytes are not bounded so, only lines: a stalled host's long line of an idle robot's
+#: frames compresses 336 times, as much as a file made to be small does (344).
+MAX_LINES_PER_COMPRESSED_BYTE = 1
+#: from how many lines, and then every how many, the lines are counted against the bytes
+#: read (the compressed bytes are read ahead of the lines, in blocks: a few lines first
+#: would be judged by a block)
+DENSITY_CHECKED_FROM = 100_000
+DENSITY_CHECKED_EVERY = 10_000
+
+
+def _lines_compressed(path: Path, lines: int, compressed: int) -> None:
+    """RecordError when ``lines`` came from ``compressed`` bytes of a compressed record,
+    more than :data:`MAX_LINES_PER_COMPRESSED_BYTE` allows; it names how to read it if it
+    is a record: decompressed, a file whose size its lines cost."""
+    if lines <= MAX_LINES_PER_COMPRESSED_BYTE * compressed:
+        return
+    plain = path.name.removesuffix(".gz") if path.name.endswith(".gz") else f"{path.name}.txt"
+    raise RecordError(
+        f"{path}:{lines}: {lines:,} lines from {compressed:,} bytes of compressed data; "
+        f"allowed: at most {MAX_LINES_PER_COMPRESSED_BYTE} a byte (run --record's hold one "
+        "line in about 4 bytes): a small file of a great many lines, which would be read for "
+        f"minutes. If it is a record, decompress it (zcat {shlex.quote(path.name)} > "
+        f"{shlex.quote(plain)}) and give that"
+    )
 
 
 def _line_text(path: Path, number: int, data: bytes) -> str:

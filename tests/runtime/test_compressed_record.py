@@ -527,3 +527,31 @@ def test_a_record_of_blank_lines_is_refused_at_the_first_too_many(
             f"{path}:{MAX_BLANK_LINES + 2}: 10,001 blank lines; allowed: at most 10,000 "
             "(run --record writes none: a file damaged, or no record)" in err
         ), err
+
+
+def test_a_small_compressed_file_of_a_great_many_lines_is_refused_early(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A stranger's 3 MB ``.gz`` of 27 million short chunk lines (1 GB of text, each line
+    valid) kept ``replay`` reading for minutes: a compressed record holding more lines than
+    bytes (run --record's hold one line in about 4) is refused at the line it is found
+    (counted from 100,000 lines on; 1,000 here), saying how to read it if it is a record.
+    A real record, and the same lines decompressed, are read."""
+    from roomba_bt.runtime import recording
+
+    monkeypatch.setattr(recording, "DENSITY_CHECKED_FROM", 1000)
+    record = _record(tmp_path / "run.jsonl.gz", capsys)
+    assert load_record(record).ended  # a real record: far fewer lines than bytes
+    header = gzip.decompress(record.read_bytes()).split(b"\n", 1)[0]
+    lines = header + b"\n" + b'{"t": 0.000000, "d": "in", "b": "00"}\n' * 50_000
+    small = tmp_path / "small.jsonl.gz"
+    small.write_bytes(gzip.compress(lines))
+    assert main(["replay", str(small)]) == 2
+    err = capsys.readouterr().err
+    said = re.search(rf"{small}:(\d+): ([\d,]+) lines from ([\d,]+) bytes of compressed data", err)
+    assert said is not None, err
+    assert int(said[1]) <= 11_000  # at the first count past it, not the file's end
+    assert "If it is a record, decompress it (zcat small.jsonl.gz > small.jsonl)" in err
+    plain = tmp_path / "small.jsonl"
+    plain.write_bytes(lines)  # the way out: a plain file's lines cost its size on the disk
+    assert load_record(plain).out_bytes == 0
