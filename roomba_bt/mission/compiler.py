@@ -60,9 +60,10 @@ from roomba_bt.mission.loader import NO_PERMISSIONS, Loader, Permissions
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import find_mission, shipped_name
 from roomba_bt.mission.source import Loc
-from roomba_bt.mission.values import Context
+from roomba_bt.mission.values import Context, FoundEnough
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile, profile_given
+from roomba_bt.printable import stopped_finding
 from roomba_bt.robot.safety import signal_interrupt
 
 __all__ = [
@@ -213,7 +214,10 @@ def _checked(
     """The mission file (or ``text``) read, checked and built: the compiler's stages in
     order. A library (no tree) that reads without error has its warnings as its diagnostics:
     ``validate lib.yaml`` said a lone ``$$`` of it only where a mission included it."""
-    parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree, text=text)
+    try:
+        parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree, text=text)
+    except FoundEnough:
+        return None, _stopped(ctx.diagnostics)
     if parsed is None or parsed.tree is None:
         return None, list(_said(ctx.diagnostics or ctx.warnings))
     tree = parsed.tree
@@ -269,6 +273,18 @@ def _said(*found: Iterable[Diagnostic]) -> tuple[Diagnostic, ...]:
     # the messages a command prints whole; those past them keep their "did you mean" for
     # str() to work out (Diagnostic.later): thousands of them cost seconds
     return (*(d.shown() for d in said[:MAX_REPORTED]), *said[MAX_REPORTED:])
+
+
+def _stopped(found: list[Diagnostic]) -> list[Diagnostic]:
+    """The errors of a check stopped at :data:`~roomba_bt.printable.MAX_FOUND` (``found``,
+    in the order found) as ``validate`` says them, as a world's are: all but the last in the
+    file's order, and in the last one's place the note that the check stopped there, listed
+    as the :data:`MAX_REPORTED`-th (after it a command says only how many more there are:
+    the note sorted at the file's end was never seen)."""
+    last = found[-1]
+    said = list(_said(found[:-1]))
+    said.insert(MAX_REPORTED - 1, Diagnostic(last.file, last.line, last.column, stopped_finding()))
+    return said
 
 
 def _tree_warnings(

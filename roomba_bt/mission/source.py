@@ -18,7 +18,7 @@ import yaml
 
 from roomba_bt import yamlsource
 from roomba_bt.mission.diagnostics import Diagnostic, Later, SubtreeUse, UseChain
-from roomba_bt.printable import path_written
+from roomba_bt.printable import MAX_FOUND, path_written
 
 _CORE = yamlsource.CORE
 
@@ -106,7 +106,7 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
         node = yamlsource.compose(text)
     except yamlsource.Refused as exc:
         refused = []
-        for each in exc.every():
+        for each in exc.every()[:MAX_FOUND]:  # the compile stops at as many
             line, column = yamlsource.error_position(each) or (1, 1)
             refused.append(Diagnostic(display, line, column, str(each.problem)))
         return None, refused
@@ -238,8 +238,8 @@ def duplicate_keys(root: yaml.Node, display: str) -> list[Diagnostic]:
     """Every key written twice in a mapping of the file, each at its second place
     (:func:`yamlsource.every_duplicate_key`): :func:`mapping` leaves the second one out and
     the parser goes on to the file's other errors."""
-    found = []
-    for dup in yamlsource.every_duplicate_key(root):
+    found: list[Diagnostic] = []
+    for dup in yamlsource.every_duplicate_key(root)[:MAX_FOUND]:  # the compile stops at as many
         path = ""
         for part in dup.path or ():
             path = join(path, f"[{part}]" if isinstance(part, int) else part)

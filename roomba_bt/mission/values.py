@@ -43,7 +43,7 @@ from roomba_bt.mission.foreign import port_remapping, suggestion
 from roomba_bt.mission.plan import KeyDecl, is_own_key
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text, sequence
 from roomba_bt.mission.wording import PYTHON, Wording
-from roomba_bt.printable import path_written
+from roomba_bt.printable import MAX_FOUND, path_written
 from roomba_bt.yamlsource import quoted, yaml12_number_problem
 
 _FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
@@ -437,6 +437,12 @@ class SubtreeDef:
     initials: Mapping[str, tuple[yaml.Node, Loc]] = field(default_factory=dict)
 
 
+class FoundEnough(Exception):
+    """A compilation found :data:`~roomba_bt.printable.MAX_FOUND` errors: no more are looked
+    for (a file of 100,000 duplicate keys listed 100,000, as a world of as many problems
+    did); the compiler says where it stopped."""
+
+
 @dataclass
 class Context:
     """Everything one compilation shares."""
@@ -473,11 +479,14 @@ class Context:
     files_defining: dict[str, list[str]] = field(default_factory=dict, init=False, repr=False)
 
     def error(self, diagnostic: Diagnostic) -> None:
+        """One more error; :class:`FoundEnough` at :data:`~roomba_bt.printable.MAX_FOUND`."""
         reported = self._reported
         before = len(reported)
         reported.add(diagnostic)  # one hash a diagnostic, not two (in, then add)
         if len(reported) != before:
             self.diagnostics.append(diagnostic)
+            if len(self.diagnostics) >= MAX_FOUND:
+                raise FoundEnough
 
     def said(self, diagnostics: list[Diagnostic]) -> None:
         """What reading a file said: its errors, and its warnings once each (a file

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -350,3 +351,32 @@ def test_a_file_of_thousands_of_unknown_names_reads_the_library_and_the_folder_a
     assert len(walked) == nodes.HINTS_LOOKED_UP
     assert compile_mission(mission)[1] == problems  # the same errors the second time
     assert len(parsed) == len(shipped.shipped_library_files())
+
+
+@pytest.mark.parametrize(
+    ("value", "said"),
+    [("{" + ",".join(["a: 1"] * 12_001) + "}", "duplicate key 'a'"),
+     ("[" + ",".join(["!!str a"] * 12_000) + "]", "explicit tag !!str is not allowed")],
+)  # fmt: skip
+def test_a_missions_check_stops_at_the_cap_and_says_so_among_the_first_listed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys, value: str, said: str
+) -> None:
+    """A mission of 100,000 duplicate keys (60,000 tags) built and counted as many errors,
+    where a world's check stops at ``printable.MAX_FOUND``: it stops there too, the note
+    that it stopped at the place of the last found and listed as the hundredth line, where
+    it is seen (a note sorted to the file's end would be among those only counted)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "many.yaml").write_text(f"mission: m\ntree: {{sequence: [stop]}}\nx: {value}\n")
+    assert main(["validate", "many.yaml"]) == 2
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[-1] == "many.yaml: failed (10,000 errors)"
+    assert lines[-2] == "... and 9,900 more errors (the first 100 are listed)"
+    assert len(lines) == 102
+    assert sum(said in line for line in lines[:100]) == 99, lines[:3]
+    assert re.fullmatch(
+        r"many\.yaml:3:\d+: checking stopped here, at 10,000 errors \(at most 10,000 are said\): "
+        r"the rest of the file is not checked \(a file generated wrong\?\)",
+        lines[99],
+    ), lines[99]
+    mission, diagnostics = compile_mission(tmp_path / "many.yaml")
+    assert mission is None and len(diagnostics) == 10_000  # each kept, the note among them
