@@ -51,6 +51,7 @@ if TYPE_CHECKING:
     from roomba_bt.behaviours.declare import Declaration, Param
     from roomba_bt.behaviours.registry import Registry
     from roomba_bt.mission.compiler import MissionText
+    from roomba_bt.mission.diagnostics import Diagnostic
 
 
 def register(sub: Any) -> None:
@@ -335,8 +336,22 @@ def _checked(file: str, found: str, params: dict[str, str], args: argparse.Names
         baud=args.baud,
         permissions=permissions(args, found),
     )
-    return Checked(file, validation.diagnostics, includes=validation.includes,
+    return Checked(file, _neither(validation.diagnostics), includes=validation.includes,
                    parameters=validation.parameters)  # fmt: skip
+
+
+def _neither(diagnostics: list[Diagnostic]) -> list[Diagnostic]:
+    """``diagnostics``, an empty file's said as neither a mission nor a world: ``validate``
+    takes both, and "the mission file is empty" was said of a world being drawn. An empty
+    file it includes is still an empty mission file (a library is expected there)."""
+    from dataclasses import replace
+
+    from roomba_bt.mission.source import EMPTY_FILE, EMPTY_MISSION
+
+    if len(diagnostics) != 1 or diagnostics[0].message != EMPTY_MISSION:
+        return diagnostics
+    (empty,) = diagnostics
+    return diagnostics if empty.included_from else [replace(empty, message=EMPTY_FILE)]
 
 
 def show_command(args: argparse.Namespace) -> int:

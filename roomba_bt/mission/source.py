@@ -101,6 +101,18 @@ def compose(
     return compose_text(text, display)
 
 
+#: what a mission file with no YAML in it (nothing, or only comments) is said to be where a
+#: mission is expected (``run``, an include); ``validate``, which takes a world too, says it
+#: as neither (:data:`EMPTY_FILE`)
+EMPTY_MISSION = "the mission file is empty"
+#: what ``validate`` says of such a file: it cannot tell a mission meant from a world
+EMPTY_FILE = (
+    "an empty file (no YAML in it, at most comments): neither a mission nor a world; expected "
+    "a mission (at least tree:, or a library's subtrees:) or a world (at least rooms:, the "
+    "floor's polygons in metres; roomba-bt worlds empty-room prints a whole one)"
+)
+
+
 def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagnostic]]:
     try:
         node = yamlsource.compose(text)
@@ -135,7 +147,7 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
     except yaml.YAMLError as exc:
         return None, [Diagnostic(display, 1, 1, f"YAML error: {exc}")]
     if node is None:
-        return None, [Diagnostic(display, 1, 1, "the mission file is empty")]
+        return None, [Diagnostic(display, 1, 1, EMPTY_MISSION)]
     return node, [*duplicate_keys(node, display), *yaml12_text_numbers(node, display)]
 
 

@@ -199,3 +199,26 @@ def test_eval_says_a_given_start_s_warning_once(worlds: Path, capsys: Capsys) ->
     err = capsys.readouterr().err.splitlines()
     said = [line for line in err if line.startswith("worlds/edge.yaml:7:10: warning: robot.start")]
     assert len(said) == 1, err
+
+
+@pytest.mark.parametrize("text", ["", "# to be drawn\n\n"], ids=["nothing", "comments"])
+def test_validate_says_an_empty_file_is_neither_a_mission_nor_a_world(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys, text: str
+) -> None:
+    """``validate`` takes a mission or a world, and said "the mission file is empty" of a
+    world being drawn: an empty file is neither, and both are named. Where a mission is
+    expected (``run``, an include), it is still an empty mission file."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "empty.yaml").write_text(text)
+    (tmp_path / "m.yaml").write_text("include: [empty.yaml]\ntree: {sequence: [stop]}\n")
+    assert main(["validate", "empty.yaml", "m.yaml"]) == 2
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == (
+        "empty.yaml:1:1: an empty file (no YAML in it, at most comments): neither a mission nor "
+        "a world; expected a mission (at least tree:, or a library's subtrees:) or a world (at "
+        "least rooms:, the floor's polygons in metres; roomba-bt worlds empty-room prints a "
+        "whole one)"
+    )
+    assert "empty.yaml:1:1: the mission file is empty (included from m.yaml:1:11)" in lines
+    assert main(["run", "empty.yaml", "--fast", "--display", "none"]) == 2
+    assert "empty.yaml:1:1: the mission file is empty" in capsys.readouterr().err
