@@ -37,6 +37,10 @@ docs/routines.md, ``doctor --port /dev/ttyUSB0`` in README.md and docs/doctor.md
 line whose rewritten argv was already run in this session is not run again, its exit code,
 output and errors are the first run's (:data:`RAN`), and its own case checks them.
 
+docs/doctor.md's transcripts (a ``text`` block that starts ``$ roomba-bt doctor``) are run
+against the simulator their paragraph names and compared with what doctor prints, line for
+line (:func:`transcripts`).
+
 A command that cannot run here is listed in :data:`NOT_RUN` with the reason; a listed
 command the docs no longer hold fails the test too (the list cannot go stale), and so does a
 command that is neither run nor listed.
@@ -413,3 +417,89 @@ def _doctor_on_a_simulator(argv: list[str], served_sim: Callable[..., Any]) -> t
         return done.returncode, done.stdout, done.stderr
     finally:
         sim.stop()
+
+
+#: docs/doctor.md's transcripts: a ``text`` block whose first line is ``$ roomba-bt doctor
+#: ...``, of the simulator its paragraph names (the last ``roomba-bt sim ...`` in backquotes
+#: since the block before). Each is run against that simulator, served here, and must print
+#: what the page shows (session 39's stranger found the ``setting`` step, which doctor prints
+#: after ``profile``, in none of them).
+DOCTOR_DOC = "docs/doctor.md"
+#: the steps whose lines are measured on the wall clock (frames counted in 0.5 s, the
+#: intervals between reads): compared by their step alone, not their words or verdict
+MEASURED_STEPS = ("stream", "timing")
+
+
+def transcripts() -> list[tuple[str, list[str], list[str], list[str]]]:
+    """(where, the simulator's argv, doctor's argv, the lines shown) of each transcript."""
+    text = (ROOT / DOCTOR_DOC).read_text(encoding="utf-8")
+    found = []
+    for match in re.finditer(
+        r"^```text\n\$ (roomba-bt doctor [^\n]*)\n(.*?)^```", text, re.M | re.S
+    ):
+        before = text[: match.start()].rsplit("```", 1)[-1]
+        sims = re.findall(r"`(roomba-bt sim [^`]*)`", before)
+        where = f"{DOCTOR_DOC}:{text.count(chr(10), 0, match.start()) + 1}"
+        assert sims, f"{where}: the transcript's paragraph names no `roomba-bt sim ...`"
+        sim = shlex.split(" ".join(sims[-1].split()))[2:]
+        for option in ("--tcp", "--rfc2217"):  # a free port, as the docs' sim commands get
+            if option in sim:
+                i = sim.index(option) + 1
+                sim[i] = sim[i].rsplit(":", 1)[0] + ":0"
+        found.append((where, sim, shlex.split(match[1]), match[2].splitlines()))
+    return found
+
+
+def _same_line(shown: str, printed: str) -> bool:
+    step = re.match(r"\[(?:ok|--|warn|FAIL)\]\s+(\w+)", shown)
+    if step and step[1] in MEASURED_STEPS:
+        return re.match(rf"\[(?:ok|--|warn|FAIL)\]\s+{step[1]}\b", printed) is not None
+    return shown == printed
+
+
+TRANSCRIPTS = transcripts()
+
+
+def test_the_doctor_page_holds_its_transcripts() -> None:
+    assert len(TRANSCRIPTS) >= 4
+
+
+@pytest.mark.parametrize(
+    ("where", "sim_args", "argv", "shown"), TRANSCRIPTS, ids=[t[0] for t in TRANSCRIPTS]
+)
+def test_each_doctor_transcript_is_what_doctor_prints(
+    where: str,
+    sim_args: list[str],
+    argv: list[str],
+    shown: list[str],
+    served_sim: Callable[..., Any],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Line for line, the port the page shows being the served one's; a ``...`` line stands
+    for the lines it leaves out."""
+    monkeypatch.delenv("ROOMBA_BT_PROFILE", raising=False)  # the `setting` step reads it
+    sim = served_sim(*sim_args)
+    assert sim.address, f"the simulator printed no address: {sim.stop()}"
+    try:
+        port = argv[argv.index("--port") + 1]
+        command = [*argv[2:]]
+        command[command.index("--port") + 1] = sim.address
+        done = finished([sys.executable, "-m", "roomba_bt.cli", "doctor", *command])
+    finally:
+        sim.stop()
+    printed = done.stdout.replace(sim.address, port)
+    printed = printed.replace(sim.address.split("://")[-1], port.split("://")[-1])
+    lines = printed.splitlines()
+    head, elided, tail = "\n".join(shown).partition("\n...\n")
+    expected_head, expected_tail = head.splitlines(), tail.splitlines()
+    got = lines[: len(expected_head)] + (lines[-len(expected_tail) :] if expected_tail else [])
+    shown_count = len(expected_head) + len(expected_tail)
+    assert len(lines) >= shown_count if elided else len(lines) == shown_count, (
+        f"{where}: the page shows {shown_count} lines, doctor printed {len(lines)}:\n{done.stdout}"
+    )
+    for shown_line, printed_line in zip(expected_head + expected_tail, got, strict=True):
+        assert _same_line(shown_line, printed_line), (
+            f"{where}: the page shows\n{shown_line}\ndoctor printed\n{printed_line}\n"
+            f"(all of it:)\n{done.stdout}{done.stderr}"
+        )
+    assert done.returncode == (0 if lines[-1].startswith("found: ") else 5), done.stderr
