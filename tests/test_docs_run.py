@@ -312,6 +312,47 @@ def test_the_python_examples_run(doc: str, heading: str, workdir: Path) -> None:
     assert namespace.get("mission") is not None  # each compiled its mission
 
 
+#: docs/evaluation.md's pandas example that reads the A/B records of the ``eval`` command
+#: above it (pandas is no dependency, nor installed for these tests: its own lines are run
+#: alone, on the records that command writes)
+PANDAS_AB = ("docs/evaluation.md", "dock-ab.jsonl")
+
+
+def test_the_pandas_a_b_example_names_the_variants_its_eval_wrote(
+    workdir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Its ``df.mission.map(...)`` gives each row the name its ``paired[...]`` indexes by.
+    The column holds the mission as given, ``roomba-bt:dock.yaml`` for a shipped one named
+    alone (as the page's command names both): ``Path(m).stem`` made that
+    ``roomba-bt:dock``, and ``paired["dock-builtin"]`` a KeyError (session 39's stranger)."""
+    import ast
+    import json
+
+    doc, records = PANDAS_AB
+    [block] = [b for b in blocks() if b.doc == doc and b.lang == "python" and records in b.text]
+    tree = ast.parse(block.text)
+    [mapper] = [
+        node.args[0]
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call) and ast.unparse(node.func) == "df.mission.map"
+    ]
+    indexed = {
+        node.slice.value
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Subscript)
+        and ast.unparse(node.value) == "paired"
+        and isinstance(node.slice, ast.Constant)
+    }
+    [command] = [c for _, c in COMMANDS if f"--out {records}" in c and c.split()[1] == "eval"]
+    assert main(fast_variant(command)[1:]) == 0, capsys.readouterr()
+    name_of = eval(compile(ast.Expression(mapper), f"{doc}:{block.line}", "eval"), {"Path": Path})
+    written = (workdir / records).read_text(encoding="utf-8").splitlines()
+    names = {name_of(json.loads(row)["mission"]) for row in written}
+    assert len(indexed) == 2 and indexed <= names, (
+        f"{doc}:{block.line}: indexes {sorted(indexed)}; the rows map to {sorted(names)}"
+    )
+
+
 @pytest.mark.parametrize(("where", "file", "text"), WORLDS, ids=[w[0] for w in WORLDS])
 def test_every_world_in_the_docs_loads(where: str, file: str, text: str) -> None:
     from roomba_bt.sim import parse_world
