@@ -6,14 +6,17 @@ are dropped, ``\\`` continues a line, ``&&`` chains); other lines of plain block
 diagrams or byte layouts. A *mission* is a ``yaml`` block with a ``tree:`` or ``subtrees:``
 key; it is written to ``<its mission name>.yaml`` (``mission:``, else ``doc-N``) in the
 directory the commands run in, so ``roomba-bt run square.yaml`` runs the block above it; a
-*world* is a ``yaml`` block with a ``rooms:`` key, written to ``<its name>.yaml``. A
-block that names ``plugins:`` by a path relative to itself is the text of a shipped mission
-(``missions/examples/custom_condition.yaml``): it is written over a copy of that file, so
-its paths resolve where the docs say, and is validated with ``--allow-plugin-files`` as the
-docs show it.
+*world* is a ``yaml`` block with a ``rooms:`` key, written to ``<its name>.yaml``. A *file*
+is a ``python`` block whose first line is a comment naming a relative path (``#
+plugins/near_wall.py``), written to that path: docs/plugins.md's reader makes the plugin
+file its mission's ``plugins:`` names, and its commands use those two, as a wheel's user
+has no ``missions/examples`` (session 39's stranger: the page ran the repository's copies).
+A mission that names ``plugins:`` is validated with ``--allow-plugin-files``, as the docs
+show it.
 
-Every command is run, in a scratch directory holding the missions written from the docs and
-a copy of ``missions/`` and links to ``plugins/`` and ``worlds/``, with exit code 0
+Every command is run, in a scratch directory holding the missions, worlds and files written
+from the docs, a copy of ``missions/``, a link to ``worlds/`` and, in its ``plugins/``, a
+link to each package of the repository's (``plugins/roomba-bt-dirt``), with exit code 0
 expected, after the rewrites of :func:`fast_variant`:
 
 * no robot: ``--port URL`` becomes the built-in simulator on the virtual clock (``--fast``);
@@ -154,13 +157,19 @@ def missions() -> list[tuple[str, str, str]]:
     for i, block in enumerate(blocks()):
         if block.lang != "yaml" or not re.search(r"^(tree|subtrees):", block.text, re.M):
             continue
-        data = yaml.safe_load(block.text)
-        name = data.get("mission") or f"doc-{i}"
-        file = f"{name}.yaml"
-        if "plugins" in data:
-            [shipped] = sorted((ROOT / "missions").rglob(file))
-            file = shipped.relative_to(ROOT).as_posix()
-        found.append((f"{block.doc}:{block.line}", file, block.text))
+        name = yaml.safe_load(block.text).get("mission") or f"doc-{i}"
+        found.append((f"{block.doc}:{block.line}", f"{name}.yaml", block.text))
+    return found
+
+
+def files() -> list[tuple[str, str, str]]:
+    """(where, path, text) of every file block: a ``python`` block whose first line is
+    ``# PATH.py``, a path relative to the folder the commands run in."""
+    found = []
+    for block in blocks():
+        named = re.match(r"# ([\w-]+(?:/[\w-]+)*\.py)\n", block.text)
+        if block.lang == "python" and named:
+            found.append((f"{block.doc}:{block.line}", named[1], block.text))
     return found
 
 
@@ -243,14 +252,18 @@ def fast_variant(command: str) -> list[str]:
 COMMANDS = commands()
 MISSIONS = missions()
 WORLDS = worlds()
+FILES = files()
 
 
 @pytest.fixture
 def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     shutil.copytree(ROOT / "missions", tmp_path / "missions")
-    for name in ("plugins", "worlds"):
-        (tmp_path / name).symlink_to(ROOT / name)
-    for _, file, text in (*MISSIONS, *WORLDS):
+    (tmp_path / "worlds").symlink_to(ROOT / "worlds")
+    (tmp_path / "plugins").mkdir()  # the docs' plugin files beside the packages
+    for package in (ROOT / "plugins").iterdir():
+        (tmp_path / "plugins" / package.name).symlink_to(package)
+    for _, file, text in (*MISSIONS, *WORLDS, *FILES):
+        (tmp_path / file).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / file).write_text(text)
     monkeypatch.chdir(tmp_path)
     return tmp_path
@@ -258,6 +271,7 @@ def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 def test_the_docs_hold_commands_and_missions() -> None:
     assert len(COMMANDS) > 30 and len(MISSIONS) >= 4
+    assert "plugins/near_wall.py" in {path for _, path, _ in FILES}  # docs/plugins.md, §2
     assert ("docs/missions.md:31", "roomba-bt validate square.yaml") in COMMANDS
 
 

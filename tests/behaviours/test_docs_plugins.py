@@ -18,11 +18,11 @@ ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "plugins.md"
 
 
-def _blocks(section: str) -> list[str]:
+def _blocks(section: str, lang: str = "python") -> list[str]:
     text = DOC.read_text(encoding="utf-8")
     assert section in text, f"docs/plugins.md lost its section {section!r}"
     body = text.split(section, 1)[1].split("\n## ", 1)[0]
-    return [str(b) for b in re.findall(r"```python\n(.*?)```", body, flags=re.DOTALL)]
+    return [str(b) for b in re.findall(rf"```{lang}\n(.*?)```", body, flags=re.DOTALL)]
 
 
 def _run(block: str, name: str) -> dict[str, Any]:
@@ -31,13 +31,21 @@ def _run(block: str, name: str) -> dict[str, Any]:
     return namespace
 
 
-def test_the_testing_examples_run(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_testing_examples_run(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """The fixture clears the blackboard; the mission naming near_wall.py runs on the
     simulator to SUCCESS with the plugin file allowed, once and from the start three times."""
     _, fixture, on_sim = _blocks("## 3. Test it without a robot")
     assert "Blackboard.clear()" in fixture
     assert "clean_blackboard" in _run(fixture, "fixture")
-    monkeypatch.chdir(ROOT)  # the example's path is relative to the repository, as pytest's
+    # §2's two files, in the reader's folder as §2 made them (not the repository's copies in
+    # missions/examples, which a wheel's user has not: session 39)
+    section = "## 2. A condition in a file next to the mission"
+    [plugin] = [b for b in _blocks(section) if b.startswith("# plugins/near_wall.py\n")]
+    [mission] = [b for b in _blocks(section, "yaml") if b.startswith("mission: custom_condition")]
+    (tmp_path / "plugins").mkdir()
+    (tmp_path / "plugins" / "near_wall.py").write_text(plugin, encoding="utf-8")
+    (tmp_path / "custom_condition.yaml").write_text(mission, encoding="utf-8")
+    monkeypatch.chdir(tmp_path)  # the example's path is relative to that folder, as pytest's
     namespace = _run(on_sim, "simulator")
     namespace["test_near_wall_stops_the_drive_in_the_corridor"]()
     namespace["test_near_wall_succeeds_from_the_corridor_s_start"]()
