@@ -5,11 +5,13 @@ the plugin file allowed), and an action that waits for Safe/Full and fails once 
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 from py_trees.common import Status
+from runtime.simrun import finished  # tests/runtime: a child run to its end, no fixed wait
 
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
@@ -31,20 +33,39 @@ def _run(block: str, name: str) -> dict[str, Any]:
     return namespace
 
 
+def _section_2_files(folder: Path) -> None:
+    """§2's two files in ``folder`` as the reader made them there: ``plugins/near_wall.py``
+    and ``custom_condition.yaml`` (not the repository's copies in missions/examples, which a
+    wheel's user has not: session 39)."""
+    section = "## 2. A condition in a file next to the mission"
+    [plugin] = [b for b in _blocks(section) if b.startswith("# plugins/near_wall.py\n")]
+    [mission] = [b for b in _blocks(section, "yaml") if b.startswith("mission: custom_condition")]
+    (folder / "plugins").mkdir()
+    (folder / "plugins" / "near_wall.py").write_text(plugin, encoding="utf-8")
+    (folder / "custom_condition.yaml").write_text(mission, encoding="utf-8")
+
+
+def test_the_stub_robot_example_passes_beside_the_plugin(tmp_path: Path) -> None:
+    """§3's first test, saved where the page says (``plugins/test_near_wall.py``, beside
+    §2's plugin), passes under pytest. The page named no place, and in the mission's folder
+    its ``from near_wall import NearWall`` is a ModuleNotFoundError (session 39's stranger)."""
+    _section_2_files(tmp_path)
+    [test] = _blocks("## 3. Test it without a robot")[:1]
+    named = re.match(r"# ([\w-]+(?:/[\w-]+)*\.py)\n", test)
+    assert named is not None, "§3's test names no file to save it in"
+    path = tmp_path / named[1]
+    path.write_text(test, encoding="utf-8")
+    done = finished([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(path)])
+    assert done.returncode == 0 and "1 passed" in done.stdout, done.stdout + done.stderr
+
+
 def test_the_testing_examples_run(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """The fixture clears the blackboard; the mission naming near_wall.py runs on the
     simulator to SUCCESS with the plugin file allowed, once and from the start three times."""
     _, fixture, on_sim = _blocks("## 3. Test it without a robot")
     assert "Blackboard.clear()" in fixture
     assert "clean_blackboard" in _run(fixture, "fixture")
-    # §2's two files, in the reader's folder as §2 made them (not the repository's copies in
-    # missions/examples, which a wheel's user has not: session 39)
-    section = "## 2. A condition in a file next to the mission"
-    [plugin] = [b for b in _blocks(section) if b.startswith("# plugins/near_wall.py\n")]
-    [mission] = [b for b in _blocks(section, "yaml") if b.startswith("mission: custom_condition")]
-    (tmp_path / "plugins").mkdir()
-    (tmp_path / "plugins" / "near_wall.py").write_text(plugin, encoding="utf-8")
-    (tmp_path / "custom_condition.yaml").write_text(mission, encoding="utf-8")
+    _section_2_files(tmp_path)
     monkeypatch.chdir(tmp_path)  # the example's path is relative to that folder, as pytest's
     namespace = _run(on_sim, "simulator")
     namespace["test_near_wall_stops_the_drive_in_the_corridor"]()
