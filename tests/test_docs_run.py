@@ -1,9 +1,10 @@
 """The docs run as written: every shell command and every mission in README.md and docs/.
 
 Fenced blocks are read from the Markdown. A *command* is a line of a ``sh``/``console``/plain
-block that starts with one of :data:`PROGRAMS` (a leading ``$ `` and a trailing ``# comment``
-are dropped, ``\\`` continues a line, ``&&`` chains); other lines of plain blocks are output,
-diagrams or byte layouts. A *mission* is a ``yaml`` block with a ``tree:`` or ``subtrees:``
+block that starts with one of :data:`PROGRAMS` (a leading ``$ ``, a leading ``nice `` (a
+priority, docs/routines.md's long evaluations) and a trailing ``# comment`` are dropped,
+``\\`` continues a line, ``&&`` chains); other lines of plain blocks are output, diagrams
+or byte layouts. A *mission* is a ``yaml`` block with a ``tree:`` or ``subtrees:``
 key; it is written to ``<its mission name>.yaml`` (``mission:``, else ``doc-N``) in the
 directory the commands run in, so ``roomba-bt run square.yaml`` runs the block above it; a
 *world* is a ``yaml`` block with a ``rooms:`` key, written to ``<its name>.yaml``. A *file*
@@ -142,7 +143,7 @@ def commands() -> list[tuple[str, str]]:
             continue
         text = re.sub(r"\\\n\s*", " ", block.text)  # continued lines
         for offset, raw in enumerate(text.splitlines()):
-            line = raw.strip().removeprefix("$ ")
+            line = raw.strip().removeprefix("$ ").removeprefix("nice ")
             if not line.startswith(PROGRAMS):
                 continue
             line = re.sub(r"\s+#.*$", "", line)
