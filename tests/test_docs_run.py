@@ -300,14 +300,17 @@ def test_every_mission_in_the_docs_validates(
     assert main(["validate", file, *allow]) == 0, f"{where}: {capsys.readouterr()}"
 
 
-#: Python blocks run as written, in the scratch directory of the docs' missions (the page, and
-#: the heading of the section that holds one block): each makes what it uses (session 37's
-#: stranger met a NameError in missions.md's, which never made its ``robot``). The blocks of
-#: docs/runtime.md are tests/runtime/test_docs_python.py's; the rest are fragments of a
-#: program (an ``except`` clause, a test) or need a robot.
+#: Python blocks run as written, in the scratch directory of the docs' missions (the page, the
+#: heading of the section that holds one block, and the name it makes): each makes what it
+#: uses (session 37's stranger met a NameError in missions.md's, which never made its
+#: ``robot``; session 39's one in simulator.md's coverage, which made no ``world``). The
+#: blocks of docs/runtime.md are tests/runtime/test_docs_python.py's; the rest are fragments
+#: of a program (an ``except`` clause, a test) or need a robot.
 PYTHON_RUN = [
-    ("docs/missions.md", "## From Python"),
-    ("docs/plugins.md", "### A behaviour in your own program"),
+    ("docs/missions.md", "## From Python", "mission"),
+    ("docs/plugins.md", "### A behaviour in your own program", "mission"),
+    ("docs/simulator.md", "## Running it", "link"),
+    ("docs/simulator.md", "## Swept area and coverage", "sim"),
 ]
 
 
@@ -320,11 +323,28 @@ def python_block(doc: str, heading: str) -> str:
     return block[1]
 
 
-@pytest.mark.parametrize(("doc", "heading"), PYTHON_RUN, ids=[h for _, h in PYTHON_RUN])
-def test_the_python_examples_run(doc: str, heading: str, workdir: Path) -> None:
+@pytest.mark.parametrize(
+    ("doc", "heading", "made"), PYTHON_RUN, ids=[f"{d}:{h}" for d, h, _ in PYTHON_RUN]
+)
+def test_the_python_examples_run(doc: str, heading: str, made: str, workdir: Path) -> None:
     namespace: dict[str, object] = {"__name__": "docs_example"}
     exec(compile(python_block(doc, heading), f"{doc}:{heading}", "exec"), namespace)
-    assert namespace.get("mission") is not None  # each compiled its mission
+    assert namespace.get(made) is not None  # each made what it is about
+
+
+def test_the_simulator_s_signature_on_its_page_is_the_code_s() -> None:
+    """docs/simulator.md's ``Simulator(world, ...)`` names every parameter, in order: it
+    left out ``coverage``, ``trace`` and ``cycle_commands_pause``, which its own examples
+    pass (session 39's stranger)."""
+    import inspect
+
+    from roomba_bt.sim import Simulator
+
+    text = (ROOT / "docs" / "simulator.md").read_text(encoding="utf-8")
+    shown = re.search(r"`Simulator\((world, [^`]*)\)`", text)
+    assert shown is not None, "docs/simulator.md lost its Simulator(world, ...) signature"
+    names = [part.split("=")[0].strip() for part in " ".join(shown[1].split()).split(", ")]
+    assert [n for n in names if n != "*"] == list(inspect.signature(Simulator).parameters)
 
 
 #: docs/evaluation.md's pandas example that reads the A/B records of the ``eval`` command
