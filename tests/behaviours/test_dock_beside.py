@@ -18,11 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.evaluate import EpisodeSpec, run_episode
+from .sim_tree import dock_from
 
-ROOT = Path(__file__).resolve().parents[2]
-APARTMENT = ROOT / "roomba_bt" / "sim" / "worlds" / "apartment.yaml"
-DOCK = ROOT / "missions" / "dock.yaml"
 #: mission time (s) within which it docks from beside the dock: 18 s measured, where it
 #: used to stay for the whole 600 s limit
 DOCKS_WITHIN_S = 60.0
@@ -36,14 +33,7 @@ DOCKS_WITHIN_S = 60.0
 def test_a_start_against_the_wall_beside_the_dock_docks(
     tmp_path: Path, x: float, y: float, heading: int
 ) -> None:
-    text = APARTMENT.read_text()
-    start = "start: {at: [2.4, 1.2], heading: 180}"
-    assert start in text
-    world = tmp_path / "apartment-beside-the-dock.yaml"
-    world.write_text(text.replace(start, f"start: {{at: [{x}, {y}], heading: {heading}}}"))
-    result = run_episode(
-        EpisodeSpec(str(DOCK), str(world), random_start=False, timeout_s=660, trace_every=0)
-    )
+    result = dock_from(tmp_path, "apartment", x, y, heading)
     assert result.outcome == "success", result.reason
     assert result.docked and result.charging
     assert result.time_s < DOCKS_WITHIN_S, result.time_s

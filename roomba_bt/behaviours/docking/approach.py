@@ -128,6 +128,22 @@ FACE_RESTART_RAD = math.radians(540.0)
 _BUMP = Hazard.BUMP
 
 
+def _swept_to_crossing(turned_at: float | None, turned: float) -> float | None:
+    """Where (mm along the crossing line, from its start) the omni receiver would have
+    been across the dock's axis as it was when the turn toward the axis had gone
+    ``turned_at`` (rad) of its ``turned``: turning, it swings ``OMNI_AHEAD_MM sin(turn)``
+    across, toward the axis (the dock ahead at the turn's start, the axis nearly along
+    that heading); crossing, ``(s + OMNI_AHEAD_MM) sin(turned)``. None: not seen.
+
+    Why: close to the dock the turn alone swings the omni over the axis, and the crossing
+    then backed up to find the band's near edge, up to 12 cm over floor the robot had not
+    driven (nothing sees behind it), and drove forward again. The edge the turn swept over
+    is the one the back-up looked for."""
+    if turned_at is None:
+        return None
+    return OMNI_AHEAD_MM * (math.sin(turned_at) / math.sin(turned) - 1.0)
+
+
 class ApproachState(IdentityEnum):
     FACE = "face"
     CLOSER = "closer"
@@ -188,7 +204,7 @@ class DockApproach(DockingAction):
         "_cross_side", "_crossings", "_face_target", "_face_turn", "_guesses", "_hazard",
         "_last_seen", "_last_side", "_last_side_time", "_lead_theta", "_lost_after", "_orbit",
         "_past_at", "_retreat", "_run", "_side_guess", "_speed", "_spin_dir", "_stall",
-        "_starts", "_sweep", "_turn_speed", "_view", "state",
+        "_starts", "_sweep", "_sweep_before", "_sweep_past", "_turn_speed", "_view", "state",
     )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
@@ -203,6 +219,7 @@ class DockApproach(DockingAction):
         self._before_at = self._past_at = None
         self._band_seen = self._orbit = False
         self._cross_path, self._sweep, self._cross_side = 0.0, 1, 1
+        self._sweep_before = self._sweep_past = None
         self._last_side_time = self._back_until = 0.0
         # a drive backwards: where (mm, signed odometry distance) and when it last got on
         self._stall = (0.0, 0.0)
@@ -294,6 +311,7 @@ class DockApproach(DockingAction):
         self._crossings += 1
         self.state = ApproachState.TURN_AWAY
         self._sweep = 1
+        self._sweep_before = self._sweep_past = None
         self._centred = False
         self.mark_turn()
         return None
@@ -322,15 +340,22 @@ class DockApproach(DockingAction):
     def _turn_away(self, snap: Snapshot, view: DockView, hazard: Hazard | None) -> Status | None:
         """Turn ``cross_angle`` away from the dock, toward the axis; then cross (or orbit)."""
         state = self._omni_state(view)
+        turned = abs(snap.odometry.angle_rad - self._turn_mark)  # abs(self.turned())
         if state is not None:
             self._sweep = state  # where the omni was last seen relative to the axis
-        if abs(snap.odometry.angle_rad - self._turn_mark) < self._cross_angle:  # self.turned()
+            if state > 0:
+                self._sweep_before = turned  # the last turn at which it was before the axis
+            elif state < 0 and self._sweep_past is None:
+                self._sweep_past = turned  # the first at which it was past it
+        if turned < self._cross_angle:
             w = TURN_AWAY_SHARE * self._turn_speed * self._cross_side
             self.wheels(-w, w)
             return RUNNING
         self.state = ApproachState.ORBIT if self._orbit else ApproachState.CROSS
         self._orbit = False
-        self._before_at = self._past_at = None
+        # the band's edges the omni swept over while turning, as the crossing measures them
+        self._before_at = _swept_to_crossing(self._sweep_before, turned)
+        self._past_at = _swept_to_crossing(self._sweep_past, turned)
         # turning swings the omni sideways: it may have swept over the axis already
         self._band_seen = self._sweep <= 0
         self._cross_path = snap.odometry.path_mm
@@ -458,10 +483,13 @@ class DockApproach(DockingAction):
         far buoy alone ("past"). The axis is half-way between the last "before" and the
         first "past", and the centre is there when the omni is ``OMNI_AHEAD_MM`` beyond it.
         Close to the dock the band is a few centimetres wide and the omni is often past the
-        axis as soon as the robot has turned: then it backs up to find the near edge
-        instead of driving on (driving a fixed distance from wherever the omni first saw
-        the band overshot the axis by up to 12 cm, and the robot crossed back and forth
-        without ever landing in the band).
+        axis as soon as the robot has turned (driving a fixed distance from wherever the
+        omni first saw the band overshot the axis by up to 12 cm, and the robot crossed back
+        and forth without ever landing in the band). The edges the turn swept the omni over
+        count as seen on this line (:func:`_swept_to_crossing`), so it drives on to the axis
+        rather than back over floor it never drove (session 39: 39 of 283 crossings from
+        fresh empty-room starts backed up, up to 12 cm); only when the turn saw no near edge
+        (its side remembered from before) does it back up to find one.
         """
         s = snap.odometry.distance_mm - self._distance_mark
         self._note_band(self._omni_state(view), s)
@@ -576,6 +604,9 @@ class DockApproach(DockingAction):
     state: ApproachState
     _before_at: float | None
     _past_at: float | None
+    #: the turns (rad) toward the axis at which the omni was last before it, first past it
+    _sweep_before: float | None
+    _sweep_past: float | None
     _run: object
     _lead_theta: float | None
     _face_target: float | None
