@@ -96,6 +96,13 @@ WEDGED_MM = 5.0
 WEDGED_S = 1.0
 #: an obstacle ahead is taken as a wall to follow after this much floor crossed (mm)
 CROSSED_BEFORE_WALL_MM = 500.0
+#: a shuttle: legs ended by a hazard that each began within SHUTTLE_MM of where the leg two
+#: before began, on its heading within SHUTTLE_RAD, SHUTTLE_REPEATS in a row (two blocked
+#: headings chosen in turn, a leg, a back-off and a turn each, from the same two places,
+#: until the time limit); the next obstacle is then followed
+SHUTTLE_MM = 30.0
+SHUTTLE_RAD = math.radians(10)
+SHUTTLE_REPEATS = 8
 
 # Following a wall (light-bumper signals 0..4095).
 #: speed cap while following (mm/s)
@@ -210,6 +217,9 @@ class VisitGrid:
         return best
 
 
+# DockSearch is over 400 lines on purpose: one stage, its states (SearchState) each a method
+# of the one node, sharing the visit grid, the trail and the leg and follow marks; a class
+# per state would hand those between objects on every tick (as DockApproach).
 @declare_stage(
     "dock_search",
     params=(
@@ -242,6 +252,8 @@ class DockSearch(DockingAction):
     from the wall and follows on; after six bumps on one wall it crosses the room instead.
     Bumps, cliffs and virtual walls met while crossing make it back off and choose again;
     the spin happens once per leaf, not again when a retry restarts it after a cliff.
+    Shuttling (eight such legs in a row, each begun where the leg two before began, on its
+    heading: two blocked headings chosen in turn), it follows the next obstacle it meets.
     Trapped (30 s within a 0.5 m circle, ten hazards met there: between a chair's legs), it
     goes back to the line it came in by and on along it through the trap, or back out the way
     it came if that line is shut, by odometry (:mod:`.escape`), and searches on.
@@ -256,9 +268,10 @@ class DockSearch(DockingAction):
     __slots__ = (
         "_avoid", "_back_until", "_bumped", "_cell", "_crumbs", "_escaping", "_follow_bumps",
         "_follow_cells", "_follow_for", "_follow_hand", "_follow_lost", "_follow_side",
-        "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_lit", "_lit_ahead",
-        "_moved_at", "_moved_mark", "_next_crumb_at", "_old_cells", "_resume_follow", "_signals",
-        "_speed", "_spun", "_target", "_wall_seen_at", "_want_wall", "_way_out", "state",
+        "_follow_speed", "_follow_steer", "_hazard", "_kept", "_leg", "_leg_starts", "_lit",
+        "_lit_ahead", "_moved_at", "_moved_mark", "_next_crumb_at", "_old_cells", "_repeats",
+        "_resume_follow", "_signals", "_speed", "_spun", "_target", "_wall_seen_at",
+        "_want_wall", "_way_out", "state",
     )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
@@ -305,6 +318,10 @@ class DockSearch(DockingAction):
         self.trail.restart()
         self._escaping = False
         self._moved_mark, self._moved_at = -math.inf, 0.0  # a leg's progress: none yet
+        # where and on which heading the last legs began (x, y, heading), and how many in a
+        # row began where the leg two before did
+        self._leg_starts: deque[tuple[float, float, float]] = deque(maxlen=3)
+        self._repeats = 0
 
     def bind(self, frame: SensorFrame) -> None:
         super().bind(frame)
@@ -371,6 +388,8 @@ class DockSearch(DockingAction):
             self._escaping, self._way_out = True, None
             self._back_off(odo, now, cliff)
             return
+        if self.state is SearchState.FORWARD and self._shuttling():
+            self._want_wall = True  # follow what is met next, out of the shuttle
         if (
             hazard is Hazard.OBSTACLE
             and self.state is SearchState.FORWARD
@@ -382,6 +401,31 @@ class DockSearch(DockingAction):
         # back off and follow on with the same hand
         self._resume_follow = self.state is SearchState.FOLLOW and hazard is Hazard.BUMP
         self._back_off(odo, now, cliff)
+
+    def _shuttling(self) -> bool:
+        """A leg ended by a hazard: True when :data:`SHUTTLE_REPEATS` such legs in a row
+        began where the leg two before began, on its heading. Between two blocked headings
+        the least visited one alternates: a leg, a back-off and a turn each, from the same
+        two places, until the time limit (fresh apartment start 324: 79 legs of 36 cm from
+        124 s on, every 6 s; the trap rule wants ten hazards in 30 s within a 0.5 m circle,
+        and the two places were 29 cm apart). The legs before the last hazard-free one
+        (a leg's whole length, a wall followed) do not count."""
+        starts = self._leg_starts
+        if len(starts) < 3:
+            self._repeats = 0
+            return False
+        x, y, heading = starts[-1]
+        x2, y2, heading2 = starts[0]
+        again = (
+            math.hypot(x - x2, y - y2) < SHUTTLE_MM
+            and abs(math.remainder(heading - heading2, math.tau)) < SHUTTLE_RAD
+        )
+        self._repeats = self._repeats + 1 if again else 0
+        if self._repeats < SHUTTLE_REPEATS:
+            return False
+        self._repeats = 0
+        starts.clear()
+        return True
 
     def _back_off(self, odo: Odometry, now: float, cliff: bool) -> None:
         """Back away from what was met (longer from a drop), and remember the heading it
@@ -462,8 +506,10 @@ class DockSearch(DockingAction):
             self._target += math.copysign(BLOCKED_NUDGE_RAD, err or 1.0)
             return self._forward(snap)
         self.state = SearchState.FORWARD
-        self._distance_mark = self._moved_mark = snap.odometry.distance_mm  # mark_distance()
+        odo = snap.odometry
+        self._distance_mark = self._moved_mark = odo.distance_mm  # mark_distance()
         self._moved_at = snap.time
+        self._leg_starts.append((odo.x_mm, odo.y_mm, self._target))
         return None
 
     def _forward(self, snap: Snapshot) -> Status | None:
@@ -471,6 +517,7 @@ class DockSearch(DockingAction):
         odo = snap.odometry
         if abs(odo.distance_mm - self._distance_mark) >= self._leg:  # self.travelled()
             self._want_wall = True
+            self._leg_starts.clear()  # a whole leg: no shuttle
             self._target = self.grid.choose_heading(odo, None)
             self.state = SearchState.TURN
             self._distance_mark = odo.distance_mm  # self.mark_distance()
@@ -532,6 +579,7 @@ class DockSearch(DockingAction):
     # wall following ----------------------------------------------------------------
     def _start_follow(self) -> None:
         self.state = SearchState.FOLLOW
+        self._leg_starts.clear()  # a wall followed: no shuttle
         self._wall_seen_at = None
         self._follow_lost = False
         self._follow_side = self._follow_hand
