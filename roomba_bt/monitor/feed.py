@@ -421,6 +421,7 @@ class RunFeed:
         self._mode: object = None
         self._refused_seen = 0
         self._tick_halts_seen = 0
+        self._tick_stills_seen = 0
         self._unnamed: frozenset[int] = frozenset()
 
     # ---------------------------------------------------------------- tree
@@ -465,6 +466,8 @@ class RunFeed:
             self._refused(runner, snapshot)
         if summary.tick_halts != self._tick_halts_seen:
             self._tick_halted(summary, snapshot)
+        if summary.tick_stills != self._tick_stills_seen:
+            self._tick_still(summary, snapshot)
         self._watch_board(runner.blackboard or run_board())
         if not ticked and self.thin_pauses and snapshot is not None:
             if self._thins(snapshot.tick, changed or mode_changed or self._motion.seen(snapshot)):
@@ -632,6 +635,17 @@ class RunFeed:
             "note",
             f"tick guard: drive 0 while a tick ran over its limit, in "
             f"{summary.tick_halt_last} ({summary.tick_halts} so far)",
+            snapshot.time if snapshot is not None else None,
+        )
+
+    def _tick_still(self, summary: RunSummary, snapshot: Snapshot | None) -> None:
+        """A tick past the guard's limit with nothing moving: an event as a halt's is (it was a
+        log warning only, and only when the gap it left came out a second or more)."""
+        self._tick_stills_seen = summary.tick_stills
+        self.event(
+            "note",
+            f"tick guard: a tick ran over its limit with nothing moving, in "
+            f"{summary.tick_still_last} (nothing to stop; {summary.tick_stills} so far)",
             snapshot.time if snapshot is not None else None,
         )
 

@@ -177,10 +177,15 @@ class StallRide:
     def tick_still(self, seconds: float, where: str) -> None:
         """The tick that just returned ran past the tick guard's limit with nothing moving
         (``seconds``: how long it had run when the guard saw it; ``where``: the behaviour and
-        its line): nothing was sent, nothing is given back, nothing counted; the frames it
-        left unread are its own (:attr:`blocked`), not a process that did not run while the
-        robot went on."""
-        self.blocked = (seconds, where or "where: unknown", False)
+        its line): nothing was sent, nothing is given back; counted (the summary's tick
+        guard line, the monitor's timeline), and the frames it left unread are its own
+        (:attr:`blocked`), not a process that did not run while the robot went on."""
+        summary = self.summary
+        summary.tick_stills += 1
+        summary.tick_still_last = where = where or "where: unknown"
+        if not summary.tick_still_first:
+            summary.tick_still_first = where
+        self.blocked = (seconds, where, False)
 
     def _given_back(self, turned_off: Command | None) -> None:
         """After the runtime's own stop (the watchdog's, the tick guard's): the last wheel

@@ -286,6 +286,13 @@ class RunSummary:
     tick_halts_motors: int = 0
     tick_halt_first: str = ""
     tick_halt_last: str = ""
+    #: ticks that ran over ``--tick-limit`` with nothing moving (the robot at rest, no
+    #: built-in cycle: the guard had nothing to stop, and sent nothing); where the first and
+    #: the last were. A log warning only before (the gap they left, when it came out a
+    #: second or more), so a run whose plugin blocked each start showed no sign of it here
+    tick_stills: int = 0
+    tick_still_first: str = ""
+    tick_still_last: str = ""
     commands_written: int = 0
     #: times the robot's wheels did not do what the command standing asked for a second (its
     #: encoders), put right by zeros and the command again (runtime/motion_watch.py); of
@@ -558,14 +565,7 @@ class RunSummary:
                 if self.unread_gaps
                 else []
             ),
-            *(
-                [
-                    f"tick guard   {self.tick_halts} slow tick(s): {self.tick_halts_said()} "
-                    f"while the tree was busy; the first in {self.tick_halt_first}"
-                ]
-                if self.tick_halts
-                else []
-            ),
+            *([f"tick guard   {guarded}"] if (guarded := self.tick_guard_text()) else []),
             *([f"unheard      {_unheard_said(self)}"] if self.unheard else []),
             f"commands     {self.commands_written} written, "
             f"{self.refused_commands} refused by the mode guard{_dropped_said(self)}",
@@ -618,6 +618,23 @@ class RunSummary:
         if self.steps:
             parts.append(f"{self.steps} step{'' if self.steps == 1 else 's'}")
         return f"{self.paused_s:.2f} s in {', '.join(parts)}, left out of mission time"
+
+    def tick_guard_text(self) -> str:
+        """The ticks the tick guard saw past its limit: those it stopped the robot in, then
+        those with nothing moving (``1 slow tick(s) with nothing moving (nothing to stop);
+        the first in sleepy (Sleepy.update at ...)``); "" when it saw none."""
+        parts = []
+        if self.tick_halts:
+            parts.append(
+                f"{self.tick_halts} slow tick(s): {self.tick_halts_said()} while the tree was "
+                f"busy; the first in {self.tick_halt_first}"
+            )
+        if self.tick_stills:
+            parts.append(
+                f"{self.tick_stills} slow tick(s) with nothing moving (nothing to stop); the "
+                f"first in {self.tick_still_first}"
+            )
+        return "; and ".join(parts)
 
     def tick_halts_said(self) -> str:
         """What the tick guard sent in its halts: ``drive 0 and motors off sent``, ``drive 0

@@ -461,7 +461,12 @@ def test_the_gap_a_tick_blocked_with_the_robot_still_leaves_is_said_as_such(
     )
     summary = run.summary
     assert summary.outcome.value == "success", summary
-    assert summary.tick_halts == 0 and "tick guard" not in str(summary), str(summary)
+    assert summary.tick_halts == 0 and summary.tick_stills == 1, str(summary)
+    assert summary.tick_still_first.startswith("still (Still.update at "), str(summary)
+    assert (
+        "tick guard   1 slow tick(s) with nothing moving (nothing to stop); the first in "
+        "still (Still.update at " in str(summary)
+    ), str(summary)
     assert summary.unread_gaps == 0 and "unread" not in str(summary), str(summary)
     said = _gaps_said(caplog)
     assert len(said) == 1, caplog.text
@@ -525,6 +530,7 @@ def test_a_record_of_a_still_tick_replays_its_gap_as_the_run_said_it(
 
     summary, said = _replayed_gaps(record_path, plugin_dir, caplog)
     assert summary.unread_gaps == 0 and summary.tick_halts == 0, str(summary)
+    assert summary.tick_stills == 1 and summary.tick_still_first == stills[0]["where"]
     assert len(said) == 1 and "no frame was read for 1.5" in said[0], said
     assert "a tick blocked (still (Still.update at " in said[0]
     assert "the robot stood still" in said[0]
@@ -556,6 +562,50 @@ def test_a_still_tick_explains_only_the_gap_after_it(
     said = _gaps_said(caplog)
     assert len(said) == 1 and "the process suspended or starved of CPU" in said[0], said
     assert summary.unread_gaps == 1, str(summary)
+
+
+@pytest.mark.extra("monitor")
+def test_the_monitor_shows_a_still_tick_live_and_replayed(
+    run_mission: RunMission,
+    plugin_dir: Path,
+    still_gate: threading.Event,
+    tmp_path: Path,
+) -> None:
+    """A still block was a log warning only (and only when its gap came out a second or
+    more): the monitor's timeline showed nothing of it. Now it is an event there, as a
+    halt is, naming the behaviour and its line: on the live page (the feed watching the
+    run) and on a record's (``roomba-bt monitor RECORD``: the replay's guard tells it)."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.monitor.feed import RunFeed
+    from roomba_bt.monitor.recorded import replay_into_feed
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.recording import load_record
+
+    def still_events(feed: RunFeed) -> list[str]:
+        return [e.text for e in feed.events if e.kind == "note" and "tick guard" in e.text]
+
+    allowed = Permissions(plugin_files=True)
+    record_path = tmp_path / "run.rec"
+    (plugin_dir / "mission.yaml").write_text(STILL_MISSION)
+    live = RunFeed(history=5000, mission_name="still")
+    live.set_tree(load_mission(plugin_dir / "mission.yaml", permissions=allowed).root)
+    run = run_mission(STILL_MISSION, tick_limit=0.02, permissions=allowed, timeout=20.0,
+                      record=record_path, observer=live.observe)  # fmt: skip
+    assert run.summary.tick_stills == 1, str(run.summary)
+    said = still_events(live)
+    assert len(said) == 1, [e.text for e in live.events]
+    assert said[0].startswith("tick guard: a tick ran over its limit with nothing moving, in ")
+    assert "still (Still.update at " in said[0] and "nothing to stop; 1 so far" in said[0]
+
+    (plugin_dir / "still.py").write_text(STILL_PLUGIN.replace(
+        "self.robot.connection.transport.advance(1.5)", "pass"))  # fmt: skip
+    record = load_record(record_path)
+    feed, summary = replay_into_feed(
+        record, load_mission(plugin_dir / "mission.yaml", permissions=allowed), CREATE2,
+        tuple(record.header["packets"]), record.header["baud"], "r",
+    )  # fmt: skip
+    assert summary.tick_stills == 1
+    assert still_events(feed) == said, [e.text for e in feed.events]
 
 
 #: the brushes and vacuum on, then the drive beside the blocking leaf
