@@ -306,7 +306,7 @@ def tick_guard_cost(calls: int = 200_000) -> tuple[float, float]:
     guard = TickGuard(mock.Mock(), 0.25)
     guard.start()
     try:
-        guarded = guard.guarded(tick, lambda seconds, where, halted: None, lambda: 0)
+        guarded = guard.guarded(tick, lambda seconds, where, halted, cycle: None, lambda: 0)
         bare = statistics.median(timeit.timeit(tick, number=calls) for _ in range(7))
         watched = statistics.median(timeit.timeit(guarded, number=calls) for _ in range(7))
     finally:

@@ -422,6 +422,7 @@ class RunFeed:
         self._refused_seen = 0
         self._tick_halts_seen = 0
         self._tick_stills_seen = 0
+        self._tick_cycles_seen = 0
         self._unnamed: frozenset[int] = frozenset()
 
     # ---------------------------------------------------------------- tree
@@ -468,6 +469,8 @@ class RunFeed:
             self._tick_halted(summary, snapshot)
         if summary.tick_stills != self._tick_stills_seen:
             self._tick_still(summary, snapshot)
+        if summary.tick_cycles != self._tick_cycles_seen:
+            self._tick_in_cycle(summary, snapshot)
         self._watch_board(runner.blackboard or run_board())
         if not ticked and self.thin_pauses and snapshot is not None:
             if self._thins(snapshot.tick, changed or mode_changed or self._motion.seen(snapshot)):
@@ -646,6 +649,18 @@ class RunFeed:
             "note",
             f"tick guard: a tick ran over its limit with nothing moving, in "
             f"{summary.tick_still_last} (nothing to stop; {summary.tick_stills} so far)",
+            snapshot.time if snapshot is not None else None,
+        )
+
+    def _tick_in_cycle(self, summary: RunSummary, snapshot: Snapshot | None) -> None:
+        """A tick past the guard's limit while a built-in cycle could drive the robot: an
+        event as a halt's is, saying the cycle went on (the guard ends none)."""
+        self._tick_cycles_seen = summary.tick_cycles
+        self.event(
+            "note",
+            f"tick guard: a tick ran over its limit while a built-in cycle could drive the "
+            f"robot, in {summary.tick_cycle_last} (the cycle went on: the guard ends none; "
+            f"{summary.tick_cycles} so far)",
             snapshot.time if snapshot is not None else None,
         )
 

@@ -44,7 +44,7 @@ from roomba_bt.runtime.recording import (
 )
 from roomba_bt.runtime.stack import past_the_link_loss, replay_record
 from roomba_bt.runtime.summary import Outcome, RunSummary
-from roomba_bt.runtime.tick_guard import STILL_NOTE
+from roomba_bt.runtime.tick_guard import CYCLE_NOTE, STILL_NOTE
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
@@ -343,6 +343,7 @@ def recorded_acts(record: Record) -> list[dict[str, Any]]:
         if isinstance(note.get("tick"), int)
         and "tick_guard" not in note
         and STILL_NOTE not in note
+        and CYCLE_NOTE not in note
         and ENDED not in note
     ]
 

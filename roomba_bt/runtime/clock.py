@@ -72,7 +72,10 @@ class StreamClock:
 
 
 def unread_gap(
-    summary: RunSummary, link: str, gap: float, blocked: tuple[float, str, bool] | None = None
+    summary: RunSummary,
+    link: str,
+    gap: float,
+    blocked: tuple[float, str, bool, str] | None = None,
 ) -> None:
     """No frame was read for ``gap`` seconds and the watchdog did not trip: the process did
     not run (a laptop suspended, SIGSTOP, a host starved of CPU), or the watchdog is off and
@@ -80,14 +83,24 @@ def unread_gap(
     counted and said (the frames that waited are dropped as stale).
 
     ``blocked``: the tick before the gap blocked past the tick guard's limit (``(seconds it
-    had run when the guard saw it, where, halted)``): the gap is that tick's. Either the
-    guard sent drive 0 in it (``halted``, :meth:`StallRide.tick_halted`), the wheels at rest
-    from then on, or nothing moved (:meth:`StallRide.tick_still`: a plugin's first
-    ``update`` blocking before its first drive), the robot still all along. Said as such,
+    had run when the guard saw it, where, halted, cycle)``): the gap is that tick's. Either
+    the guard sent drive 0 in it (``halted``, :meth:`StallRide.tick_halted`), the wheels at
+    rest from then on; or nothing moved (:meth:`StallRide.tick_still`: a plugin's first
+    ``update`` blocking before its first drive), the robot still all along; or a built-in
+    cycle could drive it (``cycle``, the guard ends none), and it went on driving: said as
+    that tick's, where it said the process was suspended or starved of CPU. Said as such,
     and not counted as unread (the summary's tick guard line counts a halt): it said the
     process was suspended or starved and the robot went on with its last command, whenever
     the block came out a second or more."""
     if blocked is not None:
+        if blocked[3]:
+            log.warning(
+                "%s: no frame was read for %.2f s: a tick blocked (%s) while %s could drive "
+                "it: the cycle went on driving, unwatched, until the tick returned (the tick "
+                "guard does not end a built-in cycle)",
+                link, gap, blocked[1], blocked[3],
+            )  # fmt: skip
+            return
         if not blocked[2]:
             log.warning(
                 "%s: no frame was read for %.2f s: a tick blocked (%s) with nothing moving: "

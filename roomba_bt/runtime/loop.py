@@ -709,11 +709,11 @@ def guarded_between_ticks(
         return work
     ride = runner.ride
 
-    def slow(seconds: float, _where: str, halted: bool) -> None:
+    def slow(seconds: float, _where: str, halted: bool, cycle: str) -> None:
         if halted:
             ride.tick_halted(tick_guard, seconds, where)
         else:
-            ride.tick_still(seconds, where)
+            ride.tick_still(seconds, where, cycle)
 
     return tick_guard.guarded(work, slow, lambda: runner.snapshot.tick)
 
@@ -871,9 +871,9 @@ def guarded_tick(runner: MissionRunner, root: py_trees.behaviour.Behaviour) -> C
         return tick
     ride = runner.ride
 
-    def slow(seconds: float, where: str, halted: bool) -> None:
-        if not halted:  # nothing moved: nothing to give back, only the gap to say
-            ride.tick_still(seconds, where)
+    def slow(seconds: float, where: str, halted: bool, cycle: str) -> None:
+        if not halted:  # nothing sent: nothing to give back, only the gap to say
+            ride.tick_still(seconds, where, cycle)
             return
         # a tick that ended the tree gets nothing of it sent again: the run's end follows
         going = root.status is py_trees.common.Status.RUNNING

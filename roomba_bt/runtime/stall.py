@@ -11,8 +11,9 @@ reset or switched off: :meth:`~roomba_bt.robot.connection.Connection.check_stall
 The tick guard's drive 0 (a tick that blocked: :mod:`roomba_bt.runtime.tick_guard`) is ridden
 through the same way (:meth:`StallRide.tick_halted`): counted, the frames it left unread not
 taken for a gap nobody read, the wheels and the motors given their last commands again. A
-tick the guard saw past its limit with nothing moving (:meth:`StallRide.tick_still`) sent
-nothing and gets nothing back, but the frames it left unread are its own too.
+tick the guard saw past its limit with nothing moving, or while a built-in cycle may have
+driven the robot (:meth:`StallRide.tick_still`), sent nothing and gets nothing back, but
+the frames it left unread are its own too.
 """
 
 from __future__ import annotations
@@ -72,10 +73,10 @@ class StallRide:
         self.gap_explained = False
         #: the tick before the next batch blocked past the tick guard's limit (how long it had
         #: run when the guard saw it, where, whether the guard stopped the wheels or the
-        #: motors in it: else nothing moved): the next batch's gap is that tick's, the robot
-        #: at rest (set by :meth:`tick_halted` and :meth:`tick_still`, read once as
-        #: ``gap_explained``)
-        self.blocked: tuple[float, str, bool] | None = None
+        #: motors in it, and the built-in cycle that may have driven the robot meanwhile, ""
+        #: if nothing moved): the next batch's gap is that tick's (set by :meth:`tick_halted`
+        #: and :meth:`tick_still`, read once as ``gap_explained``)
+        self.blocked: tuple[float, str, bool, str] | None = None
         #: once frames are back, while the frames that waited are read (the stall's
         #: backlog, over several reads): when the last of its batches came (None: not back)
         self._backlog_read_at: float | None = None
@@ -170,22 +171,29 @@ class StallRide:
             tick_guard.limit_s if tick_guard else 0.0, where or "where: unknown",
             " and motors off" if motors_off is not None else "",
         )  # fmt: skip
-        self.blocked = (seconds, summary.tick_halt_last, True)  # the frames it left unread
+        self.blocked = (seconds, summary.tick_halt_last, True, "")  # the frames it left unread
         if tree_running:
             self._given_back(motors_off)
 
-    def tick_still(self, seconds: float, where: str) -> None:
-        """The tick that just returned ran past the tick guard's limit with nothing moving
-        (``seconds``: how long it had run when the guard saw it; ``where``: the behaviour and
-        its line): nothing was sent, nothing is given back; counted (the summary's tick
-        guard line, the monitor's timeline), and the frames it left unread are its own
-        (:attr:`blocked`), not a process that did not run while the robot went on."""
+    def tick_still(self, seconds: float, where: str, cycle: str = "") -> None:
+        """The tick that just returned ran past the tick guard's limit with nothing moving, or
+        while ``cycle`` (a built-in cycle, as :func:`~roomba_bt.runtime.tick_guard.cycle_said`
+        says it) may have driven the robot, which the guard does not end (``seconds``: how
+        long it had run when the guard saw it; ``where``: the behaviour and its line):
+        nothing was sent, nothing is given back; counted (the summary's tick guard line, the
+        monitor's timeline), and the frames it left unread are its own (:attr:`blocked`), not
+        a process that did not run."""
         summary = self.summary
-        summary.tick_stills += 1
-        summary.tick_still_last = where = where or "where: unknown"
-        if not summary.tick_still_first:
-            summary.tick_still_first = where
-        self.blocked = (seconds, where, False)
+        where = where or "where: unknown"
+        if cycle:
+            summary.tick_cycles += 1
+            summary.tick_cycle_last = where
+            summary.tick_cycle_first = summary.tick_cycle_first or where
+        else:
+            summary.tick_stills += 1
+            summary.tick_still_last = where
+            summary.tick_still_first = summary.tick_still_first or where
+        self.blocked = (seconds, where, False, cycle)
 
     def _given_back(self, turned_off: Command | None) -> None:
         """After the runtime's own stop (the watchdog's, the tick guard's): the last wheel

@@ -293,6 +293,12 @@ class RunSummary:
     tick_stills: int = 0
     tick_still_first: str = ""
     tick_still_last: str = ""
+    #: ticks that ran over ``--tick-limit`` while a built-in cycle (Clean, Spot, Seek Dock)
+    #: may have driven the robot in Passive: the guard ends no cycle, so it sent nothing and
+    #: the cycle went on driving; where the first and the last were
+    tick_cycles: int = 0
+    tick_cycle_first: str = ""
+    tick_cycle_last: str = ""
     commands_written: int = 0
     #: times the robot's wheels did not do what the command standing asked for a second (its
     #: encoders), put right by zeros and the command again (runtime/motion_watch.py); of
@@ -633,6 +639,11 @@ class RunSummary:
             parts.append(
                 f"{self.tick_stills} slow tick(s) with nothing moving (nothing to stop); the "
                 f"first in {self.tick_still_first}"
+            )
+        if self.tick_cycles:
+            parts.append(
+                f"{self.tick_cycles} slow tick(s) while a built-in cycle could drive the robot "
+                f"(it went on: the guard ends no cycle); the first in {self.tick_cycle_first}"
             )
         return "; and ".join(parts)
 

@@ -27,7 +27,11 @@ stop, but the guard still notes where it was: the frames the tick leaves unread 
 its own, the robot still, and the run says so (``runtime/clock.py``, ``unread_gap``), where
 it said the process had been suspended or starved of CPU while the robot went on with its
 last command, and counted an unread gap (whenever the block came out a second or more: a
-plugin's ``time.sleep(1)`` did in 1 of 2 real-time runs).
+plugin's ``time.sleep(1)`` did in 1 of 2 real-time runs). So does a tick past the limit
+while a built-in cycle (Clean, Spot, Seek Dock: the opcode table's ``BUILTIN_CYCLE``) may
+be driving the robot in Passive: the guard ends no cycle (that is the tree's to decide, and
+Safe would end it), so it sends nothing, and the run says the cycle went on driving while
+the tick blocked.
 
 The run's end is guarded too (:meth:`TickGuard.halt_before_stop`): before the tree's stop,
 whose ``terminate()`` calls may block as an ``update`` may, the runner has the guard send the
@@ -64,15 +68,21 @@ from roomba_bt.runtime.teardown import where_in
 log = logging.getLogger(__name__)
 
 
-#: ``slow(seconds, where, halted)``: the runner's reaction to a tick that ran past the limit,
-#: in the ticking thread, lock held, once the tick is over; ``halted``: the guard stopped
-#: something in it (False: nothing moved, nothing was sent)
-Slow = Callable[[float, str, bool], None]
+#: ``slow(seconds, where, halted, cycle)``: the runner's reaction to a tick that ran past the
+#: limit, in the ticking thread, lock held, once the tick is over; ``halted``: the guard
+#: stopped something in it (False: it sent nothing); ``cycle``: the built-in cycle that may
+#: have driven the robot meanwhile, as said (:func:`cycle_said`), "" if none (nothing moved)
+Slow = Callable[[float, str, bool, str], None]
 
 #: the record's note of a tick that ran past the limit with nothing moving (the value: how
 #: long it had run when the guard saw it); a key of its own, not ``tick_guard``'s, so that an
 #: earlier roomba-bt's replay, which reads only those, sends no drive 0 for it
 STILL_NOTE = "tick_still"
+
+#: the record's note of a tick that ran past the limit while a built-in cycle may have driven
+#: the robot (its ``cycle``: :func:`cycle_said`); a key of its own, not :data:`STILL_NOTE`'s,
+#: which an earlier roomba-bt's replay would say as the robot standing still
+CYCLE_NOTE = "tick_cycle"
 
 #: where the halt before the tree's stop is noted as done (the record's ``where``)
 AT_THE_END = "the run's end, before the tree's stop"
@@ -94,6 +104,19 @@ def motors_running(connection: Connection) -> bool:
     obeys it (:meth:`CommandWriter.motors_running
     <roomba_bt.robot.writer.CommandWriter.motors_running>`, as the watchdog asks it)."""
     return connection.writer.motors_running()
+
+
+def cycle_said(connection: Connection) -> str:
+    """The built-in cycle that may be driving the robot (``CommandWriter.cycle_may_drive``),
+    as a sentence says it: ``the robot's Clean (135) cycle`` (one the run wrote), ``a cycle
+    the robot started by itself`` (a button, its schedule); "" when none may be."""
+    writer = connection.writer
+    if not writer.cycle_may_drive:
+        return ""
+    running = writer.running_cycle
+    if running is None:
+        return "a cycle the robot started by itself"
+    return f"the robot's {running.spec.title} ({running.spec.opcode}) cycle"
 
 
 def halt_blocked(connection: Connection) -> bool:
@@ -161,9 +184,10 @@ class TickGuard:
         self._entered: float | None = None
         self._ticks = 0
         #: the last tick the guard saw past the limit: its count, how long it had run then,
-        #: where it was (:meth:`_where`), and whether the guard stopped the wheels or the
-        #: motors in it (False: nothing moved; it may still, and then the stop replaces it)
-        self._slow: tuple[int, float, str, bool] | None = None
+        #: where it was (:meth:`_where`), whether the guard stopped the wheels or the motors
+        #: in it (False: nothing moved; it may still, and then the stop replaces it), and the
+        #: built-in cycle that may have driven the robot meanwhile (:func:`cycle_said`, "")
+        self._slow: tuple[int, float, str, bool, str] | None = None
         #: the stream's tick index of the running tick (the runner's snapshot), for the note
         self._index: Callable[[], int] = lambda: 0
         self._owner = 0  # the thread that ticks
@@ -204,11 +228,13 @@ class TickGuard:
     def guarded(
         self, tick: Callable[[], object], slow: Slow, index: Callable[[], int]
     ) -> Callable[[], None]:
-        """``tick`` with the lock released around it; ``slow(seconds, where, halted)`` is
-        called in the main thread, lock held, after a tick that ran past the limit, whether
-        it returned or raised (``seconds``: how long that tick had run when the guard saw it;
-        ``where``: :meth:`_where`; ``halted``: the guard stopped the wheels or the motors,
-        else nothing moved). ``index()``: the running tick's index in the stream."""
+        """``tick`` with the lock released around it; ``slow(seconds, where, halted, cycle)``
+        is called in the main thread, lock held, after a tick that ran past the limit,
+        whether it returned or raised (``seconds``: how long that tick had run when the guard
+        saw it; ``where``: :meth:`_where`; ``halted``: the guard stopped the wheels or the
+        motors, else it sent nothing; ``cycle``: the built-in cycle that may have driven the
+        robot meanwhile, "" if nothing moved). ``index()``: the running tick's index in the
+        stream."""
         lock = self.lock
         clock = self.clock
         self._index = index
@@ -224,7 +250,7 @@ class TickGuard:
                 self._entered = None
                 seen = self._slow
                 if seen is not None and seen[0] == self._ticks:
-                    slow(seen[1], seen[2], seen[3])
+                    slow(seen[1], seen[2], seen[3], seen[4])
 
         return guarded_tick
 
@@ -242,13 +268,16 @@ class TickGuard:
                     continue
                 if self._moving():
                     where = self._where()
-                    self._slow = (tick, ran, where, True)  # once a tick, even if the write fails
+                    self._slow = (tick, ran, where, True, "")  # once a tick, even if it fails
                     motors = halt_blocked(self.connection)
                     self._note(ran, where, motors)  # only a stop that went out is replayed
-                elif (seen is None or seen[0] != tick) and not self._cycle():
-                    where = self._where()  # nothing to stop: where it blocked, once a tick
-                    self._slow = (tick, ran, where, False)
-                    self._note_still(ran, where)
+                elif seen is None or seen[0] != tick:
+                    # nothing to stop (or a cycle, which the guard does not end): where it
+                    # blocked, once a tick
+                    cycle = cycle_said(self.connection)
+                    where = self._where()
+                    self._slow = (tick, ran, where, False, cycle)
+                    self._note_still(ran, where, cycle)
             except Exception as exc:  # the port gone, say: the main thread meets it next
                 log.warning("the tick guard could not send drive 0: %s", exc)
             finally:
@@ -267,26 +296,25 @@ class TickGuard:
                 act["motors"] = True
             note(act)
 
-    def _note_still(self, ran: float, where: str) -> None:
-        """A tick past the limit with nothing moving, in the record (:data:`STILL_NOTE`): its
-        replay says the gap that tick left as the live run did. ``"at": "after"``: read after
-        that tick (an earlier roomba-bt's monitor takes it for an operator's act it does not
-        know, and passes it there, holding back no act of the next tick)."""
+    def _note_still(self, ran: float, where: str, cycle: str) -> None:
+        """A tick past the limit with nothing moving (:data:`STILL_NOTE`), or while ``cycle``
+        may have driven the robot (:data:`CYCLE_NOTE`), in the record: its replay says the
+        gap that tick left as the live run did. ``"at": "after"``: read after that tick (an
+        earlier roomba-bt's monitor takes it for an operator's act it does not know, and
+        passes it there, holding back no act of the next tick)."""
         note = getattr(self.connection.transport, "note", None)
         if callable(note):
-            note({
-                STILL_NOTE: round(ran, 3), "limit": self.limit_s, "where": where,
-                "tick": self._index(), "at": "after",
-            })  # fmt: skip
+            kept: dict[str, Any] = {
+                CYCLE_NOTE if cycle else STILL_NOTE: round(ran, 3), "limit": self.limit_s,
+                "where": where, "tick": self._index(), "at": "after",
+            }  # fmt: skip
+            if cycle:
+                kept["cycle"] = cycle
+            note(kept)
 
     def _moving(self) -> bool:
         """The wheels move or a brush or the vacuum runs: something to stop."""
         return wheels_moving(self.connection) or motors_running(self.connection)
-
-    def _cycle(self) -> bool:
-        """A built-in cycle may be driving the robot (in Passive: the guard ends none, and the
-        robot is not still while a tick blocks)."""
-        return self.connection.writer.cycle_may_drive
 
     def _where(self) -> str:
         """Where the ticking thread is (:func:`where_in`); "" if the thread is gone."""
@@ -302,14 +330,15 @@ class RecordedTickGuard:
     """A replay's tick guard: the acts of the recorded run's (its notes), each done again in
     the tick it was done in, after that tick (which does not block here) and before its
     flush, as live: drive 0 where the record has it, then the runner's reaction; and the
-    ticks it saw past the limit with nothing moving (:data:`STILL_NOTE`), told to the runner
-    after that tick, as live (nothing sent)."""
+    ticks it saw past the limit with nothing moving (:data:`STILL_NOTE`) or a built-in
+    cycle driving (:data:`CYCLE_NOTE`), told to the runner after that tick, as live
+    (nothing sent)."""
 
     def __init__(self, connection: Connection, notes: Iterable[dict[str, Any]]) -> None:
         self.connection = connection
         notes = list(notes)
         acts = _ticked(notes, "tick_guard")
-        stills = _ticked(notes, STILL_NOTE)
+        stills = _ticked(notes, STILL_NOTE) + _ticked(notes, CYCLE_NOTE)
         #: the recorded run sent drive 0 before its tree's stop (:meth:`halt_before_stop`)
         self._at_end = any(n.get("at") == "end" for n in acts)
         first = (acts or stills)[:1]
@@ -343,9 +372,11 @@ class RecordedTickGuard:
                     self.connection.send_many(stop_first())
                 else:
                     self.connection.halt()
-                slow(float(act["tick_guard"]), str(act.get("where", "")), True)
+                slow(float(act["tick_guard"]), str(act.get("where", "")), True, "")
             elif still is not None:
-                slow(float(still[STILL_NOTE]), str(still.get("where", "")), False)
+                cycle = str(still.get("cycle") or "a built-in cycle") if CYCLE_NOTE in still else ""
+                ran = still[CYCLE_NOTE] if CYCLE_NOTE in still else still[STILL_NOTE]
+                slow(float(ran), str(still.get("where", "")), False, cycle)
 
         return replayed_tick
 

@@ -564,6 +564,70 @@ def test_a_still_tick_explains_only_the_gap_after_it(
     assert summary.unread_gaps == 1, str(summary)
 
 
+#: the robot's own Clean cycle started (Passive: the tree drives nothing), then the still leaf
+CYCLE_MISSION = """
+plugins: [./still.py]
+tree:
+  sequence:
+    - mode: safe
+    - clean
+    - wait: 150ms
+    - still
+    - wait: 100ms
+"""
+
+
+def test_the_gap_a_tick_blocked_while_a_cycle_drove_leaves_is_said_as_such(
+    run_mission: RunMission,
+    plugin_dir: Path,
+    still_gate: threading.Event,
+    caplog: pytest.LogCaptureFixture,
+    tmp_path: Path,
+) -> None:
+    """A tick that blocks while a built-in cycle (Clean) may be driving the robot in Passive:
+    the guard ends no cycle, and sends nothing, but the gap is that tick's: said naming the
+    behaviour and its line, and that the cycle went on driving; not as a process suspended
+    or starved of CPU (what it said, and counted as unread), and counted on the summary's
+    tick guard line. A record keeps the note (a key of its own), and its replay says the
+    gap the same way, writing the recorded bytes."""
+    from roomba_bt.runtime.tick_guard import CYCLE_NOTE
+
+    record_path = tmp_path / "run.rec"
+    run = run_mission(CYCLE_MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True),
+                      timeout=20.0, record=record_path)  # fmt: skip
+    summary = run.summary
+    assert summary.outcome.value == "success", summary
+    assert still_gate.is_set()  # the guard looked where the tick was
+    assert summary.unread_gaps == 0 and "unread" not in str(summary), str(summary)
+    assert summary.tick_halts == summary.tick_stills == 0 and summary.tick_cycles == 1
+    assert summary.tick_cycle_first.startswith("still (Still.update at "), str(summary)
+    assert "1 slow tick(s) while a built-in cycle could drive the robot" in str(summary)
+    said = _gaps_said(caplog)
+    assert len(said) == 1, caplog.text
+    assert "no frame was read for 1.5" in said[0]
+    assert f"a tick blocked (still (Still.update at {plugin_dir / 'still.py'}:" in said[0]
+    assert "while the robot's Clean (135) cycle could drive it" in said[0]
+    assert "the cycle went on driving" in said[0]
+    assert "the tick guard does not end a built-in cycle" in said[0]
+    assert "suspended" not in said[0] and "stood still" not in said[0]
+    written = [data for _, data in run.link.writes]
+    clean = written.index(C.clean().data)
+    assert HALT not in written[clean + 1 :], written  # no drive 0 alone: nothing from the guard
+    notes = [n for _, n in run_record_notes(record_path) if CYCLE_NOTE in n]
+    assert len(notes) == 1 and notes[0]["cycle"] == "the robot's Clean (135) cycle", notes
+    assert "tick_guard" not in notes[0] and "tick_still" not in notes[0]
+
+    replayed, again = _replayed_gaps(record_path, plugin_dir, caplog)
+    assert replayed.tick_cycles == 1 and replayed.unread_gaps == 0, str(replayed)
+    assert len(again) == 1 and again[0].split(": ", 1)[1] == said[0].split(": ", 1)[1], again
+
+
+def run_record_notes(path: Path) -> list[tuple[float, dict[str, object]]]:
+    from roomba_bt.runtime.recording import load_record
+
+    return list(load_record(path).notes)
+
+
 @pytest.mark.extra("monitor")
 def test_the_monitor_shows_a_still_tick_live_and_replayed(
     run_mission: RunMission,
