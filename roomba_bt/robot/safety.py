@@ -429,10 +429,12 @@ def answer_given(code: int | None = None) -> None:
     (:data:`ENDING_SIGNALS`, those :data:`IGNORED_AT_START` aside) do not change it: the
     first lets the last words (a run's summary and report, a NO CONNECTION's hint) be
     written and the command exit with its answer, but no longer than :data:`LAST_WORDS_S`:
-    a thread then ends the process with that answer, ``os._exit(code)`` (``128 + signal``
-    when none was given), even while a blocked write holds the stream's lock, which no
-    handler in the main thread can get past; the others change nothing. The terminal's
-    stop (Ctrl-Z) suspends, as ever.
+    a thread then ends the process, even while a blocked write holds the stream's lock,
+    which no handler in the main thread can get past, with ``128 + signal``: the last
+    words were cut short by the signal, and the exit code says so (decided, session 39:
+    it was the answer, 0 for a run that succeeded, which told a script its report was
+    whole); the answer is said on stderr if it takes it at once. The others change
+    nothing. The terminal's stop (Ctrl-Z) suspends, as ever.
 
     The CLI's, as the process (a program that calls its ``main(argv)`` keeps its
     handlers), once nothing a robot or the next run needs is left: after a run, the
@@ -478,10 +480,26 @@ def _ends_after_the_last_words(signum: int, frame: FrameType | None) -> None:
 
 
 def _last_words_run_out(signum: int) -> None:
-    """The process's end :data:`LAST_WORDS_S` after ``signum`` came, its last words not done:
-    with the command's answer, read now (the last given: :func:`answer_given`), else
-    ``128 + signum``."""
-    os._exit(_ANSWER[-1] if _ANSWER else 128 + signum)
+    """The process's end :data:`LAST_WORDS_S` after ``signum`` came: with ``128 + signum``
+    while the last words are not out (the report cut short: blocked on a pipe or terminal
+    nobody reads), the command's answer said on stderr if it takes it now (it is most often
+    the same blocked pipe); with the answer once they are (:func:`signals_wait_for_the_exit`:
+    only the interpreter's exit was left)."""
+    if _ANSWER and _WORDS_OUT:
+        os._exit(_ANSWER[-1])
+    if _ANSWER:
+        say_if_room(2, _cut_short(signum, _ANSWER[-1]))
+    os._exit(128 + signum)
+
+
+def _cut_short(signum: int, answer: int) -> bytes:
+    """What :func:`_last_words_run_out` says of a command whose last words ``signum`` cut
+    short: its own answer, which the exit code no longer gives."""
+    name = signal.Signals(signum).name
+    return (
+        f"roomba-bt: the report was cut short: {name} came and it was not written within "
+        f"{LAST_WORDS_S:g} s; exit {128 + signum}, where the command's answer was {answer}\n"
+    ).encode()
 
 
 #: the most the process's exit may take once its last words are out
@@ -498,7 +516,9 @@ def signals_wait_for_the_exit() -> None:
     Python's finalization puts its own handlers back to their default action, so a
     Ctrl-C in it (the third of three pressed 0.3 s apart, after the run's summary) killed
     the process by SIGINT, status -2 where the command said 130; an ignored one is not
-    Python's to put back."""
+    Python's to put back. A signal's end already set going (:func:`answer_given`) then
+    exits with the command's answer: its words are out."""
+    _WORDS_OUT.append(True)
     for signum in _taken(EARLY_SIGNALS):
         with contextlib.suppress(ValueError):  # not the main thread
             signal.signal(signum, signal.SIG_IGN)
@@ -508,8 +528,12 @@ def signals_wait_for_the_exit() -> None:
 
 #: the signal whose :func:`_ends_after_the_last_words` set the process's end going (one)
 _LAST_WORDS: list[int] = []
-#: the command's exit code once known (:func:`answer_given`), what that end exits with
+#: the command's exit code once known (:func:`answer_given`), what that end exits with once
+#: the last words are out
 _ANSWER: list[int] = []
+#: not empty once the command's last words are written and flushed
+#: (:func:`signals_wait_for_the_exit`)
+_WORDS_OUT: list[bool] = []
 
 
 class InterruptGuard:

@@ -24,14 +24,18 @@ sys.exit(code)
 """
 
 #: a signal (``argv[2]``) while the last words are written (a run's summary, its answer 4
-#: known), and one whose last words never end (a stdout nobody reads: here a sleep)
+#: known), one whose last words never end (a stdout nobody reads: here a sleep), and one
+#: whose words are out and flushed but whose exit is slow ("slow exit": a thread joined)
 SIGNAL_IN_THE_LAST_WORDS = """
 import os, signal, sys, time
-from roomba_bt.robot.safety import answer_given
+from roomba_bt.robot.safety import answer_given, signals_wait_for_the_exit
 answer_given(4)
 os.kill(os.getpid(), int(sys.argv[2]))
 print("the summary", flush=True)
 if sys.argv[1] == "stuck":
+    time.sleep(60)
+if sys.argv[1] == "slow exit":
+    signals_wait_for_the_exit()
     time.sleep(60)
 sys.exit(4)
 """
@@ -56,12 +60,26 @@ def test_a_signal_in_the_last_words_lets_them_finish_with_the_command_s_code(
     assert (done.returncode, done.stdout) == (4, "the summary\n"), done.stderr
 
 
-def test_last_words_that_never_end_are_ended_with_the_command_s_answer() -> None:
+def test_last_words_that_never_end_are_ended_with_the_signal_s_code() -> None:
     """A write blocked on a pipe nobody reads is why a signal ends the process here: a
-    thread ends it :data:`LAST_WORDS_S` after the signal, with the answer the command had
-    given (it was ``128 + SIGTERM``, 143, whatever the run's own code)."""
+    thread ends it :data:`LAST_WORDS_S` after the signal, with ``128 + SIGTERM``: the report
+    was cut short by the signal (session 37 to 38 exited with the command's answer, 4 here,
+    0 for a run that succeeded: a script took a report cut short for a whole one). The
+    answer is said on stderr, which takes it here."""
     done = _run(SIGNAL_IN_THE_LAST_WORDS, "stuck", str(int(signal.SIGTERM)))
-    assert done.returncode == 4, done.stderr
+    assert done.returncode == 128 + signal.SIGTERM, done.stderr
+    assert (
+        "roomba-bt: the report was cut short: SIGTERM came and it was not written within "
+        "2 s; exit 143, where the command's answer was 4" in done.stderr
+    ), done.stderr
+
+
+def test_last_words_out_and_a_slow_exit_keep_the_command_s_answer() -> None:
+    """The words written and flushed, only the interpreter's exit left (a thread it waits
+    for): the signal cut nothing short, and the end it set going exits with the answer."""
+    done = _run(SIGNAL_IN_THE_LAST_WORDS, "slow exit", str(int(signal.SIGTERM)))
+    assert (done.returncode, done.stdout) == (4, "the summary\n"), done.stderr
+    assert "cut short" not in done.stderr
 
 
 #: a second signal whose handler runs inside the first's (three SIGTERMs sent together as a
