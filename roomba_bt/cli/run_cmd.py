@@ -60,7 +60,7 @@ from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, duration_said, encodes, escaped
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG, TurnedAway
-from roomba_bt.robot.safety import answer_given, terminal_stops_kept
+from roomba_bt.robot.safety import answer_given, terminal_stops_ignored, terminal_stops_kept
 from roomba_bt.runtime.summary import (
     DEFAULT_GRACE,
     DEFAULT_TICK_LIMIT,
@@ -334,7 +334,11 @@ def run_command(args: argparse.Namespace) -> int:
     if isinstance(claimed, int):
         return claimed
     try:
-        return _claimed_run(args, *checked, claimed)
+        # from before the port opens: a background job's first line to a ``stty tostop``
+        # terminal (the tree drawn before the run) stopped it (SIGTTOU) with its port open;
+        # the run ignores them on the wall clock, as its report does
+        with terminal_stops_ignored(not args.fast):
+            return _claimed_run(args, *checked, claimed)
     finally:
         if claimed is not None:
             claimed.release()  # a run that ended before its record began: the file as it was

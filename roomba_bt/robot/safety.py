@@ -52,6 +52,26 @@ TERMINAL_STOP_SIGNALS: tuple[int, ...] = tuple(
 )
 
 
+@contextlib.contextmanager
+def terminal_stops_ignored(ignore: bool = True) -> Iterator[None]:
+    """Within the block the terminal's stops (:data:`TERMINAL_STOP_SIGNALS`) are ignored (if
+    ``ignore``, and in the main thread: signal handlers are its), as a run on the wall clock
+    has them (:class:`InterruptGuard`): a run in a worker thread (``RunStack.ticks()``),
+    whose guard can set no handler, is watched so by the program's thread. A background job
+    of a ``stty tostop`` terminal whose loop body wrote a line was stopped whole (SIGTTOU),
+    the robot driving on with its last command."""
+    if not ignore or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    put_back = terminal_stops_kept()
+    for signum in TERMINAL_STOP_SIGNALS:
+        signal.signal(signum, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        put_back()
+
+
 def terminal_stops_kept() -> Callable[[], None]:
     """The terminal's stops (:data:`TERMINAL_STOP_SIGNALS`) as they are now, and a call that
     puts them back: a run's handlers are given back before its report (a signal then is the

@@ -14,8 +14,10 @@ written, before the exception goes on), Ctrl-C while the loop waits for a tick (
 then :class:`~roomba_bt.runtime.loop.Interrupted` is raised with the summary), and
 ``stack.close()`` (a ``with`` block's end). On a link on the wall clock (a robot) the robot
 drives on while the loop's body runs, as while a behaviour blocks: the run's tick guard
-watches the body as it watches a tick (drive 0 past ``tick_limit``), and SIGTERM raises
-:class:`~roomba_bt.robot.safety.Terminated` in the loop while it runs.
+watches the body as it watches a tick (drive 0 past ``tick_limit``), SIGTERM raises
+:class:`~roomba_bt.robot.safety.Terminated` in the loop while it runs, and the terminal's
+stops are ignored, as ``run()`` has them (a background job's line to a ``stty tostop``
+terminal stopped the process, SIGTTOU, the robot driving on).
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from roomba_bt.robot.interface import Snapshot
-from roomba_bt.robot.safety import interrupt_reason, sigterm_raises
+from roomba_bt.robot.safety import interrupt_reason, sigterm_raises, terminal_stops_ignored
 from roomba_bt.runtime.loop import (
     MissionRunner,
     TickObserver,
@@ -151,7 +153,9 @@ def ticks(stack: RunStack) -> Generator[Tick, None, None]:
     )
     interrupt: KeyboardInterrupt | None = None
     ended: _Ended | None = None
-    with sigterm_raises():
+    # the run's own guard is the worker's, which can set no handler: the terminal's stops are
+    # ignored here, as run() has them on the wall clock
+    with sigterm_raises(), terminal_stops_ignored(stack.runner.on_wall_clock):
         worker.start()
         try:
             first = True

@@ -73,9 +73,14 @@ tree:
 def _in_the_background(tmp_path: Path, *args: str, tostop: bool, foreground: bool = False) -> str:
     """``roomba-bt ARGS`` (``circle.yaml`` written first) as a background job of a terminal
     (or its foreground job): how it ended; the terminal's screen in ``screen.out``."""
-    (tmp_path / "circle.yaml").write_text(CIRCLE)
     command = [sys.executable, "-m", "roomba_bt.cli", *args]
-    how = "foreground" if foreground else "tostop" if tostop else "-"
+    return _job(tmp_path, command, "foreground" if foreground else "tostop" if tostop else "-")
+
+
+def _job(tmp_path: Path, command: list[str], how: str) -> str:
+    """``command`` (``circle.yaml`` written first) as a job of a terminal, ``how`` the
+    leader's (:data:`LEADER`): how it ended; the terminal's screen in ``screen.out``."""
+    (tmp_path / "circle.yaml").write_text(CIRCLE)
     done = subprocess.run(
         [sys.executable, "-c", LEADER, how, *command],
         capture_output=True, text=True, timeout=90, cwd=tmp_path,
@@ -117,6 +122,65 @@ def test_a_run_in_the_background_writing_to_a_tostop_terminal_is_not_stopped(
         tostop=True,
     )  # fmt: skip
     assert ended == "exit 1", ended  # the timeout, after its safe stop
+
+
+@pytest.mark.parametrize(
+    ("args", "code"),
+    [((), "exit 1"), (("--port", "ttyUSB9", "--display", "none"), "exit 3")],
+    ids=["its-tree-first", "no-connection"],
+)
+def test_a_run_in_the_background_of_a_tostop_terminal_writes_before_its_run_too(
+    tmp_path: Path, args: tuple[str, ...], code: str
+) -> None:
+    """The run ignored the terminal's stops only from its run's start: its first write
+    before (the tree drawn before the run, ``--display auto`` and ``tree``; a port that
+    did not open, exit 3) stopped the job (SIGTTOU), the port open and a script waiting
+    for an exit that never came. Ignored from before the port is opened now."""
+    ended = _in_the_background(
+        tmp_path, "run", "circle.yaml", "--timeout", "1s", *args, tostop=True
+    )  # fmt: skip
+    assert ended == code, ended
+    screen = (tmp_path / "screen.out").read_bytes()
+    if not args:
+        assert b"drive(velocity=100 mm/s, radius=200 mm left)" in screen, screen
+    else:
+        assert b"outcome      NO CONNECTION" in screen, screen
+
+
+#: a program's run tick by tick on the real-time simulator, the robot driving its circle
+#: from the second tick on; the loop's body writes a line to the terminal at tick 30 (the
+#: program's own write after the run, the robot stopped, is the terminal's to stop)
+TICKS_PROGRAM = """
+import sys
+import roomba_bt
+mission = roomba_bt.load_mission_text(open("circle.yaml").read())
+simulator = roomba_bt.Simulator(
+    roomba_bt.load_world("empty-room"), roomba_bt.CREATE2, seed=0, trace=False
+)
+stack = roomba_bt.RunStack(mission, roomba_bt.RealtimeSimLink(simulator),
+                           profile=roomba_bt.CREATE2, timeout_s=1.0)
+with stack:
+    for tick in stack.ticks():
+        if tick.number == 30:
+            print("driving at tick 30:", stack.connection.writer.last_wheels, file=sys.stderr)
+with open("outcome.txt", "w") as kept:  # the robot stopped: a line here may stop the job
+    print("outcome", stack.summary.outcome.value, file=kept)
+"""
+
+
+def test_a_programs_loop_over_ticks_in_the_background_is_not_stopped_by_its_writes(
+    tmp_path: Path,
+) -> None:
+    """``for tick in stack.ticks():`` runs the run in a worker thread, and the run's signal
+    guard, which ignores the terminal's stops on the wall clock, does nothing outside the
+    main thread: the loop body's line to a ``tostop`` terminal stopped the whole process
+    (SIGTTOU) with the robot driving its circle, the simulator stopped with it here but a
+    robot driving on. The loop keeps them ignored as ``run()`` does."""
+    ended = _job(tmp_path, [sys.executable, "-c", TICKS_PROGRAM], "tostop")
+    assert ended == "exit 0", ended
+    screen = (tmp_path / "screen.out").read_bytes()
+    assert b"driving at tick 30: Command(drive, [137, 0, 100, 0, 200])" in screen, screen
+    assert (tmp_path / "outcome.txt").read_text() == "outcome timeout\n"
 
 
 @pytest.mark.extra("monitor")
