@@ -420,9 +420,7 @@ class RunFeed:
         self._layout: FrameLayout | None = None
         self._mode: object = None
         self._refused_seen = 0
-        self._tick_halts_seen = 0
-        self._tick_stills_seen = 0
-        self._tick_cycles_seen = 0
+        self._guard_seen, self._guard_counts = 0, (0, 0, 0)  # tick_guard_said's
         self._unnamed: frozenset[int] = frozenset()
 
     # ---------------------------------------------------------------- tree
@@ -465,12 +463,8 @@ class RunFeed:
             self._mode = snapshot.mode
         if summary.refused_commands != self._refused_seen:
             self._refused(runner, snapshot)
-        if summary.tick_halts != self._tick_halts_seen:
-            self._tick_halted(summary, snapshot)
-        if summary.tick_stills != self._tick_stills_seen:
-            self._tick_still(summary, snapshot)
-        if summary.tick_cycles != self._tick_cycles_seen:
-            self._tick_in_cycle(summary, snapshot)
+        if summary.tick_halts + summary.tick_stills + summary.tick_cycles != self._guard_seen:
+            self._tick_guard_saw(summary, snapshot)
         self._watch_board(runner.blackboard or run_board())
         if not ticked and self.thin_pauses and snapshot is not None:
             if self._thins(snapshot.tick, changed or mode_changed or self._motion.seen(snapshot)):
@@ -632,37 +626,14 @@ class RunFeed:
         more = f" (+{count - 1} more)" if count > 1 else ""
         self.event("refused", f"{last}{more}", snapshot.time if snapshot else 0.0)
 
-    def _tick_halted(self, summary: RunSummary, snapshot: Snapshot | None) -> None:
-        self._tick_halts_seen = summary.tick_halts
-        self.event(
-            "note",
-            f"tick guard: drive 0 while a tick ran over its limit, in "
-            f"{summary.tick_halt_last} ({summary.tick_halts} so far)",
-            snapshot.time if snapshot is not None else None,
-        )
-
-    def _tick_still(self, summary: RunSummary, snapshot: Snapshot | None) -> None:
-        """A tick past the guard's limit with nothing moving: an event as a halt's is (it was a
-        log warning only, and only when the gap it left came out a second or more)."""
-        self._tick_stills_seen = summary.tick_stills
-        self.event(
-            "note",
-            f"tick guard: a tick ran over its limit with nothing moving, in "
-            f"{summary.tick_still_last} (nothing to stop; {summary.tick_stills} so far)",
-            snapshot.time if snapshot is not None else None,
-        )
-
-    def _tick_in_cycle(self, summary: RunSummary, snapshot: Snapshot | None) -> None:
-        """A tick past the guard's limit while a built-in cycle could drive the robot: an
-        event as a halt's is, saying the cycle went on (the guard ends none)."""
-        self._tick_cycles_seen = summary.tick_cycles
-        self.event(
-            "note",
-            f"tick guard: a tick ran over its limit while a built-in cycle could drive the "
-            f"robot, in {summary.tick_cycle_last} (the cycle went on: the guard ends none; "
-            f"{summary.tick_cycles} so far)",
-            snapshot.time if snapshot is not None else None,
-        )
+    def _tick_guard_saw(self, summary: RunSummary, snapshot: Snapshot | None) -> None:
+        """Its events since the feed last looked (:func:`tick_guard_said`), at the tick's time;
+        their sum is what ``observe`` compares a tick (one compare where it had three)."""
+        time = snapshot.time if snapshot is not None else None
+        for text in tick_guard_said(summary, self._guard_counts):
+            self.event("note", f"tick guard: {text}", time)
+        self._guard_counts = (summary.tick_halts, summary.tick_stills, summary.tick_cycles)
+        self._guard_seen = sum(self._guard_counts)
 
     # ---------------------------------------------------------------- any thread
     def end(self, finished: str, ending: Ending | None, no_end: str | None = None) -> None:
@@ -770,6 +741,32 @@ class RunFeed:
 #: itself (its own words, without the logger's prefix), said in the terminal's log too; the
 #: :class:`EventLogHandler` leaves it out, or the page's log showed it twice
 IN_THE_EVENT_LOG = {"in_the_event_log": True}
+
+
+def tick_guard_said(summary: RunSummary, seen: tuple[int, int, int]) -> list[str]:
+    """The tick guard's events since ``seen`` (its halts, still ticks and ticks in a cycle as
+    the feed last counted them): a halt, and a tick past the limit in which it sent nothing,
+    with nothing moving or while a built-in cycle could drive the robot (the guard ends
+    none), as a halt is (those were a log warning only, and only when the gap they left came
+    out a second or more); each with where the last was and how many so far."""
+    said = []
+    if summary.tick_halts != seen[0]:
+        said.append(
+            f"drive 0 while a tick ran over its limit, in {summary.tick_halt_last} "
+            f"({summary.tick_halts} so far)"
+        )
+    if summary.tick_stills != seen[1]:
+        said.append(
+            f"a tick ran over its limit with nothing moving, in {summary.tick_still_last} "
+            f"(nothing to stop; {summary.tick_stills} so far)"
+        )
+    if summary.tick_cycles != seen[2]:
+        said.append(
+            f"a tick ran over its limit while a built-in cycle could drive the robot, in "
+            f"{summary.tick_cycle_last} (the cycle went on: the guard ends none; "
+            f"{summary.tick_cycles} so far)"
+        )
+    return said
 
 
 class EventLogHandler(logging.Handler):

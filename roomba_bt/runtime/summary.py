@@ -286,16 +286,14 @@ class RunSummary:
     tick_halts_motors: int = 0
     tick_halt_first: str = ""
     tick_halt_last: str = ""
-    #: ticks that ran over ``--tick-limit`` with nothing moving (the robot at rest, no
-    #: built-in cycle: the guard had nothing to stop, and sent nothing); where the first and
-    #: the last were. A log warning only before (the gap they left, when it came out a
-    #: second or more), so a run whose plugin blocked each start showed no sign of it here
+    #: ticks that ran over ``--tick-limit`` in which the guard sent nothing, with where the
+    #: first and the last of each kind were: with nothing moving (``tick_still*``: the robot
+    #: at rest, nothing to stop; a log warning only before, when its gap came out a second
+    #: or more), or while a built-in cycle (Clean, Spot, Seek Dock) may have driven the
+    #: robot in Passive (``tick_cycle*``: the guard ends no cycle; it went on driving)
     tick_stills: int = 0
     tick_still_first: str = ""
     tick_still_last: str = ""
-    #: ticks that ran over ``--tick-limit`` while a built-in cycle (Clean, Spot, Seek Dock)
-    #: may have driven the robot in Passive: the guard ends no cycle, so it sent nothing and
-    #: the cycle went on driving; where the first and the last were
     tick_cycles: int = 0
     tick_cycle_first: str = ""
     tick_cycle_last: str = ""

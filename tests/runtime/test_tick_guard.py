@@ -582,7 +582,6 @@ def test_the_gap_a_tick_blocked_while_a_cycle_drove_leaves_is_said_as_such(
     plugin_dir: Path,
     still_gate: threading.Event,
     caplog: pytest.LogCaptureFixture,
-    tmp_path: Path,
 ) -> None:
     """A tick that blocks while a built-in cycle (Clean) may be driving the robot in Passive:
     the guard ends no cycle, and sends nothing, but the gap is that tick's: said naming the
@@ -592,7 +591,7 @@ def test_the_gap_a_tick_blocked_while_a_cycle_drove_leaves_is_said_as_such(
     gap the same way, writing the recorded bytes."""
     from roomba_bt.runtime.tick_guard import CYCLE_NOTE
 
-    record_path = tmp_path / "run.rec"
+    record_path = plugin_dir / "run.rec"  # the test's folder
     run = run_mission(CYCLE_MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True),
                       timeout=20.0, record=record_path)  # fmt: skip
     summary = run.summary
