@@ -346,8 +346,9 @@ class MonitorSession:
         if noted:
             _note(runner, {"pause": why, "at": at})
         # a step's own pause, or one that ended it first (a breakpoint on its tick, a reload
-        # in it): the operator's act was the step, counted so (a breakpoint's was a pause)
-        ends_step = self._steps_left is not None and why != BY_OPERATOR
+        # in it): the operator's act was the step, counted so (a breakpoint's was a pause);
+        # the operator's own pause pressed during a step is both: the step, and the pause
+        in_step = self._steps_left is not None
         self._steps_left = None
         connection = runner.connection
         mode = connection.mode
@@ -362,9 +363,9 @@ class MonitorSession:
         self.state.paused_tick = runner.snapshot.tick if runner.has_snapshot else 0
         if noted:  # a reload's pause lasts no frame: not one the summary counts
             summary = runner.summary
-            if ends_step:
+            if in_step:
                 summary.steps += 1
-            else:
+            if not in_step or why == BY_OPERATOR:
                 summary.pauses += 1
         runner.clock_held = True  # mission time stands still until the resume
         runner.wall_limit.hold(True)  # and --wall-limit's count: a pause is no stuck tick

@@ -485,6 +485,36 @@ def test_a_step_whose_tick_hits_a_breakpoint_is_counted_as_a_step_live_and_repla
     assert (replayed.pauses, replayed.steps) == (1, len(pressed)), replayed.paused_text()
 
 
+def test_a_pause_pressed_during_a_step_counts_the_step_and_the_pause_live_and_replayed(
+    tmp_path: Path, until: Callable[..., None]
+) -> None:
+    """Pause pressed while a step is under way (before its own pause came): the summary
+    counted one more pause and no step, as if the operator had never stepped. Both are
+    counted: one pause, one step, then the pause pressed in it; the replay counts alike."""
+    record_path = tmp_path / "stepped.jsonl"
+    rig = Rig(record=record_path)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 50)
+        rig.session.request("pause")
+        until(lambda: rig.session.state.paused)
+        rig.session.request("step")
+        rig.session.request("pause")  # queued behind it: applied before the step's pause
+        until(lambda: sum(e.text.startswith("pause (") for e in rig.feed.events) == 2)
+        rig.session.request("stop")
+
+    summary = rig.run_with(operator)
+    rig.stack.close()
+    pauses = [e.text for e in rig.feed.events if e.text.startswith("pause (")]
+    assert [p.split(":")[0] for p in pauses] == ["pause (paused by the operator)"] * 2, pauses
+    assert (summary.pauses, summary.steps) == (2, 1), summary.paused_text()
+    _, replayed = replay_into_feed(
+        load_record(record_path), load_mission(SHUTTLE, {}, profile=CREATE2), CREATE2,
+        rig.packets, 115200, "x",
+    )  # fmt: skip
+    assert (replayed.pauses, replayed.steps) == (2, 1), replayed.paused_text()
+
+
 def test_a_breakpoint_on_the_last_tick_holds_the_ended_mission_until_the_resume(
     tmp_path: Path, until: Callable[..., None]
 ) -> None:
