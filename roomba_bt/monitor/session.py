@@ -266,6 +266,28 @@ class MonitorSession:
             return False
         return True
 
+    def between_frames(self, runner: MissionRunner) -> None:
+        """The run's last read brought no frame (a stall the watchdog rides through, up to
+        ``--grace``): a Stop queued acts now (the run ends as on Ctrl-C, its safe stop
+        written), as the program's ``request_stop`` does; it waited for the next frame, and
+        the robot's stop with it. The requests queued before it are not done: a pause, a
+        step, a force act in a frame (where the record's replay does them), and the run's
+        end stops the robot anyway."""
+        with self._lock:
+            if "stop" not in self._queued:
+                return
+            while self._stop is None:  # up to the stop (queued: never empty before it)
+                req = self._requests.get_nowait()
+                if req.action in _CONTROLS:
+                    self._queued.pop(0)
+                if req.action == "stop":
+                    self._asker = req.by
+                    try:
+                        self._apply_one(runner, req)
+                    finally:
+                        self._asker = None
+            raise StopRequested(self._stop, at="after")
+
     def _tally_pause(self, runner: MissionRunner) -> None:
         """The summary's ``paused``: the pauses' stream time so far, this one's included (a
         run stopped while paused ends here), in the stream's ticks: what a replay counts too."""

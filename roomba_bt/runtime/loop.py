@@ -279,6 +279,20 @@ class InnerGate:
     def holds(self, runner: MissionRunner) -> bool:
         return self.inner is not None and self.inner.holds(runner)
 
+    def between_frames(self, runner: MissionRunner) -> None:
+        between_frames(self.inner, runner)
+
+
+def between_frames(gate: TickGate | None, runner: MissionRunner) -> None:
+    """A read brought no frame (a stall the watchdog rides through, up to ``--grace``): the
+    gate's ``between_frames``, where it has one, may end the run now (raise
+    :class:`StopRequested`, ``at="after"``): the program's :meth:`MissionRunner.request_stop`,
+    and the monitor's Stop, which waited for the next frame, the robot's stop with it. Not a
+    part of :class:`TickGate`: a gate that has nothing to do between frames needs none."""
+    waiting = getattr(gate, "between_frames", None)
+    if waiting is not None:
+        waiting(runner)
+
 
 class _StopGate(InnerGate):
     """What :meth:`MissionRunner.request_stop` puts before the run's gate: the next frame
@@ -291,6 +305,9 @@ class _StopGate(InnerGate):
 
     def before_tick(self, runner: MissionRunner) -> bool:
         raise StopRequested(self.reason)
+
+    def between_frames(self, runner: MissionRunner) -> None:
+        raise StopRequested(self.reason, at="after")  # no frame: the stop goes on anyway
 
 
 class MissionRunner(BaseHandle):
@@ -525,8 +542,8 @@ class MissionRunner(BaseHandle):
                 if not batch:
                     if writer.silenced_by is not None:  # sent past the tick (a thread's)
                         return silenced(root, summary, writer.silenced_by)
-                    if isinstance(self.gate, _StopGate):  # no frame: the stop goes on anyway
-                        raise StopRequested(self.gate.reason, at="after")
+                    if self.gate is not None:  # a stop asked for acts without a frame
+                        between_frames(self.gate, self)
                     if self.input_ended is not None and (why := self.input_ended()):
                         summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
                         return

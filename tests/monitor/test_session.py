@@ -83,6 +83,9 @@ class PacedGate:
     def holds(self, runner: MissionRunner) -> bool:
         return self.session.holds(runner)
 
+    def between_frames(self, runner: MissionRunner) -> None:
+        self.session.between_frames(runner)
+
 
 class Rig:
     """A shuttle run on the virtual clock with the monitor's session as its gate."""
@@ -1151,6 +1154,39 @@ def test_a_stall_ridden_through_during_a_pause_says_the_run_stays_paused(
     rig.run_with(lambda rig: until(lambda: rig.runner.summary.stalls_ridden == 1))
     [back] = [r.getMessage() for r in caplog.records if "are back" in r.getMessage()]
     assert back.endswith("; the mission goes on"), back
+
+
+def test_a_stop_pressed_during_a_stall_ends_the_run_without_waiting_for_a_frame() -> None:
+    """Stop pressed while the watchdog rides a stall through: the run waited for the next
+    frame (up to ``--grace``) before it ended, the robot's stop waiting with it, while the
+    program's ``request_stop`` acts on an empty read. The operator's stop acts on the next
+    read too, frame or not. (The stop is asked on the run's own thread, as the watchdog
+    trips, so that on the virtual clock the gap is not over before the operator's thread
+    gets a turn.)"""
+    rig = Rig(faults=Faults(stream_gap_at=2.0, stream_gap_s=1.5))
+    asked: list[float] = []
+
+    class StopAtTheTrip(logging.Handler):
+        def emit(self, record: logging.LogRecord) -> None:
+            if "waiting up to" in record.getMessage():  # the watchdog's trip, said
+                asked.append(rig.connection.transport.now())
+                rig.session.request("stop", by="the test")
+
+    logger, handler = logging.getLogger("roomba_bt.runtime.loop"), StopAtTheTrip()
+    logger.addHandler(handler)
+    try:
+        summary = rig.run_with(lambda rig: None, ended=True)
+    finally:
+        logger.removeHandler(handler)
+    ended = rig.connection.transport.now()
+    rig.stack.close()
+    assert len(asked) == 1 and asked[0] < 3.5  # in the gap (2.0 s to 3.5 s of stream)
+    assert summary.outcome is Outcome.INTERRUPTED, summary.reason
+    assert summary.reason == "stopped by the operator"
+    assert summary.stalls == 1 and summary.stalls_ridden == 0  # ended before frames came back
+    assert ended - asked[0] < 0.2, (asked, ended)  # a read or two: not the 1.5 s to a frame
+    [stop] = [e.text for e in rig.feed.events if e.text.startswith("stop:")]
+    assert stop == "stop: the run ends (as on Ctrl-C); from the test"
 
 
 @pytest.mark.parametrize("lost", ["asleep", "port gone"])
