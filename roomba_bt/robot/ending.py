@@ -153,10 +153,21 @@ SEEN_STOPPED = (
     "last seen stopped in Passive, in the frames it sent after every command written (it stays "
     "stopped unless something else moves it: its buttons, a schedule)"
 )
+#: The same of a robot whose stream carries no OI mode (packet 35: a program's own packet
+#: list), its frames sent after every command written showing the wheel speeds it was last
+#: asked for at 0 (packet 39, Drive's; 41/42, Drive Direct's), the run having written Passive
+SEEN_STOPPED_UNMODED = (
+    "last seen stopped, its requested wheel speeds at 0 in the frames it sent after every "
+    "command written (the stream carries no OI mode, packet 35: Passive was written, not "
+    "seen; it stays stopped unless something else moves it: its buttons, a schedule)"
+)
 
 #: Requested wheel velocities (left, right) and the encoders (left, right): what a stop the
 #: robot streams on after says of its wheels.
 _LEFT_VELOCITY, _RIGHT_VELOCITY = packet_ids("requested_left_velocity", "requested_right_velocity")
+#: the requested velocity of a Drive (39): with 41/42, what a frame shows of the wheel speeds
+#: the robot was last asked for (:func:`seen_stopped`)
+(_VELOCITY,) = packet_ids("requested_velocity")
 _ENCODERS = packet_ids("left_encoder_counts", "right_encoder_counts")
 
 #: What a stop may meet and must survive.
@@ -484,10 +495,10 @@ class SafeStop:
         self.confirm: Callable[[], bool] | None = None
         self.closed = False
         #: the mode, the last wheel command and what stopped the wheels before the stop was
-        #: written, and whether its frames showed it stopped (:func:`seen_stopped`): what is
-        #: said of a stop that did not arrive
-        self._before: tuple[OIMode, Command | None, str, bool] = (
-            writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by, False
+        #: written, and what its frames showed of it stopped ("" for nothing:
+        #: :func:`seen_stopped`): what is said of a stop that did not arrive
+        self._before: tuple[OIMode, Command | None, str, str] = (
+            writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by, ""
         )  # fmt: skip
         #: the mode packet 35 read in frames that came after a stop (it was not heard)
         self._seen: OIMode | None = None
@@ -818,7 +829,7 @@ class SafeStop:
         heard = self.robot_heard
         idle = wheels is None and (not heard or mode is OIMode.PASSIVE)
         self.nothing_set_going = idle
-        still = still and self._seen is None  # no frame came after the stop to say more
+        still = still if self._seen is None else ""  # no frame came after the stop to say more
         level = logging.DEBUG if idle else logging.WARNING if still else logging.ERROR
         if not heard:  # nothing was ever seen of it
             report = why
@@ -858,43 +869,54 @@ class SafeStop:
         return stopped
 
 
-def seen_stopped(ending: SafeStop) -> bool:
-    """Whether the robot's last frame shows it stopped in Passive with nothing written since
-    that could set it going: the frame was sent after the robot heard the last command (past
-    :meth:`SafeStop.in_flight`), packet 35 reads Passive, no built-in cycle may drive, and
-    its wheels are still (the requested velocities at 0 where streamed, else the last wheel
-    command a drive 0, heard before it went to Passive). A run held paused (the pause's safe
-    stop: drive 0, motors off, Start, confirmed by seconds of frames) whose cable was then
-    pulled was said "may still be moving: pick it up". A robot never told to move is said
-    so (:meth:`SafeStop._undelivered`'s idle). Out of the class for its size."""
+def seen_stopped(ending: SafeStop) -> str:
+    """What the robot's last frame shows of it stopped with nothing written since that
+    could set it going ("" if nothing): the frame was sent after the robot heard the last
+    command (past :meth:`SafeStop.in_flight`), no built-in cycle may drive, and either
+    packet 35 reads Passive and its wheels are still (the requested velocities at 0 where
+    streamed, else the last wheel command a drive 0, heard before it went to Passive):
+    :data:`SEEN_STOPPED`; or, on a stream without packet 35, the run wrote Passive after a
+    drive 0 and the frame shows the requested wheel speeds it carries (39; 41/42) at 0:
+    :data:`SEEN_STOPPED_UNMODED`. A run held paused (the pause's safe stop: drive 0, motors
+    off, Start, confirmed by seconds of frames) whose cable was then pulled was said "may
+    still be moving: pick it up". A robot never told to move is said so
+    (:meth:`SafeStop._undelivered`'s idle). Out of the class for its size."""
     writer = ending.writer
     link = writer.link
     frame, wheels = link.frame, writer.last_wheels
-    if frame is None or wheels is None or OI_MODE_PACKET not in frame or writer.cycle_may_drive:
-        return False
+    if frame is None or wheels is None or writer.cycle_may_drive:
+        return ""
     if link.arrival <= writer.last_command_at + ending.in_flight(
         stream_period(link.stream_ids, writer.baud)
     ):
-        return False  # a command may have come after it: what it did is not seen
+        return ""  # a command may have come after it: what it did is not seen
+    if OI_MODE_PACKET not in frame:  # the wheels' speeds alone, where the frame shows them
+        shown = [pid for pid in (_VELOCITY, _LEFT_VELOCITY, _RIGHT_VELOCITY) if pid in frame]
+        wheels_shown = _VELOCITY in shown or len(shown) >= 2  # 39, or 41 and 42
+        stopped = describe_activity(wheels) == "stopped" and writer.modes.mode is OIMode.PASSIVE
+        still = wheels_shown and stopped and not any(frame[pid] for pid in shown)
+        return SEEN_STOPPED_UNMODED if still else ""
     if writer.modes.detector.interpret(frame[OI_MODE_PACKET]) is not OIMode.PASSIVE:
-        return False
+        return ""
     if _LEFT_VELOCITY in frame and _RIGHT_VELOCITY in frame:
-        return frame[_LEFT_VELOCITY] == frame[_RIGHT_VELOCITY] == 0
-    return describe_activity(wheels) == "stopped"
+        still = frame[_LEFT_VELOCITY] == frame[_RIGHT_VELOCITY] == 0
+    else:
+        still = describe_activity(wheels) == "stopped"
+    return SEEN_STOPPED if still else ""
 
 
 def last_seen_words(
-    mode: OIMode, wheels: tuple[Command | None, str], after_stop: bool, still: bool
+    mode: OIMode, wheels: tuple[Command | None, str], after_stop: bool, still: str
 ) -> str:
     """What a stop not delivered says the robot was last seen doing: in ``mode`` with
     ``wheels`` (the last wheel command and what stopped them: :func:`describe_activity`),
-    ``after_stop`` in frames that came after the stop, or ``still``, stopped in Passive as
-    its frames showed (:func:`seen_stopped`). A part of :meth:`SafeStop._undelivered`."""
+    ``after_stop`` in frames that came after the stop, or ``still``, what its frames showed
+    of it stopped (:func:`seen_stopped`). A part of :meth:`SafeStop._undelivered`."""
     activity = describe_activity(*wheels)
     if after_stop:
         return f"last seen in {mode.label} (the last wheel command written: {activity})"
     if still:  # the pause's stop, seen taken: nothing to pick up
-        return SEEN_STOPPED
+        return still
     return f"last seen in {mode.label} {activity}"
 
 

@@ -11,6 +11,7 @@ from typing import Any, TypeVar
 import pytest
 
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
@@ -148,6 +149,55 @@ def test_a_paused_robot_seen_stopped_in_passive_is_not_said_to_be_moving(
         "not delivered: the port is gone: reseat the cable, then roomba-bt doctor --port "
         "sim://box"
     )
+
+
+#: a stream without packet 35 (the OI mode), as a program's ``Connection.start`` may ask for
+UNMODED = (7, 9, 10, 11, 12, 43, 44)
+
+
+@pytest.mark.parametrize("velocities", [(39,), (41, 42), (39, 41, 42)], ids=str)
+def test_a_paused_robot_seen_stopped_without_its_mode_streamed_is_said_stopped(
+    velocities: tuple[int, ...], caplog: pytest.LogCaptureFixture
+) -> None:
+    """The cable pulled during a pause on a stream without packet 35: "the robot may still
+    be moving: pick it up", though its frames since the pause's stop showed its requested
+    wheel speeds at 0 (packet 39, Drive's velocity; 41/42, Drive Direct's). Said as known:
+    stopped; its mode not streamed (Passive written, not seen)."""
+    connection, link = paused((*UNMODED, *velocities))
+    frames_for(connection, 20)
+    assert stopped_pulled(connection, link, caplog) == ["WARNING"]
+    assert connection.stop_report == (
+        "last seen stopped, its requested wheel speeds at 0 in the frames it sent after every "
+        "command written (the stream carries no OI mode, packet 35: Passive was written, not "
+        "seen; it stays stopped unless something else moves it: its buttons, a schedule); the "
+        "stop was not delivered: the port is gone: reseat the cable, then roomba-bt doctor "
+        "--port sim://box"
+    )
+
+
+def test_a_robot_whose_frames_show_neither_its_mode_nor_its_wheels_may_still_be_moving() -> None:
+    """Without packet 35 the words come only where the frames show the wheels at 0: no
+    requested velocity streamed (the encoders alone, one frame kept), no frame since the
+    stop was heard, a requested wheel speed not 0."""
+    connection, link = paused(UNMODED)
+    frames_for(connection, 20)
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert "the robot may still be moving: pick it up" in str(connection.stop_report)
+    connection, link = paused((*UNMODED, 41, 42))
+    link.pulled = True  # no frame since the pause's stop
+    assert connection.safe_stop() is False
+    assert "the robot may still be moving: pick it up" in str(connection.stop_report)
+    connection, link = paused((*UNMODED, 39, 41, 42))
+    frames_for(connection, 20)
+    last = connection.link.frame
+    assert last is not None
+    values = list(last.values)  # its right wheel asked for 100 mm/s (its drive 0 not heard)
+    values[last.layout.index[41]] = 100
+    connection.link.frame = SensorFrame(last.layout, tuple(values))
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert "the robot may still be moving: pick it up" in str(connection.stop_report)
 
 
 def test_a_pause_not_yet_seen_taken_is_still_said_to_be_maybe_moving() -> None:
