@@ -527,6 +527,10 @@ class SafeStop:
         #: the last stop not known delivered met a robot this session set nothing going
         #: for: none answered, or one seen only in Passive, its wheels never commanded
         self.nothing_set_going = False
+        #: why the robot is taken for asleep (:func:`fell_asleep`), while :attr:`unheard`
+        self.asleep_said: str | None = None
+        #: the last stop not known delivered met a robot asleep, seen stopped before it slept
+        self.asleep_stopped = False
         #: the stop being said undelivered found the port gone (:meth:`_port_gone`)
         self._gone = False
         #: the stop answered only at another rate (``baud_hunt.found_words``), or ""; the
@@ -606,7 +610,7 @@ class SafeStop:
             failed = self._port_gone()
         if failed is not None:
             return self._undelivered(failed)
-        if unconfirmed is not None and unconfirmed is self.unheard and self._confirmed():
+        if unconfirmed is not None and unconfirmed is self.unheard and confirmed_by(self.confirm):
             self.unheard = unconfirmed = None  # it answered after the stop: it heard it
         elif unconfirmed is None:  # a quiet after the stop that began before it
             unconfirmed = self._unproven
@@ -777,11 +781,6 @@ class SafeStop:
             "after it"
         )
 
-    def _confirmed(self) -> bool:
-        """Whether :attr:`confirm` says the robot heard the stop (False if there is none, or
-        asking failed)."""
-        return confirmed_by(self.confirm)
-
     @property
     def robot_heard(self) -> bool:
         """Whether a robot ever answered: a valid stream frame, or a reply (the start-up's
@@ -830,6 +829,8 @@ class SafeStop:
         idle = wheels is None and (not heard or mode is OIMode.PASSIVE)
         self.nothing_set_going = idle
         still = still if self._seen is None else ""  # no frame came after the stop to say more
+        asleep = self.unheard is not None and self.unheard is self.asleep_said
+        self.asleep_stopped = heard and bool(still) and asleep
         level = logging.DEBUG if idle else logging.WARNING if still else logging.ERROR
         if not heard:  # nothing was ever seen of it
             report = why
@@ -867,6 +868,15 @@ class SafeStop:
         if self.safe_stopped is None:
             self.safe_stopped = stopped
         return stopped
+
+
+def fell_asleep(ending: SafeStop, why: str) -> None:
+    """The robot is taken for asleep (5 minutes in Passive with nothing from us, its stream
+    stopped: ``silence.asleep_by_idle``), ``why`` saying so: a stop written now is unheard
+    (:attr:`SafeStop.unheard`), and one seen stopped before it slept is said asleep and
+    stopped (:attr:`SafeStop.asleep_stopped`: a robot asleep does not move; the summary's
+    "NOT DELIVERED" in capitals is for one that may). Out of the class for its size."""
+    ending.unheard = ending.asleep_said = why
 
 
 def seen_stopped(ending: SafeStop) -> str:

@@ -38,7 +38,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.stream import stream_period
 from roomba_bt.robot import wording
 from roomba_bt.robot.discovery import OI_RATES, search, wake_pulse
-from roomba_bt.robot.ending import signals_deferred
+from roomba_bt.robot.ending import fell_asleep, signals_deferred
 from roomba_bt.robot.errors import (
     BaudChanged,
     ConnectionFailed,
@@ -108,9 +108,10 @@ def asleep_by_idle(connection: Connection) -> RobotAsleep | None:
     idle = connection.transport.now() - idle_since(connection)
     if idle < SLEEP_AFTER_S:
         return None
-    connection.unheard = (
+    fell_asleep(
+        connection.ending,
         f"the robot was asleep ({idle:.0f} s in Passive with nothing from us; asleep, it hears "
-        "nothing until a BRC pulse)"
+        "nothing until a BRC pulse)",
     )
     return RobotAsleep(
         connection.name, idle, keep_awake=connection.keep_awake, pulses=_pulses(connection),

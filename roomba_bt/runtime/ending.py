@@ -36,7 +36,7 @@ from roomba_bt.robot.hazards import sets_going
 from roomba_bt.robot.interface import Odometer, Outbox, Snapshot
 from roomba_bt.robot.safety import SAFE_STOP_UNDER_WAY, InterruptGuard
 from roomba_bt.runtime.long_run import RobotCycleWatch
-from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.runtime.summary import ASLEEP_STOPPED, RunSummary
 from roomba_bt.runtime.teardown import (
     behaviour_at,
     behaviour_in,
@@ -551,10 +551,18 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
         # that never left Passive nor had a wheel command read as an alarm to a hobbyist
         reset = getattr(getattr(connection, "ending", None), "reset_seen", False)
         # nor one whose reset was read: its OI is Off, its wheels stopped, whatever the stop did
-        said = "nothing this run set going; " if calm else "" if reset else "NOT DELIVERED: "
+        asleep = getattr(getattr(connection, "ending", None), "asleep_stopped", False)
+        # nor one seen stopped that then fell asleep (a long pause): asleep, it does not move
+        said = (
+            "nothing this run set going; " if calm
+            else "" if reset
+            else f"{ASLEEP_STOPPED}; " if asleep
+            else "NOT DELIVERED: "
+        )  # fmt: skip
         summary.safe_stop = said + (report or "the stop sequence could not be written")
         summary.stop_delivered = False
         summary.set_nothing_going = calm
+        summary.asleep_stopped = asleep
         note_undelivered_stop(summary)
     except KeyboardInterrupt:
         summary.safe_stop = "interrupted during the safe stop"

@@ -27,6 +27,11 @@ if TYPE_CHECKING:
 #: Seconds a run waits, after the watchdog stopped the wheels, for valid frames to come back
 #: before it ends as a lost connection, exit 8 (``run --grace``).
 DEFAULT_GRACE = 2.0
+#: The summary's ``safe stop`` first words for a stop written to a robot asleep whose frames
+#: had shown it stopped before it slept (a long pause on a link without keep-awake): it does
+#: not move, and "NOT DELIVERED:" in capitals is kept for a robot that may (decided, session
+#: 39; the exit code is the lost connection's all the same: the run ended on the sleep)
+ASLEEP_STOPPED = "asleep and stopped"
 
 #: ``run --tick-limit`` default, seconds (runtime/tick_guard.py): 17 stream slots; at
 #: 500 mm/s, 12.5 cm driven blind
@@ -351,6 +356,10 @@ class RunSummary:
     #: the stop not known delivered met a robot the run set nothing going for (none
     #: answered, or one seen only in Passive with its wheels never commanded)
     set_nothing_going: bool = False
+    #: the stop not known delivered was written to a robot asleep, its frames having shown it
+    #: stopped before it slept (a long pause on a link without keep-awake): said
+    #: :data:`ASLEEP_STOPPED`, not ``NOT DELIVERED``
+    asleep_stopped: bool = False
     max_tick_s: float = 0.0
     #: where the slowest tick was, when a watch could tell (runtime/tick_watch.py: ``run``'s,
     #: on either clock): ``sleepy (Sleepy.update at x.py:98)``; "" otherwise
@@ -531,6 +540,8 @@ class RunSummary:
             return "unknown: no robot answered"
         if not self.stop_delivered and self.set_nothing_going:
             return f"unknown: last seen in {mode}, the run set nothing going, the stop unconfirmed"
+        if not self.stop_delivered and self.asleep_stopped:
+            return f"unknown: asleep, last seen stopped in {mode}; the stop unconfirmed"
         if not self.stop_delivered:
             return f"unknown: last seen in {mode}, the stop was not delivered"
         return mode

@@ -1102,9 +1102,10 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
     until: Callable[..., None], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """A pause on a link without keep-awake, the robot asleep after its minutes in Passive
-    (here 3 s): the run ends, connection lost (exit 3), and its summary said the stop was
+    (here 3 s): the run ends, connection lost (exit 8), and its summary said the stop was
     unconfirmed because "the robot had sent no valid frame for 0.51 s before it", as if the
-    line had failed. It says what is known: the stop was written to a robot asleep."""
+    line had failed. It says what is known: the stop was written to a robot asleep, seen
+    stopped before it slept (until session 39 under "NOT DELIVERED:", in capitals)."""
     monkeypatch.setattr(silence, "SLEEP_AFTER_S", 3.0)
     monkeypatch.setattr(sim_robot, "PASSIVE_SLEEP_SECONDS", 3.0)
     rig = Rig(keep_awake=False)
@@ -1118,11 +1119,17 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
     assert rig.sim.asleep
     assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 8
     assert "the robot fell asleep" in summary.reason
+    # the pause's stop, confirmed by its frames, then sleep: stopped, and not said in the
+    # capitals of a stop that failed to reach a robot that may be moving ("NOT DELIVERED:")
     assert summary.safe_stop.startswith(
-        "NOT DELIVERED: last seen stopped in Passive, in the frames it sent after every command "
-    )  # the pause's stop, confirmed: it said "last seen in Passive stopped"
+        "asleep and stopped; last seen stopped in Passive, in the frames it sent after every "
+        "command written"
+    ), summary.safe_stop
     assert "the stop was written but is unconfirmed: the robot was asleep" in summary.safe_stop
     assert "no valid frame" not in summary.safe_stop
+    assert summary.final_mode_text() == (
+        "unknown: asleep, last seen stopped in Passive; the stop unconfirmed"
+    )
 
 
 def test_a_stall_ridden_through_during_a_pause_says_the_run_stays_paused(
