@@ -294,6 +294,18 @@ def between_frames(gate: TickGate | None, runner: MissionRunner) -> None:
         waiting(runner)
 
 
+def stop_between_frames(runner: MissionRunner) -> None:
+    """:func:`between_frames` for the run's loop: a stop it raises notes the bytes written
+    by then, the stall's drive 0 among them, for the record's end note, where a replay ends
+    once it has written as much (``stack.RecordedEnd.between_frames``). Out of
+    :class:`MissionRunner` for its size."""
+    try:
+        between_frames(runner.gate, runner)
+    except StopRequested:
+        runner.summary.written_when_interrupted = runner.connection.link.bytes_written
+        raise
+
+
 class _StopGate(InnerGate):
     """What :meth:`MissionRunner.request_stop` puts before the run's gate: the next frame
     ends the run with :class:`StopRequested` (the monitor's stop, from any thread). A gate,
@@ -543,7 +555,7 @@ class MissionRunner(BaseHandle):
                     if writer.silenced_by is not None:  # sent past the tick (a thread's)
                         return silenced(root, summary, writer.silenced_by)
                     if self.gate is not None:  # a stop asked for acts without a frame
-                        between_frames(self.gate, self)
+                        stop_between_frames(self)
                     if self.input_ended is not None and (why := self.input_ended()):
                         summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
                         return
@@ -589,8 +601,8 @@ class MissionRunner(BaseHandle):
         except (KeyboardInterrupt, RunAborted) as exc:  # Ctrl-C, SIGTERM, --wall-limit...:
             if not behaviours_interrupt(exc):  # in which half of its frame (a behaviour's own
                 summary.ended_at = interrupted_at(self, flushed)  # interrupt: its error)
-                summary.written_when_interrupted = self._link.bytes_written  # a flush cut short?
                 if summary.ended_at is not None and summary.ended_at[1] == "before":
+                    summary.written_when_interrupted = self._link.bytes_written  # a flush cut?
                     summary.cut_short = cut_short(exc, perf() - started)
             raise
 

@@ -801,11 +801,12 @@ def end_note(
     """The record's end note: how its run ended, and where (``ended_at``: the tick and
     half, ``RunSummary.ended_at``; None: before the first frame). ``written``: for an
     interrupt "before" the tick was written whole, the bytes of the record's "out" side
-    written by then (:data:`WRITTEN`)."""
+    written by then (:data:`WRITTEN`); "after" it, those too (a stop between frames, in a
+    stall: the watchdog's drive 0 among them, which the replay writes before it ends)."""
     note: dict[str, Any] = {ENDED: outcome, "reason": reason, "time": round(mission_time, 3)}
     if ended_at is not None:
         note["tick"], note["at"] = ended_at
-        if written is not None and ended_at[1] == "before":
+        if written is not None:
             note[WRITTEN] = written
     return note
 

@@ -539,6 +539,9 @@ class RecordedEnd(InnerGate):
         self.transport = transport
         #: whether the replay ended here (its summary then says how the recorded run did)
         self.ended = False
+        #: past the end's tick, the replay waits to have written what the recorded run had
+        #: when its stop came (:meth:`between_frames`): the record's end is no end yet
+        self.waiting = False
 
     def _end(self) -> None:
         self.ended = True
@@ -567,8 +570,30 @@ class RecordedEnd(InnerGate):
 
     def after_tick(self, runner: MissionRunner) -> None:
         super().after_tick(runner)
-        if runner.snapshot.tick >= self.tick:  # "after": the run ended with this tick
-            self._end()
+        if runner.snapshot.tick >= self.tick:  # "after": the run ended with this tick...
+            self.waiting = self._writes_to_come()
+            if not self.waiting:
+                self._end()  # ...unless it wrote more before its stop (a stall's drive 0)
+
+    def between_frames(self, runner: MissionRunner) -> None:
+        """A read with no frame past the end's tick: a stop the recorded run was asked for
+        between frames (the monitor's Stop in a stall, after the watchdog's drive 0) ends
+        the replay here, once it has written as much. It ended the replay at the tick
+        before, and the record's drive 0 was the replay's first difference (exit 1)."""
+        super().between_frames(runner)
+        past = runner.has_snapshot and runner.snapshot.tick >= self.tick
+        if self.half == "after" and past:
+            self.waiting = self._writes_to_come()
+            if not self.waiting:
+                self._end()
+
+    def _writes_to_come(self) -> bool:
+        """Whether the recorded run wrote more after the end's tick, before its stop, than
+        the replay has so far (the end note's ``written``: none in an older record)."""
+        transport = self.transport
+        return (
+            self.written is not None and transport is not None and transport.written < self.written
+        )
 
 
 class AfterTickGate(InnerGate):
@@ -734,6 +759,26 @@ def follow_the_recorded_link(stack: RunStack, record: Record) -> None:
     )
 
 
+def replay_input_ended(
+    transport: ReplayTransport, record: Record, until: float | None, ends: list[RecordedEnd]
+) -> Callable[[], str | None]:
+    """A replay's ``input_ended`` (:func:`replay_record`): a difference, the window's end
+    (``until``), or the record's; not while the replay's end (``ends``: its
+    :class:`RecordedEnd`, once made) waits for the writes of a stop between frames, the
+    reads going on past the record's last chunk to the watchdog's trip it noted, whose
+    drive 0 came before the stop (up to the record's last time)."""
+
+    def input_ended() -> str | None:
+        if transport.difference is not None or transport.starved():
+            return "first difference from the record"
+        if transport.ended_early:
+            return _window_end(until)
+        waits = any(end.waiting for end in ends) and transport.now() <= record.last_t
+        return _end_of(record) if transport.exhausted and not waits else None
+
+    return input_ended
+
+
 def replay_record(
     record: Record,
     mission: MissionLike,
@@ -757,14 +802,7 @@ def replay_record(
     transport's ``ended_early``)."""
     transport = ReplayTransport(record, name=f"replay:{name}", progress=progress)
     header = record.header
-
-    def input_ended() -> str | None:
-        if transport.difference is not None or transport.starved():
-            return "first difference from the record"
-        if transport.ended_early:
-            return _window_end(until)
-        return _end_of(record) if transport.exhausted else None
-
+    ends: list[RecordedEnd] = []  # the replay's end where its run was stopped, once made
     stack = RunStack(
         mission,
         transport,
@@ -775,7 +813,7 @@ def replay_record(
         grace=float(header.get("grace", DEFAULT_GRACE)),
         keep_awake=False,  # no robot to keep awake (it said a robot "sleeps after 5 minutes")
         observer=observer,
-        input_ended=input_ended,
+        input_ended=replay_input_ended(transport, record, until, ends),
         replayed_notes=[note for _, note in record.notes],  # the tick guard's acts
     )
     follow_the_recorded_link(stack, record)
@@ -783,6 +821,7 @@ def replay_record(
         gate = WindowEnd(until, gate, transport)
     gate = link_lost_after(record, gate, transport)
     end = recorded_end(record, gate, transport)
+    ends += [end] if end is not None else []
     stack.runner.gate = end or gate  # the monitor's replay of the operator's acts inside
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
     try:

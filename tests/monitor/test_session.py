@@ -183,6 +183,13 @@ class Rig:
         return self.sim.mode, self.sim.left_speed, self.sim.right_speed
 
 
+def paused_after(rig: Rig, until: Callable[..., None], ticks: int) -> None:
+    """The operator's pause, once the tree has ticked ``ticks`` times, seen taken."""
+    until(lambda: rig.ticks(ticked=True) > ticks)
+    rig.session.request("pause")
+    until(lambda: rig.session.state.paused)
+
+
 def test_pause_freezes_the_tree_in_passive_resume_drives_again_stop_ends_as_ctrl_c(
     until: Callable[..., None],
 ) -> None:
@@ -498,9 +505,7 @@ def test_a_pause_pressed_during_a_step_counts_the_step_and_the_pause_live_and_re
     rig = Rig(record=record_path)
 
     def operator(rig: Rig) -> None:
-        until(lambda: rig.ticks(ticked=True) > 50)
-        rig.session.request("pause")
-        until(lambda: rig.session.state.paused)
+        paused_after(rig, until, 50)
         rig.session.request("step")
         rig.session.request("pause")  # queued behind it: applied before the step's pause
         until(lambda: sum(e.text.startswith("pause (") for e in rig.feed.events) == 2)
@@ -1023,9 +1028,7 @@ def test_a_replayed_pause_says_its_safe_stop_was_replayed_not_sent(
     rig = Rig(record=record_path)
 
     def operator(rig: Rig) -> None:
-        until(lambda: rig.ticks(ticked=True) > 100)
-        rig.session.request("pause")
-        until(lambda: rig.session.state.paused)
+        paused_after(rig, until, 100)
         rig.session.request("resume")
         until(lambda: not rig.session.state.paused)
         rig.session.request("stop")
@@ -1163,21 +1166,29 @@ def test_a_stall_ridden_through_during_a_pause_says_the_run_stays_paused(
     assert back.endswith("; the mission goes on"), back
 
 
-def test_a_stop_pressed_during_a_stall_ends_the_run_without_waiting_for_a_frame() -> None:
+@pytest.mark.parametrize("by", ["the monitor", "request_stop"])
+def test_a_stop_asked_for_during_a_stall_ends_the_run_without_waiting_for_a_frame(
+    by: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """Stop pressed while the watchdog rides a stall through: the run waited for the next
     frame (up to ``--grace``) before it ended, the robot's stop waiting with it, while the
     program's ``request_stop`` acts on an empty read. The operator's stop acts on the next
-    read too, frame or not. (The stop is asked on the run's own thread, as the watchdog
-    trips, so that on the virtual clock the gap is not over before the operator's thread
-    gets a turn.)"""
-    rig = Rig(faults=Faults(stream_gap_at=2.0, stream_gap_s=1.5))
+    read too, frame or not. The record of either replays to that end: the replay ended at
+    the tick before and called the stall's drive 0 its first difference (exit 1). (The stop
+    is asked on the run's own thread, as the watchdog trips, so that on the virtual clock
+    the gap is not over before the operator's thread gets a turn.)"""
+    record_path = tmp_path / "stalled.jsonl"
+    rig = Rig(record=record_path, faults=Faults(stream_gap_at=2.0, stream_gap_s=1.5))
     asked: list[float] = []
 
     class StopAtTheTrip(logging.Handler):
         def emit(self, record: logging.LogRecord) -> None:
             if "waiting up to" in record.getMessage():  # the watchdog's trip, said
                 asked.append(rig.connection.transport.now())
-                rig.session.request("stop", by="the test")
+                if by == "the monitor":
+                    rig.session.request("stop", by="the test")
+                else:
+                    rig.runner.request_stop("stopped by the operator")
 
     logger, handler = logging.getLogger("roomba_bt.runtime.loop"), StopAtTheTrip()
     logger.addHandler(handler)
@@ -1192,8 +1203,14 @@ def test_a_stop_pressed_during_a_stall_ends_the_run_without_waiting_for_a_frame(
     assert summary.reason == "stopped by the operator"
     assert summary.stalls == 1 and summary.stalls_ridden == 0  # ended before frames came back
     assert ended - asked[0] < 0.2, (asked, ended)  # a read or two: not the 1.5 s to a frame
-    [stop] = [e.text for e in rig.feed.events if e.text.startswith("stop:")]
-    assert stop == "stop: the run ends (as on Ctrl-C); from the test"
+    stops = [e.text for e in rig.feed.events if e.text.startswith("stop:")]
+    if by == "the monitor":
+        assert stops == ["stop: the run ends (as on Ctrl-C); from the test"]
+    capsys.readouterr()
+    assert main(["replay", str(record_path)]) == 0
+    out = capsys.readouterr().out
+    assert "replay: the recorded run was stopped by the operator" in out, out
+    assert "first difference" not in out, out
 
 
 @pytest.mark.parametrize("lost", ["asleep", "port gone"])

@@ -133,45 +133,47 @@ def stopped_pulled(
     return [r.levelname for r in caplog.records]
 
 
-@pytest.mark.parametrize("packets", [PACKETS, (*PACKETS, 41, 42)], ids=["encoders", "velocities"])
-def test_a_paused_robot_seen_stopped_in_passive_is_not_said_to_be_moving(
-    packets: tuple[int, ...], caplog: pytest.LogCaptureFixture
+#: a stream without packet 35 (the OI mode), as a program's ``Connection.start`` may ask for
+UNMODED = (7, 9, 10, 11, 12, 43, 44)
+#: what a stop not delivered says of a robot seen stopped in Passive by its frames
+IN_PASSIVE = (
+    "last seen stopped in Passive, in the frames it sent after every command written (it "
+    "stays stopped unless something else moves it: its buttons, a schedule)"
+)
+#: the same on a stream without packet 35, its frames showing the requested wheel speeds at 0
+NO_MODE_STREAMED = (
+    "last seen stopped, its requested wheel speeds at 0 in the frames it sent after every "
+    "command written (the stream carries no OI mode, packet 35: Passive was written, not "
+    "seen; it stays stopped unless something else moves it: its buttons, a schedule)"
+)
+
+
+@pytest.mark.parametrize(
+    ("packets", "words"),
+    [
+        (PACKETS, IN_PASSIVE),
+        ((*PACKETS, 41, 42), IN_PASSIVE),
+        ((*UNMODED, 39), NO_MODE_STREAMED),
+        ((*UNMODED, 41, 42), NO_MODE_STREAMED),
+        ((*UNMODED, 39, 41, 42), NO_MODE_STREAMED),
+    ],
+    ids=["encoders", "velocities", "no mode, 39", "no mode, 41/42", "no mode, 39-42"],
+)
+def test_a_paused_robot_seen_stopped_is_not_said_to_be_moving(
+    packets: tuple[int, ...], words: str, caplog: pytest.LogCaptureFixture
 ) -> None:
     """The cable pulled while the operator held the run paused: the summary and the banner
     said "last seen in Passive stopped; ... the robot may still be moving: pick it up",
-    though the pause's own stop had been seen taken in every frame since."""
+    though the pause's own stop had been seen taken in every frame since. On a stream
+    without packet 35 (until session 39 still "may still be moving") the frames show the
+    requested wheel speeds at 0 (packet 39, Drive's velocity; 41/42, Drive Direct's):
+    said as known, stopped, its mode not streamed (Passive written, not seen)."""
     connection, link = paused(packets)
     frames_for(connection, 20)  # seconds of a pause, shortened
     assert stopped_pulled(connection, link, caplog) == ["WARNING"]
     assert connection.stop_report == (
-        "last seen stopped in Passive, in the frames it sent after every command written (it "
-        "stays stopped unless something else moves it: its buttons, a schedule); the stop was "
-        "not delivered: the port is gone: reseat the cable, then roomba-bt doctor --port "
-        "sim://box"
-    )
-
-
-#: a stream without packet 35 (the OI mode), as a program's ``Connection.start`` may ask for
-UNMODED = (7, 9, 10, 11, 12, 43, 44)
-
-
-@pytest.mark.parametrize("velocities", [(39,), (41, 42), (39, 41, 42)], ids=str)
-def test_a_paused_robot_seen_stopped_without_its_mode_streamed_is_said_stopped(
-    velocities: tuple[int, ...], caplog: pytest.LogCaptureFixture
-) -> None:
-    """The cable pulled during a pause on a stream without packet 35: "the robot may still
-    be moving: pick it up", though its frames since the pause's stop showed its requested
-    wheel speeds at 0 (packet 39, Drive's velocity; 41/42, Drive Direct's). Said as known:
-    stopped; its mode not streamed (Passive written, not seen)."""
-    connection, link = paused((*UNMODED, *velocities))
-    frames_for(connection, 20)
-    assert stopped_pulled(connection, link, caplog) == ["WARNING"]
-    assert connection.stop_report == (
-        "last seen stopped, its requested wheel speeds at 0 in the frames it sent after every "
-        "command written (the stream carries no OI mode, packet 35: Passive was written, not "
-        "seen; it stays stopped unless something else moves it: its buttons, a schedule); the "
-        "stop was not delivered: the port is gone: reseat the cable, then roomba-bt doctor "
-        "--port sim://box"
+        f"{words}; the stop was not delivered: the port is gone: reseat the cable, then "
+        "roomba-bt doctor --port sim://box"
     )
 
 
