@@ -200,11 +200,13 @@ def _pty_words(port: str) -> LinkWords:
     """A pty's own path: a serial adapter's words where a bridge such as socat may carry the
     bytes to one, the program at its other end's where the simulator is there: its end
     (:data:`_PTY_ENDED`), the way back to it (:data:`_PTY_GONE`), and the line where a
-    message names it (what to check, what loses bytes, what stalled): ``sim --pty``, whose
-    fault options lose and damage bytes on purpose and which stalls on a busy computer, or
-    the cable behind a bridge, both said. A run on ``sim --pty --host-drop-rate 0.05`` said
-    "(a loose or noisy cable?)", "so the cable is a likely cause" and "check the cable and
-    its adapter" of a simulator told to drop bytes."""
+    message names it (what to check, what loses bytes, what stalled, what is wired, what
+    gives back its bytes, what carries BRC): ``sim --pty``, whose fault options lose and
+    damage bytes on purpose and which stalls on a busy computer, or the cable behind a
+    bridge, both said. A run on ``sim --pty --host-drop-rate 0.05`` said "(a loose or noisy
+    cable?)", "so the cable is a likely cause" and "check the cable and its adapter" of a
+    simulator told to drop bytes; one on ``sim --pty --asleep`` blamed "wrong cable or
+    wiring", and a pty that echoed "loop:// or another test port"."""
     bridge = "a bridge such as socat"
     behind = f"behind {bridge}"
     host_faults = "the simulator's --host-drop-rate or --host-corrupt-rate"
@@ -227,6 +229,21 @@ def _pty_words(port: str) -> LinkWords:
             f"cable and adapter {behind}"
         ),
         serial_side=f"the line behind the pty ({host_faults}, or the cable {behind})",
+        between=f"the program at the pty's other end (the simulator, or {bridge})",
+        wiring=(
+            "a pty that is not the simulator's (give the path roomba-bt sim --pty printed), "
+            f"or a cable {behind} wired wrong (TX/RX swapped, adapter not a 5 V TTL serial)"
+        ),
+        echo_causes=(
+            "a program at the pty's other end that gives back what it is sent, not the "
+            "simulator (give the path roomba-bt sim --pty printed)",
+            f"a cable or adapter {behind} whose transmit and receive lines are joined",
+        ),
+        pulse_fix=(
+            "a pty carries no modem lines: roomba-bt sim --rfc2217 carries BRC to the "
+            "simulator's robot, and a robot's cable with BRC on RTS or DTR does it opened by "
+            f"its own device path, not through {bridge}"
+        ),
     )
 
 

@@ -16,7 +16,7 @@ import stat
 
 from serial.tools import list_ports
 
-from roomba_bt.transport.link_kind import NETWORK_PORTS, link_of
+from roomba_bt.transport.link_kind import NETWORK_PORTS, LinkKind, link_of
 
 #: why a device that another process holds (``flock``) was not opened
 IN_USE = (
@@ -45,6 +45,13 @@ CLOSED_AT_ONCE = (
     "the far end closed the connection at once, before sending a byte: another client may "
     "hold it (a bridge or roomba-bt sim --tcp serves one client at a time: another run, "
     "sensors or doctor on this robot?)"
+)
+#: why a pty's path (``/dev/pts/N``) is not there: a pty lives as long as the program that
+#: made it (``roomba-bt sim --pty``, socat) holds it; a user who gave one after the simulator
+#: ended was told "the cable unplugged, or the adapter has another name"
+NO_SUCH_PTY = (
+    "no such pty: the program that made it (roomba-bt sim --pty, socat) has ended, or made "
+    "another: start it again if need be and give the path it prints"
 )
 #: pyserial's words when an ``rfc2217://`` server did not answer its negotiation in time
 RFC2217_UNANSWERED_TEXT = "does not seem to support RFC2217"
@@ -142,7 +149,7 @@ def open_failure(device: str, code: int | None, message: str = "") -> str | None
     if code in CLOSED_ERRORS and device.lower().startswith(NETWORK_PORTS):
         return CLOSED_AT_ONCE  # an rfc2217:// server closed it while it was negotiated
     if code == errno.ENOENT:
-        return no_such_device()
+        return NO_SUCH_PTY if link_of(device).kind is LinkKind.PTY else no_such_device()
     return None
 
 

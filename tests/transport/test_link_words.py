@@ -149,3 +149,45 @@ def test_a_pty_s_stream_that_froze_and_a_silent_robot_name_the_simulator_first()
     assert "(a frozen adapter or cable?)" in str(
         StreamLost("/dev/ttyUSB0", 2.5, 2.0, 0, watchdog=0.1, halted=True, came_back=3.1)
     )
+
+
+#: the fields of a robot's start-up and keep-awake messages that name the line: a pty's
+#: kept the cable's words after its line, froze and check had theirs
+PTY_START = ("between", "wiring", "echo_causes", "pulse_fix")
+
+
+@pytest.mark.parametrize("name", PTY_START)
+def test_a_pty_s_start_up_words_name_the_simulator_not_a_cable_alone(name: str) -> None:
+    """``run --port`` on ``sim --pty --asleep`` listed "wrong cable or wiring (TX/RX swapped,
+    adapter not a 5 V TTL serial)" among its causes, and a pty that gave back its bytes
+    "loop:// or another test port given as the robot's": the simulator first, a cable only
+    behind a bridge such as socat. A device path keeps the cable's words."""
+    pty = _texts(link_of("/dev/pts/3"))[name]
+    assert "simulator" in pty and "socat" in pty, pty
+    assert "cable" not in pty or pty.index("simulator") < pty.index("cable"), pty
+    assert "loop://" not in pty and "the wrong device" not in pty, pty
+    device = _texts(link_of("/dev/ttyUSB0"))[name]
+    assert "simulator" not in device and "socat" not in device, device
+
+
+def test_the_robot_s_errors_on_a_pty_name_what_is_at_its_other_end() -> None:
+    """The messages a run on ``sim --pty`` meets at its start: no answer (``--asleep``), an
+    echo, and keep-awake's BRC fix where the pty cannot pulse."""
+    port = "/dev/pts/3"
+    assert no_answer_causes(port)[2].startswith("a pty that is not the simulator's")
+    echo = str(not_a_mode(port, 149))
+    assert "a program at the pty's other end that gives back what it is sent" in echo, echo
+    assert "loop://" not in echo
+    asleep = str(RobotAsleep(port, 300.0, keep_awake=True, pulses=False))
+    assert "a pty carries no modem lines: roomba-bt sim --rfc2217 carries BRC" in asleep, asleep
+    assert "use a USB cable" not in asleep
+
+
+def test_a_pty_path_that_is_not_there_is_said_a_pty_not_an_unplugged_cable() -> None:
+    """``run --port /dev/pts/7`` after the simulator ended said "no such device: the cable
+    unplugged, or the adapter has another name"; a device path keeps those words."""
+    said = open_failure("/dev/pts/7", errno.ENOENT)
+    assert said is not None and said.startswith("no such pty: the program that made it")
+    assert "cable" not in said
+    device = open_failure("/dev/ttyUSB7", errno.ENOENT)
+    assert device is not None and device.startswith("no such device: the cable unplugged")
