@@ -653,7 +653,7 @@ def _chosen_world(given: str | None) -> World | str | None:
     try:
         return load_world(given)
     except WorldError as exc:
-        return world_error_text(exc)
+        return world_error_text(exc, "monitor")
 
 
 def _draw_recorded_world(

@@ -685,7 +685,7 @@ def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | s
     except WorldError as exc:
         from roomba_bt.cli.worlds_cmd import world_error_text
 
-        return world_error_text(exc)
+        return world_error_text(exc, "run")
     world = simulator.world
     if not (args.random_start and world.start_region is not None):  # its given start
         from roomba_bt.cli.worlds_cmd import world_warnings_text

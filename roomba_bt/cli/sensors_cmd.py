@@ -155,7 +155,7 @@ def sensors_command(args: argparse.Namespace) -> int:
             except WorldError as exc:
                 from roomba_bt.cli.worlds_cmd import world_error_text
 
-                print(world_error_text(exc), file=sys.stderr)
+                print(world_error_text(exc, "sensors"), file=sys.stderr)
                 return ExitCode.INVALID
         link = far_end(args.port, args.baud, simulator, opened=opened)
         _show_live(link, profile, args, group == ALL_SENSORS)

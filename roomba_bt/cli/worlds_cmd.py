@@ -43,7 +43,7 @@ def worlds_command(args: argparse.Namespace) -> int:
     try:
         files = world_files()
     except WorldError as exc:
-        print(world_error_text(exc), file=sys.stderr)
+        print(world_error_text(exc, "worlds"), file=sys.stderr)
         return ExitCode.INVALID
     names = tuple(files)
     if args.name is not None:
@@ -75,7 +75,7 @@ def _list_worlds(files: dict[str, Path]) -> int:
         try:
             world = load_world(path)
         except WorldError as exc:
-            print(world_error_text(exc), file=sys.stderr)
+            print(world_error_text(exc, "worlds"), file=sys.stderr)
             code = ExitCode.INVALID
             continue
         xs = [x for room in world.rooms for x, _ in room]
@@ -152,9 +152,12 @@ def _as_diagnostic(problem: WorldProblem, severity: str = "error") -> Diagnostic
                       severity=severity)  # fmt: skip
 
 
-def world_error_text(exc: WorldError) -> str:
-    """A world's problems as ``run`` and ``sensors`` print them on stderr: a problem at a
-    place as its own ``file:line:col: ...`` line, as ``validate`` prints it (the first line
-    began ``roomba-bt: `` and broke a ``^file:line:col`` matcher), one without a place (no
-    such file) after ``roomba-bt: ``; the first hundred, then how many more (:func:`listed`)."""
-    return "\n".join(listed([str(p) if p.line else f"roomba-bt: {p}" for p in exc.problems]))
+def world_error_text(exc: WorldError, command: str) -> str:
+    """A world's problems as ``run``, ``sensors``, ``monitor`` and ``worlds`` (``command``)
+    print them on stderr: a problem at a place as its own ``file:line:col: ...`` line, as
+    ``validate`` prints it (the first line began ``roomba-bt: `` and broke a
+    ``^file:line:col`` matcher), one without a place (no such file, unreadable) after
+    ``roomba-bt COMMAND: ``, as the command's other errors and ``eval``'s world errors begin
+    (it said ``roomba-bt: ``); the first hundred, then how many more (:func:`listed`)."""
+    prefix = f"roomba-bt {command}: "
+    return "\n".join(listed([str(p) if p.line else f"{prefix}{p}" for p in exc.problems]))

@@ -139,13 +139,13 @@ def test_a_worlds_variable_naming_no_folder_is_refused_naming_it(
 ) -> None:
     """A missing folder left no world at all: ``run`` said "allowed: a YAML file or one of"
     and nothing, ``worlds`` printed nothing with exit 0. Now both are usage errors (exit 2)
-    naming the variable and the folder."""
+    naming the variable and the folder, after the command's name."""
     (tmp_path / "a-file").write_text("")
     given = str(tmp_path / folder)
     monkeypatch.setenv("ROOMBA_BT_WORLDS", given)
-    said = f"roomba-bt: ROOMBA_BT_WORLDS: {given!r}: {problem}; it names folders of your own"
+    said = f"ROOMBA_BT_WORLDS: {given!r}: {problem}; it names folders of your own"
     assert main(["worlds"]) == 2
     out, err = capsys.readouterr()
-    assert out == "" and err.startswith(said)
+    assert out == "" and err.startswith(f"roomba-bt worlds: {said}")
     assert main(["run", "dock", "--fast", "--display", "none"]) == 2
-    assert capsys.readouterr().err.startswith(said)
+    assert capsys.readouterr().err.startswith(f"roomba-bt run: {said}")

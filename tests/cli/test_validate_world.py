@@ -222,3 +222,29 @@ def test_validate_says_an_empty_file_is_neither_a_mission_nor_a_world(
     assert "empty.yaml:1:1: the mission file is empty (included from m.yaml:1:11)" in lines
     assert main(["run", "empty.yaml", "--fast", "--display", "none"]) == 2
     assert "empty.yaml:1:1: the mission file is empty" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", "dock", "--fast", "--display", "none", "--world"],
+        ["sensors", "--world"],
+        ["monitor", "r.jsonl", "--monitor", "0", "--world"],
+    ],
+    ids=["run", "sensors", "monitor"],
+)
+@pytest.mark.parametrize("world", ["worlds/gone.yaml", "worlds"], ids=["no such file", "a folder"])
+def test_a_world_that_cannot_be_read_is_said_by_the_command_that_read_it(
+    worlds: Path, capsys: Capsys, argv: list[str], world: str
+) -> None:
+    """A world with no place to point at (no such file, a folder) began ``roomba-bt: ``
+    where ``eval`` and every other error of these commands say ``roomba-bt run: ``: said
+    after the command's name, as eval says it."""
+    if argv[0] == "monitor":
+        pytest.importorskip("aiohttp")  # the monitor extra
+    assert main([*argv, world]) == 2
+    command = argv[0]
+    err = capsys.readouterr().err
+    assert err.startswith(f"roomba-bt {command}: {world}: world: found "), err
+    assert main(["eval", "dock", "--runs", "1", "--world", world]) == 2
+    assert capsys.readouterr().err.startswith(f"roomba-bt eval: {world}: world: found ")

@@ -1310,7 +1310,7 @@ def test_monitor_world_that_cannot_be_read_is_exit_2_before_the_replay(
     broken = tmp_path / "broken.yaml"
     broken.write_text("name: broken\nrooms: 3\n")
     capsys.readouterr()
-    for given, said in (("nosuch", "roomba-bt: nosuch: "), (str(broken), f"{broken}:2:")):
+    for given, said in (("nosuch", "roomba-bt monitor: nosuch: "), (str(broken), f"{broken}:2:")):
         assert main(["monitor", str(record), "--monitor", "0", "--world", given]) == 2
         captured = capsys.readouterr()
         assert said in captured.err and "monitor: http" not in captured.out, captured
