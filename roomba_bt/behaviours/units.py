@@ -182,6 +182,8 @@ def _unknown_unit(dimension: str, value: str, number: str, unit: str) -> str:
         f"{', '.join(UNITS[dimension])}"
     )
     number = number.strip()
+    if not math.isfinite(float(number)):  # 1e400: the unit is said first, the hint is none
+        return message
     if dimension == "duration" and unit in _SHORTER_THAN_MS:
         in_ms = float(number) * _SHORTER_THAN_MS[unit] * 1000
         message += f" ({number}{unit} is {in_ms:g}ms)"
@@ -321,10 +323,8 @@ def parse_quantity(dimension: str, value: object) -> float:
             )
         )
     number, unit = float(match.group(1)), match.group(2)
-    if not math.isfinite(number):  # 1e400 overflows to inf
-        raise UnitError(
-            f"{quoted(value)}: {_number_said(match.group(1))} is too large a number for {what}"
-        )
+    # the unit before the number's size: ``1e400 mm/s`` given as a distance was "too large a
+    # number for a distance", and its user made it smaller, to be told the unit next
     if unit not in units:
         known = ", ".join(units)
         if unit == "":
@@ -334,6 +334,10 @@ def parse_quantity(dimension: str, value: object) -> float:
                 f"{value!r} has no unit; {what} needs one of: {known} (e.g. {EXAMPLES[dimension]})"
             )
         raise UnitError(_unknown_unit(dimension, value, match.group(1), unit))
+    if not math.isfinite(number):  # 1e400 overflows to inf
+        raise UnitError(
+            f"{quoted(value)}: {_number_said(match.group(1))} is too large a number for {what}"
+        )
     canonical = number * units[unit]
     if not math.isfinite(canonical):  # 1e308 h overflows to inf in seconds: "internal error"
         largest = sys.float_info.max / units[unit]

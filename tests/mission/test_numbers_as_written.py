@@ -143,3 +143,29 @@ def test_a_number_too_large_once_converted_is_refused_at_its_value(
     text = HEADER + f"tree:\n  sequence:\n    - mode: safe\n    - {leaf}\n"
     problems = _problems(tmp_path, text)
     assert len(problems) == 1 and problems[0].startswith(found), problems
+
+
+@pytest.mark.parametrize(
+    ("leaf", "found"),
+    [
+        ("drive: {velocity: 100 mm/s, distance: 1e400 mm/s}", "5:45: drive.distance: unknown "
+         "distance unit 'mm/s' in '1e400 mm/s'; use one of: mm, cm, m"),
+        ("drive: {velocity: 1e400 m, distance: 1 m}", "5:25: drive.velocity: unknown speed "
+         "unit 'm' in '1e400 m'; use one of: mm/s, cm/s, m/s"),
+        ("wait: 1e400 us", "5:13: wait.duration: unknown duration unit 'us' in '1e400 us'; use "
+         "one of: ms, s, sec, min, h, d"),
+        ("drive: {velocity: 100 mm/s, distance: '1e400'}", "5:45: drive.distance: '1e400' has "
+         "no unit; a distance needs one of: mm, cm, m"),
+        ("drive: {velocity: 100 mm/s, distance: 1e400 m}", "5:45: drive.distance: '1e400 m': "
+         "1e400 is too large a number for a distance"),
+    ],
+)  # fmt: skip
+def test_a_number_too_large_in_the_wrong_unit_is_told_the_unit_first(
+    tmp_path: Path, leaf: str, found: str
+) -> None:
+    """``1e400 mm/s`` as a distance said "too large a number for a distance": made smaller, it
+    was then told the unit. What was found (the unit) and what is allowed come first; the
+    size only of a value in a unit of its own."""
+    text = HEADER + f"tree:\n  sequence:\n    - mode: safe\n    - {leaf}\n"
+    problems = _problems(tmp_path, text)
+    assert len(problems) == 1 and problems[0].startswith(found), problems
