@@ -23,7 +23,7 @@ from collections import deque
 from collections.abc import Callable
 from datetime import datetime
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Self
 
 from roomba_bt.monitor.feed import Ending, RunFeed
 from roomba_bt.monitor.session import STEP, MonitorSession
@@ -76,7 +76,7 @@ def replay_into_feed(
         label=record.label,
     )  # fmt: skip
     feed.set_tree(mission.root)
-    with QuietReplayStart(f"replay:{name}"):  # the page says the start; stderr is for trouble
+    with MissionWordsOnThePage(feed):  # the page says them; stderr is for trouble
         summary, transport, lost = replay_judged(
             record, mission, profile=profile, packets=packets, baud=baud, name=name,
             gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
@@ -115,8 +115,11 @@ def replay_judged(
     how the recorded run ended (:func:`recorded_loss_said`). ``replay`` printed ``ERROR ...
     the stop was written but is unconfirmed`` and ``outcome CONNECTION LOST (the safe stop
     did not reach the robot ...)`` of a replay that reaches no robot, where the monitor
-    already said neither: one rule for both."""
-    with ReplayStopReports(f"replay:{name}") as stop_reports:
+    already said neither: one rule for both. So is the replay's start: its connection's INFO
+    lines only at ``-v`` (:class:`QuietReplayStart`)."""
+    # the replay's start (its banner, a mode change by itself) is said only at -v: the
+    # record's summary and page say it, and stderr is for what went wrong
+    with ReplayStopReports(f"replay:{name}") as stop_reports, QuietReplayStart(f"replay:{name}"):
         summary, transport = replay_record(record, mission, name=name, **replayed)
     # a difference past where the recorded run's link failed is none (replay's own words)
     lost = past_the_link_loss(transport, transport.first_difference(), record.ending)
@@ -149,12 +152,32 @@ def recorded_loss_said(summary: RunSummary, ending: dict[str, Any]) -> None:
     summary.stop_delivered = False
 
 
-class QuietReplayStart(logging.Filter):
+class _OnLogger(logging.Filter):
+    """A filter on the logger :attr:`LOGGER` for as long as a ``with`` block runs."""
+
+    LOGGER = "roomba_bt"
+
+    def __enter__(self) -> Self:
+        logging.getLogger(self.LOGGER).addFilter(self)
+        return self
+
+    def __exit__(self, kind: object, *_: object) -> None:
+        logging.getLogger(self.LOGGER).removeFilter(self)
+
+
+def _said_at_v() -> bool:
+    """Whether ``-v`` (or a program's DEBUG logging) asks for every line."""
+    return logging.getLogger().isEnabledFor(logging.DEBUG)
+
+
+class QuietReplayStart(_OnLogger):
     """The replay's connection's INFO lines (``replay:FILE: iRobot Create 2 in Passive,
-    streaming [...]``, a mode change by itself) kept off stderr while ``monitor RECORD``
-    replays: its page and banner say them, and a user opening a record wants a quiet
-    terminal unless something is wrong (docs/monitor.md says what stderr shows). A warning
-    or worse is said as before, and so is everything at ``-v``."""
+    streaming [...]``, a mode change by itself) kept off stderr while a record is replayed
+    (``replay``, ``monitor RECORD``: :func:`replay_judged`): the summary, the page and its
+    banner say them, and a user replaying a record wants a quiet terminal unless something
+    is wrong (docs/monitor.md and docs/runtime.md say what stderr shows; ``replay`` printed
+    the banner for every record until session 39). A warning or worse is said as before,
+    and so is everything at ``-v``."""
 
     LOGGER = "roomba_bt.robot.connection"
 
@@ -163,19 +186,33 @@ class QuietReplayStart(logging.Filter):
         self.prefix = f"{link}: "
 
     def filter(self, record: logging.LogRecord) -> bool:
-        if record.levelno >= logging.WARNING or logging.getLogger().isEnabledFor(logging.DEBUG):
+        if record.levelno >= logging.WARNING or _said_at_v():
             return True
         return not record.getMessage().startswith(self.prefix)
 
-    def __enter__(self) -> QuietReplayStart:
-        logging.getLogger(self.LOGGER).addFilter(self)
-        return self
 
-    def __exit__(self, *_: object) -> None:
-        logging.getLogger(self.LOGGER).removeFilter(self)
+class MissionWordsOnThePage(_OnLogger):
+    """The mission's log (``roomba_bt.mission``: its ``log`` leaves, its behaviours'
+    warnings) into the record's page while ``monitor RECORD`` replays it, not onto stderr:
+    it printed every ``log`` line of the recorded run there, without its time, before the
+    page's URL. A warning or worse goes into the page's event log, as a live run's page has
+    it (:class:`~roomba_bt.monitor.feed.EventLogHandler`); a ``log`` at ``info`` is on the
+    page as its leaf's status change (``log(text) -> SUCCESS``). At ``-v`` each is said on
+    stderr too. ``replay`` says them on stderr as the run did: it has no page."""
+
+    LOGGER = "roomba_bt.mission"
+
+    def __init__(self, feed: RunFeed) -> None:
+        super().__init__()
+        self.feed = feed
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno >= logging.WARNING:
+            self.feed.event("warning", record.getMessage())
+        return _said_at_v()
 
 
-class ReplayStopReports(logging.Filter):
+class ReplayStopReports(_OnLogger):
     """The replay's own safe stop's reports (``robot/ending.py``'s log, naming the replay's
     link, ``link``), held back while a record is replayed (:func:`replay_judged`: the page's
     and ``replay``'s): :meth:`say` lets them out, and a replay that leaves without it drops
@@ -201,12 +238,8 @@ class ReplayStopReports(logging.Filter):
             return False
         return True
 
-    def __enter__(self) -> ReplayStopReports:
-        logging.getLogger(self.LOGGER).addFilter(self)
-        return self
-
     def __exit__(self, kind: object, *_: object) -> None:
-        logging.getLogger(self.LOGGER).removeFilter(self)
+        super().__exit__(kind)
         if kind is not None:
             self.say()
 

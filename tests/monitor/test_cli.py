@@ -713,6 +713,70 @@ def test_a_record_view_says_its_replay_s_start_only_at_v(
     assert len(started) == (level == logging.DEBUG), caplog.text
 
 
+@pytest.mark.parametrize("level", [logging.INFO, logging.DEBUG], ids=["default", "-v"])
+def test_replay_says_its_start_only_at_v_and_the_mission_s_log_as_the_run_did(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, level: int
+) -> None:
+    """``roomba-bt replay RECORD`` printed ``INFO roomba_bt.robot.connection:
+    replay:RECORD: iRobot Create 2 in Passive, streaming [...]`` on stderr for every record,
+    where ``monitor RECORD`` said it only at ``-v`` (the DEBUG level): one rule for both
+    (``replay_judged``). The mission's own ``log`` lines stay: ``replay`` has no page."""
+    mission = tmp_path / "said.yaml"
+    mission.write_text(LOGGED)
+    record = tmp_path / "run.jsonl"
+    assert main(["run", str(mission), "--fast", "--display", "none", "--record", str(record)]) == 0
+    caplog.clear()
+    caplog.set_level(level)
+    assert main(["replay", str(record), "--display", "none"]) == 0
+    said = [r.getMessage() for r in caplog.records]
+    started = [m for m in said if m.startswith("replay:") and "streaming [" in m]
+    assert len(started) == (level == logging.DEBUG), said
+    assert "starting the leg" in said and "the leg is done" in said, said
+
+
+#: a mission whose log says something at info and at warning
+LOGGED = """\
+tree:
+  sequence:
+    - mode: safe
+    - log: starting the leg
+    - drive: {velocity: 100 mm/s, distance: 0.1 m}
+    - log: {message: the leg is done, level: warning}
+    - mode: passive
+"""
+
+
+@pytest.mark.parametrize("level", [logging.INFO, logging.DEBUG], ids=["default", "-v"])
+def test_a_record_view_puts_the_mission_s_log_on_its_page_not_on_stderr(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, level: int
+) -> None:
+    """``monitor RECORD`` printed each ``log`` line of the recorded run on stderr, without its
+    time, before the page's URL: its warning is in the page's event log, as a live run's page
+    has it, and its info line is there as its leaf's status; ``-v`` says them on stderr too."""
+    pytest.importorskip("aiohttp")
+    from roomba_bt.cli import build_parser
+    from roomba_bt.cli.run_cmd import load_recorded
+    from roomba_bt.monitor.recorded import replay_into_feed
+
+    mission = tmp_path / "said.yaml"
+    mission.write_text(LOGGED)
+    record = tmp_path / "run.jsonl"
+    assert main(["run", str(mission), "--fast", "--display", "none", "--record", str(record)]) == 0
+    recorded = load_recorded(build_parser().parse_args(["monitor", str(record)]))
+    assert not isinstance(recorded, int)
+    caplog.clear()
+    caplog.set_level(level)
+    feed, _ = replay_into_feed(
+        recorded.record, recorded.mission, recorded.profile, recorded.packets, recorded.baud,
+        str(record),
+    )  # fmt: skip
+    said = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.mission"]
+    assert said == (["starting the leg", "the leg is done"] if level == logging.DEBUG else [])
+    events = [(e.kind, e.text) for e in feed.events]
+    assert ("warning", "the leg is done") in events, events
+    assert any(t.startswith("log(starting the leg) -> SUCCESS") for _, t in events), events
+
+
 def test_monitor_of_a_record_on_a_wildcard_address_says_the_machine_s_name(
     tmp_path: Path, served_record: ServedRecord
 ) -> None:
