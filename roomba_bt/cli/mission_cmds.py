@@ -755,7 +755,12 @@ def _unknown_behaviour(name: str, registry: Registry) -> str:
 
 
 def _print_behaviour(entry: dict[str, Any]) -> None:
-    """One behaviour of ``describe_behaviours`` as ``roomba-bt behaviours`` prints it."""
+    """One behaviour of ``describe_behaviours`` as ``roomba-bt behaviours`` prints it, its
+    docstring's and its parameters' reST inline markup as a terminal reads it
+    (:func:`~roomba_bt.behaviours.reference.inline_text`: ```key``` printed as written);
+    ``--json`` keeps the text as written."""
+    from roomba_bt.behaviours.reference import inline_text
+
     modes = " or ".join(entry["modes"])
     head = f"{entry['name']}  ({entry['kind']}"
     if len(entry["modes"]) < 4:
@@ -774,7 +779,7 @@ def _print_behaviour(entry: dict[str, Any]) -> None:
     if entry["clash"]:
         print(f"    {entry['clash']['severity']}: {entry['clash']['why']}")
     if entry["doc"]:
-        print(f"    {entry['doc']}")
+        print(f"    {inline_text(entry['doc'])}")
     for p in entry["parameters"]:
         parts = [p["type"] if not p["choices"] else "|".join(p["choices"])]
         if p["unit"]:
@@ -789,7 +794,7 @@ def _print_behaviour(entry: dict[str, Any]) -> None:
             parts.append(f"default {p['default']}")
         else:
             parts.append("optional")
-        doc = f"  {p['doc']}" if p["doc"] else ""
+        doc = f"  {inline_text(p['doc'])}" if p["doc"] else ""
         print(f"    {p['name']}: {', '.join(parts)}{doc}")
     reads = entry["reads"]
     if reads:

@@ -240,6 +240,48 @@ def test_behaviours_lists_a_plugin_files_behaviours_with_plugin_file(capsys: Cap
     assert "--plugin-file no_such.py: no such file" in capsys.readouterr().err
 
 
+#: a plugin whose docstrings are written in reST, as Python's and Sphinx's habit has them
+REST_DOCS = '''\
+from roomba_bt.behaviours import BOOL, Condition, Param, declare
+
+
+@declare("s39_rest", kind="condition", reads=(7,),
+         params=[Param("side", BOOL, default=True, doc="read ``left`` **first**")])
+class Rest(Condition):
+    """True where :class:`~roomba_bt.behaviours.Condition`'s ``check`` says, *see*
+    `the spec <https://example.org/oi>`_ and :func:`roomba_bt.oi.commands.safe`.
+
+    The rest of the docstring is no part of the entry.
+    """
+
+    def check(self, snapshot):
+        return True
+'''
+
+
+def test_behaviours_prints_a_docstring_s_rest_as_a_terminal_reads_it(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """A plugin's docstring was printed as written (````check````, ``:class:`~...```); its
+    literals and roles are code in single backquotes, as roomba-bt's own messages write it,
+    its link its text and address, its stresses their words. ``--json`` keeps it as written:
+    data for a program that may render reST itself."""
+    plugin = tmp_path / "rest.py"
+    plugin.write_text(REST_DOCS)
+    assert main(["behaviours", "s39_rest", "--plugin-file", str(plugin)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[1] == (
+        "    True where `Condition`'s `check` says, see the spec (https://example.org/oi) and "
+        "`roomba_bt.oi.commands.safe`."
+    ), out
+    assert out[2] == "    side: bool, default True  read `left` first", out
+    assert main(["behaviours", "s39_rest", "--plugin-file", str(plugin), "--json"]) == 0
+    (entry,) = json.loads(capsys.readouterr().out)
+    assert entry["doc"].startswith("True where :class:`~roomba_bt.behaviours.Condition`'s")
+    assert main(["behaviours", "s39_rest", "--plugin-file", str(plugin), "--markdown"]) == 0
+    assert "True where `Condition`'s `check` says" in capsys.readouterr().out
+
+
 #: a plugin file with one good class, one declared wrongly and two that declare one name
 PARTLY_BAD = """\
 from py_trees.common import Status
