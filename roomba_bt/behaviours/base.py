@@ -203,8 +203,8 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         if spec.leads_to is not None:  # the static mode check reads leads_to=
             self._hold_to_leads_to(command, spec.leads_to)
             self._mode_sent = True
-        elif declaration.mode_first and not self._mode_sent:  # validate read mode_first=
-            raise UnkeptDeclaration(self, command, _MODE_FIRST)
+        elif declaration.mode_first and not self._mode_sent and self._mode_comes_first():
+            raise UnkeptDeclaration(self, command, _MODE_FIRST)  # validate read mode_first=
         if spec.drives_wheels:  # what it set turning is stopped when it ends (terminate)
             self._started_motion = turns_wheels(command)
         elif spec.effect is _BUILTIN_CYCLE:  # ended when it is halted or fails (terminate)
@@ -222,6 +222,16 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             robot.outbox.send(halt(), self)
             robot.outbox.send(motors_off(), self)
         robot.outbox.send(command, self)
+
+    def _mode_comes_first(self) -> bool:
+        """Whether this leaf, with its parameters as the mission gives them (the static
+        check's, ``@key`` values unread), sends a mode command first each start
+        (:meth:`~roomba_bt.behaviours.declare.Declaration.mode_comes_first`: one rule with
+        validate); asked once, at the first command before a mode command."""
+        first = self._mode_first
+        if first is None:
+            first = self._mode_first = self.declaration.mode_comes_first(self.params)
+        return first
 
     def _hold_to_leads_to(self, command: Command, sent: OIMode) -> None:
         """Refuse a mode command (leading to ``sent``) leading elsewhere than the mode its
@@ -289,6 +299,9 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
     #: whether it sent a mode command since it started (a ``mode_first`` leaf's first
     #: command is one: :meth:`send`); cleared as it stops (:meth:`Action.stop`)
     _mode_sent = False
+    #: whether its first command must be a mode command with its parameters (None: not
+    #: asked yet: :meth:`_mode_comes_first`)
+    _mode_first: bool | None = None
 
     def value(self, name: str) -> Any:
         """The parameter ``name`` for this run (blackboard references resolved at start)."""

@@ -370,16 +370,26 @@ class Declaration:
         passive`` sends Start alone, accepted in Off too)."""
         return _accepted_in(self.sent(params))
 
+    def mode_comes_first(self, params: Mapping[str, Any]) -> bool:
+        """Whether, with ``params``, its first command each start is one of its mode
+        commands: a ``mode_first`` leaf whose commands with them (:meth:`sent`,
+        ``sends_by``) hold one. One with none with them (``own_mode: false``) is judged as
+        any leaf, all its commands where it is reached, and may send any first. The one rule
+        both read: the static mode check (:meth:`sent_first`) and ``send()``, which held
+        every ``mode_first`` leaf to a mode command first, stricter than the check."""
+        if not self.mode_first:
+            return False
+        return any(COMMANDS[op].leads_to is not None for op in self.sent(params))
+
     def sent_first(self, params: Mapping[str, Any]) -> tuple[int, ...]:
         """The commands it may send in the mode it is reached in, with ``params``: all it
-        sends, or, for a ``mode_first`` leaf, its mode commands (its others come after one
-        of those, in the mode it took the robot to). The static mode check holds the modes
-        a leaf is reached in to these."""
+        sends, or, where its mode command comes first (:meth:`mode_comes_first`), its mode
+        commands (its others come after one of those, in the mode it took the robot to). The
+        static mode check holds the modes a leaf is reached in to these."""
         sent = self.sent(params)
-        if not self.mode_first:
+        if not self.mode_comes_first(params):
             return sent
-        first = tuple(op for op in sent if COMMANDS[op].leads_to is not None)
-        return first or sent  # with these parameters it sends no mode command: all, then
+        return tuple(op for op in sent if COMMANDS[op].leads_to is not None)
 
     def reached_in(self, params: Mapping[str, Any]) -> frozenset[OIMode]:
         """Modes it may be reached in with ``params``: those that take every command of

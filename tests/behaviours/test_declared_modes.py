@@ -10,7 +10,7 @@ from __future__ import annotations
 import pytest
 from py_trees.common import Status
 
-from roomba_bt.behaviours import Action, declare
+from roomba_bt.behaviours import BOOL, Action, Param, declare
 from roomba_bt.behaviours.actions import Mode, Stop
 from roomba_bt.behaviours.base import UnkeptDeclaration
 from roomba_bt.behaviours.declare import DeclarationError
@@ -321,3 +321,45 @@ def test_a_mode_first_leaf_whose_first_command_is_another_is_refused(which: str)
                        r"first command is one of its mode commands\), and this one came before "
                        r"any since it started"):  # fmt: skip
         leaf.tick_once()
+
+
+def _own_mode(params: object) -> tuple[int, ...]:
+    """A ``sends_by``: Safe and a drive, or with ``own_mode: false`` the drive alone."""
+    given = params if isinstance(params, dict) else {}
+    return opcodes("safe", "drive") if given.get("own_mode", True) else opcodes("drive")
+
+
+@pytest.mark.parametrize("own_mode", [True, False])
+def test_a_mode_first_leaf_is_held_to_its_mode_command_where_its_parameters_send_one(
+    own_mode: bool,
+) -> None:
+    """``mode_first=True`` with a ``sends_by`` that sends no mode command with some
+    parameters: validate judged all its commands where it is reached (a drive: Safe or
+    Full), and the runtime still refused its drive first, stricter than the check. One rule
+    (``Declaration.mode_comes_first``), read by both: with ``own_mode: false`` it is any
+    leaf, judged and run so; with its Safe it is held to sending it first."""
+
+    class Hop(_Scripted):
+        """Drives, sending its own Safe first where asked to."""
+
+        def start(self) -> None:
+            self.ticks = iter([([commands.drive(200, 32767)], Status.SUCCESS)])
+
+    declared = declare(
+        "hop", kind="action", sends=opcodes("safe", "drive"), mode_first=True,
+        sends_by=_own_mode, params=[Param("own_mode", BOOL, default=True)],
+    )(Hop)  # fmt: skip
+    Registry(entry_point_group=None).register(declared, "test")
+    decl = declared.declaration
+    params = {"own_mode": own_mode}
+    assert decl.mode_comes_first(params) is own_mode
+    assert decl.sent_first(params) == (opcodes("safe") if own_mode else opcodes("drive"))
+    assert (OIMode.PASSIVE in decl.reached_in(params)) is own_mode
+    leaf: Action = declared("hop", params)
+    leaf.setup(robot=StubRobot())
+    if own_mode:  # it says its Safe comes first, and drove first
+        with pytest.raises(UnkeptDeclaration, match="says mode_first=True"):
+            leaf.tick_once()
+        return
+    leaf.tick_once()  # reached in Safe, as validate held it to: its drive goes
+    assert leaf.status is Status.SUCCESS

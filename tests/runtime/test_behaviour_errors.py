@@ -418,6 +418,66 @@ def test_a_mode_first_plugin_runs_from_passive_and_a_liar_is_named(
     assert "commands     0 written" in out, out
 
 
+#: a mode_first plugin whose own Safe is a parameter's choice (sends_by): with own_mode: false
+#: it sends the drive alone, and is any leaf
+HOP = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import BOOL, Action, Param, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.opcodes import opcodes
+
+
+def _sends(params):
+    return opcodes("safe", "drive") if params.get("own_mode", True) else opcodes("drive")
+
+
+@declare("hop", kind="action", sends=opcodes("safe", "drive"), reads=(19,), mode_first=True,
+         sends_by=_sends, params=[Param("own_mode", BOOL, default=True)])
+class Hop(Action):
+    """Drives five ticks, sending its own Safe first where own_mode says so."""
+
+    def start(self):
+        if self.value("own_mode"):
+            self.send(commands.safe())
+        self.ticks = 0
+
+    def update(self):
+        self.ticks += 1
+        if self.ticks < 5:
+            self.send(commands.drive(100, 32767))
+            return Status.RUNNING
+        self.send(commands.halt())
+        return Status.SUCCESS
+'''
+
+
+@pytest.mark.parametrize(
+    ("hop", "validated"),
+    [("hop", 0), ("hop: {own_mode: false}", 2), ("{mode: safe}, hop: {own_mode: false}", 0)],
+    ids=["its own Safe", "no Safe, in Passive", "no Safe, after mode: safe"],
+)
+def test_a_mode_first_plugin_whose_parameters_send_no_mode_command_runs_as_validated(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], hop: str, validated: int
+) -> None:
+    """``mode_first=True`` with ``sends_by``: validate judged ``hop: {own_mode: false}``
+    (no Safe of its own) as any leaf, and refused it in Passive; after ``mode: safe`` it
+    validated, and the run then ended at its first drive, exit 4 (``UnkeptDeclaration``: its
+    mode command did not come first). One rule for both: what validates runs, with no mode
+    guard refusal."""
+    (tmp_path / "hop.py").write_text(HOP)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(f"plugins: [./hop.py]\ntree:\n  sequence: [{hop}, {{mode: passive}}]\n")
+    assert main(["validate", str(mission), "--allow-plugin-files", "--strict"]) == validated
+    out = capsys.readouterr().out
+    if validated:
+        assert "hop sends Drive (137), accepted only in Safe or Full mode, but it can be " in out
+        return
+    assert main([*_run(mission), "--strict"]) == 0
+    out, err = capsys.readouterr()
+    assert "outcome      SUCCESS" in out and " 0 refused by the mode guard" in out, out + err
+
+
 OS_ERRORS = [
     OSError("cannot open the log device"),
     FileNotFoundError(2, "No such file or directory", "/tmp/calibration.json"),
