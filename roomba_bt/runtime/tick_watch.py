@@ -40,17 +40,26 @@ named as before.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
 
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.runtime.teardown import behaviour_at
 
+log = logging.getLogger(__name__)
+
 #: seconds between two looks at the ticking thread
 LOOK_EVERY_S = 0.025
+#: wall seconds of a run on the virtual clock after which, if its mission time is still
+#: behind its wall time and its ticks are found in a behaviour, it is said once
+#: (:meth:`SlowTickWatch.slower_than_real_time`): a run that long, slower than a robot
+#: would go, looks hung to its author
+FAST_BUT_SLOW_AFTER_S = 2.0
 
 #: a thread's seconds on a CPU and waiting for one, so far (:class:`SchedStat`); None: not
 #: known here
@@ -133,6 +142,11 @@ class SlowTickWatch:
         #: the last look that found a new tick count, and the thread's times then: the ticks
         #: that end before the next such look ran after it
         self._window: tuple[float, tuple[float, float] | None] | None = None
+        #: wall seconds the looks found the ticks inside a behaviour (a pause, the runtime's
+        #: own waits not counted), and whether a run on the virtual clock slower than real
+        #: time was said (:meth:`slower_than_real_time`)
+        self.held_s = 0.0
+        self.slow_said = False
         self._done = threading.Event()
         self._thread = threading.Thread(
             target=self._watch, name="roomba-bt slow tick watch", daemon=True
@@ -201,7 +215,31 @@ class SlowTickWatch:
             if now - self._inside > self.longest_s:
                 self.longest_s, self.where = now - self._inside, where
                 self._longest_gap = self._inside_gap  # this iteration is the longest
+            self.held_s += now - self._last
+            if not self.slow_said and self.summary.virtual_clock:
+                self.slower_than_real_time(ticks, where)
         self._gap, self._last = now - self._last, now
+
+    def slower_than_real_time(self, ticks: int, where: str) -> None:
+        """On the virtual clock (``run --fast``), once: a run whose ticks the looks have found
+        inside behaviours for :data:`FAST_BUT_SLOW_AFTER_S` of wall time or more
+        (:attr:`held_s`: a monitor's pause is not counted), its mission time, ``ticks``
+        frames, behind that; ``where``: the behaviour the tick is in now. A plugin's
+        ``time.sleep(1)`` a tick made a 2 s ``timeout`` take some 130 s, mission time moving
+        15 ms a tick: a first run looked hung, and nothing was said until the summary. The
+        watch's own look, off the tick path: the loop's cost is the same."""
+        held, mission = self.held_s, ticks * SLOT_SECONDS
+        if held < FAST_BUT_SLOW_AFTER_S or mission >= held:
+            return
+        self.slow_said = True
+        log.warning(
+            "run --fast: behaviours have held the ticks %.1f s of wall time for %.2f s of "
+            "mission time (%.0fx slower than a robot), now %s: --fast ticks the tree as fast "
+            "as it allows and mission time is the frames ticked (%g ms each), so a behaviour "
+            "that waits on the wall clock (time.sleep, I/O) slows the whole run, and a limit "
+            "in mission time takes that much longer; the run is not hung",
+            held, mission, held / max(mission, SLOT_SECONDS), where, SLOT_SECONDS * 1000,
+        )  # fmt: skip
 
     def _left(self, now: float) -> None:
         """The iteration the looks found inside a behaviour is there no longer at ``now``

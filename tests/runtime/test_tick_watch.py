@@ -296,3 +296,75 @@ def test_the_thread_s_times_are_read_from_the_kernel_where_it_keeps_them() -> No
     assert after is not None and after[0] > before[0] and after[1] >= before[1]
     assert stats.read() is None  # closed
     assert SchedStat(-1).read() is None
+
+
+def _a_second_a_tick(
+    caplog: pytest.LogCaptureFixture, virtual_clock: bool, seconds: float, per_tick: float
+) -> list[str]:
+    """A run whose every tick blocks ``per_tick`` wall seconds inside a behaviour, watched
+    for ``seconds`` of wall time: what the watch warned."""
+    thread = FakeThread()
+    summary = RunSummary("m", virtual_clock=virtual_clock)
+    watch = SlowTickWatch(summary, 0.025, clock=lambda: thread.now, times=thread.times)
+    where = "hang (Hang.update at x.py:9)"
+    caplog.set_level("WARNING", logger="roomba_bt.runtime.tick_watch")
+    ticks = 0
+    while thread.now - 100.0 < seconds:
+        ticks += 1
+        watch.look(ticks, lambda: where)  # a new tick, then looks inside it
+        for _ in range(max(1, round(per_tick / 0.025)) - 1):
+            thread.run(0.025, 0.0, 0.0)  # blocked: no CPU, no wait for one
+            watch.look(ticks, lambda: where)
+        thread.run(0.025, 0.0, 0.0)
+    return [r.getMessage() for r in caplog.records]
+
+
+def test_a_fast_run_slower_than_a_robot_is_said_once_naming_the_behaviour(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A plugin's ``time.sleep(1)`` a tick made a 2 s ``timeout`` under ``--fast`` take some
+    130 s of wall time, mission time moving 15 ms a tick, with nothing said until the
+    summary: a plugin author's first run looked hung. The watch says it once, off the tick
+    path, naming the behaviour and what --fast's mission time is."""
+    said = _a_second_a_tick(caplog, virtual_clock=True, seconds=10.0, per_tick=1.0)
+    assert len(said) == 1, said
+    assert said[0].startswith(
+        "run --fast: behaviours have held the ticks 2.0 s of wall time for 0.04 s of mission "
+        "time (44x slower than a robot), now hang (Hang.update at x.py:9): --fast ticks the "
+        "tree as fast as it allows and mission time is the frames ticked (15 ms each)"
+    ), said
+    assert said[0].endswith("the run is not hung")
+
+
+@pytest.mark.parametrize(
+    ("virtual_clock", "per_tick"),
+    [(False, 1.0), (True, 0.01)],
+    ids=["on the wall clock", "a fast run faster than a robot"],
+)
+def test_no_run_that_keeps_up_or_is_on_the_wall_clock_is_warned(
+    caplog: pytest.LogCaptureFixture, virtual_clock: bool, per_tick: float
+) -> None:
+    """On the wall clock a blocked tick is the tick guard's and the summary's; a --fast run
+    that keeps ahead of a robot's time says nothing, however long."""
+    assert _a_second_a_tick(caplog, virtual_clock, seconds=10.0, per_tick=per_tick) == []
+
+
+def test_a_fast_run_paused_by_its_monitor_is_not_said_slow(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A ``run --fast --monitor`` paused for a minute waits in the runtime's own code: only
+    the time the looks find the ticks inside a behaviour counts, so its first slowish tick
+    after the resume is not said to hold a run that kept ahead of a robot."""
+    thread = FakeThread()
+    summary = RunSummary("m", virtual_clock=True)
+    watch = SlowTickWatch(summary, 0.025, clock=lambda: thread.now, times=thread.times)
+    caplog.set_level("WARNING", logger="roomba_bt.runtime.tick_watch")
+    watch.look(500, lambda: "")
+    for _ in range(2400):  # paused: the loop waits on the monitor's gate, in no behaviour
+        thread.run(0.025, 0.0, 0.0)
+        watch.look(500, lambda: "")
+    for _ in range(10):  # resumed: a tick of a quarter of a second in cover
+        thread.run(0.025, 1.0, 0.0)
+        watch.look(501, lambda: "cover (Cover.update at coverage_map.py:700)")
+    assert watch.held_s == pytest.approx(0.225)  # its first look found a new tick
+    assert not caplog.records
