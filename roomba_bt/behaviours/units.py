@@ -582,9 +582,20 @@ def _parse_float(value: object) -> float:
     return float(value)  # type: ignore[arg-type]
 
 
+#: the words a boolean is written as, each with the boolean it means: quoted, a text
+_BOOLEAN_WORDS = {"true": True, "yes": True, "on": True, "false": False, "no": False, "off": False}
+
+
 def _parse_bool(value: object) -> bool:
+    """A boolean; a quoted ``'true'`` is told it is a text, and how to write the boolean: a
+    plugin's ``Param("x", BOOL, default="true")`` was refused with "expected true or false,
+    got 'true'", which reads as its own contradiction."""
     if not isinstance(value, bool):
-        raise UnitError(f"expected true or false, got {described(value)}")
+        said = described(value)
+        meant = _BOOLEAN_WORDS.get(value.strip().lower()) if isinstance(value, str) else None
+        if meant is not None:
+            said = f"the text {said}: write {str(meant).lower()} unquoted ({meant} in Python)"
+        raise UnitError(f"expected true or false, got {said}")
     return value
 
 

@@ -220,3 +220,18 @@ def test_a_float_too_large_or_written_as_text_says_so(value: object, message: st
         FLOAT.parse(value)
     assert str(caught.value) == message
     assert FLOAT.parse(1.5) == 1.5
+
+
+@pytest.mark.parametrize(("text", "meant"), [("true", True), ("No", False), ("on", True)])
+def test_a_boolean_written_as_a_text_is_told_it_is_one(text: str, meant: bool) -> None:
+    """A plugin's ``Param("x", BOOL, default="true")`` (and a mission's quoted ``"no"``) was
+    refused with "expected true or false, got 'true'", which reads as its own contradiction:
+    it is said a text, with the boolean it means."""
+    with pytest.raises(UnitError) as refused:
+        BOOL.parse(text)
+    assert str(refused.value) == (
+        f"expected true or false, got the text '{text}': write {str(meant).lower()} unquoted "
+        f"({meant} in Python)"
+    )
+    with pytest.raises(UnitError, match=r"got 'yes please'$"):
+        BOOL.parse("yes please")
