@@ -21,7 +21,7 @@ import stat
 __all__ = [
     "ANY_CONTROL", "CONTROL", "INVISIBLE", "MAX_FOUND", "MAX_LISTED", "NAME_LIMIT", "TEXT_LIMIT",
     "UNPRINTABLE", "duration_said", "duration_words", "encodes", "escaped", "listed",
-    "more_listed", "name_shown", "shortened", "stopped_finding",
+    "more_listed", "name_shown", "shortened", "stopped_finding", "stopped_warning",
 ]  # fmt: skip
 
 #: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file
@@ -98,6 +98,16 @@ def stopped_finding(limit: int = MAX_FOUND) -> str:
     return (
         f"checking stopped here, at {limit:,} errors (at most {limit:,} are said): the rest of "
         "the file is not checked (a file generated wrong?)"
+    )
+
+
+def stopped_warning(limit: int = MAX_FOUND) -> str:
+    """What a mission's check says in place of its warnings past :data:`MAX_FOUND`, at the
+    place it stopped keeping them: it goes on for errors (a warning never stops a mission
+    that compiles), but a file of 1 MiB held 260,000 warnings, each one more to sort."""
+    return (
+        f"warnings stopped here, at {limit:,} (at most {limit:,} are said): the rest of the "
+        "file is checked for errors only (a file generated wrong?)"
     )
 
 

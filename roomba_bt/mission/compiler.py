@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import gc
 import itertools
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -63,7 +63,7 @@ from roomba_bt.mission.source import Loc
 from roomba_bt.mission.values import Context, FoundEnough
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile, profile_given
-from roomba_bt.printable import stopped_finding
+from roomba_bt.printable import MAX_FOUND, stopped_finding, stopped_warning
 from roomba_bt.robot.safety import signal_interrupt
 
 __all__ = [
@@ -217,9 +217,9 @@ def _checked(
     try:
         parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree, text=text)
     except FoundEnough:
-        return None, _stopped(ctx.diagnostics)
+        return None, _stopped(ctx.diagnostics, ctx.stops)
     if parsed is None or parsed.tree is None:
-        return None, list(_said(ctx.diagnostics or ctx.warnings))
+        return None, _unbuilt(ctx)
     tree = parsed.tree
     modes = ModeCheck(ctx.wording)
     modes.run(tree)
@@ -237,7 +237,7 @@ def _checked(
         assert parsed.tree_loc is not None
         diagnostics.append(parsed.tree_loc.at(problem))
     if diagnostics:
-        return None, list(_said(diagnostics))
+        return None, _pinned(_said(diagnostics), ctx.stops)
     try:
         root = build(tree)
     except BuildError as failed:
@@ -257,10 +257,18 @@ def _checked(
         blackboard_keys={k: d.type for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
-        warnings=_said(ctx.warnings, _tree_warnings(tree, modes, profile, ignored), dead_warnings),
+        warnings=_kept(ctx.warnings, _tree_warnings(tree, modes, profile, ignored), dead_warnings),
         waits_past_sleep=waits_past_sleep(modes, profile),
     )
     return mission, []
+
+
+def _unbuilt(ctx: Context) -> list[Diagnostic]:
+    """What a mission whose file did not read says (its errors), or a library (no tree: its
+    warnings, which a mission's use of it would say)."""
+    if ctx.diagnostics:
+        return _pinned(_said(ctx.diagnostics), ctx.stops)
+    return list(_kept(ctx.warnings))
 
 
 def _said(*found: Iterable[Diagnostic]) -> tuple[Diagnostic, ...]:
@@ -275,16 +283,43 @@ def _said(*found: Iterable[Diagnostic]) -> tuple[Diagnostic, ...]:
     return (*(d.shown() for d in said[:MAX_REPORTED]), *said[MAX_REPORTED:])
 
 
-def _stopped(found: list[Diagnostic]) -> list[Diagnostic]:
+def _stopped(found: list[Diagnostic], stops: list[Diagnostic]) -> list[Diagnostic]:
     """The errors of a check stopped at :data:`~roomba_bt.printable.MAX_FOUND` (``found``,
     in the order found) as ``validate`` says them, as a world's are: all but the last in the
     file's order, and in the last one's place the note that the check stopped there, listed
-    as the :data:`MAX_REPORTED`-th (after it a command says only how many more there are:
-    the note sorted at the file's end was never seen)."""
+    among the first :data:`MAX_REPORTED` (after them a command says only how many more
+    there are: the note sorted at the file's end was never seen), as is ``stops``' note of
+    a tree cut short."""
     last = found[-1]
-    said = list(_said(found[:-1]))
-    said.insert(MAX_REPORTED - 1, Diagnostic(last.file, last.line, last.column, stopped_finding()))
-    return said
+    note = Diagnostic(last.file, last.line, last.column, stopped_finding())
+    return _pinned((*_said(found[:-1]), note), [*stops, note])
+
+
+def _kept(*found: Iterable[Diagnostic]) -> tuple[Diagnostic, ...]:
+    """A mission's warnings as ``validate`` says them (:func:`_said`), at most
+    :data:`~roomba_bt.printable.MAX_FOUND`: past them, the first so many found less one, and
+    in the place of the last the note that no more are said (``Context.warn`` keeps no
+    more), listed among the first :data:`MAX_REPORTED`, as the errors' stop is."""
+    every = list(itertools.chain.from_iterable(found))
+    if len(every) <= MAX_FOUND:
+        return _said(every)
+    last = every[MAX_FOUND - 1]
+    note = Diagnostic(last.file, last.line, last.column, stopped_warning(), severity="warning")
+    return tuple(_pinned((*_said(every[: MAX_FOUND - 1]), note), [note]))
+
+
+def _pinned(said: Sequence[Diagnostic], stops: Sequence[Diagnostic]) -> list[Diagnostic]:
+    """``said`` with each diagnostic that says where a check stopped (``stops``, by their
+    text) among the first :data:`MAX_REPORTED`, the last of them, where it sorts past them:
+    it explains the rest, and a command lists only those (the tree cut at 10,000 nodes was
+    said after a hundred errors of the nodes before it, and never seen)."""
+    notes = {stop.message for stop in stops}
+    late = [d for d in said[MAX_REPORTED:] if d.message in notes]
+    if not late:
+        return list(said)
+    kept = [d for d in said if d.message not in notes or d not in late]
+    at = MAX_REPORTED - len(late)
+    return [*kept[:at], *(d.shown() for d in late), *kept[at:]]
 
 
 def _tree_warnings(

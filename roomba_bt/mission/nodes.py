@@ -201,13 +201,13 @@ class NodeParser:
             return False
         self._too_many = True
         where = self._uses[-1] if self._uses else loc
-        self.ctx.error(
-            where.at(
-                f"the tree grows past {MAX_TREE_NODES:,} nodes here (subtrees are expanded where "
-                f"they are used, so a subtree using another several times multiplies it); at "
-                f"most {MAX_TREE_NODES:,} are allowed (a file generated wrong?)"
-            )
+        cut = where.at(
+            f"the tree grows past {MAX_TREE_NODES:,} nodes here (subtrees are expanded where "
+            f"they are used, so a subtree using another several times multiplies it); at "
+            f"most {MAX_TREE_NODES:,} are allowed (a file generated wrong?)"
         )
+        self.ctx.stops.append(cut)  # listed among the first, as it explains those after
+        self.ctx.error(cut)
         return True
 
     def _node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
@@ -362,8 +362,7 @@ class NodeParser:
                 if severity == "error":
                     raise Bad(at.key_loc.at(why))
                 warning = at.key_loc.at(why).as_warning()
-                if warning not in self.ctx.warnings:
-                    self.ctx.warnings.append(warning)
+                self.ctx.warn(warning)
             return parse_leaf(self.ctx, decl, at)
         if kind.shape is Shape.CHILDREN:
             return parse_composite(self, kind, at)
@@ -452,8 +451,7 @@ class NodeParser:
             own = self._alone(sub, with_mission=False)[1] if library else frozenset()
             for warning in warnings:
                 said = warning if warning in own else warning.used_at(use)
-                if said not in self.ctx.warnings:
-                    self.ctx.warnings.append(said)
+                self.ctx.warn(said)
         return body
 
     def _alone(self, sub: SubtreeDef, *, with_mission: bool) -> tuple[Findings, Findings]:
@@ -518,8 +516,7 @@ class NodeParser:
                 scope=scope_of_argument(self.ctx, pvalue, env, self.own_keys.mission),
             )
         for warning in _shadowed(sub, self.global_env, key_loc):
-            if warning not in self.ctx.warnings:
-                self.ctx.warnings.append(warning)
+            self.ctx.warn(warning)
         given = {a[0] for a in args}
         for pname, (vtype, default, _) in sub.params.items():
             if pname in given:

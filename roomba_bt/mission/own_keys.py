@@ -100,8 +100,7 @@ class OwnKeys:
                 f"({outside[key].type.describe()}) in its body: {key} there is each use's "
                 "own; rename one of them if the body should read the mission's"
             ).as_warning()
-            if warning not in self.ctx.warnings:
-                self.ctx.warnings.append(warning)
+            self.ctx.warn(warning)
 
     def checked(self, sub: SubtreeDef, body: Node | None, scope: KeyScope, number: int) -> None:
         """``sub``'s own keys in ``body`` (parsed in ``scope``) given the names of its

@@ -226,8 +226,7 @@ def warn_escaped(
         if name not in meant
     ]
     for _, warning in sorted(said, key=lambda each: each[0]):
-        if warning not in ctx.warnings:
-            ctx.warnings.append(warning)
+        ctx.warn(warning)
 
 
 def _character_at(node: yaml.Node, loc: Loc, text: str, offset: int) -> Loc:
@@ -469,9 +468,15 @@ class Context:
     #: written there that mean the text ``${name}``, not warned of (:func:`read_literal`)
     #: each name with where it is written, for :func:`check_literal_names`
     literal: dict[str, dict[str, Loc]] = field(default_factory=dict)
+    #: where a check stopped before the file's end (the tree cut at ``MAX_TREE_NODES``): a
+    #: command lists it among the first it lists, wherever it sorts (``compiler._pinned``)
+    stops: list[Diagnostic] = field(default_factory=list)
     #: ``diagnostics`` as a set: an error is reported once, and looking it up in the list
     #: made N errors cost N**2/2 comparisons (20,000 aliases took 40 s to validate)
     _reported: set[Diagnostic] = field(default_factory=set, init=False, repr=False)
+    #: ``warnings`` as a set, for the same reason: 16,000 YAML 1.1 numbers (``1_0``, four
+    #: bytes each) took 44 s to validate, and a file of 1 MiB holds 260,000
+    _warned: set[Diagnostic] = field(default_factory=set, init=False, repr=False)
     #: the files that define each unknown subtree's name, by the name (``nodes``'s hint,
     #: which reads the granted folders' files): looked up once a name, and for at most
     #: ``HINTS_LOOKED_UP`` names a compile (100,000 unknown subtrees read the folder's
@@ -488,14 +493,26 @@ class Context:
             if len(self.diagnostics) >= MAX_FOUND:
                 raise FoundEnough
 
+    def warn(self, diagnostic: Diagnostic) -> None:
+        """One more warning, kept once; past :data:`~roomba_bt.printable.MAX_FOUND` of them
+        none is kept (the check goes on for errors): the compiler keeps as many as it says
+        (:func:`~roomba_bt.mission.compiler._kept`), and says where they stopped."""
+        warned = self._warned
+        if len(warned) > MAX_FOUND:
+            return
+        before = len(warned)
+        warned.add(diagnostic)
+        if len(warned) != before:
+            self.warnings.append(diagnostic)
+
     def said(self, diagnostics: list[Diagnostic]) -> None:
         """What reading a file said: its errors, and its warnings once each (a file
         included twice is read twice)."""
         for diagnostic in diagnostics:
             if diagnostic.severity != "warning":
                 self.error(diagnostic)
-            elif diagnostic not in self.warnings:
-                self.warnings.append(diagnostic)
+            else:
+                self.warn(diagnostic)
 
     #: at most this many unread includes are named in one note
     _UNREAD_NAMED = 2
@@ -543,11 +560,13 @@ class Context:
         two lists it gives), not said: a subtree's body parsed at a use, whose findings the
         use may have caused (:meth:`NodeParser.node`'s caller decides where each is said)."""
         said, reported, warned = self.diagnostics, self._reported, self.warnings
-        self.diagnostics, self._reported, self.warnings = [], set(), []
+        warned_set = self._warned
+        self.diagnostics, self._reported, self.warnings, self._warned = [], set(), [], set()
         try:
             yield self.diagnostics, self.warnings
         finally:
             self.diagnostics, self._reported, self.warnings = said, reported, warned
+            self._warned = warned_set
 
     def report(self, bad: Bad) -> None:
         """A :class:`Bad`'s diagnostic and those raised with it (each key of a mapping that

@@ -380,3 +380,47 @@ def test_a_missions_check_stops_at_the_cap_and_says_so_among_the_first_listed(
     ), lines[99]
     mission, diagnostics = compile_mission(tmp_path / "many.yaml")
     assert mission is None and len(diagnostics) == 10_000  # each kept, the note among them
+
+
+def test_a_tree_cut_short_is_said_among_the_first_listed(tmp_path: Path, capsys: Capsys) -> None:
+    """The tree cut at ``MAX_TREE_NODES`` explains every node after it, but its line sorted
+    after the hundred errors of the nodes before it, which are all a command lists: a user
+    read a hundred bad velocities and ``... and 301 more errors``, never why. It is listed
+    as the hundredth now, as the check's stop at 10,000 errors is."""
+    from roomba_bt.mission.nodes import MAX_TREE_NODES
+
+    bad = "    - drive: {velocity: 9 parsecs}\n" * 200  # two errors each
+    good = "    - stop\n" * (MAX_TREE_NODES + 100)
+    (tmp_path / "cut.yaml").write_text(f"mission: m\ntree:\n  sequence:\n{bad}{good}")
+    assert main(["validate", str(tmp_path / "cut.yaml")]) == 2
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[-2] == "... and 301 more errors (the first 100 are listed)"
+    assert re.search(r"cut\.yaml:\d+:7: the tree grows past 10,000 nodes here ", lines[99])
+    assert sum("grows past" in line for line in lines) == 1
+    assert all("parsecs" in line or "Passive" in line for line in lines[:99])
+
+
+def test_a_missions_warnings_stop_at_the_cap_and_say_so_among_the_first_listed(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """Warnings had no cap, and each was looked up in the list of those kept: 16,000 YAML
+    1.1 numbers (``1_0``, four bytes) took 44 s to validate, a file of 1 MiB holds 170,000.
+    They stop at ``printable.MAX_FOUND`` as errors do (the check goes on for errors), the
+    note at the place of the last and listed as the hundredth line."""
+    keys = "".join(f"  k{i}: {{type: int, initial: 1_0}}\n" for i in range(12_000))
+    (tmp_path / "w.yaml").write_text(f"mission: m\nblackboard:\n{keys}tree: {{sequence: [stop]}}\n")
+    assert main(["validate", str(tmp_path / "w.yaml")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[-1].endswith("w.yaml: ok, with warnings")
+    assert lines[-2] == "... and 9,900 more warnings (the first 100 are listed)"
+    assert sum("'1_0' is the number 10" in line for line in lines[:100]) == 99
+    assert re.fullmatch(
+        r".*w\.yaml:10002:31: warning: warnings stopped here, at 10,000 \(at most 10,000 are "
+        r"said\): the rest of the file is checked for errors only \(a file generated wrong\?\)",
+        lines[99],
+    ), lines[99]
+    mission, diagnostics = compile_mission(tmp_path / "w.yaml")
+    assert mission is not None and not diagnostics and len(mission.warnings) == 10_000
+    (tmp_path / "w.yaml").write_text(f"mission: m\nblackboard:\n{keys}tree: {{sequence: [nope]}}\n")
+    assert main(["validate", str(tmp_path / "w.yaml")]) == 2  # the errors after are found
+    assert "unknown" in capsys.readouterr().out
