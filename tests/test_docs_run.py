@@ -15,10 +15,14 @@ has no ``missions/examples`` (session 39's stranger: the page ran the repository
 A mission that names ``plugins:`` is validated with ``--allow-plugin-files``, as the docs
 show it.
 
-Every command is run, in a scratch directory holding the missions, worlds and files written
-from the docs, a copy of ``missions/``, a link to ``worlds/`` and, in its ``plugins/``, a
-link to each package of the repository's (``plugins/roomba-bt-dirt``), with exit code 0
-expected, after the rewrites of :func:`fast_variant`:
+Every command is run as a wheel's user runs it: in a scratch directory holding only the
+missions, worlds and files its own page has the reader write (no ``missions/``, ``worlds/`` or
+``plugins/roomba-bt-dirt`` of the repository's, which a wheel does not hold: session 39's
+stranger met ``missions/dock.yaml``, exit 2, on five pages this test had run in a folder
+holding a copy of them). A command its page frames as a checkout's (:data:`CHECKOUT`, each
+with its reason) runs in a checkout's directory instead: the docs' files, a copy of
+``missions/``, a link to ``worlds/`` and, in its ``plugins/``, a link to each package of the
+repository's. Exit code 0 is expected, after the rewrites of :func:`fast_variant`:
 
 * no robot: ``--port URL`` becomes the built-in simulator on the virtual clock (``--fast``);
   ``sensors`` stops after one refresh (``--count 1``);
@@ -32,14 +36,15 @@ expected, after the rewrites of :func:`fast_variant`:
   ``--rfc2217 HOST:0``);
 * ``doctor --port URL`` runs against a simulator this test serves: ``roomba-bt sim --rfc2217``,
   asleep, at 19200, so every step up to the BRC wake is taken;
-* placeholders get a value: ``[NAME...]`` -> ``drive``, ``A.yaml``/``B.yaml`` ->
-  ``missions/dock.yaml``/``missions/dock-builtin.yaml``;
+* placeholders get a value: ``[NAME...]`` -> ``drive``, ``A.yaml``/``B.yaml`` (two missions
+  of the reader's) -> the shipped ``dock``/``dock-builtin``;
 * ``make run`` runs the command its Makefile recipe runs.
 
 The docs give some commands more than once (the same ``eval`` in three tables of
 docs/routines.md, ``doctor --port /dev/ttyUSB0`` in README.md and docs/doctor.md): a command
-line whose rewritten argv was already run in this session is not run again, its exit code,
-output and errors are the first run's (:data:`RAN`), and its own case checks them.
+line whose rewritten argv was already run in this session, in the same kind of directory
+(and, where it names a file of its page's, with the same files), is not run again: its exit
+code, output and errors are the first run's (:data:`RAN`), and its own case checks them.
 
 docs/doctor.md's transcripts (a ``text`` block that starts ``$ roomba-bt doctor``) are run
 against the simulator their paragraph names and compared with what doctor prints, line for
@@ -77,13 +82,12 @@ SHELL_LANGS = ("", "sh", "console", "shell", "bash")
 #: Commands the test does not run, and why (exact text as in the docs, comment dropped).
 NOT_RUN: dict[str, str] = {
     "make test": "this test suite is what it runs",
-    ". .venv/bin/activate": "changes the calling shell; the tests already run in that venv",
     "pip install 'roomba-bt[cluster]'": "an install from the package index; `make test` "
     "installs the cluster extra into the venv these tests run in",
     "dask scheduler": "a server that runs until stopped (a Dask cluster's scheduler)",
     "dask worker tcp://HOST:8786 --nthreads 1": "a server that runs until stopped, and "
     "HOST is the user's machine",
-    "roomba-bt eval missions/dock.yaml --world apartment --runs 2000 "
+    "roomba-bt eval dock --world apartment --runs 2000 "
     "--scheduler tcp://HOST:8786 --out apartment.jsonl": "needs the Dask cluster the two "
     "commands above start (HOST is the user's); the Dask engine itself is tested in "
     "tests/evaluate",
@@ -101,10 +105,10 @@ NOT_RUN: dict[str, str] = {
     "so those tests run beside this one",
     "pip install 'roomba-bt[monitor]'": "an install from the package index; `make test` "
     "installs the monitor extra into the venv these tests run in",
-    "roomba-bt run missions/dock.yaml --world apartment --monitor": "serves the page until "
+    "roomba-bt run dock --world apartment --monitor": "serves the page until "
     "the run ends in real time; tests/monitor runs the monitor in a real browser",
-    "roomba-bt run missions/dock.yaml --port /dev/ttyUSB0 --monitor 9000": "needs a robot",
-    "roomba-bt run missions/dock.yaml --monitor 0.0.0.0:8765": "serves on every address "
+    "roomba-bt run dock --port /dev/ttyUSB0 --monitor 9000": "needs a robot",
+    "roomba-bt run dock --monitor 0.0.0.0:8765": "serves on every address "
     "until stopped; the token rule is tested in tests/monitor",
     "roomba-bt run mymission.yaml --monitor --watch": "watches a file until stopped; "
     "tests/monitor changes a mission under --watch",
@@ -196,8 +200,25 @@ def make_run_command() -> str:
     return recipe[1].replace("$(RUN_ARGS)", args[1])
 
 
-PLACEHOLDERS = {"[NAME...]": "drive", "A.yaml": "missions/dock.yaml",
-                "B.yaml": "missions/dock-builtin.yaml"}  # fmt: skip
+PLACEHOLDERS = {"[NAME...]": "drive", "A.yaml": "dock", "B.yaml": "dock-builtin"}
+
+#: Commands run in a checkout's directory (a copy of ``missions/``, the repository's worlds and
+#: plugin packages), not a wheel's user's, and why: each is framed by its page as a
+#: checkout's (exact text as in the docs, comment dropped).
+CHECKOUT: dict[str, str] = {
+    "make run": "README's quick start, in a checkout: the Makefile is the repository's",
+    "roomba-bt validate --strict missions/*.yaml missions/lib/*.yaml": "docs/ci.md runs "
+    "them from a checkout's root (roomba-bt's own missions and their library, as a team's "
+    "CI runs them on its repository), and says so",
+    "roomba-bt -q validate --strict --format github missions/*.yaml missions/lib/*.yaml": (
+        "docs/ci.md, the same: from a checkout's root"
+    ),
+    "roomba-bt validate --format json missions/*.yaml > validate.json": "docs/ci.md, the "
+    "same: from a checkout's root",
+    "roomba-bt run plugins/roomba-bt-dirt/examples/dirt.yaml --world "
+    "plugins/roomba-bt-dirt/examples/dirty-room.yaml --fast": "docs/plugins.md §5: the "
+    "example package is in roomba-bt's source (a checkout or the sdist), as the page says",
+}
 
 
 #: Episodes a docs ``eval`` runs: two, so its summary is over more than one episode ...
@@ -256,18 +277,37 @@ WORLDS = worlds()
 FILES = files()
 
 
+def page_files(doc: str) -> list[tuple[str, str]]:
+    """(path, text) of each mission, world and file that page ``doc`` has its reader write."""
+    return [(f, t) for where, f, t in (*MISSIONS, *WORLDS, *FILES) if where.startswith(f"{doc}:")]
+
+
+def doc_of(where: str) -> str:
+    """The page of a ``doc:line`` place."""
+    return where.rsplit(":", 1)[0]
+
+
 @pytest.fixture
-def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    shutil.copytree(ROOT / "missions", tmp_path / "missions")
-    (tmp_path / "worlds").symlink_to(ROOT / "worlds")
-    (tmp_path / "plugins").mkdir()  # the docs' plugin files beside the packages
-    for package in (ROOT / "plugins").iterdir():
-        (tmp_path / "plugins" / package.name).symlink_to(package)
-    for _, file, text in (*MISSIONS, *WORLDS, *FILES):
-        (tmp_path / file).parent.mkdir(parents=True, exist_ok=True)
-        (tmp_path / file).write_text(text)
-    monkeypatch.chdir(tmp_path)
-    return tmp_path
+def scratch(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Callable[..., Path]:
+    """The directory a page's commands run in, made the current one: what the page ``doc``
+    has the reader write and nothing else (a wheel's user's), or with ``checkout=True`` also
+    a copy of ``missions/``, the worlds and, in ``plugins/``, each package of the
+    repository's (:data:`CHECKOUT`)."""
+
+    def made(doc: str, checkout: bool = False) -> Path:
+        if checkout:
+            shutil.copytree(ROOT / "missions", tmp_path / "missions")
+            (tmp_path / "worlds").symlink_to(ROOT / "worlds")
+            (tmp_path / "plugins").mkdir()  # the docs' plugin files beside the packages
+            for package in (ROOT / "plugins").iterdir():
+                (tmp_path / "plugins" / package.name).symlink_to(package)
+        for file, text in page_files(doc):
+            (tmp_path / file).parent.mkdir(parents=True, exist_ok=True)
+            (tmp_path / file).write_text(text)
+        monkeypatch.chdir(tmp_path)
+        return tmp_path
+
+    return made
 
 
 def test_the_docs_hold_commands_and_missions() -> None:
@@ -278,8 +318,9 @@ def test_the_docs_hold_commands_and_missions() -> None:
 
 def test_every_listed_command_is_still_in_the_docs() -> None:
     documented = {command for _, command in COMMANDS}
-    stale = [command for command in NOT_RUN if command not in documented]
-    assert not stale, f"NOT_RUN lists commands the docs no longer hold: {stale}"
+    stale = [command for command in (*NOT_RUN, *CHECKOUT) if command not in documented]
+    assert not stale, f"NOT_RUN or CHECKOUT lists commands the docs no longer hold: {stale}"
+    assert not set(NOT_RUN) & set(CHECKOUT), "a command is either run or not"
 
 
 def test_every_command_is_run_or_listed_with_a_reason() -> None:
@@ -293,8 +334,13 @@ def test_every_command_is_run_or_listed_with_a_reason() -> None:
 
 @pytest.mark.parametrize(("where", "file", "text"), MISSIONS, ids=[m[0] for m in MISSIONS])
 def test_every_mission_in_the_docs_validates(
-    where: str, file: str, text: str, workdir: Path, capsys: pytest.CaptureFixture[str]
+    where: str,
+    file: str,
+    text: str,
+    scratch: Callable[..., Path],
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
+    scratch(doc_of(where))  # beside what its page has the reader write, no more
     # A mission that names plugin files is validated as the docs show it: with the permission.
     allow = ["--allow-plugin-files"] if (yaml.safe_load(text) or {}).get("plugins") else []
     assert main(["validate", file, *allow]) == 0, f"{where}: {capsys.readouterr()}"
@@ -326,7 +372,10 @@ def python_block(doc: str, heading: str) -> str:
 @pytest.mark.parametrize(
     ("doc", "heading", "made"), PYTHON_RUN, ids=[f"{d}:{h}" for d, h, _ in PYTHON_RUN]
 )
-def test_the_python_examples_run(doc: str, heading: str, made: str, workdir: Path) -> None:
+def test_the_python_examples_run(
+    doc: str, heading: str, made: str, scratch: Callable[..., Path]
+) -> None:
+    scratch(doc)
     namespace: dict[str, object] = {"__name__": "docs_example"}
     exec(compile(python_block(doc, heading), f"{doc}:{heading}", "exec"), namespace)
     assert namespace.get(made) is not None  # each made what it is about
@@ -354,7 +403,7 @@ PANDAS_AB = ("docs/evaluation.md", "dock-ab.jsonl")
 
 
 def test_the_pandas_a_b_example_names_the_variants_its_eval_wrote(
-    workdir: Path, capsys: pytest.CaptureFixture[str]
+    scratch: Callable[..., Path], capsys: pytest.CaptureFixture[str]
 ) -> None:
     """Its ``df.mission.map(...)`` gives each row the name its ``paired[...]`` indexes by.
     The column holds the mission as given, ``roomba-bt:dock.yaml`` for a shipped one named
@@ -364,6 +413,7 @@ def test_the_pandas_a_b_example_names_the_variants_its_eval_wrote(
     import json
 
     doc, records = PANDAS_AB
+    workdir = scratch(doc)
     [block] = [b for b in blocks() if b.doc == doc and b.lang == "python" and records in b.text]
     tree = ast.parse(block.text)
     [mapper] = [
@@ -427,20 +477,34 @@ RUN = [
 NOT_SAID = {"my-flat.yaml": "fell to Passive by itself"}
 
 
-#: (exit code, stdout, stderr) of each whole command line run so far, by its argv as run: a
-#: line the docs give again (the same argv, in a scratch directory of the same files) ran the
-#: same way, and is not run twice (the module's docstring).
-RAN: dict[tuple[str, ...], tuple[int, str, str]] = {}
+#: (exit code, stdout, stderr) of each whole command line run so far, by its argv as run, the
+#: kind of directory and the files of its page where it names one: a line the docs give again
+#: (the same argv, in a scratch directory of the same files) ran the same way, and is not
+#: run twice (the module's docstring).
+RAN: dict[tuple[object, ...], tuple[int, str, str]] = {}
+
+
+def test_the_wheel_s_user_has_no_checkout(scratch: Callable[..., Path]) -> None:
+    """The folder a wheel's user runs a page's commands in holds what the page writes and no
+    more: a command naming ``missions/dock.yaml`` fails there, as it does for such a user."""
+    workdir = scratch("README.md")
+    assert not (workdir / "missions").exists() and not (workdir / "worlds").exists()
+    assert sorted(p.name for p in workdir.iterdir()) == sorted(
+        f for f, _ in page_files("README.md")
+    )
+    assert main(["validate", "missions/dock.yaml"]) == 2
 
 
 @pytest.mark.parametrize(("where", "command"), RUN)
 def test_every_command_in_the_docs_runs(
     where: str,
     command: str,
-    workdir: Path,
+    scratch: Callable[..., Path],
     capsys: pytest.CaptureFixture[str],
     served_sim: Callable[..., Any],
 ) -> None:
+    checkout = command in CHECKOUT
+    workdir = scratch(doc_of(where), checkout=checkout)
     for part in command.split(" && "):
         redirect = None
         if " > " in part:
@@ -449,8 +513,11 @@ def test_every_command_in_the_docs_runs(
         expanded = [w for word in argv for w in (sorted(glob.glob(word)) or [word])]
         assert expanded[0] == "roomba-bt", f"{where}: {part}"
         if part == command:  # the whole line: it needs no file an earlier part wrote
-            code, out, err = RAN.get(tuple(expanded)) or _run(expanded, capsys, served_sim)
-            RAN[tuple(expanded)] = code, out, err
+            files = page_files(doc_of(where))
+            named = any(f in word for word in expanded for f, _ in files)
+            key = (checkout, tuple(files) if named else (), *expanded)
+            code, out, err = RAN.get(key) or _run(expanded, capsys, served_sim)
+            RAN[key] = code, out, err
         else:
             code, out, err = _run(expanded, capsys, served_sim)
         assert code == 0, f"{where}: {' '.join(expanded)} exited {code}\n{out}\n{err}"
