@@ -396,6 +396,37 @@ def test_the_simulator_s_signature_on_its_page_is_the_code_s() -> None:
     assert [n for n in names if n != "*"] == list(inspect.signature(Simulator).parameters)
 
 
+#: Error lines a page quotes whole: (the page, the environment and the command that make
+#: it, the exit code). The page holds what the command prints on its last line of stderr, to
+#: the character, in backquotes (the Markdown's line breaks aside): docs/robot.md quoted
+#: the ROOMBA_BT_PROFILE error without its ``(roomba-bt run --help, --profile)`` end
+#: (session 39's stranger).
+QUOTED_ERRORS = [
+    ("docs/robot.md", {"ROOMBA_BT_PROFILE": "roomba560"}, "roomba-bt run dock --fast", 2),
+]
+
+
+@pytest.mark.parametrize(
+    ("doc", "env", "command", "code"), QUOTED_ERRORS, ids=[q[0] for q in QUOTED_ERRORS]
+)
+def test_each_quoted_error_is_what_the_command_prints(
+    doc: str,
+    env: dict[str, str],
+    command: str,
+    code: int,
+    scratch: Callable[..., Path],
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    scratch(doc)
+    for name, value in env.items():
+        monkeypatch.setenv(name, value)
+    assert main(shlex.split(command)[1:]) == code
+    said = capsys.readouterr().err.strip().splitlines()[-1]
+    page = " ".join((ROOT / doc).read_text(encoding="utf-8").split())
+    assert f"`{said}`" in page, f"{doc} does not quote what {command} prints:\n{said}"
+
+
 #: docs/evaluation.md's pandas example that reads the A/B records of the ``eval`` command
 #: above it (pandas is no dependency, nor installed for these tests: its own lines are run
 #: alone, on the records that command writes)
