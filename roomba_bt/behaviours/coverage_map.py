@@ -70,13 +70,13 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import driving, reversing
 from roomba_bt.behaviours.base import Action
-from roomba_bt.behaviours.blackboard import run_board
+from roomba_bt.behaviours.blackboard import run_board, write_key
 from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.docking.common import DockWatch
 from roomba_bt.behaviours.driving import WHEEL
 from roomba_bt.behaviours.drops import DROP, DropEdge, KnownDrops
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
-from roomba_bt.behaviours.units import DISTANCE, DURATION, INT
+from roomba_bt.behaviours.units import BOOL, DISTANCE, DURATION, INT, STR
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import (
     ENCODER_PACKETS,
@@ -702,8 +702,13 @@ class NoFrontier:
               doc="passes over the floor: when its map says the floor is done, another "
                   "on a map of the walls drawn afresh (the encoders' drift closes the "
                   "first early)"),
+        Param("unreached", STR, from_blackboard=False,
+              doc="a bool key written when the floor is done: true when its map still "
+                  "shows unswept floor it found no way to (its message says how much), "
+                  "for the mission to say so"),
     ),
     reads=MAP_READS,
+    writes_keys={"unreached": BOOL},
     sends=opcodes("drive_direct", "drive"),
 )  # fmt: skip
 class Cover(Action):
@@ -773,6 +778,7 @@ class Cover(Action):
                 self.feedback_message = fmap.floor_done(left)
                 if left:  # floor left on its map: the run's log says it, as a warning
                     _log.warning("%s: %s", self.name, self.feedback_message)
+                self._said_unreached(bool(left))
                 return _OK
             wheels = self._step(frame)
             if wheels is not None:
@@ -781,6 +787,18 @@ class Cover(Action):
                 return _RUN
         self.send(driving.drive_wheels(0.0, 0.0))
         return _RUN
+
+    def _said_unreached(self, left: bool) -> None:
+        """Write ``left`` (its map shows floor it found no way to) to the ``unreached`` key,
+        where one is given.
+
+        Why: the warning and this leaf's message were all that said it, and the run
+        summary's ``mission said`` line, the mission's last ``log``, read "cleaning stopped:
+        the floor is done" over a bedroom never entered; with the key the mission's own
+        ``log`` says it (missions/clean.yaml)."""
+        key = self.value("unreached")
+        if key is not None:
+            write_key(str(key), left, self.name)
 
     @property
     def _pose(self) -> Odometry:

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from py_trees.common import Status
 
+from roomba_bt.behaviours.coverage_map import FloorMap
 from roomba_bt.evaluate import EpisodeSpec, run_episode
 from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.mission import load_mission
@@ -244,6 +245,39 @@ def test_clean_says_why_it_stopped_and_a_retried_cover_shows_no_old_failure(
     assert cover.status is Status.SUCCESS
     assert re.fullmatch(r"floor done: \d+\.\d m² swept by its own map", cover.feedback_message)
     assert _stopped(cleaned_at_a_cliff.said) == ["cleaning stopped: the floor is done"]
+    assert summary.said == "cleaning stopped: the floor is done"  # its map left none open
+
+
+#: what clean.yaml says when cover's map still shows floor it found no way to
+FLOOR_LEFT = (
+    "cleaning stopped: the floor is done by its map, but its map shows unswept floor it "
+    "found no way to (a door its map closed?): cover's message says how much"
+)
+
+
+def test_clean_says_in_its_summary_that_its_map_left_floor_it_found_no_way_to(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A floor done while cover's map still showed unswept floor beside what it swept was a
+    warning in the log and cover's message in the final tree; the summary's ``mission
+    said`` line read "cleaning stopped: the floor is done" (the apartment, 1.5 % encoder
+    error: the bedroom never entered, session 38). Now cover writes ``unreached`` and the
+    mission says it there. Its map is made to show 2.5 m of such floor (a small room's
+    own map shows none)."""
+    monkeypatch.setattr(FloorMap, "unreached", lambda self: 25)
+    room = tmp_path / "small.yaml"
+    room.write_text(
+        "rooms: [[[0, 0], [2, 0], [2, 1.5], [0, 1.5]]]\n"
+        "robot: {start: {at: [1.0, 0.75], heading: 0}}\n"
+    )
+    _, summary, compiled = _clean_on_the_simulator(str(room), None, {"go_home": "false"}, 900.0)
+    assert summary.outcome.value == "success", summary.reason
+    assert summary.said == FLOOR_LEFT
+    cover = next(n for n in compiled.root.iterate() if n.name.startswith("cover("))
+    assert cover.feedback_message.endswith(
+        "its map shows unswept floor along 2.5 m of the floor it swept that it found no way "
+        "to (a door its map closed?)"
+    )
 
 
 def _stopped(messages: Iterable[str]) -> list[str]:
