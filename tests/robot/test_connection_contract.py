@@ -201,7 +201,9 @@ def test_robot_that_does_not_answer_fails_with_the_port_and_likely_causes(
         connection.start("safe", PACKETS, confirm_timeout=0.2)
     message = str(failed.value)
     assert message.startswith(link.url + ": the robot did not answer")
-    assert "wrong baud rate" in message and "no power" in message and "wrong cable" in message
+    assert "wrong baud rate" in message and "no power" in message
+    assert "wrong cable" not in message  # a pty: the program at its other end, not a cable
+    assert "a cable behind a bridge such as socat wired wrong" in message
     connection.close()
 
 
