@@ -302,8 +302,22 @@ def stop_between_frames(runner: MissionRunner) -> None:
     try:
         between_frames(runner.gate, runner)
     except StopRequested:
-        runner.summary.written_when_interrupted = runner.connection.link.bytes_written
+        note_written(runner)
         raise
+
+
+def note_written(runner: MissionRunner) -> None:
+    """The bytes gone over the link when the run was ended from outside (a stop between
+    frames, a Ctrl-C or SIGTERM), for the record's end note: the count the run's record
+    keeps of its "out" side (``RecordingTransport.out_bytes``), whoever wrote them; None
+    without a record. It was the link's count, translated at the end by what the link
+    wrote since, which missed the bytes written past the link (``discovery.probe``'s Query
+    List after a stop not confirmed): on a robot's port the note said more than was
+    written, and the replay, waiting for it, called a faithful record different (exit 1).
+    Read off the transport, not kept on the runner: its instance stays within CPython's
+    shared attribute table (the note at the end of ``MissionRunner.__init__``)."""
+    counted = getattr(runner.connection.transport, "out_bytes", None)
+    runner.summary.written_when_interrupted = counted if type(counted) is int else None
 
 
 class _StopGate(InnerGate):
@@ -601,8 +615,8 @@ class MissionRunner(BaseHandle):
         except (KeyboardInterrupt, RunAborted) as exc:  # Ctrl-C, SIGTERM, --wall-limit...:
             if not behaviours_interrupt(exc):  # in which half of its frame (a behaviour's own
                 summary.ended_at = interrupted_at(self, flushed)  # interrupt: its error)
+                note_written(self)  # a flush cut short ("before"), a stall's drive 0 ("after")
                 if summary.ended_at is not None and summary.ended_at[1] == "before":
-                    summary.written_when_interrupted = self._link.bytes_written  # a flush cut?
                     summary.cut_short = cut_short(exc, perf() - started)
             raise
 

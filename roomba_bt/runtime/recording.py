@@ -509,7 +509,9 @@ class RecordingTransport:
             self._log("out", data)
             self.out_bytes += len(data)
 
-    #: the bytes of the record's "out" side so far (an end note's ``written`` is one)
+    #: the bytes of the record's "out" side so far, whoever wrote them (the link, the probe
+    #: that asks after a stop, the baud hunt): an end note's ``written`` is one, read when
+    #: the run was ended (``loop.note_written``)
     out_bytes = 0
 
     def read(self, timeout: float) -> bytes:
@@ -799,10 +801,12 @@ def end_note(
     written: int | None = None,
 ) -> dict[str, Any]:
     """The record's end note: how its run ended, and where (``ended_at``: the tick and
-    half, ``RunSummary.ended_at``; None: before the first frame). ``written``: for an
-    interrupt "before" the tick was written whole, the bytes of the record's "out" side
-    written by then (:data:`WRITTEN`); "after" it, those too (a stop between frames, in a
-    stall: the watchdog's drive 0 among them, which the replay writes before it ends)."""
+    half, ``RunSummary.ended_at``; None: before the first frame). ``written``: for a run
+    ended from outside (a stop, a Ctrl-C), the bytes of the record's "out" side written by
+    then (:data:`WRITTEN`), counted by the record itself, so the probe's Query List after a
+    stop not confirmed is not among them: "before" the tick was written whole, the part of
+    it written; "after" it, those of the tick and any since (a stop between frames, in a
+    stall: the watchdog's drive 0, which the replay writes before it ends)."""
     note: dict[str, Any] = {ENDED: outcome, "reason": reason, "time": round(mission_time, 3)}
     if ended_at is not None:
         note["tick"], note["at"] = ended_at

@@ -341,7 +341,7 @@ class RunStack:
                 summary = self.runner.summary
                 self.transport.note(  # how it ended, for replay and the monitor's record view
                     end_note(summary.outcome.value, summary.reason, summary.mission_time_s,
-                             summary.ended_at, self._written_when_interrupted())
+                             summary.ended_at, summary.written_when_interrupted)
                 )  # fmt: skip
                 self.transport.flush()
                 summary.record_stopped = self.transport.stopped or ""
@@ -380,17 +380,6 @@ class RunStack:
         """The end of a ``with`` block: :meth:`close` (a run still going, in a worker thread
         or a :meth:`ticks` loop left early, is stopped first, its safe stop written)."""
         self.close()
-
-    def _written_when_interrupted(self) -> int | None:
-        """The bytes of the record's "out" side when a Ctrl-C or SIGTERM came (None: none
-        did): the link's count then, less what the link wrote since (the tree's stop, the
-        safe stop), from the record's count now; the two counts differ when the record
-        began on a connection that had written already (one taken over)."""
-        when = self.runner.summary.written_when_interrupted
-        if when is None or not isinstance(self.transport, RecordingTransport):
-            return None
-        since = self.connection.link.bytes_written - when
-        return self.transport.out_bytes - since
 
     def _warn_off_the_main_thread(self, thread: threading.Thread) -> None:
         """A run that drives (a link on the wall clock) in a thread Ctrl-C never reaches: a

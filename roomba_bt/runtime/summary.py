@@ -428,13 +428,15 @@ class RunSummary:
     #: tick); the record's end note holds it, and a replay ends an interrupted run there
     #: (None: before the first frame)
     ended_at: tuple[int, str] | None = None
-    #: the bytes the link had written when a Ctrl-C or SIGTERM came in the tick loop before
-    #: the tree's tick was written whole (``ended_at``; None: none came there): inside the
-    #: tick (none of it written) or between two of its flush's writes (part of it): the
-    #: record's end note holds the record's offset of it (``written``), and the replay
-    #: writes the tick up to there. Also a stop asked for between frames (the
-    #: monitor's, ``request_stop``: in a stall, after the watchdog's drive 0): the replay
-    #: ends there once it has written as much (``stack.RecordedEnd.between_frames``)
+    #: the bytes gone over the link (the record's "out" side: whoever wrote them) when the
+    #: run was ended from outside in its tick loop (None: it was not, or no record counts
+    #: them: ``loop.note_written``). A Ctrl-C or SIGTERM "before" the tree's tick
+    #: was written whole (``ended_at``) came inside the tick (none of it written) or between
+    #: two of its flush's writes (part of it): the replay writes the tick up to there. A
+    #: stop asked for between frames (the monitor's, ``request_stop``), or a Ctrl-C there,
+    #: in a stall: the watchdog's drive 0 among them, and the replay ends once it has
+    #: written as much (``stack.RecordedEnd.between_frames``). The record's end note holds it
+    #: (``written``)
     written_when_interrupted: int | None = None
     #: which robot ran it: its port as given, or ``simulator WORLD`` (``run`` sets it: two
     #: runs' summaries in one terminal, of one mission, could not be told apart); "" says

@@ -18,10 +18,14 @@ from typing import Any
 
 import pytest
 
+from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.discovery import PROBE_QUERY
 from roomba_bt.robot.safety import signal_reason
 from roomba_bt.runtime.recording import load_record
+from roomba_bt.runtime.stack import Recording, RunStack
+from roomba_bt.transport import SerialTransport
 
 from .bridge import ResettingBridge
 from .simrun import SPIN, ended, finished, write_mission
@@ -665,3 +669,63 @@ def test_ctrl_c_on_a_noisy_line_leaves_the_robot_stopped_in_passive(tmp_path: Pa
     assert not [line for line in said.splitlines() if re.search(r"ignored \d+ byte", line)], said
     assert "stalls" in out
     assert SAFE_END in load_record(record).outbound  # then close()'s again, unconfirmed
+
+
+@pytest.mark.parametrize("by", ["stack.stop", "Ctrl-C"])
+def test_a_run_stopped_in_a_stall_over_the_pty_replays_byte_for_byte(
+    served_sim: Callable[..., Any], tmp_path: Path, by: str
+) -> None:
+    """A run on a robot's port stopped while the watchdog rode a stall (the monitor's Stop,
+    ``stack.stop()``), or interrupted there: the stop, written into the stream's gap, is not
+    confirmed, and the run asks after it with a Query List (``discovery.probe``, written
+    past the link). The end note's ``written`` was the link's count translated to the
+    record's, which missed the probe's bytes: it said 5 bytes more than the run had written
+    when it was stopped, and the replay waited for them inside the stall: "first difference
+    ... expected Drive (137) 89 00 00 00 00, sent nothing", exit 1, of a faithful record.
+    The note holds the record's own count at the stop, whoever wrote since.
+
+    The run is in this process, on the pty, so that its stop is asked as the watchdog
+    trips (on the run's own thread): the stall is the stop's, whatever the machine's load."""
+    sim = served_sim(
+        "--pty", "--stream-gap-at", "1.5", "--stream-gap-s", "3", "--faults-from-stream"
+    )
+    source, path = write_mission(tmp_path, SPIN), tmp_path / "run.jsonl"
+    stack = RunStack(
+        load_mission(source, {}, profile=CREATE2),
+        SerialTransport.open(sim.address),
+        profile=CREATE2,
+        timeout_s=30.0,
+        record=Recording(path, str(source)),
+    )
+
+    class StopAtTheTrip(logging.Handler):
+        def emit(self, record: logging.LogRecord) -> None:
+            if "waiting up to" in record.getMessage():
+                stack.stop("stopped by the test")
+
+    class CtrlCAtTheTrip(logging.Handler):
+        def emit(self, record: logging.LogRecord) -> None:
+            if "waiting up to" in record.getMessage():
+                raise KeyboardInterrupt
+
+    logger = logging.getLogger("roomba_bt.runtime.loop")
+    handler = StopAtTheTrip() if by == "stack.stop" else CtrlCAtTheTrip()
+    logger.addHandler(handler)
+    try:
+        summary = stack.run(raise_interrupts=False)
+    finally:
+        logger.removeHandler(handler)
+        stack.close()
+    assert summary.outcome.name == "INTERRUPTED", summary.reason
+    record = load_record(path)
+    ending = record.ending
+    assert ending is not None, record
+    # the note's count ends at the stall's drive 0, the safe stop next; past it the stop,
+    # unconfirmed in the gap, was asked after with a Query List (which it counted too)
+    written, outbound = ending["written"], record.outbound
+    assert outbound[:written].endswith(oi.halt().data), (written, outbound.hex())
+    assert outbound[written:].startswith(oi.halt().data + oi.motors_off().data), outbound.hex()
+    assert PROBE_QUERY in outbound[written:], summary.safe_stop
+    replay = finished([*CLI, "replay", str(path)])
+    assert replay.returncode == 0, replay.stdout + replay.stderr
+    assert "first difference" not in replay.stdout, replay.stdout
