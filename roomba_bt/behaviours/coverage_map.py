@@ -134,10 +134,6 @@ _NO_START_MM = 20.0
 #: ... and the robot drives this far (mm) straight away from the drop first: a leg along
 #: the drop then clears it (a cliff sensor's look-ahead reaches 18 cm to the side)
 _CLEAR_MM = 150.0
-#: the moves a guessed drop (:attr:`.drops.KnownDrops.edges`: where a straight drop would go
-#: on) does not end, only a drop met: a path's leg (its path goes on) and the move clear of a
-#: drop (:meth:`Cover._clear_of_drop`: among the stairs' guesses it ended before it started)
-_KNOWN_ONLY = ("goto", "clear")
 #: the frontier cells left at the end (:meth:`FloorMap.unreached`) from which ``cover``'s
 #: "floor done" says them: a metre of its map's frontier
 UNREACHED_SAID = 10
@@ -891,7 +887,7 @@ class Cover(Action):
                 why = "swept"
             elif kind in ("lane", "shift") and self._bearings.blocked_ahead(self._line[2]):
                 why = "map"
-            elif self._map.drops.ahead(pose, pose.theta_rad, guessed=kind not in _KNOWN_ONLY):
+            elif self._map.drops.ahead(pose, pose.theta_rad, guessed=kind != "goto"):
                 why = "drop"  # known: not met again (drops.py)
         if why is None:
             speed = self.number("speed")
@@ -964,12 +960,10 @@ class Cover(Action):
         too, and the same path was planned again: living room seed 2 with 1.5 % encoder
         error stood 164 s without new floor, 656 s in (session 37).
 
-        The move clear ends only at a drop met (:data:`_KNOWN_ONLY`), not at a guess of one:
-        among the stairs' drops the guesses (where a straight drop would go on) lay every
-        way, and it ended before it started (session 39). One that a known drop ends before
-        it starts too (another drop the other way) puts the leg's cell in
-        :attr:`FloorMap.avoid`: the path was planned again through it, leg, turn, no move,
-        for 94 s (living room seed 24, exact encoders, by the stairs; session 38)."""
+        A move clear that a drop ends before it starts too (a drop, or a guess of one, the
+        other way as well) puts the leg's cell in :attr:`FloorMap.avoid`: the path was planned
+        again through it, leg, turn, no move, for 94 s (living room seed 24, exact encoders,
+        by the stairs; session 38)."""
         away = self._map.drops.away(self._pose)
         if away is None:
             return False

@@ -29,10 +29,10 @@ What it does now::
                                     right and none ahead (:meth:`DropEdge.along`, 15 deg at
                                     least, 60 at most), and within SEARCH_MM of a drop on its
                                     right it drives at SLOW_MM_S
-    a lane, a shift, a path's leg,  ends where a line (or a guess; a path's leg and the move
-    a seek, an arc between lanes,   clear: a known one only, and a path goes on) is within
-    the move clear of a drop        MARGIN_MM beyond a cliff sensor or between two; slows to
-                                    SLOW_MM_S within SLOW_MM of one
+    a lane, a shift, a path's leg,  ends where a line (or a guess; a path's leg: a known one
+    a seek, an arc between lanes    only, and its path goes on) is within MARGIN_MM beyond a
+                                    cliff sensor or between two; slows to SLOW_MM_S within
+                                    SLOW_MM of one
 
 A part of a drop not met yet is met as before (the first edge along the apartment's stairs
 meets them every 35 cm instead of every 20); a part met is not met again while odometry

@@ -482,52 +482,6 @@ def test_a_leg_a_known_drop_keeps_from_starting_is_not_planned_again(
         assert (cell in cover._map.avoid) is avoided and decided == [True], achieved
 
 
-def _move_clear(
-    make: Make, robot: StubRobot, behind: float, ahead: tuple[tuple[float, float], ...]
-) -> tuple[str, str, float]:
-    """The move clear of a drop met at x ``behind`` (y -150 and 150: away is 0 deg), with
-    drops met at ``ahead`` (x, y) too, driven straight ahead: how its drive ended (kind,
-    why, mm achieved)."""
-    cover = _edging(make, robot)
-    drops = cover._map.drops
-    drops.mark(behind, -150.0, math.pi / 2, 0.0)
-    drops.mark(behind, 150.0, math.pi / 2, 300.0)
-    for k, (x, y) in enumerate(ahead):
-        drops.mark(x, y, math.pi / 2, 5000.0 + 300.0 * k)
-    assert drops.away(cover._pose) == pytest.approx(0.0)
-    ended: list[tuple[str, str, float]] = []
-
-    def end() -> None:
-        ended.append((cover._kind, cover._why, cover._achieved))
-
-    cover._ended = end  # type: ignore[method-assign]
-    assert cover._clear_of_drop()
-    counts = 0
-    for _ in range(100):  # straight ahead as far as it drives
-        if cover._phase == "drive":
-            counts += 10
-        _wheels_frame(robot, counts, counts, (0,) * 6)
-        cover.tick_once()
-        if ended:
-            return ended[0]
-    raise AssertionError("the move clear never ended")
-
-
-def test_the_move_clear_of_a_drop_is_ended_by_drops_met_not_by_guesses(
-    make: Make, robot: StubRobot
-) -> None:
-    """The move clear of the drop that kept a leg from starting was ended by guesses too
-    (where a straight drop would go on, which no cliff sensor saw): among the stairs' drops
-    it ended before it started (session 38 kept the leg out of the next plans and no more).
-    Here a drop met 25 cm behind it sends it straight ahead, where a second drop's guess
-    (met 25-55 cm to its right, guessed to go on 30 cm) crosses its way 17 cm on: it drives
-    its 15 cm. A drop met across its way 23 cm on ends it (met 18 cm behind: apart from it)."""
-    guessed = _move_clear(make, robot, -250.0, ((170.0, -550.0), (170.0, -250.0)))
-    assert guessed[:2] == ("clear", "limit") and guessed[2] >= coverage_map._CLEAR_MM, guessed
-    met = _move_clear(make, robot, -180.0, ((230.0, -100.0), (230.0, 100.0)))
-    assert met[:2] == ("clear", "drop") and met[2] < coverage_map._CLEAR_MM / 2, met
-
-
 def test_a_leg_held_where_it_is_backs_off_and_is_not_planned_again(
     make: Make, robot: StubRobot
 ) -> None:
