@@ -899,12 +899,9 @@ class Cover(Action):
             return driving.steer_along(self._line, pose.x_mm, pose.y_mm, pose.theta_rad, speed)
         self._achieved = along
         self._why = why
-        back = driving.BACK_OFF_MM.get(why)
-        if why == "stalled" and kind == "goto":  # held, no bump shown: off it as off one
-            back = driving.BACK_OFF_MM["bump"]  # (:meth:`_ended`)
-        if back is not None:
+        if why in driving.BACK_OFF_MM:
             self._plan.insert(0, self._ended)
-            self._back(back)
+            self._back(driving.BACK_OFF_MM[why])
         else:
             self._ended()
         return None
@@ -930,12 +927,8 @@ class Cover(Action):
                     return
             if self._why not in ("limit", "drop"):  # blocked on the way: decide again
                 # from here (a known drop: this leg ends short of it, the path goes on)
-                if self._why in driving.BACK_OFF_MM or self._why == "stalled":
-                    # met something, or held by what no sensor shows: no path that way
-                    # again (it bumped into it, path after path; held against a wall its
-                    # drifted map had as floor, it planned the same leg again, stalled
-                    # 3 s, 50 times: 148 s, apartment seed 8 with 1.5 % error, session 39)
-                    self._map.avoid.add(self._goto_cell)
+                if self._why in driving.BACK_OFF_MM:  # met something: no path that way again
+                    self._map.avoid.add(self._goto_cell)  # (it bumped into it, path after path)
                 self._plan.clear()
                 self._decide()
             else:

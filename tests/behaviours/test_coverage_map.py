@@ -480,34 +480,3 @@ def test_a_leg_a_known_drop_keeps_from_starting_is_not_planned_again(
         cover._plan = [partial(decided.append, True)]  # no drop near on its map: on
         cover._ended()
         assert (cell in cover._map.avoid) is avoided and decided == [True], achieved
-
-
-def test_a_leg_held_where_it_is_backs_off_and_is_not_planned_again(
-    make: Make, robot: StubRobot
-) -> None:
-    """A path's leg whose wheels are driven and held (no bump shown: a wall its drifted map
-    had as floor, against the robot's side) ended "stalled" after 3 s, and the same path was
-    planned again from where it stood, 50 times: 148 s without new floor (the apartment,
-    seed 8, 1.5 % error, session 39). Now it backs off as from a bump and that leg's cell is
-    not planned through again."""
-    cover = _edging(make, robot)
-    cell = cover._map.cell(800.0, 0.0)
-    assert cell is not None
-    cover._plan.clear()
-    cover._goto_cell = cell
-    cover._drive("goto", 0.0, 800.0)  # a leg of its path, 80 cm ahead
-    phases = []
-    for _ in range(round(driving.STALL_S / 0.015) + 20):  # the wheels held where it is
-        _wheels_frame(robot, 0, 0, (0,) * 6)
-        cover.tick_once()
-        phases.append(cover._phase)
-    assert phases[0] == "drive" and phases[-1] == "back", phases[-1]
-    assert cover._why == "stalled"
-    wheels = robot.flush()[-1]
-    assert wheels.opcode == 145 and wheels.args[0] < 0  # backing
-    counts = 0
-    while cover._phase == "back":
-        counts -= 8
-        _wheels_frame(robot, counts, counts, (0,) * 6)
-        cover.tick_once()
-    assert cell in cover._map.avoid
