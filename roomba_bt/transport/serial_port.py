@@ -176,6 +176,19 @@ def _close_port(port: serial.SerialBase) -> None:
             sock.close()
 
 
+def _open_port(port: serial.Serial) -> None:
+    """Open ``port``, closed again if its open fails part way: pyserial's ``socket://`` open
+    connects, then reads what the far end had sent (``reset_input_buffer``), which raises
+    when a bridge resets the new connection at once; the port, left open with its socket,
+    was dropped, and its ``__del__`` leaked the socket (the close :func:`_close_port`
+    mends)."""
+    try:
+        port.open()
+    except BaseException:
+        _close_port(port)
+        raise
+
+
 def _closed_at_once(port: serial.SerialBase) -> bool:
     """Whether the far end of a new raw TCP connection (``socket://``) closes it within
     :data:`RECONNECT_SETTLE_S`: looked at with ``MSG_PEEK``, so a byte of the robot's stream
@@ -334,7 +347,7 @@ class SerialTransport:
                 port.dtr = False
             if isinstance(port, serial.Serial):  # a device, not a socket:// or loop:// URL
                 port.exclusive = True
-            port.open()
+            _open_port(port)
         except _OPEN_ERRORS as exc:
             known = open_failure(url, error_number(exc), str(exc))
             if known in (IN_USE, IN_USE_EXCLUSIVE) and _held_here(url):
@@ -597,11 +610,11 @@ class SerialTransport:
                 port = _device_port(*settings)
                 if isinstance(port, serial.Serial):  # a device, not a URL
                     port.exclusive = True
-                    port.open()
+                    _open_port(port)
                 else:
                     left = within - (time.monotonic() - began)
                     with _open_within(max(left, CONNECT_LEAST_S)):
-                        port.open()
+                        _open_port(port)
                 if _closed_at_once(port):
                     _close_port(port)
                     raise ConnectionResetError("the far end closed the new connection at once")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import select
 import socket
 import struct
 import subprocess
@@ -593,6 +594,63 @@ def test_a_bridge_that_resets_is_reconnected_past_one_that_turns_the_connection_
     finally:
         transport.close()
         for sock in (*served, listener):
+            sock.close()
+
+
+def _open_reset_as_it_reads(
+    monkeypatch: pytest.MonkeyPatch, listener: socket.socket
+) -> list[socket.socket]:
+    """pyserial's ``socket://`` open, connected, reads what the far end sent first
+    (``reset_input_buffer``): a bridge that resets the new connection at once makes that
+    read raise, and the socket's ``shutdown`` fails after it. Made so here every time (in
+    CI it was a race): the bridge (``listener``) resets each new connection before the
+    read. The sockets the opens made are returned, to see each closed."""
+    made: list[socket.socket] = []
+    handler = serial_port.protocol_socket.Serial
+    read_as_pyserial = handler.reset_input_buffer
+
+    def reset_as_it_reads(port: serial_port.protocol_socket.Serial) -> None:
+        made.append(port._socket)
+        turned, _ = listener.accept()
+        turned.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        turned.close()  # RST
+        select.select([port._socket], [], [], 2.0)
+        read_as_pyserial(port)  # raises: the connection was reset
+
+    monkeypatch.setattr(handler, "reset_input_buffer", reset_as_it_reads)
+    return made
+
+
+def test_an_open_of_a_bridge_that_resets_at_once_leaves_no_socket_open(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """CI failed on a socket left open (``ResourceWarning`` from the port's ``__del__``)
+    by a reopen's try that the bridge turned away as pyserial's open read."""
+    listener = socket.create_server(("127.0.0.1", 0))
+    url = f"socket://127.0.0.1:{listener.getsockname()[1]}"
+    try:
+        made = _open_reset_as_it_reads(monkeypatch, listener)
+        with pytest.raises(TransportError):
+            SerialTransport.open(url)
+        assert len(made) == 1 and made[0].fileno() == -1  # closed, not left to the GC
+    finally:
+        listener.close()
+
+
+def test_a_reopen_turned_away_as_it_reads_leaves_no_socket_open(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    listener = socket.create_server(("127.0.0.1", 0))
+    url = f"socket://127.0.0.1:{listener.getsockname()[1]}"
+    transport = SerialTransport.open(url)
+    accepted = [listener.accept()[0]]
+    try:
+        made = _open_reset_as_it_reads(monkeypatch, listener)
+        assert transport.reopen(within=0.3) is None
+        assert made and all(sock.fileno() == -1 for sock in made)
+    finally:
+        transport.close()
+        for sock in (*accepted, listener):
             sock.close()
 
 
