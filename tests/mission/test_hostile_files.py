@@ -400,6 +400,14 @@ def test_a_tree_cut_short_is_said_among_the_first_listed(tmp_path: Path, capsys:
     assert all("parsecs" in line or "Passive" in line for line in lines[:99])
 
 
+def _twelve_thousand_warnings(path: Path) -> str:
+    """A valid mission of 12,000 warnings written to ``path`` (a blackboard key each, its
+    ``initial`` the YAML 1.1 number ``1_0``): the blackboard's lines, for a variant."""
+    keys = "".join(f"  k{i}: {{type: int, initial: 1_0}}\n" for i in range(12_000))
+    path.write_text(f"mission: m\nblackboard:\n{keys}tree: {{sequence: [stop]}}\n")
+    return keys
+
+
 def test_a_missions_warnings_stop_at_the_cap_and_say_so_among_the_first_listed(
     tmp_path: Path, capsys: Capsys
 ) -> None:
@@ -407,8 +415,7 @@ def test_a_missions_warnings_stop_at_the_cap_and_say_so_among_the_first_listed(
     1.1 numbers (``1_0``, four bytes) took 44 s to validate, a file of 1 MiB holds 170,000.
     They stop at ``printable.MAX_FOUND`` as errors do (the check goes on for errors), the
     note at the place of the last and listed as the hundredth line."""
-    keys = "".join(f"  k{i}: {{type: int, initial: 1_0}}\n" for i in range(12_000))
-    (tmp_path / "w.yaml").write_text(f"mission: m\nblackboard:\n{keys}tree: {{sequence: [stop]}}\n")
+    keys = _twelve_thousand_warnings(tmp_path / "w.yaml")
     assert main(["validate", str(tmp_path / "w.yaml")]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[-1].endswith("w.yaml: ok, with warnings")
@@ -424,3 +431,26 @@ def test_a_missions_warnings_stop_at_the_cap_and_say_so_among_the_first_listed(
     (tmp_path / "w.yaml").write_text(f"mission: m\nblackboard:\n{keys}tree: {{sequence: [nope]}}\n")
     assert main(["validate", str(tmp_path / "w.yaml")]) == 2  # the errors after are found
     assert "unknown" in capsys.readouterr().out
+
+
+def test_validate_json_counts_the_warnings_kept_and_lists_a_hundred(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """``--format json``, which CI reads (docs/ci.md), of the file above: the file's
+    ``warnings`` are the 10,000 kept (the cap's note among them), 100 diagnostics are listed
+    with the note last, and ``diagnostics_omitted`` counts the 9,900 others, so that the
+    listed and the omitted add up to the count a program reads."""
+    import json
+
+    _twelve_thousand_warnings(tmp_path / "w.yaml")
+    assert main(["validate", "--format", "json", str(tmp_path / "w.yaml")]) == 0
+    report = json.loads(capsys.readouterr().out)
+    [file] = report["files"]
+    assert (file["verdict"], file["errors"], file["warnings"]) == ("ok, with warnings", 0, 10_000)
+    assert file["diagnostics_omitted"] == 9_900
+    listed = report["diagnostics"]
+    assert len(listed) == 100 and {d["severity"] for d in listed} == {"warning"}
+    assert [d["yaml_path"] for d in listed[:99]] == [f"blackboard.k{i}.initial" for i in range(99)]
+    assert (listed[-1]["line"], listed[-1]["column"]) == (10002, 31)
+    assert listed[-1]["message"].startswith("warnings stopped here, at 10,000")
+    assert len(listed) + file["diagnostics_omitted"] == file["warnings"]
