@@ -396,6 +396,23 @@ def test_the_simulator_s_signature_on_its_page_is_the_code_s() -> None:
     assert [n for n in names if n != "*"] == list(inspect.signature(Simulator).parameters)
 
 
+#: Commands a page gives in its prose, not in a block, that a wheel's user runs as written:
+#: (the page, the command). Each runs in that page's scratch folder and exits 0: the page
+#: said ``roomba-bt validate missions/*.yaml worlds/*.yaml``, exit 2 in a wheel's user's
+#: folder (session 39's stranger).
+PROSE_RUN = [("docs/simulator.md", "roomba-bt validate dock my-flat.yaml")]
+
+
+@pytest.mark.parametrize(("doc", "command"), PROSE_RUN, ids=[c for _, c in PROSE_RUN])
+def test_the_prose_commands_run_as_a_wheel_s_user_runs_them(
+    doc: str, command: str, scratch: Callable[..., Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    scratch(doc)
+    page = " ".join((ROOT / doc).read_text(encoding="utf-8").split())
+    assert f"`{command}`" in page, f"{doc} no longer gives `{command}`"
+    assert main(shlex.split(command)[1:]) == 0, capsys.readouterr()
+
+
 #: Error lines a page quotes whole: (the page, the environment and the command that make
 #: it, the exit code). The page holds what the command prints on its last line of stderr, to
 #: the character, in backquotes (the Markdown's line breaks aside): docs/robot.md quoted
