@@ -3,15 +3,17 @@
 Fenced blocks are read from the Markdown. A *command* is a line of a ``sh``/``console``/plain
 block that starts with one of :data:`PROGRAMS` (a leading ``$ ``, a leading ``nice `` (a
 priority, docs/routines.md's long evaluations) and a trailing ``# comment`` are dropped,
-``\\`` continues a line, ``&&`` chains); other lines of plain blocks are output, diagrams
-or byte layouts. A *mission* is a ``yaml`` block with a ``tree:`` or ``subtrees:``
-key; it is written to ``<its mission name>.yaml`` (``mission:``, else ``doc-N``) in the
-directory the commands run in, so ``roomba-bt run square.yaml`` runs the block above it; a
-*world* is a ``yaml`` block with a ``rooms:`` key, written to ``<its name>.yaml``. A *file*
-is a ``python`` block whose first line is a comment naming a relative path (``#
-plugins/near_wall.py``), written to that path: docs/plugins.md's reader makes the plugin
-file its mission's ``plugins:`` names, and its commands use those two, as a wheel's user
-has no ``missions/examples`` (session 39's stranger: the page ran the repository's copies).
+``\\`` continues a line, ``&&`` chains; a line ``cd DIR && roomba-bt ...`` is one too, and
+must be in :data:`NOT_RUN`: this test runs none from another folder); other lines of plain
+blocks are output, diagrams or byte layouts. A *mission* is a ``yaml`` block with a
+``tree:`` or ``subtrees:`` key; it is written to ``<its mission name>.yaml`` (``mission:``,
+else ``doc-N``) in the directory the commands run in, so ``roomba-bt run square.yaml``
+runs the block above it; a *world* is a ``yaml`` block with a ``rooms:`` key, written to
+``<its name>.yaml``. A *file* is a ``python`` block whose first line is a comment naming a
+relative path (``# plugins/near_wall.py``), written to that path: docs/plugins.md's reader
+makes the plugin file its mission's ``plugins:`` names, and its commands use those two, as
+a wheel's user has no ``missions/examples`` (session 39's stranger: the page ran the
+repository's copies).
 A mission that names ``plugins:`` is validated with ``--allow-plugin-files``, as the docs
 show it.
 
@@ -114,6 +116,18 @@ NOT_RUN: dict[str, str] = {
     "tests/monitor changes a mission under --watch",
     "roomba-bt monitor dock.jsonl": "serves the page until stopped; tests/monitor opens "
     "a recorded run in a browser",
+    "cd records && roomba-bt run ../missions/off-the-dock.yaml --fast --world "
+    "../worlds/lab.yaml --seed 0 --timeout 10min --include-dir ../missions/common --record "
+    "off-the-dock.jsonl": "docs/runtime.md: the reader's repository of the record header "
+    "above (missions/off-the-dock.yaml, its library folder missions/common, the world "
+    "worlds/lab.yaml, records/), which no page has the reader write; "
+    "tests/runtime/test_record_checkouts.py builds such a repository and makes a record "
+    "again from its header, in the record's folder, byte for byte",
+    "roomba-bt run missions/dock.yaml --fast --world worlds/lab.yaml --reproducible --record "
+    "records/dock.jsonl > records/dock.summary.txt": "docs/runtime.md's CI job, at the top of "
+    "the reader's repository (its missions/, its world worlds/lab.yaml, the records/ it "
+    "commits), which no page has the reader write; tests/runtime/test_record_checkouts.py "
+    "runs --reproducible there twice and compares the record and the summary",
     "roomba-bt validate --format json --include-dir missions/common missions "
     "| jq -r --arg lib missions/common/lib/escapes.yaml '.files[] | "
     "select(.includes | any(. == $lib)) | .file'": "a team's repository (missions/common "
@@ -148,7 +162,8 @@ def commands() -> list[tuple[str, str]]:
         text = re.sub(r"\\\n\s*", " ", block.text)  # continued lines
         for offset, raw in enumerate(text.splitlines()):
             line = raw.strip().removeprefix("$ ").removeprefix("nice ")
-            if not line.startswith(PROGRAMS):
+            elsewhere = re.match(r"cd \S+ && ", line)  # run from another folder
+            if not line.removeprefix(elsewhere[0] if elsewhere else "").startswith(PROGRAMS):
                 continue
             line = re.sub(r"\s+#.*$", "", line)
             line = re.sub(r"\s+", " ", line).strip()
@@ -327,7 +342,8 @@ def test_every_command_is_run_or_listed_with_a_reason() -> None:
     for where, command in COMMANDS:
         for part in command.split(" && "):
             program = part.split()[0]
-            assert program == "roomba-bt" or part in NOT_RUN or part == "make run", (
+            listed = part in NOT_RUN or command in NOT_RUN  # a `cd DIR && ...` whole
+            assert program == "roomba-bt" or listed or part == "make run", (
                 f"{where}: {part!r} is neither run by this test nor listed in NOT_RUN"
             )
 
