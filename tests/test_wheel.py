@@ -1,0 +1,105 @@
+"""The wheel as its readers meet it: the package index shows README.md as its long description,
+and ``roomba-bt docs PAGE --path`` gives a wheel's user a page to open in a Markdown viewer.
+
+The wheel is built here as ``pip wheel`` builds it (``.ci/wheel-check`` does the same), from a
+copy of the files it is made of, so that the build writes nothing into the checkout: the
+links of README.md pointed into a repository (``docs/robot.md``, ``CONTRIBUTING.md``), dead
+on the index's page, as the package names no public repository (session 39's stranger).
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+import zipfile
+from collections.abc import Iterator
+from email.parser import Parser
+from pathlib import Path, PurePosixPath
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+#: what the wheel is made of (pyproject.toml's package and its readme and licence)
+SOURCES = ("pyproject.toml", "README.md", "LICENSE", "MANIFEST.in")
+#: how a wheel's user or an index reader gets the source distribution, where the files a
+#: wheel leaves out are (the words of ``roomba-bt docs``'s own message)
+SDIST = "pip download --no-deps --no-binary :all: roomba-bt"
+#: a Markdown link or picture: ``[text](target)``, ``![alt](target)``
+LINK = re.compile(r"(!?)\[((?:[^\[\]]|\[[^\]]*\])*)\]\(([^)\s]+)\)")
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory: pytest.TempPathFactory) -> Iterator[zipfile.ZipFile]:
+    """The wheel built from a copy of the package's files (``roomba_bt/docs``, a link to the
+    repository's ``docs/``, copied as the files it links, as the sdist holds them)."""
+    tree = tmp_path_factory.mktemp("tree")
+    for name in SOURCES:
+        shutil.copy2(ROOT / name, tree / name)
+    shutil.copytree(
+        ROOT / "roomba_bt", tree / "roomba_bt", ignore=shutil.ignore_patterns("__pycache__")
+    )
+    dist = tmp_path_factory.mktemp("dist")
+    done = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet",
+         "--disable-pip-version-check", "--wheel-dir", str(dist), str(tree)],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    if done.returncode != 0:  # pip fetches setuptools>=77 to build it: an index is needed
+        pytest.skip(f"could not build the wheel with pip: {done.stderr.strip()[-2000:]}")
+    [built] = dist.glob("roomba_bt-*.whl")
+    archive = zipfile.ZipFile(built)
+    yield archive
+    archive.close()
+
+
+def long_description(wheel: zipfile.ZipFile) -> str:
+    [metadata] = [n for n in wheel.namelist() if n.endswith(".dist-info/METADATA")]
+    message = Parser().parsestr(wheel.read(metadata).decode("utf-8"))
+    assert message["Description-Content-Type"] == "text/markdown"
+    return str(message.get_payload())
+
+
+def shipped_pages(wheel: zipfile.ZipFile) -> dict[str, str]:
+    """The pages ``roomba-bt docs`` lists, by name, as the wheel holds them."""
+    return {
+        PurePosixPath(n).stem: wheel.read(n).decode("utf-8")
+        for n in wheel.namelist()
+        if re.fullmatch(r"roomba_bt/docs/[\w-]+\.md", n)
+    }
+
+
+def test_the_long_description_is_the_readme(wheel: zipfile.ZipFile) -> None:
+    assert long_description(wheel).strip() == (ROOT / "README.md").read_text("utf-8").strip()
+
+
+def test_every_link_of_the_index_page_leads_somewhere_a_reader_can_go(
+    wheel: zipfile.ZipFile,
+) -> None:
+    """The index shows the long description with its links as written, and the package names
+    no repository (no Project-URL): a relative link there leads nowhere. Each relative link
+    to a page says, as its text, the command that prints the page from the installed wheel
+    (``roomba-bt docs robot``), which holds it; a link to another file of the repository's
+    says, after it, the command that downloads the source distribution, which holds it."""
+    text = long_description(wheel)
+    pages = shipped_pages(wheel)
+    links = LINK.findall(text)
+    assert len(links) > 10, "README.md lost its links to the pages"
+    lost = []
+    for match in LINK.finditer(text):
+        picture, label, target = match.groups()
+        if re.match(r"https?://", target):
+            continue
+        path = target.split("#", 1)[0]
+        page = re.fullmatch(r"docs/([\w-]+)\.md", path)
+        if page and not picture:
+            if page[1] not in pages:
+                lost.append(f"{target}: a page the wheel does not hold")
+            elif label != f"`roomba-bt docs {page[1]}`":
+                lost.append(f"[{label}]({target}): its text is not `roomba-bt docs {page[1]}`")
+            continue
+        after = " ".join(text[match.end() : match.end() + 400].split())
+        if not (ROOT / path).is_file() or SDIST not in after:
+            lost.append(f"{match[0]}: not followed by where it is ({SDIST})")
+    assert not lost, "links of the index page that lead nowhere:\n" + "\n".join(lost)
