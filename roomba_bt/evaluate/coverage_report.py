@@ -31,6 +31,7 @@ from roomba_bt.evaluate import EpisodeSpec, run_episodes
 from roomba_bt.evaluate.coverage import CoverageSummary, Spread, summarize_coverage
 from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.evaluate.parallel import ProgressBar
+from roomba_bt.evaluate.report import picture
 from roomba_bt.evaluate.stats import wilson_interval
 
 BEGIN, END = "<!-- coverage -->", "<!-- /coverage -->"
@@ -279,7 +280,11 @@ def _section(
         f"{min(args.drift_runs, args.runs)} living-room starts and the first "
         f"{min(args.drift_runs, args.apartment_runs)} apartment starts.",
         "",
-        "![coverage over time](routines/coverage-living-room.png)",
+        picture(
+            "coverage-living-room.png",
+            "Coverage of the living room over time, in percent of its floor, for each row of "
+            "the table above: the mean as a line, the 10th to 90th percentile as a band",
+        ),
         "",
         f"Whole apartment, {args.apartment_runs} seeded starts anywhere, 60 minutes each; "
         "coverage per room at the end, mean (min):",

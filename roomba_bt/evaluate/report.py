@@ -33,6 +33,34 @@ PAGE = "routines.md"
 FIGURES = "routines"
 BEGIN, END = "<!-- figures:begin -->", "<!-- figures:end -->"
 
+
+def picture(file: str, shows: str | None = None) -> str:
+    """The Markdown of the plot ``FIGURES/file``, its alternative text saying what it shows
+    (``shows``, else :data:`SHOWS`'s) and where it is. The wheel leaves the plots out
+    (pyproject.toml: 1.2 MB beside the wheel's 1.6), so a Markdown viewer of the installed
+    page (``roomba-bt docs routines --path``) shows that text in the plot's place: a bare
+    title (``patrol``) said nothing."""
+    where = f"docs/{FIGURES}/{file} of roomba-bt's source distribution"
+    return f"![{shows or SHOWS[file]} (the picture: {where})]({FIGURES}/{file})"
+
+
+#: each episode's path, as every plot of :func:`build` draws them
+_PATHS = (
+    "each episode's path from its start (a dot), green where the mission succeeded and red "
+    "where it did not, over the world's walls and furniture"
+)
+_TO_DOCK = "toward the dock (its buoys and force field drawn at the south wall)"
+#: what each plot of :func:`build` shows, for its alternative text (:func:`picture`)
+SHOWS = {
+    "dock-empty-room.png": f"Dock in the empty room: {_PATHS}, {_TO_DOCK}",
+    "dock-apartment.png": f"Dock in the apartment: {_PATHS}, {_TO_DOCK}",
+    "patrol-corridor.png": f"Patrol of the corridor: {_PATHS}, around the block in its middle",
+    "patrol-low-battery.png": f"Patrol of the corridor on a low battery: {_PATHS}, from the "
+    "loop to the dock on the south wall",
+    "bump-and-turn-corridor.png": f"Bump-and-turn in the corridor: {_PATHS}, straight lines "
+    "from wall to wall for a minute",
+}
+
 #: The dock's beam parameters at the ends of the ranges the dock mission is meant to handle
 #: (the simulator's defaults are GUIDE.md section 5's: red -5..25, green -25..5 deg, buoys
 #: 1 m, force field 0.6 m, contacts 7.5 cm and 6 deg).
@@ -265,8 +293,7 @@ def build(
         exp, s, _ = results[key]
         reasons = "; ".join(f"{c} x {r}" for r, c in s.failures) or "none"
         out.append(f"- {exp.label}: {reasons}")
-    out += ["", "![dock in the empty room](routines/dock-empty-room.png)",
-            "![dock in the apartment](routines/dock-apartment.png)", ""]  # fmt: skip
+    out += ["", picture("dock-empty-room.png"), picture("dock-apartment.png"), ""]
     out += ["### Patrol", "",
             "| experiment | runs | success (95 % Wilson) | median | loops around the block | "
             "longest stall | stuck (> 30 s) | ended docked |",
@@ -274,15 +301,14 @@ def build(
     for key in ("patrol", "patrol-low"):
         exp, s, episodes = results[key]
         out += patrol_lines(exp, s, episodes)
-    out += ["", "![patrol](routines/patrol-corridor.png)",
-            "![patrol, low battery](routines/patrol-low-battery.png)", ""]  # fmt: skip
+    out += ["", picture("patrol-corridor.png"), picture("patrol-low-battery.png"), ""]
     out += ["### Bump-and-turn: reaction", ""]
     for key in ("bump", "bump-apartment"):
         exp, s, episodes = results[key]
         out += [f"{exp.label}:", ""]
         out += bump_lines(s, episodes)
         out.append("")
-    out += ["![bump-and-turn](routines/bump-and-turn-corridor.png)"]
+    out += [picture("bump-and-turn-corridor.png")]
     out += ["", "### Speed", ""]
     out += speed_lines(missions)
     out += ["", END]
