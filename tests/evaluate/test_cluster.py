@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
 
 from roomba_bt.evaluate import EpisodeResult, cluster, episode_specs, run_episodes
 from roomba_bt.evaluate.cluster import dask_client, dask_logs_as_detail, run_on_client
@@ -146,15 +147,19 @@ def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_
     assert said in capsys.readouterr().err
 
 
-def test_the_seeds_run_again_are_named_from_their_keys() -> None:
+def test_the_seeds_run_again_are_named_from_their_keys(capsys: pytest.CaptureFixture[str]) -> None:
     """The scheduler names the futures a dead worker held by key; the seeds are their
-    episodes', each once, in order, the first ten said."""
+    episodes', each once, in order, the first ten said; the line docs/evaluation.md quotes
+    (of seeds 17 and 18) says them."""
     specs = [dataclasses.replace(SPECS[0], seed=seed) for seed in range(100, 112)]
     keys = [f"episode-0a1b2c-{i}" for i in (3, 1, 11, 0, 2, 4, 5, 6, 7, 8, 9, 10)]
     assert cluster._seeds_of(specs, [*keys[:2], "episode-0a1b2c-3-alone"]) == "101, 103"
     assert cluster._seeds_of(specs, keys) == (
         "100, 101, 102, 103, 104, 105, 106, 107, 108, 109 and 2 more"
     )
+    assert cluster._say_reruns(specs, keys[:2]) == 2
+    err = capsys.readouterr().err
+    assert_quoted("docs/evaluation.md", "roomba-bt eval: 2 episode(s) ran again", err, numbers=True)
 
 
 #: ``roomba-bt`` whose Dask client gives a lost scheduler 5 s to come back, not the user's

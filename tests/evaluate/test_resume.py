@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
 
 from roomba_bt.cli import main
 from roomba_bt.cli.eval_resume import refused_over
@@ -412,6 +413,12 @@ def test_an_interrupted_evaluation_says_its_plot_is_not_drawn(
     assert (left in err) == out
     if out:
         assert len((tmp_path / "r.jsonl").read_text().splitlines()) == 2
+    if out:  # docs/evaluation.md quotes both lines, of its own files and 1963 episodes left
+        names = {str(plot): "ab.png", f"{tmp_path}/r.jsonl": "ab.jsonl"}
+        assert_quoted("docs/evaluation.md", "roomba-bt eval: --plot ab.png not drawn", err,
+                      names=names)  # fmt: skip
+        assert_quoted("docs/evaluation.md", "roomba-bt eval: the same command with --resume", err,
+                      numbers=True, names=names)  # fmt: skip
 
 
 def test_a_resume_names_each_file_it_read_episodes_from(

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
 
 from roomba_bt.cli import main
 
@@ -280,6 +281,10 @@ def test_from_leaves_out_the_last_record_a_killed_sweep_cut_short(
                    "short as it was written (the file ends inside it: the sweep was killed, or "
                    f"the disk was full): left out\nroomba-bt eval: 5 episode(s) of 2 variant(s) "
                    f"read from {partial}; none run\n")  # fmt: skip
+    # docs/evaluation.md quotes the first line, of a sweep of its own: dock, line 42, seed 20
+    assert_quoted("docs/evaluation.md", "roomba-bt eval: --from ab.jsonl.partial.jsonl:", err,
+                  numbers=True, names={str(partial): "ab.jsonl.partial.jsonl",
+                                       BUMP: "roomba-bt:dock.yaml"})  # fmt: skip
     partial.write_bytes(b'{"seed": 1, "outc')
     assert main(["eval", "--from", str(partial)]) == 2
     err = capsys.readouterr().err

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py
 
 from roomba_bt.evaluate import parallel
 from roomba_bt.runtime import ending
@@ -100,6 +101,9 @@ def test_a_sweep_whose_episodes_each_hang_in_terminate_stops_at_the_cap(
         "went on without it), the first: seed "
     ) in err, err
     assert "endless loop" not in err, err
+    # docs/evaluation.md quotes both lines (3 episodes, a cap of 10: numbers of its example)
+    assert_quoted("docs/evaluation.md", "roomba-bt eval: 3 episode(s) hung", err, numbers=True)
+    assert_quoted("docs/evaluation.md", "roomba-bt eval: the sweep stopped:", err, numbers=True)
 
 
 def test_a_worker_an_episode_left_a_stuck_thread_in_is_retired_and_replaced(

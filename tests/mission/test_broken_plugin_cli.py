@@ -14,8 +14,10 @@ import json
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
 from runtime.installed import (  # tests/runtime: plugins installed
     conditions_module,
+    install_distribution,
     installed_registry,
 )
 
@@ -121,6 +123,25 @@ def test_a_name_two_plugins_declare_is_no_broken_plugin(
     out, err = capsys.readouterr()
     assert "bt-s29-one:s29_sound" in json.loads(out)["$defs"]
     assert "roomba-bt schema: warning: plugin 's29_two'" in err
+
+
+def test_the_page_quotes_what_schema_and_behaviours_say_of_a_plugin_that_does_not_import(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """docs/plugins.md's plugin, installed as the page names it (``roomba-bt-lab``, its
+    package ``roomba_bt_lab``, the entry point ``lab``), whose line 42 imports a module
+    that is not there: ``schema``'s error is the page's quote, and ``behaviours`` says it
+    as the page says (``roomba-bt behaviours: error: ...``)."""
+    _installed(tmp_path, monkeypatch)
+    source = "\n" * 41 + "import nonexistent_mod\n"
+    install_distribution(tmp_path / "site", "roomba-bt-lab", "roomba_bt_lab", source,
+                         entry="lab", package=True)  # fmt: skip
+    assert main(["schema"]) == 2
+    assert_quoted(
+        "docs/plugins.md", "roomba-bt schema: error: plugin 'lab'", capsys.readouterr().err
+    )
+    assert main(["behaviours"]) == 2
+    assert_quoted("docs/plugins.md", "roomba-bt behaviours: error: ...", capsys.readouterr().err)
 
 
 #: what an installed plugin's import may raise that is no ``Exception`` (session 29's

@@ -7,10 +7,15 @@ stderr, where 0.2.0 said nothing (a nightly ``validate`` hid the broken plugin),
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import pytest
-from runtime.installed import installed_registry  # tests/runtime: plugins installed
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
+from runtime.installed import (  # tests/runtime: plugins installed
+    install_distribution,
+    installed_registry,
+)
 
 from roomba_bt.cli import main
 
@@ -101,3 +106,26 @@ def test_a_nightly_validate_of_other_missions_says_it_too(
     assert main(["validate", str(plain)]) == 0
     [line] = _warnings(capsys.readouterr().err)
     assert line.endswith(f"; a mission cannot use {LOST}")
+
+
+def test_the_pages_quote_what_each_command_says_of_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """docs/plugins.md quotes ``behaviours``' last line and ``validate``'s warning of this
+    plugin, installed as the page names it (``roomba-bt-keys``, its package
+    ``roomba_bt_keys``, the entry point ``keys``), and docs/missions.md the warning's start."""
+    import roomba_bt.behaviours.registry as registries
+
+    registry = installed_registry(tmp_path, monkeypatch)
+    install_distribution(tmp_path / "site", "roomba-bt-keys", "roomba_bt_keys", HALF,
+                         entry="keys", package=True)  # fmt: skip
+    monkeypatch.delitem(sys.modules, "roomba_bt_keys", raising=False)
+    monkeypatch.setattr(registries, "_DEFAULT", registry)
+    (tmp_path / "k.yaml").write_text(USES_STORE_N)
+    assert main(["behaviours"]) == 2
+    err = capsys.readouterr().err
+    assert_quoted("docs/plugins.md", "roomba-bt behaviours: an installed plugin did not", err)
+    assert main(["validate", str(tmp_path / "k.yaml")]) == 0
+    err = capsys.readouterr().err
+    assert_quoted("docs/plugins.md", "roomba-bt validate: warning: plugin 'keys'", err)
+    assert_quoted("docs/missions.md", "roomba-bt validate: warning: plugin ...", err)

@@ -17,14 +17,28 @@ from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP
 from roomba_bt.mission.shipped import SHIPPED_DIR
 
 
-def install_distribution(site: Path, distribution: str, module: str, source: str) -> None:
-    """``distribution`` (version 1.0) with the one module ``module`` holding ``source``,
-    its entry point named after the module."""
-    (site / f"{module}.py").write_text(source)
+def install_distribution(
+    site: Path,
+    distribution: str,
+    module: str,
+    source: str,
+    entry: str | None = None,
+    package: bool = False,
+) -> None:
+    """``distribution`` (version 1.0) with the one module ``module`` holding ``source`` (with
+    ``package``, a package: ``module/__init__.py``), its entry point named ``entry`` (else
+    after the module): a plugin as docs/plugins.md's examples name it."""
+    if package:
+        (site / module).mkdir()
+        (site / module / "__init__.py").write_text(source)
+    else:
+        (site / f"{module}.py").write_text(source)
     info = site / f"{distribution.replace('-', '_')}-1.0.dist-info"
     info.mkdir()
     (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {distribution}\nVersion: 1.0\n")
-    (info / "entry_points.txt").write_text(f"[roomba_bt.behaviours]\n{module} = {module}\n")
+    (info / "entry_points.txt").write_text(
+        f"[roomba_bt.behaviours]\n{entry or module} = {module}\n"
+    )
 
 
 def conditions_module(*declared: tuple[str, str, str, bool]) -> str:
