@@ -76,9 +76,9 @@ ASLEEP = (
 class LinkFixes:
     """doctor's fixes where they name the line: a cable and its adapter on a device path (the
     words docs/doctor.md quotes), the bridge at its address, its power, its Wi-Fi and its
-    serial side on a network port. A Wi-Fi bridge's user was told to check a cable there is
-    none of. Chosen once from the port's :class:`~roomba_bt.transport.link_kind.LinkWords`
-    (:attr:`Report.fixes`)."""
+    serial side on a network port, the program at its other end on a pty's own path. A
+    Wi-Fi bridge's user was told to check a cable there is none of. Chosen once from the
+    port's :class:`~roomba_bt.transport.link_kind.LinkWords` (:attr:`Report.fixes`)."""
 
     #: silent at every rate, and this port cannot pulse BRC
     wake: str
@@ -123,6 +123,51 @@ CABLE_FIXES = LinkFixes(
     drops="a long cable, a bad adapter",
     delays="a long cable, a bad adapter, a relay",
     garbles="a loose or long cable, a wrong baud rate",
+)
+
+
+#: What the program at a pty's other end may be: ``roomba-bt sim --pty`` (whose fault options
+#: garble, drop and delay bytes on purpose), or a bridge such as socat with a robot's cable
+#: behind it (the words :func:`~roomba_bt.transport.link_kind.link_of` gives a pty's link)
+_PTY_END = "the program at the pty's other end"
+_SOCAT = "a bridge such as socat"
+_SIM_PTY = "the path roomba-bt sim --pty printed"
+
+#: doctor's fixes on a pty's own path (/dev/pts/N): the other end is a program, not a cable.
+#: ``sim --pty --corrupt-rate 1.0`` was told to "check the cable and the adapter (noise on a
+#: long or loose cable, ... a 3.3 V adapter on the 5 V line)"; a pty nobody reads, "that the
+#: cable is a 5 V TTL serial adapter"; one that echoes, "give the robot's port (ls
+#: /dev/ttyUSB*)". The cable is said only as what may be behind a bridge.
+PTY_FIXES = LinkFixes(
+    wake=(
+        f"{ASLEEP}. To wake it from here: a pty carries no modem lines and could not be hung "
+        "up either; roomba-bt sim --rfc2217 carries BRC to the simulator's robot, and a "
+        "robot's cable with BRC on RTS or DTR carries it opened by its own device path, not "
+        f"through {_SOCAT}"
+    ),
+    silent=(
+        f"check that {_PTY_END} still runs and is the simulator (give {_SIM_PTY}), not "
+        "another program's pty, and that no other program holds the port; behind "
+        f"{_SOCAT}, that the robot is on (press Clean: its light comes on) and that the "
+        f"cable is a 5 V TTL serial adapter with TX and RX not swapped; {DOCK_WAKE}"
+    ),
+    garbled=(
+        f"the robot may be there, but what {_PTY_END} sends arrives garbled: the "
+        "simulator's fault options garble it on purpose (--corrupt-rate, --noise, "
+        f"--bit-flip-rate), or it is not the simulator (give {_SIM_PTY}); behind {_SOCAT}, "
+        "check the cable and the adapter and the bridge's serial settings (8N1, no flow "
+        "control, the robot's rate; a robot set to a rate other than 115200 or 19200 by Baud "
+        "(129) answers at neither: power it off and on)"
+    ),
+    echo=(
+        f"this is not a robot's port: {_PTY_END} gives back what it is sent, not the "
+        f"simulator (give {_SIM_PTY}), or a cable or adapter behind {_SOCAT} has its "
+        "transmit and receive lines joined"
+    ),
+    recheck=f"check {_PTY_END} (the simulator's fault options, or {_SOCAT} and its cable)",
+    drops=f"the simulator's --drop-rate or a busy computer, a cable behind {_SOCAT}",
+    delays=f"the simulator's --latency or a busy computer, {_SOCAT} and its cable",
+    garbles=f"the simulator's --corrupt-rate or --bit-flip-rate, a cable behind {_SOCAT}",
 )
 
 
@@ -257,11 +302,14 @@ class Report:
 
     @property
     def fixes(self) -> LinkFixes:
-        """The fixes worded for this port's link: a network bridge's, or a cable's."""
+        """The fixes worded for this port's link: a network bridge's, a pty's (a program at
+        its other end), or a cable's."""
         from roomba_bt.transport.link_kind import LinkKind
 
         if self.link.kind is LinkKind.NETWORK:
             return _network_fixes(self.link.between)
+        if self.link.kind is LinkKind.PTY:
+            return PTY_FIXES
         return CABLE_FIXES
 
     def line(self, mark: str, step: str, text: str, fix: str = "", label: str = "fix") -> None:

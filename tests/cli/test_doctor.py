@@ -29,6 +29,7 @@ from runtime.simrun import (  # tests/runtime: a WiFi bridge on the virtual cloc
 import roomba_bt.transport as transport_package
 from roomba_bt.cli.doctor_cmd import (
     CABLE_FIXES,
+    PTY_FIXES,
     Report,
     _examine,
     _Failed,
@@ -507,7 +508,14 @@ def test_a_line_that_garbles_every_byte_is_called_garbled_not_silent(
     assert len(failed) == 1 and "the line garbles them" in failed[0], done.stdout
     assert "silent at every OI rate" not in done.stdout
     assert "TX and RX not swapped" not in done.stdout
-    assert "check the cable and the adapter" in done.stdout
+    # the pty's other end is the simulator, garbling on purpose: said first, a cable only
+    # as what may be behind a bridge (it said "check the cable and the adapter (noise on a
+    # long or loose cable ...)" as on a device path)
+    assert _fix_of(done.stdout, "baud").startswith(
+        "fix: the robot may be there, but what the program at the pty's other end sends "
+        "arrives garbled: the simulator's fault options garble it on purpose (--corrupt-rate, "
+    ), done.stdout
+    assert "noise on a long or loose cable" not in done.stdout
 
 
 def _doctor_in_process(robot: Any, allow_reset: bool) -> tuple[int, str]:
@@ -696,6 +704,62 @@ def test_a_robot_not_found_behind_a_network_bridge_is_told_of_the_bridge_not_a_c
     out = report.out.getvalue()
     assert _fix_of(out, step).startswith(said), out
     assert "cable" not in out and "adapter" not in out
+
+
+PTY_PORT = "/dev/pts/7"
+
+
+@pytest.mark.parametrize(
+    ("link", "step", "said"),
+    [
+        (
+            lambda: _Line(echoes=True),
+            "port",
+            "fix: this is not a robot's port: the program at the pty's other end gives back "
+            "what it is sent, not the simulator (give the path roomba-bt sim --pty printed), "
+            "or a cable or adapter behind a bridge such as socat has its transmit and receive "
+            "lines joined",
+        ),
+        (
+            lambda: _Line(echoes=False),
+            "baud",
+            "fix: check that the program at the pty's other end still runs and is the "
+            "simulator (give the path roomba-bt sim --pty printed), not another program's pty",
+        ),
+        (
+            _garbling_link,
+            "baud",
+            "fix: the robot may be there, but what the program at the pty's other end sends "
+            "arrives garbled: the simulator's fault options garble it on purpose",
+        ),
+    ],
+    ids=["echo", "silent-after-the-pulse", "garbled"],
+)
+def test_a_robot_not_found_on_a_pty_is_told_of_the_program_at_its_other_end(
+    link: Callable[[], SimLink], step: str, said: str
+) -> None:
+    """A pty's other end is a program (the simulator, or a bridge such as socat): its fixes
+    spoke of a cable first ("use a cable that wires BRC", "the cable is a 5 V TTL serial
+    adapter", "give the robot's port (ls /dev/ttyUSB*)")."""
+    report = Report(io.StringIO(), link_of(PTY_PORT))
+    assert report.fixes is PTY_FIXES
+    with pytest.raises(_Failed) as failed:
+        _examine(link(), (115200, 19200), False, report)
+    assert failed.value.code == ExitCode.NO_ANSWER
+    out = report.out.getvalue()
+    assert _fix_of(out, step).startswith(said), out
+    assert "ls /dev/ttyUSB" not in out
+
+
+def test_every_pty_fix_names_its_other_end_before_any_cable() -> None:
+    """Each of the pty's fixes (the wake's, which only a port that cannot hang up reaches,
+    the stream's and the status step's too) speaks first of the simulator or the program at
+    the pty's other end; a cable only after it, as what may be behind a bridge."""
+    for name in PTY_FIXES.__slots__:
+        fix = getattr(PTY_FIXES, name)
+        program = min(at for at in (fix.find("simulator"), fix.find("pty")) if at >= 0)
+        assert "cable" not in fix[:program], (name, fix)
+    assert "use a cable that wires BRC" not in PTY_FIXES.wake
 
 
 @pytest.mark.parametrize(
