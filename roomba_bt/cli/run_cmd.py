@@ -1235,6 +1235,7 @@ def replay_command(args: argparse.Namespace) -> int:
         gate=operator_replay(record, recorded.mission),  # the monitor's pauses, steps, forces
         until=window[1],
         observer=observer,
+        stamp_logs=True,  # a mission's log lines with their t=, as the recorded run's
     )  # fmt: skip
     summary.strict_named = "run --strict"  # its warning of refusals: what would fail a run
     summary.label = record.label  # replays of several robots' runs told apart, as the runs

@@ -101,6 +101,20 @@ def use_mission_clock(runner: MissionRunner | None, label: str = "") -> None:
     MissionClockFormatter.clock = partial(mission_time_now, runner)
 
 
+@contextmanager
+def stamped_logs(runner: MissionRunner | None, label: str = "") -> Iterator[None]:
+    """:func:`use_mission_clock` for as long as the block runs (``runner`` None: nothing
+    stamped), stopped after it whatever ends it: a replay's (``replay_record``)."""
+    if runner is None:
+        yield
+        return
+    use_mission_clock(runner, label)
+    try:
+        yield
+    finally:
+        use_mission_clock(None)
+
+
 #: ``run --display``: the live tree, one log line per status change, or nothing; ``auto`` is
 #: the tree on a terminal and the log elsewhere.
 Display = Literal["auto", "tree", "log", "none"]

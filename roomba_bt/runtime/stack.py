@@ -38,6 +38,7 @@ from roomba_bt.robot.errors import DEFAULT_WATCHDOG, ConnectionClosed
 from roomba_bt.robot.stall_asks import STREAM_AGAIN_NOTE
 from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.clock import mission_time_after
+from roomba_bt.runtime.display import stamped_logs
 from roomba_bt.runtime.given import check_arguments, check_given
 from roomba_bt.runtime.long_run import say_waits_past_sleep
 from roomba_bt.runtime.loop import (
@@ -781,6 +782,7 @@ def replay_record(
     raise_interrupts: bool = True,
     progress: Callable[[float], None] | None = None,
     until: float | None = None,
+    stamp_logs: bool = False,
 ) -> tuple[RunSummary, ReplayTransport]:
     """``record``'s sensor bytes through ``mission`` on the recorded clock (``replay`` and the
     monitor's recorded runs): the run ends at the record's end or at the first command that
@@ -788,7 +790,9 @@ def replay_record(
     raised again unless ``raise_interrupts`` is False (see :meth:`RunStack.run`).
     ``progress(fraction)``: at each tenth of the record's time replayed. ``until``: the
     mission time the replay ends at, as if the record ended there (``--to``; its
-    transport's ``ended_early``)."""
+    transport's ``ended_early``). ``stamp_logs``: log lines stamped with the replay's mission
+    time and the record's label, as ``run``'s (``replay``'s: its caller cannot reach the
+    runner made here, and a mission's ``log`` lines had no ``t=``)."""
     transport = ReplayTransport(record, name=f"replay:{name}", progress=progress)
     header = record.header
     ends: list[RecordedEnd] = []  # the replay's end where its run was stopped, once made
@@ -814,7 +818,8 @@ def replay_record(
     stack.runner.gate = end or gate  # the monitor's replay of the operator's acts inside
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
     try:
-        summary = stack.run(raise_interrupts=raise_interrupts)
+        with stamped_logs(stack.runner if stamp_logs else None, record.label):
+            summary = stack.run(raise_interrupts=raise_interrupts)
     finally:
         # as the recorded run's (``run``): a stop not delivered is tried once more there, and
         # its bytes are in the record; before, the replay's was left to the program's exit

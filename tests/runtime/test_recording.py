@@ -21,6 +21,7 @@ from roomba_bt.mission import load_mission
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.safety import SIGINT_SAID
 from roomba_bt.robot.wording import COMMAND_LINE, spoken
+from roomba_bt.runtime.display import MissionClockFormatter
 from roomba_bt.runtime.recording import RecordingTransport, ReplayTransport, load_record
 from roomba_bt.runtime.stack import Recording, RunStack, replay_record
 from roomba_bt.runtime.summary import Outcome, RunSummary
@@ -130,6 +131,52 @@ def test_a_record_ends_with_the_runs_end_line_and_replays_whole(
     out = capsys.readouterr().out
     assert "the tree wrote the same" in out and "as the recorded run" in out
     assert "without the run's end" not in out
+
+
+class _Stamped(logging.Handler):
+    """The ``roomba_bt.mission`` lines (a mission's ``log`` leaves) as the command line's
+    formatter writes them when each is logged: ``t=`` is the mission clock's then."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.INFO)
+        self.setFormatter(MissionClockFormatter())
+        self.lines: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.lines.append(self.format(record))
+
+
+def test_a_replay_stamps_the_mission_s_log_lines_as_its_run_did(tmp_path: Path) -> None:
+    """``replay``'s runner is made inside ``replay_record``, where the command line could not
+    give it the mission clock: its ``log`` lines came without the ``t=`` (and the ``--label``)
+    the recorded run's had. Each is now the run's line, stamped alike."""
+    mission = tmp_path / "logs.yaml"
+    mission.write_text(
+        "mission: logs\ntree:\n  sequence:\n    - log: first\n    - wait: 0.5s\n"
+        "    - log: second\n",
+        encoding="utf-8",
+    )
+    record = tmp_path / "run.jsonl"
+    said = _Stamped()
+    logger = logging.getLogger("roomba_bt.mission")
+    level = logger.level
+    logger.addHandler(said)
+    logger.setLevel(logging.INFO)
+    try:
+        argv = ["run", str(mission), "--fast", "--display", "none", "--label", "robot 3"]
+        assert main([*argv, "--record", str(record)]) == 0
+        ran, said.lines = said.lines, []
+        assert main(["replay", str(record), "--display", "none"]) == 0
+        replayed = said.lines
+    finally:
+        logger.removeHandler(said)
+        logger.setLevel(level)
+    assert ran == [
+        "t=0.000 [robot 3] INFO roomba_bt.mission: first",
+        "t=0.510 [robot 3] INFO roomba_bt.mission: second",
+    ]
+    assert replayed == ran
+    assert MissionClockFormatter.clock is None  # the stamping ends with the replay
 
 
 def test_a_killed_runs_record_is_compared_up_to_where_it_ends(
