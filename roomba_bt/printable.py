@@ -4,7 +4,8 @@ stranger's file can carry, the invisible ones that reorder or hide what is shown
 (:func:`path_written`, one backslash where the file has one); and a duration as a person reads it
 (:func:`duration_said`: ``1 d``, not ``86400 s``), the one spelling of every layer's messages;
 a long name or value cut with its length said (:func:`shortened`, :func:`name_shown`); and a
-long list of errors cut after its first hundred, how many more said (:func:`listed`).
+long list of errors cut after its first hundred, how many more said (:func:`listed`); a
+value as a mission writes it (:func:`yaml_written`: ``true``, not Python's ``True``).
 
 Standard library only and importing nothing of ours, so that every layer may use it, the
 protocol's included, and the command line's parser can say a name without loading YAML
@@ -14,6 +15,7 @@ shows them)."""
 from __future__ import annotations
 
 import errno
+import math
 import os
 import re
 import stat
@@ -22,6 +24,7 @@ __all__ = [
     "ANY_CONTROL", "CONTROL", "INVISIBLE", "MAX_FOUND", "MAX_LISTED", "NAME_LIMIT", "TEXT_LIMIT",
     "UNPRINTABLE", "duration_said", "duration_words", "encodes", "escaped", "listed",
     "more_listed", "name_shown", "shortened", "stopped_finding", "stopped_warning",
+    "yaml_written",
 ]  # fmt: skip
 
 #: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file
@@ -175,6 +178,26 @@ def repr_written(value: object) -> str:
     value a message quotes, a text or a list of them; its control characters stay escaped
     (``'\\x1b'``), which a terminal would obey."""
     return repr(value).replace("\\\\", "\\")
+
+
+def yaml_written(value: object) -> str:
+    """``value`` (a default, an initial value) as a mission file writes it: ``true``,
+    ``false`` and ``null``, not Python's ``True``, ``False`` and ``None``, which
+    ``roomba-bt behaviours``, its generated docs and ``missions`` printed (a mission that
+    wrote ``True`` got it as YAML 1.1 reads it, a user who wrote ``None`` a text); ``.inf``
+    and ``.nan``; a list or a mapping in YAML's flow style, its items alike."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float) and not math.isfinite(value):
+        return ".nan" if math.isnan(value) else ("-.inf" if value < 0 else ".inf")
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(map(yaml_written, value)) + "]"
+    if isinstance(value, dict):
+        pairs = (f"{yaml_written(key)}: {yaml_written(item)}" for key, item in value.items())
+        return "{" + ", ".join(pairs) + "}"
+    return str(value)
 
 
 def encodes(stream: object, text: str) -> bool:

@@ -52,7 +52,7 @@ from roomba_bt.oi.odometry import SLOWEST_MOVING_SPEED_MM_S, WHEEL_SPEED_STEP_MM
 from roomba_bt.oi.opcodes import COMMANDS, Effect
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile
-from roomba_bt.printable import CONTROL
+from roomba_bt.printable import CONTROL, yaml_written
 from roomba_bt.yamlsource import character_name, quoted
 
 #: The names this module offered that other modules define (each -> its module): moved in
@@ -192,7 +192,7 @@ class Param:
         if self.required:
             parts.append("required")
         elif self.default is not None:
-            parts.append(f"default {self.default}")
+            parts.append(f"default {yaml_written(self.default)}")
         return ", ".join(parts)
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import re
 
 from roomba_bt.behaviours.declare import Declaration, Param
+from roomba_bt.printable import yaml_written
 
 #: the parameter table's head, as every entry on the page has it
 TABLE_HEAD = (
@@ -74,7 +75,7 @@ def param_default(param: Param) -> str:
     """The default column: **required**, the default as code, or empty (optional, none)."""
     if param.required:
         return "**required**"
-    return "" if param.default is None else f"`{param.default}`"
+    return "" if param.default is None else f"`{yaml_written(param.default)}`"
 
 
 def param_row(param: Param) -> tuple[str, str, str, str, str]:

@@ -44,7 +44,7 @@ from roomba_bt.cli.profile_choice import (
 )
 from roomba_bt.cli.validate_report import FORMATS, Checked
 from roomba_bt.oi.profiles import get_profile
-from roomba_bt.printable import ANY_CONTROL, TEXT_LIMIT, escaped, shortened
+from roomba_bt.printable import ANY_CONTROL, TEXT_LIMIT, escaped, shortened, yaml_written
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
@@ -791,7 +791,7 @@ def _print_behaviour(entry: dict[str, Any]) -> None:
         if p["required"]:
             parts.append("required")
         elif p["default"] is not None:
-            parts.append(f"default {p['default']}")
+            parts.append(f"default {yaml_written(p['default'])}")  # true, not True
         else:
             parts.append("optional")
         doc = f"  {inline_text(p['doc'])}" if p["doc"] else ""

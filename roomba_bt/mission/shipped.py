@@ -26,7 +26,7 @@ import yaml
 from roomba_bt.behaviours.units import closest
 from roomba_bt.mission.values import substituted
 from roomba_bt.mission.wording import COMMAND_LINE, Wording
-from roomba_bt.printable import LINK_LOOP, broken_link
+from roomba_bt.printable import LINK_LOOP, broken_link, yaml_written
 
 #: Where the shipped missions live: the package's data directory (a sibling of ``mission/``).
 SHIPPED_DIR = Path(__file__).resolve().parent.parent / "missions"
@@ -229,16 +229,6 @@ def _with_defaults(text: str, params: tuple[ShippedParameter, ...]) -> str:
     return substituted(text, defaults.get)
 
 
-def _default_written(default: object) -> str:
-    """A default as the file writes it and ``-p`` takes it: ``true``, where ``str`` said
-    Python's ``True`` (``-p go_home=false`` is how it is given)."""
-    if default is None:
-        return "none"
-    if isinstance(default, bool):
-        return "true" if default else "false"
-    return str(default)
-
-
 def describe_shipped() -> list[ShippedMission]:
     """Each shipped mission's name, description and parameter declarations, read as plain
     data (the files are checked by the tests; listing them compiles nothing)."""
@@ -290,7 +280,7 @@ def _own_keys(declared: dict[str, Any]) -> tuple[str, ...]:
             continue
         line = f"{key}: {'record' if 'fields' in decl else decl.get('type', '')}"
         if "initial" in decl:
-            line += f", initial {_default_written(decl['initial'])}"
+            line += f", initial {yaml_written(decl['initial'])}"
         out.append(line + (f"  {decl['doc']}" if decl.get("doc") else ""))
     return tuple(out)
 
@@ -302,7 +292,7 @@ def _declared(declared: dict[str, Any]) -> tuple[ShippedParameter, ...]:
         ShippedParameter(
             pname,
             str(decl.get("type", "")) + (f" of {decl['items']}" if "items" in decl else ""),
-            _default_written(decl["default"]) if "default" in decl else REQUIRED,
+            yaml_written(decl["default"]) if "default" in decl else REQUIRED,
             str(decl.get("doc", "")),
         )
         for pname, decl in declared.items()

@@ -274,12 +274,52 @@ def test_behaviours_prints_a_docstring_s_rest_as_a_terminal_reads_it(
         "    True where `Condition`'s `check` says, see the spec (https://example.org/oi) and "
         "`roomba_bt.oi.commands.safe`."
     ), out
-    assert out[2] == "    side: bool, default True  read `left` first", out
+    assert out[2] == "    side: bool, default true  read `left` first", out
     assert main(["behaviours", "s39_rest", "--plugin-file", str(plugin), "--json"]) == 0
     (entry,) = json.loads(capsys.readouterr().out)
     assert entry["doc"].startswith("True where :class:`~roomba_bt.behaviours.Condition`'s")
     assert main(["behaviours", "s39_rest", "--plugin-file", str(plugin), "--markdown"]) == 0
     assert "True where `Condition`'s `check` says" in capsys.readouterr().out
+
+
+def test_behaviours_print_each_default_as_a_mission_writes_it(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """``behaviours`` printed a bool's default as Python's ``True``, its ``--markdown`` (the
+    entries of docs/missions.md) as `` `False` ``, and a language word's options alike,
+    where a mission writes ``true`` and ``false``."""
+    plugin = tmp_path / "rest.py"
+    plugin.write_text(REST_DOCS.replace("default=True", "default=False"))
+    assert main(["behaviours", "s39_rest", "--plugin-file", str(plugin)]) == 0
+    assert "    side: bool, default false  read `left` first" in capsys.readouterr().out
+    assert main(["behaviours", "s39_rest", "--plugin-file", str(plugin), "--markdown"]) == 0
+    assert "| `side` | bool |  | `false` | read `left` first |" in capsys.readouterr().out
+    assert main(["behaviours", "parallel"]) == 0
+    said = capsys.readouterr().out
+    assert "memory: bool, default false;" in said and "synchronise: bool, default true;" in said
+    assert main(["behaviours", "seek_dock", "--markdown"]) == 0
+    assert "| `wait` | bool |  | `true` |" in capsys.readouterr().out
+    assert main(["behaviours"]) == 0
+    listed = capsys.readouterr().out
+    assert "default True" not in listed and "default False" not in listed
+
+
+@pytest.mark.parametrize(
+    ("value", "written"),
+    [
+        (True, "true"), (False, "false"), (None, "null"), (2, "2"), (0.5, "0.5"),
+        (float("inf"), ".inf"), (float("-inf"), "-.inf"), (float("nan"), ".nan"),
+        ("10min", "10min"), ([1, True, None], "[1, true, null]"),
+        ({"on": False}, "{on: false}"),
+    ],
+)  # fmt: skip
+def test_a_value_is_written_as_yaml_writes_it(value: object, written: str) -> None:
+    """The one spelling of a default or an initial value in every listing (``behaviours``,
+    its Markdown, ``missions``: a shipped mission's ``default: null`` was listed "none", a
+    text to YAML)."""
+    from roomba_bt.printable import yaml_written
+
+    assert yaml_written(value) == written
 
 
 #: a plugin file with one good class, one declared wrongly and two that declare one name
