@@ -291,6 +291,37 @@ def _fraction_hint(dimension: str, value: str) -> str:
     return f": a fraction does not read as a number: write {said}"
 
 
+#: a number written as no finite one: ``inf``, ``-Infinity``, ``nan``, YAML's ``.inf`` as a
+#: text (``.inf mm``), with what follows it taken for its unit
+_NOT_FINITE = re.compile(r"^\s*([-+]?\.?(?:inf(?:inity)?|nan))\s*(\S*)\s*$", re.IGNORECASE)
+
+
+def _not_finite(dimension: str, value: str) -> str | None:
+    """What to say of a quantity whose number is no finite one (``inf mm/s`` given as a
+    distance, ``nan m``), the unit too where it is not the dimension's; None for any other
+    value. It was "expected a distance such as 300 mm, 30cm or 1.5 m, got 'inf mm'", which
+    named neither the number nor the unit as the trouble."""
+    match = _NOT_FINITE.match(value)
+    if match is None:
+        return None
+    number, unit = match.groups()
+    units = UNITS[dimension]
+    said = f"{quoted(value)}: {number} is not a finite number"
+    if unit and unit not in units:
+        said += f", and {unit!r} is no {dimension} unit"
+    return f"{said}; {_allowed(dimension)}"
+
+
+def _allowed(dimension: str) -> str:
+    """What a quantity of ``dimension`` is: "a distance is a finite number in mm, cm or m
+    (e.g. 300 mm, 30cm or 1.5 m)"."""
+    *most, last = UNITS[dimension]
+    units = f"{', '.join(most)} or {last}" if most else last
+    return (
+        f"{with_article(dimension)} is a finite number in {units} (e.g. {EXAMPLES[dimension]})"
+    )
+
+
 def parse_quantity(dimension: str, value: object) -> float:
     """``parse_quantity("speed", "0.2 m/s") == 200.0``; raises :class:`UnitError`."""
     units = UNITS[dimension]
@@ -313,6 +344,9 @@ def parse_quantity(dimension: str, value: object) -> float:
         spelled = _ANY_UNIT.match(value)  # 100µs, 90º: a number and a unit not in ASCII
         if not stray and spelled is not None and math.isfinite(float(spelled.group(1))):
             raise UnitError(_unknown_unit(dimension, value, *spelled.groups()) + miswritten(value))
+        not_finite = _not_finite(dimension, value)
+        if not_finite is not None:
+            raise UnitError(not_finite)
         raise UnitError(
             f"expected {what} such as {EXAMPLES[dimension]}, got {quoted(value)}"
             + (
@@ -333,17 +367,19 @@ def parse_quantity(dimension: str, value: object) -> float:
             raise UnitError(
                 f"{value!r} has no unit; {what} needs one of: {known} (e.g. {EXAMPLES[dimension]})"
             )
-        raise UnitError(_unknown_unit(dimension, value, match.group(1), unit))
-    if not math.isfinite(number):  # 1e400 overflows to inf
-        raise UnitError(
-            f"{quoted(value)}: {_number_said(match.group(1))} is too large a number for {what}"
-        )
+        unknown = _unknown_unit(dimension, value, match.group(1), unit)
+        if not math.isfinite(number):  # both said at once: 1e400 mm/s as a distance
+            unknown += f"; and {_number_said(match.group(1))} is too large: it must be finite"
+        raise UnitError(unknown)
     canonical = number * units[unit]
-    if not math.isfinite(canonical):  # 1e308 h overflows to inf in seconds: "internal error"
+    # 1e400 overflows to inf, 1e308 h to inf in seconds (an "internal error" once): what is
+    # allowed said beside it, as the largest in the unit written
+    if not math.isfinite(canonical):
         largest = sys.float_info.max / units[unit]
+        said = _number_said(match.group(1)) + (f" {unit}" if math.isfinite(number) else "")
         raise UnitError(
-            f"{quoted(value)}: {_number_said(match.group(1))} {unit} is too large a number "
-            f"for {what} (it must be finite: at most {largest:.3g} {unit})"
+            f"{quoted(value)}: {said} is too large a number for {what} (it must be finite: "
+            f"at most {largest:.3g} {unit})"
         )
     return canonical
 

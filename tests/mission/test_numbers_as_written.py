@@ -169,3 +169,35 @@ def test_a_number_too_large_in_the_wrong_unit_is_told_the_unit_first(
     text = HEADER + f"tree:\n  sequence:\n    - mode: safe\n    - {leaf}\n"
     problems = _problems(tmp_path, text)
     assert len(problems) == 1 and problems[0].startswith(found), problems
+
+
+ALLOWED_DISTANCE = "a distance is a finite number in mm, cm or m (e.g. 300 mm, 30cm or 1.5 m)"
+
+
+@pytest.mark.parametrize(
+    ("distance", "found"),
+    [
+        ("inf mm", "'inf mm': inf is not a finite number; " + ALLOWED_DISTANCE),
+        ("nan mm", "'nan mm': nan is not a finite number; " + ALLOWED_DISTANCE),
+        ("-Infinity m", "'-Infinity m': -Infinity is not a finite number; " + ALLOWED_DISTANCE),
+        ("inf", "'inf': inf is not a finite number; " + ALLOWED_DISTANCE),
+        ("inf mm/s", "'inf mm/s': inf is not a finite number, and 'mm/s' is no distance unit; "
+         + ALLOWED_DISTANCE),
+        ("1e400 mm/s", "unknown distance unit 'mm/s' in '1e400 mm/s'; use one of: mm, cm, m; "
+         "and 1e400 is too large: it must be finite"),
+        ("1e400 mm", "'1e400 mm': 1e400 is too large a number for a distance (it must be "
+         "finite: at most 1.8e+308 mm)"),
+    ],
+)  # fmt: skip
+def test_a_distance_that_is_no_finite_number_says_so_and_what_is_allowed(
+    tmp_path: Path, distance: str, found: str
+) -> None:
+    """``inf mm/s``, ``nan mm`` (and ``1e400 mm/s``) given as a distance said "expected a
+    distance such as 300 mm, 30cm or 1.5 m, got 'inf mm'": neither the number nor the unit
+    named as the trouble, nor that a distance is a finite number in mm, cm or m."""
+    text = (
+        HEADER
+        + f"tree:\n  sequence:\n    - mode: safe\n    - backtrack: {{distance: {distance}}}\n"
+    )
+    problems = _problems(tmp_path, text)
+    assert problems == [f"5:29: backtrack.distance: {found}"]
