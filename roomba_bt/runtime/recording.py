@@ -100,6 +100,7 @@ file up to the note is a record every reader takes.
 from __future__ import annotations
 
 import contextlib
+import errno
 import gzip
 import io
 import json
@@ -126,7 +127,7 @@ from roomba_bt.oi.encode import BAUD_CODES, command_size, decode_command
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES
-from roomba_bt.printable import ANY_CONTROL, escaped, shortened
+from roomba_bt.printable import ANY_CONTROL, broken_link, escaped, shortened
 from roomba_bt.robot import wording
 from roomba_bt.robot.safety import interrupts_deferred
 from roomba_bt.runtime.claimed import ClaimedFile, held_by_a_writer
@@ -1126,9 +1127,27 @@ def _record_lines(path: Path, size: int | None = None) -> Iterator[tuple[int, st
                     break
                 yield number, _line_text(path, number, data), data.endswith(b"\n"), end
     except OSError as exc:
-        raise RecordError(f"{path}: cannot read record: {exc.strerror or exc}") from None
+        found = _unreadable(path, exc)
+        raise RecordError(f"{path}: record: found {found}; {RECORD_WANTED}") from None
     if number == 0:
         raise RecordError(f"{path}:1: empty file; expected a {RECORD_FORMAT} header line")
+
+
+#: what ``replay`` and ``monitor`` take, said where a record path is wrong
+RECORD_WANTED = "wanted: a record file, as run MISSION --record FILE writes one"
+
+
+def _unreadable(path: Path, exc: OSError) -> str:
+    """What is at the record path ``path`` whose read failed with ``exc``, in a user's words:
+    ``replay``/``monitor`` of a missing record said "cannot read record: No such file or
+    directory", the error's bare text, where a mission or a world names what it found and
+    what it wants."""
+    if exc.errno in (errno.ENOENT, errno.ENOTDIR):
+        return broken_link(path) if path.is_symlink() else "no such file"
+    if exc.errno in (errno.EACCES, errno.EPERM):
+        return "a file this user may not read (permission denied)"
+    name = errno.errorcode.get(exc.errno or 0)
+    return f"a file that could not be read: {exc.strerror or exc}" + (f" ({name})" if name else "")
 
 
 def open_record(path: Path) -> io.BufferedIOBase:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import bz2
+import errno
 import json
 import logging
 import lzma
@@ -422,6 +423,53 @@ def test_a_pipe_given_as_a_record_is_refused_before_it_is_opened(
     assert capsys.readouterr().err.splitlines() == [
         f"roomba-bt {command}: {fifo}: not a regular file; a record is a file run --record wrote"
     ]
+
+
+@pytest.mark.parametrize("command", READERS)
+def test_a_missing_record_is_named_with_what_was_found_and_what_is_wanted(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``replay`` and ``monitor`` of a record that is not there said "cannot read record: No
+    such file or directory", the error's text alone; a broken link the same. Exit 2, as a
+    missing mission or world."""
+    missing, link = tmp_path / "nope.jsonl", tmp_path / "link.jsonl"
+    link.symlink_to("gone.jsonl")
+    wanted = "wanted: a record file, as run MISSION --record FILE writes one"
+    assert main([command, str(missing)]) == 2
+    assert main([command, str(link)]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"roomba-bt {command}: {missing}: record: found no such file; {wanted}",
+        f"roomba-bt {command}: {link}: record: found a broken symbolic link (to 'gone.jsonl', "
+        f"which does not exist); {wanted}",
+    ]
+
+
+@pytest.mark.parametrize(
+    ("number", "found"),
+    [
+        (errno.EACCES, "a file this user may not read (permission denied)"),
+        (errno.EIO, "a file that could not be read: Input/output error (EIO)"),
+    ],
+)
+def test_a_record_that_cannot_be_read_says_why_in_words(
+    number: int, found: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A record there but unreadable (root reads a chmod 000 file, so the error is made)."""
+    from roomba_bt.runtime import recording
+
+    record = tmp_path / "run.jsonl"
+    record.write_text("{}\n")
+
+    def refused(*args: object, **kwargs: object) -> None:
+        raise OSError(number, os.strerror(number))
+
+    monkeypatch.setattr(recording, "open_record", refused)
+    with pytest.raises(recording.RecordError) as said:
+        load_record(record)
+    assert str(said.value) == (
+        f"{record}: record: found {found}; wanted: a record file, as run MISSION --record FILE "
+        "writes one"
+    )
 
 
 def test_summary_packets_are_dropped_when_they_do_not_fit_the_baud() -> None:
