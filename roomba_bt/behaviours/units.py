@@ -317,9 +317,7 @@ def _allowed(dimension: str) -> str:
     (e.g. 300 mm, 30cm or 1.5 m)"."""
     *most, last = UNITS[dimension]
     units = f"{', '.join(most)} or {last}" if most else last
-    return (
-        f"{with_article(dimension)} is a finite number in {units} (e.g. {EXAMPLES[dimension]})"
-    )
+    return f"{with_article(dimension)} is a finite number in {units} (e.g. {EXAMPLES[dimension]})"
 
 
 def parse_quantity(dimension: str, value: object) -> float:

@@ -49,6 +49,7 @@ from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary, falls_in_order
+from roomba_bt.runtime.tick_watch import WHEN_SLOW, slowest_tick_named
 from roomba_bt.runtime.wall_limit import ran_out
 from roomba_bt.sim import STEP_SECONDS, Faults, SimLink, Simulator, World
 from roomba_bt.sim.faults import NO_FAULTS
@@ -262,6 +263,14 @@ class EpisodeResult:
     #: the robot model the episode's mission ran as (``EpisodeSpec.profile``): a results
     #: file read back (``eval --from``, ``--resume``) names it; "" in files written before
     profile: str = ""
+    #: the behaviour the episode's slowest tick was in, where a behaviour held the ticks on
+    #: the wall clock (the run summary's ``slowest ... ms in sleepy (Sleepy.update at
+    #: x.py:11)``: runtime/tick_watch.py, :data:`~roomba_bt.runtime.tick_watch.WHEN_SLOW`),
+    #: and that tick's host seconds; "" and 0 for an episode at its usual pace. The
+    #: evaluation's report says it once; measured on the host, not part of the episode, and
+    #: not written to a results file
+    slowest_in: str = field(default="", compare=False)
+    slowest_tick_s: float = field(default=0.0, compare=False)
 
     @property
     def succeeded(self) -> bool:
@@ -617,8 +626,11 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
     if IN_POOL_WORKER:  # Ctrl-C is the parent's: it ends the pool, a worker just ends
         stack.runner.guards_signals = False
     # Ctrl-C or a signal stops the evaluation, not just this episode: raised again once the
-    # robot is stopped, with the signal it stands for (its Interruption says which)
-    summary = stack.run()
+    # robot is stopped, with the signal it stands for (its Interruption says which). A
+    # behaviour that waits on the wall clock is named as run names it, by a watch that
+    # sleeps while the episode runs at its usual pace (off the tick path: the loop is run's)
+    with slowest_tick_named(stack.runner.summary, WHEN_SLOW):
+        summary = stack.run()
     if summary.outcome is Outcome.INTERRUPTED:  # a stop asked of the run itself: the same
         raise KeyboardInterrupt(summary.reason)
     stage = failure_stage(summary.reason)
@@ -706,6 +718,8 @@ def _measured(
         ),
         said=summary.said,
         profile=spec.profile,
+        slowest_in=_named_as_given(spec, summary.slowest_in),
+        slowest_tick_s=summary.max_tick_s if summary.slowest_in else 0.0,
     )
 
 

@@ -12,9 +12,15 @@ Off the tick path on purpose: the loop's code is the same; the watch reads the s
 tick count, which the loop keeps anyway, and a count unchanged from one look to the next is
 an iteration still running (only then does it look where: a fast run's ticks pass unseen).
 The ticking thread pays only the GIL hand-over of a thread that wakes 40 times a second. An
-evaluation (thousands of episodes, benchmarked per tick) does not start one
+evaluation (thousands of episodes, benchmarked per tick) starts one that sleeps
+(:data:`DORMANT_LOOK_S`): it wakes twice a second, reads the tick count, and looks closely
+only once the episode's mission time went slower than the wall clock over a wake's
+interval (an episode runs hundreds of times faster than a robot: one that does not has a
+behaviour waiting on the wall clock, a ``time.sleep``, I/O). A plugin that slept in its
+``update`` under ``eval`` was said only by ``--wall-limit``'s HUNG; an episode at its
+usual pace never wakes the watch, and a short one ends before its first look
 (:attr:`MissionRunner.names_slow_ticks <roomba_bt.runtime.loop.MissionRunner.names_slow_ticks>`:
-``roomba-bt run`` sets it).
+``roomba-bt run`` sets it True, an evaluation's episode :data:`WHEN_SLOW`).
 
 What it can name: a tick that ran for two looks or more (about 50 ms); a shorter slowest
 tick, or one whose looks found no behaviour (the runtime's own code, the port), stays
@@ -61,6 +67,14 @@ LOOK_EVERY_S = 0.025
 #: would go, looks hung to its author
 FAST_BUT_SLOW_AFTER_S = 2.0
 
+#: ``MissionRunner.names_slow_ticks`` of an evaluation's episode: a watch that looks closely
+#: only once the run goes slower than the wall clock (:data:`DORMANT_LOOK_S`)
+WHEN_SLOW = "when slow"
+#: seconds between two reads of the tick count by a watch that waits for the run to go slower
+#: than the wall clock (:attr:`SlowTickWatch.dormant_s`): two wakes a second cost an episode
+#: nothing it measures, and a run that slow takes seconds
+DORMANT_LOOK_S = 0.5
+
 #: a thread's seconds on a CPU and waiting for one, so far (:class:`SchedStat`); None: not
 #: known here
 ThreadTimes = Callable[[], tuple[float, float] | None]
@@ -97,7 +111,9 @@ class SchedStat:
 class SlowTickWatch:
     """Looks at one run's ticking thread from a thread of its own (the module docstring).
     ``clock`` and ``times`` (the ticking thread's :data:`ThreadTimes`) are the wall clock's
-    and the kernel's (:class:`SchedStat`), given for a test."""
+    and the kernel's (:class:`SchedStat`), given for a test. ``dormant_s``: first only read
+    the tick count every that many seconds, until the run goes slower than the wall clock
+    (:meth:`wakes`); None: look every ``look_every_s`` from the start."""
 
     def __init__(
         self,
@@ -106,10 +122,18 @@ class SlowTickWatch:
         *,
         clock: Callable[[], float] = time.monotonic,
         times: ThreadTimes | None = None,
+        dormant_s: float | None = None,
     ) -> None:
         self.summary = summary
         self.look_every_s = look_every_s
         self.clock = clock
+        self.dormant_s = dormant_s
+        #: the dormant watch's last read (its time and the tick count; first, the watch's
+        #: making, before the ticks begin), and the time of the read before the last one that
+        #: found the count changed: the tick running when it wakes began after that
+        #: (:meth:`wakes`)
+        self._dormant_read = (clock(), summary.ticks)
+        self._began_after = self._dormant_read[0]
         #: the kernel's reader of the ticking thread's times (the one that makes the watch),
         #: closed by :meth:`close`; None when a test gives ``times``
         self._schedstat: SchedStat | None = None
@@ -191,8 +215,30 @@ class SlowTickWatch:
 
     def _watch(self) -> None:
         frames = sys._current_frames
+        if self.dormant_s is not None:
+            while not self._done.wait(self.dormant_s):
+                if self.wakes(self.summary.ticks):
+                    break
+            else:
+                return  # the run ended at its usual pace: nothing looked at
         while not self._done.wait(self.look_every_s):
             self.look(self.summary.ticks, lambda: behaviour_at(frames().get(self._owner)))
+
+    def wakes(self, ticks: int) -> bool:
+        """A dormant watch's read of the loop's tick count ``ticks``: True (it looks every
+        ``look_every_s`` from now on) when the mission time the ticks added since the last
+        read is less than the wall time since it. The looks go on from this read as if it
+        were one of theirs: the tick running now began after the read before the one that
+        last found the count changed, and that stretch is counted as unseen, so a long tick
+        under way when the watch wakes is still judged by :meth:`culprit`'s rule."""
+        now = self.clock()
+        (then, before), self._dormant_read = self._dormant_read, (now, ticks)
+        if ticks != before:
+            self._began_after = then
+        if (ticks - before) * SLOT_SECONDS >= now - then:
+            return False
+        self._seen, self._last, self._gap = ticks, now, now - self._began_after
+        return True
 
     def look(self, ticks: int, where_now: Callable[[], str]) -> None:
         """One look, the loop's tick count ``ticks`` read: the same as at the last look is
@@ -289,15 +335,16 @@ class SlowTickWatch:
 
 
 @contextlib.contextmanager
-def slowest_tick_named(summary: RunSummary, watch: bool) -> Iterator[None]:
+def slowest_tick_named(summary: RunSummary, watch: bool | str) -> Iterator[None]:
     """The run's ticks, watched when ``watch`` (:class:`SlowTickWatch`, from the calling
-    thread, which ticks); when they end, however they end, ``summary.slowest_in`` says where
-    the slowest tick was if the watch could tell, or ``summary.slowest_host_busy`` that the
-    host kept the ticking thread from running then."""
+    thread, which ticks; :data:`WHEN_SLOW`: dormant until the run goes slower than the wall
+    clock); when they end, however they end, ``summary.slowest_in`` says where the slowest
+    tick was if the watch could tell, or ``summary.slowest_host_busy`` that the host kept
+    the ticking thread from running then."""
     if not watch:
         yield
         return
-    watcher = SlowTickWatch(summary)
+    watcher = SlowTickWatch(summary, dormant_s=DORMANT_LOOK_S if watch == WHEN_SLOW else None)
     watcher.start()
     try:
         yield

@@ -113,8 +113,8 @@ def test_run_fast_names_the_behaviour_of_its_slowest_tick(
 def test_a_program_s_run_starts_no_watch_unless_asked(
     run_mission: RunMission, mission: Path
 ) -> None:
-    """The evaluation's episodes (benchmarked per tick) and a program's runs start no watch
-    thread: only ``roomba-bt run`` sets ``names_slow_ticks``."""
+    """A program's runs start no watch thread: ``roomba-bt run`` sets ``names_slow_ticks``
+    (and an evaluation's episode starts a dormant one: the tests below)."""
     run = run_mission(MISSION, permissions=Permissions(plugin_files=True), timeout=10.0)
     assert run.summary.max_tick_s > 0.4
     assert getattr(run.summary, "slowest_in", "") == ""
@@ -368,3 +368,74 @@ def test_a_fast_run_paused_by_its_monitor_is_not_said_slow(
         watch.look(501, lambda: "cover (Cover.update at coverage_map.py:700)")
     assert watch.held_s == pytest.approx(0.225)  # its first look found a new tick
     assert not caplog.records
+
+
+def test_eval_names_the_behaviour_that_held_its_episode_s_ticks(
+    watched_mission: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``eval`` started no watch: a plugin blocked in its ``update`` was said only by
+    ``--wall-limit``'s HUNG. Its dormant watch wakes once the episode goes slower than the
+    wall clock, the tick already blocked, and the report names the behaviour once, as
+    ``run``'s ticks line does. In this process (``--wall-limit none``): the fixture's pipe."""
+    argv = ["eval", str(watched_mission), "--runs", "1", "--allow-plugin-files",
+            "--no-progress", "--wall-limit", "none"]  # fmt: skip
+    assert main(argv) == ExitCode.OK
+    out = capsys.readouterr().out
+    warnings = [line for line in out.splitlines() if line.startswith("warning ")]
+    plugin = watched_mission.parent / "sleepy.py"
+    assert len(warnings) == 1, out
+    assert warnings[0].startswith("warning      slowest tick "), out
+    assert (
+        f" ms in sleepy (Sleepy.update at {plugin}:21), in 1 of 1 episodes: a behaviour "
+        in (warnings[0])
+    )
+
+
+def _dormant(thread: FakeThread) -> SlowTickWatch:
+    summary = RunSummary("m", max_tick_s=0.001)
+    return SlowTickWatch(
+        summary, 0.025, clock=lambda: thread.now, times=thread.times, dormant_s=0.5
+    )
+
+
+def test_a_dormant_watch_stays_asleep_while_the_episode_outruns_the_wall_clock() -> None:
+    """An evaluation's episode runs hundreds of times faster than a robot: its watch reads
+    the tick count twice a second and never looks closer (the tick path is run's, and an
+    episode at its usual pace pays two wakes a second of another thread)."""
+    thread = FakeThread()
+    watch = _dormant(thread)
+    ticks = 0
+    assert not watch.wakes(ticks)  # read as it was made: no time, no tick
+    for _ in range(10):
+        thread.run(0.5, 1.0, 0.0)
+        ticks += 3000  # 45 s of mission time in half a second
+        assert not watch.wakes(ticks)
+    thread.run(0.5, 1.0, 0.0)
+    ticks += 34  # 0.51 s of mission time in 0.5 s: as fast as a robot, still not slower
+    assert not watch.wakes(ticks)
+
+
+def test_a_dormant_watch_wakes_into_a_long_tick_and_still_judges_it_whole() -> None:
+    """A tick blocked 1.3 s: the read after its start still finds ticks added (it began
+    between two reads), the next finds none and wakes the watch 0.7 s into the tick. The
+    looks from there see 0.6 s of it; what no look saw (from the read before the count last
+    changed) is counted as unseen, so the tick is named, as a watch awake all along would."""
+    thread = FakeThread()
+    watch = _dormant(thread)
+    where = "sleepy (Sleepy.update at sleepy.py:21)"
+    watch.wakes(0)
+    thread.run(0.5, 1.0, 0.0)
+    assert not watch.wakes(2000)
+    thread.run(0.5, 1.0, 0.0)  # 200 more ticks in 0.2 s, then the blocked one begins
+    assert not watch.wakes(2200)
+    thread.run(0.5, 0.0, 0.0)
+    assert watch.wakes(2200)  # none in half a second: slower than a robot
+    for _ in range(24):
+        thread.run(0.025, 0.0, 0.0)
+        watch.look(2200, lambda: where)
+    thread.run(0.025, 0.0, 0.0)
+    watch.summary.max_tick_s = 1.3  # the loop's measure, once it ended
+    watch.look(2201, lambda: where)
+    watch.close()
+    assert watch.longest_s == pytest.approx(0.6)
+    assert watch.culprit() == where
