@@ -58,6 +58,9 @@ _DRIVE = COMMANDS_BY_NAME["drive"].opcode
 _START = COMMANDS_BY_NAME["start"].opcode
 #: Drive, Drive Direct, Drive PWM: sent again with the same bytes, they change nothing
 _WHEEL_COMMANDS = frozenset(c.opcode for c in COMMANDS.values() if c.drives_wheels)
+#: read for every command executed, as globals: an enum member read off its class costs
+#: about a thousand machine instructions on CPython 3.11 (its metaclass's ``__getattr__``)
+_OFF, _BUILTIN_CYCLE = OIMode.OFF, Effect.BUILTIN_CYCLE
 
 
 def _count_offset(spec: CommandSpec) -> int:
@@ -194,7 +197,7 @@ class OIProtocol(StreamOutput):
             return
         if self.heard is not None:
             self.heard(spec, args)
-        if self.asleep or self.mode is OIMode.OFF:
+        if self.asleep or self.mode is _OFF:
             # Off (and asleep) answers nothing but Start, and Reset where it exists.
             if op not in _WAKERS:
                 if spec.is_actuator:
@@ -204,7 +207,7 @@ class OIProtocol(StreamOutput):
             if spec.is_actuator:
                 self.violations.append(Violation(self.time, op, spec.name, self.mode))
             return
-        if spec.effect is Effect.BUILTIN_CYCLE:
+        if spec.effect is _BUILTIN_CYCLE:
             self._start_cycle(spec)
             return
         if spec.leads_to is not None:
