@@ -802,11 +802,17 @@ def _run_held(args: argparse.Namespace, stack: RunStack, monitor: LiveMonitor | 
 def _stop_said(stack: RunStack) -> str:
     """Whether the robot was stopped, once the stack is closed, for a run that ended on an
     internal error (its summary may be unfinished): ``the robot was stopped (the safe stop
-    was delivered)`` or ``safe stop NOT DELIVERED: ...``."""
+    was delivered)``, or ``safe stop`` and what the summary's line would say of a stop not
+    known delivered, in its words (``NOT DELIVERED: ...`` only for a robot that may be
+    moving: :func:`~roomba_bt.runtime.ending.undelivered_said`; it said so of a robot seen
+    stopped that then fell asleep, where the summary said ``asleep and stopped``)."""
+    from roomba_bt.runtime.ending import undelivered_said
+
     connection = stack.connection
     if connection.safe_stopped:
         return "the robot was stopped (the safe stop was delivered) and its port closed"
-    return f"safe stop NOT DELIVERED: {connection.stop_report or 'the port failed'}"
+    said = undelivered_said(connection)
+    return f"safe stop {said}{connection.stop_report or 'the port failed'}"
 
 
 def _report(

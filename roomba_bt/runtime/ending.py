@@ -546,28 +546,36 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
             )
             return
         report = getattr(connection, "stop_report", None)
-        calm = getattr(getattr(connection, "ending", None), "nothing_set_going", False)
-        # a robot the run set nothing going for is not said NOT DELIVERED in capitals: one
-        # that never left Passive nor had a wheel command read as an alarm to a hobbyist
-        reset = getattr(getattr(connection, "ending", None), "reset_seen", False)
-        # nor one whose reset was read: its OI is Off, its wheels stopped, whatever the stop did
-        asleep = getattr(getattr(connection, "ending", None), "asleep_stopped", False)
-        # nor one seen stopped that then fell asleep (a long pause): asleep, it does not move
-        said = (
-            "nothing this run set going; " if calm
-            else "" if reset
-            else f"{ASLEEP_STOPPED}; " if asleep
-            else "NOT DELIVERED: "
-        )  # fmt: skip
+        ending = getattr(connection, "ending", None)
+        said = undelivered_said(connection)
         summary.safe_stop = said + (report or "the stop sequence could not be written")
         summary.stop_delivered = False
-        summary.set_nothing_going = calm
-        summary.asleep_stopped = asleep
+        summary.set_nothing_going = getattr(ending, "nothing_set_going", False)
+        summary.asleep_stopped = getattr(ending, "asleep_stopped", False)
         note_undelivered_stop(summary)
     except KeyboardInterrupt:
         summary.safe_stop = "interrupted during the safe stop"
     except Exception as exc:
         summary.safe_stop = f"FAILED: {type(exc).__name__}: {exc}"
+
+
+def undelivered_said(connection: object) -> str:
+    """The first words of what is said of a stop not known delivered, the summary's ``safe
+    stop`` line's and the command line's after an internal error alike (the connection's
+    ``stop_report`` follows them): ``NOT DELIVERED:``, in capitals, only for a robot that
+    may be moving. A robot the run set nothing going for (one that never left Passive nor
+    had a wheel command: an alarm to a hobbyist) is said calmly; so is one whose reset was
+    read (its OI is Off, its wheels stopped, whatever the stop did: the report says it) and
+    one seen stopped that then fell asleep (a long pause: asleep, it does not move). The
+    command line's internal-error line said ``NOT DELIVERED:`` of them all."""
+    ending = getattr(connection, "ending", None)
+    if getattr(ending, "nothing_set_going", False):
+        return "nothing this run set going; "
+    if getattr(ending, "reset_seen", False):
+        return ""
+    if getattr(ending, "asleep_stopped", False):
+        return f"{ASLEEP_STOPPED}; "
+    return "NOT DELIVERED: "
 
 
 def off_by_the_tree(command: Command | None) -> str:

@@ -31,6 +31,7 @@ from runtime.test_terminate_never_returns import (  # a plugin whose terminate()
 )
 
 from roomba_bt.cli import main
+from roomba_bt.cli.run_cmd import _stop_said
 from roomba_bt.mission import Permissions, load_mission
 from roomba_bt.monitor import session as session_module
 from roomba_bt.monitor.feed import EventLogHandler, Ring, RunFeed
@@ -1133,6 +1134,10 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
     assert summary.final_mode_text() == (
         "unknown: asleep, last seen stopped in Passive; the stop unconfirmed"
     )
+    # the command line's line after an internal error says it in the same words (it said
+    # "safe stop NOT DELIVERED: ..." of the robot the summary said asleep and stopped)
+    rig.stack.close()
+    assert _stop_said(rig.stack) == f"safe stop {summary.safe_stop}"
 
 
 def test_a_stall_ridden_through_during_a_pause_says_the_run_stays_paused(
