@@ -45,6 +45,7 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, stream_period
 from roomba_bt.robot.baud_hunt import asks_after, found_words, hunt, put_back
 from roomba_bt.robot.errors import PortLost, RobotError, WaitCutShort
+from roomba_bt.robot.hazards import sets_going
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink
 from roomba_bt.robot.modes import OffsetDetector
 from roomba_bt.robot.safety import ENDING_SIGNALS
@@ -529,8 +530,9 @@ class SafeStop:
         self.nothing_set_going = False
         #: why the robot is taken for asleep (:func:`fell_asleep`), while :attr:`unheard`
         self.asleep_said: str | None = None
-        #: the last stop not known delivered met a robot asleep, seen stopped before it slept
-        self.asleep_stopped = False
+        #: the last stop not known delivered met a robot its frames had shown stopped after
+        #: every command written (:func:`seen_stopped`), and of those one that then slept
+        self.seen_still = self.asleep_stopped = False
         #: the stop being said undelivered found the port gone (:meth:`_port_gone`)
         self._gone = False
         #: the stop answered only at another rate (``baud_hunt.found_words``), or ""; the
@@ -830,7 +832,8 @@ class SafeStop:
         self.nothing_set_going = idle
         still = still if self._seen is None else ""  # no frame came after the stop to say more
         asleep = self.unheard is not None and self.unheard is self.asleep_said
-        self.asleep_stopped = heard and bool(still) and asleep
+        self.seen_still = heard and bool(still)
+        self.asleep_stopped = self.seen_still and asleep
         level = logging.DEBUG if idle else logging.WARNING if still else logging.ERROR
         if not heard:  # nothing was ever seen of it
             report = why
@@ -882,7 +885,8 @@ def fell_asleep(ending: SafeStop, why: str) -> None:
 def seen_stopped(ending: SafeStop) -> str:
     """What the robot's last frame shows of it stopped with nothing written since that
     could set it going ("" if nothing): the frame was sent after the robot heard the last
-    command (past :meth:`SafeStop.in_flight`), no built-in cycle may drive, and either
+    command (past :meth:`SafeStop.in_flight`), no built-in cycle may drive, the last Motors
+    command written runs no brush nor the vacuum, and either
     packet 35 reads Passive and its wheels are still (the requested velocities at 0 where
     streamed, else the last wheel command a drive 0, heard before it went to Passive):
     :data:`SEEN_STOPPED`; or, on a stream without packet 35, the run wrote Passive after a
@@ -893,8 +897,10 @@ def seen_stopped(ending: SafeStop) -> str:
     (:meth:`SafeStop._undelivered`'s idle). Out of the class for its size."""
     writer = ending.writer
     link = writer.link
-    frame, wheels = link.frame, writer.last_wheels
+    frame, wheels, motors = link.frame, writer.last_wheels, writer.last_motors
     if frame is None or wheels is None or writer.cycle_may_drive:
+        return ""
+    if motors is not None and sets_going(motors):  # a brush or the vacuum left running
         return ""
     if link.arrival <= writer.last_command_at + ending.in_flight(
         stream_period(link.stream_ids, writer.baud)

@@ -36,7 +36,7 @@ from roomba_bt.robot.hazards import sets_going
 from roomba_bt.robot.interface import Odometer, Outbox, Snapshot
 from roomba_bt.robot.safety import SAFE_STOP_UNDER_WAY, InterruptGuard
 from roomba_bt.runtime.long_run import RobotCycleWatch
-from roomba_bt.runtime.summary import ASLEEP_STOPPED, RunSummary
+from roomba_bt.runtime.summary import ASLEEP_STOPPED, SEEN_STOPPED_FIRST, RunSummary
 from roomba_bt.runtime.teardown import (
     behaviour_at,
     behaviour_in,
@@ -552,6 +552,7 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
         summary.stop_delivered = False
         summary.set_nothing_going = getattr(ending, "nothing_set_going", False)
         summary.asleep_stopped = getattr(ending, "asleep_stopped", False)
+        summary.seen_stopped = getattr(ending, "seen_still", False)
         note_undelivered_stop(summary)
     except KeyboardInterrupt:
         summary.safe_stop = "interrupted during the safe stop"
@@ -566,8 +567,12 @@ def undelivered_said(connection: object) -> str:
     may be moving. A robot the run set nothing going for (one that never left Passive nor
     had a wheel command: an alarm to a hobbyist) is said calmly; so is one whose reset was
     read (its OI is Off, its wheels stopped, whatever the stop did: the report says it) and
-    one seen stopped that then fell asleep (a long pause: asleep, it does not move). The
-    command line's internal-error line said ``NOT DELIVERED:`` of them all."""
+    one seen stopped that then fell asleep (a long pause: asleep, it does not move), and
+    one whose frames, sent after every command written, showed it stopped, whatever kept
+    the stop from it then (a cable pulled while the monitor held the run paused: the
+    pause's own stop seen taken; ``robot.ending.seen_stopped``). The command line's
+    internal-error line said ``NOT DELIVERED:`` of them all; the summary, of the last too
+    (session 38's decision, until session 40)."""
     ending = getattr(connection, "ending", None)
     if getattr(ending, "nothing_set_going", False):
         return "nothing this run set going; "
@@ -575,6 +580,8 @@ def undelivered_said(connection: object) -> str:
         return ""
     if getattr(ending, "asleep_stopped", False):
         return f"{ASLEEP_STOPPED}; "
+    if getattr(ending, "seen_still", False):
+        return f"{SEEN_STOPPED_FIRST}; "
     return "NOT DELIVERED: "
 
 

@@ -32,6 +32,13 @@ DEFAULT_GRACE = 2.0
 #: not move, and "NOT DELIVERED:" in capitals is kept for a robot that may (decided, session
 #: 39; the exit code is the lost connection's all the same: the run ended on the sleep)
 ASLEEP_STOPPED = "asleep and stopped"
+#: ... and for any other stop not known delivered (the port gone, the robot silent, the port
+#: failed while the stop was listened after) to a robot whose frames, sent after every
+#: command written, showed it stopped (its requested wheel speeds at 0 / packet 35 reading
+#: Passive, no brush nor the vacuum left running, no built-in cycle): nothing was written
+#: since that could set it going (decided, session 40; "NOT DELIVERED:" until then: the
+#: capitals are for a robot that may be moving)
+SEEN_STOPPED_FIRST = "seen stopped"
 
 #: ``run --tick-limit`` default, seconds (runtime/tick_guard.py): 17 stream slots; at
 #: 500 mm/s, 12.5 cm driven blind
@@ -360,6 +367,10 @@ class RunSummary:
     #: stopped before it slept (a long pause on a link without keep-awake): said
     #: :data:`ASLEEP_STOPPED`, not ``NOT DELIVERED``
     asleep_stopped: bool = False
+    #: the stop not known delivered met a robot its frames had shown stopped after every
+    #: command written (asleep or not): said :data:`SEEN_STOPPED_FIRST` (or
+    #: :data:`ASLEEP_STOPPED`), not ``NOT DELIVERED``
+    seen_stopped: bool = False
     max_tick_s: float = 0.0
     #: where the slowest tick was, when a watch could tell (runtime/tick_watch.py: ``run``'s,
     #: on either clock): ``sleepy (Sleepy.update at x.py:98)``; "" otherwise
@@ -546,6 +557,8 @@ class RunSummary:
             return f"unknown: last seen in {mode}, the run set nothing going, the stop unconfirmed"
         if not self.stop_delivered and self.asleep_stopped:
             return f"unknown: asleep, last seen stopped in {mode}; the stop unconfirmed"
+        if not self.stop_delivered and self.seen_stopped:
+            return f"unknown: last seen stopped in {mode}, the stop was not delivered"
         if not self.stop_delivered:
             return f"unknown: last seen in {mode}, the stop was not delivered"
         return mode

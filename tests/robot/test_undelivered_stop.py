@@ -6,6 +6,7 @@ from __future__ import annotations
 import logging
 import re
 import threading
+from collections.abc import Callable
 from typing import Any, TypeVar
 
 import pytest
@@ -18,6 +19,8 @@ from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import STOP_RESYNC_ZEROS, describe_activity
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG, PortLost, StreamStalled
 from roomba_bt.robot.link import LinkStatus
+from roomba_bt.runtime.ending import mode_of, stop_robot, undelivered_said
+from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.sim import Faults, SimLink, Simulator, parse_world
 
 BOX = """
@@ -216,6 +219,53 @@ def test_a_pause_not_yet_seen_taken_is_still_said_to_be_maybe_moving() -> None:
     link.pulled = True
     assert connection.safe_stop() is False
     assert "the robot may still be moving: pick it up" in str(connection.stop_report)
+
+
+def _brushing_then_passive(connection: Connection) -> None:
+    """Safe, the main brush on, Start: Passive with a Motors command that runs a brush the
+    last one written (whether the robot's Passive stops it, nothing here shows)."""
+    connection.send_many([oi.safe(), oi.motors(0x04), oi.start()])
+
+
+@pytest.mark.parametrize(
+    ("before_the_pull", "calm"),
+    [
+        (lambda c: frames_for(c, 20), True),
+        (lambda c: None, False),  # no frame since the pause's stop
+        (lambda c: (frames_for(c, 20), c.send_many([oi.safe()])), False),  # a command since
+        (lambda c: (_brushing_then_passive(c), frames_for(c, 20)), False),  # a brush left on
+    ],
+    ids=["seen stopped", "no frame since", "a command since", "a brush on"],
+)
+def test_the_summary_of_a_stop_not_delivered_is_calm_only_for_a_robot_seen_stopped(
+    before_the_pull: Callable[[Connection], object], calm: bool
+) -> None:
+    """The rule: ``NOT DELIVERED:`` in capitals only where the robot may be moving. A cable
+    pulled while the monitor held the run paused, the pause's stop seen taken in the frames
+    since (Passive, the wheels asked for 0, no brush nor vacuum left on, nothing written
+    after them): the summary said ``NOT DELIVERED: last seen stopped in Passive, ...``
+    (session 38's decision) and ``final mode unknown: last seen in Passive, the stop was not
+    delivered``; it says ``seen stopped; ...``. No frame since the stop, a command written
+    after the last frame, or a brush left running keep the capitals."""
+    connection, link = paused()
+    before_the_pull(connection)
+    link.pulled = True
+    summary = RunSummary(mission="m")
+    stop_robot(connection, summary)
+    summary.final_mode = mode_of(connection)  # as the run's end sums it up
+    assert summary.stop_delivered is False
+    if calm:
+        assert summary.safe_stop == f"seen stopped; {connection.stop_report}"
+        assert summary.safe_stop.startswith(f"seen stopped; {IN_PASSIVE}; the stop was not ")
+        assert summary.final_mode_text() == (
+            "unknown: last seen stopped in Passive, the stop was not delivered"
+        )
+    else:
+        assert summary.safe_stop == f"NOT DELIVERED: {connection.stop_report}"
+        assert "the robot may still be moving: pick it up" in summary.safe_stop
+        assert summary.final_mode_text().endswith(", the stop was not delivered")
+        assert "stopped" not in summary.final_mode_text()
+    assert undelivered_said(connection) == summary.safe_stop[: -len(str(connection.stop_report))]
 
 
 def test_a_delivered_stop_leaves_no_report() -> None:
