@@ -28,7 +28,7 @@ import py_trees
 from roomba_bt.behaviours.actions import last_said
 from roomba_bt.behaviours.blackboard import run_board, running_on
 from roomba_bt.oi.encode import Command
-from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.printable import duration_said
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import STOP_RESYNC_ZEROS, SafeStop
@@ -263,13 +263,16 @@ class RunEnding:
 
     def sum_up(self, wall_time_s: float, last: Snapshot | None, unconfirmed: int) -> None:
         """The summary's last figures, once the robot is stopped: the run's wall time, the
-        last snapshot's (None: none came), the mode the robot was left in, whether it ever
-        answered, the hazard onsets never confirmed, the parser's counters and the falls."""
+        last snapshot's (None: none came), the mode the robot was left in (and whether the
+        stream showed it: packet 35), whether it ever answered, the hazard onsets never
+        confirmed, the parser's counters and the falls."""
         summary, connection = self.summary, self.connection
         summary.wall_time_s = wall_time_s
         summary.take_last(last)
         summary.final_mode = mode_of(connection)
         link = getattr(connection, "link", None)
+        streamed = getattr(link, "stream_ids", None)  # none asked for: nothing to say
+        summary.mode_streamed = not streamed or OI_MODE_PACKET in streamed
         heard = getattr(connection, "robot_answered", None)  # a reply or a frame, not noise
         summary.robot_answered = getattr(link, "bytes_read", 1) > 0 if heard is None else heard
         summary.unconfirmed_hazards = unconfirmed

@@ -39,6 +39,10 @@ ASLEEP_STOPPED = "asleep and stopped"
 #: since that could set it going (decided, session 40; "NOT DELIVERED:" until then: the
 #: capitals are for a robot that may be moving)
 SEEN_STOPPED_FIRST = "seen stopped"
+#: What ``final mode`` adds after a mode the run's stream never showed: packet 35 not in it
+#: (a program's own packet list), the mode is only what the run wrote, the mode model's
+#: (decided, session 40: it read as if the robot had shown it)
+MODEL_ONLY = " (not in the stream: the run's own model)"
 
 #: ``run --tick-limit`` default, seconds (runtime/tick_guard.py): 17 stream slots; at
 #: 500 mm/s, 12.5 cm driven blind
@@ -346,6 +350,9 @@ class RunSummary:
     #: ``RunEnding.robot_cycle``); "" if none was seen
     robot_cycle: str = ""
     final_mode: OIMode | None = None
+    #: the run's stream carried the OI mode (packet 35): False, the final mode is the run's
+    #: own model of what it wrote, never checked against the robot (:data:`MODEL_ONLY`)
+    mode_streamed: bool = True
     battery_percent: float | None = None
     #: the lowest battery level seen, looked at once a second of mission time
     #: (runtime/long_run.py) and at the end; None when the stream did not carry it
@@ -549,8 +556,11 @@ class RunSummary:
         )
 
     def final_mode_text(self) -> str:
-        """The summary's ``final mode``: the mode after the safe stop, or why it is unknown."""
+        """The summary's ``final mode``: the mode after the safe stop, or why it is unknown;
+        one the stream never showed (no packet 35) said as the run's own model's."""
         mode = self.final_mode.label if self.final_mode is not None else "unknown"
+        if self.final_mode is not None and not self.mode_streamed:
+            mode += MODEL_ONLY
         if not self.robot_answered:
             return "unknown: no robot answered"
         if not self.stop_delivered and self.set_nothing_going:

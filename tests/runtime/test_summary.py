@@ -17,7 +17,7 @@ from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import ExitCode, Outcome, RunFailed, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
 
-from .simrun import DRIVE_TO_WALL, LEDGE, TWICE_OVER_THE_EDGE, RunMission
+from .simrun import DRIVE_TO_WALL, LEDGE, SHORT_DRIVE, TWICE_OVER_THE_EDGE, RunMission
 
 
 def test_each_line_of_the_summary_stays_one_line() -> None:
@@ -299,3 +299,34 @@ def test_slow_ticks_on_the_virtual_clock_are_not_called_overruns(virtual: bool, 
     summary.virtual_clock = virtual
     line = next(x for x in str(summary).splitlines() if x.startswith("ticks"))
     assert line == f"ticks        1920001 {said}"
+
+
+@pytest.mark.parametrize(
+    ("packets", "final"),
+    [
+        (None, "Passive"),
+        ((7, 9, 10, 11, 12, 43, 44), "Passive (not in the stream: the run's own model)"),
+    ],
+    ids=["packet 35 streamed", "no packet 35"],
+)
+def test_the_final_mode_of_a_stream_without_packet_35_is_said_as_the_models(
+    packets: tuple[int, ...] | None, final: str
+) -> None:
+    """A program's own packet list without packet 35 (the OI mode): the summary's ``final
+    mode`` read ``Passive`` as if the robot had shown it, where it was only what the run had
+    written (the mode model, never checked against the robot). It says whose it is; with
+    packet 35 streamed, the mode as ever."""
+    from roomba_bt import load_mission_text
+
+    stack = RunStack(
+        load_mission_text(SHORT_DRIVE),
+        SimLink(Simulator(load_world("empty-room"), CREATE2)),
+        profile=CREATE2,
+        packets=packets,
+        timeout_s=30.0,
+    )
+    with stack:
+        summary = stack.run()
+    assert summary.outcome is Outcome.SUCCESS, summary
+    assert summary.final_mode_text() == final
+    assert f"final mode   {final}" in summary.lines()
