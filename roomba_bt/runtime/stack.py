@@ -532,6 +532,9 @@ class RecordedEnd(InnerGate):
         #: past the end's tick, the replay waits to have written what the recorded run had
         #: when its stop came (:meth:`between_frames`): the record's end is no end yet
         self.waiting = False
+        #: the note's count and the bytes the recorded run wrote before its stop, where the
+        #: first is past the second (:data:`~roomba_bt.runtime.recording.MISCOUNT`)
+        self.miscount: tuple[int, int] | None = None
 
     def _end(self) -> None:
         self.ended = True
@@ -573,9 +576,25 @@ class RecordedEnd(InnerGate):
         super().between_frames(runner)
         past = runner.has_snapshot and runner.snapshot.tick >= self.tick
         if self.half == "after" and past:
-            self.waiting = self._writes_to_come()
+            self.waiting = self._writes_to_come() and not self._miscounted()
             if not self.waiting:
                 self._end()
+
+    def _miscounted(self) -> bool:
+        """Whether the end note's count is past the bytes the recorded run wrote before its
+        stop: the replay, between frames and waiting for them, is past the time the recorded
+        run wrote its next bytes, which nothing of its run wrote here (its link writes what
+        it wrote in the stall, when it did): those came after the stop, and the count is
+        the known miscount of an older record (:data:`~roomba_bt.runtime.recording.
+        MISCOUNT`). The replay then ends here, and its own stop is compared with the
+        record's from there: the same bytes, and it is said so; others, a difference. It
+        waited for bytes that came after the stop, and said the stop's drive 0 was its
+        first difference, "sent nothing", exit 1."""
+        transport = self.transport
+        if self.written is None or transport is None or not transport.write_passed():
+            return False
+        self.miscount = (self.written, transport.written)
+        return True
 
     def _writes_to_come(self) -> bool:
         """Whether the recorded run wrote more after the end's tick, before its stop, than
@@ -826,4 +845,6 @@ def replay_record(
         stack.close()
     if end is not None and end.ended and summary.outcome is Outcome.INTERRUPTED:
         summary.outcome, summary.reason = Outcome.INPUT_ENDED, f"end of the record: {end.reason}"
+    if end is not None and end.miscount is not None:  # said by replay, the stop the same
+        record.miscounted = end.miscount
     return summary, transport

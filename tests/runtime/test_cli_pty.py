@@ -698,9 +698,12 @@ def test_a_run_stopped_in_a_stall_over_the_pty_replays_byte_for_byte(
         record=Recording(path, str(source)),
     )
 
+    at_the_stop: list[int] = []  # the link's count there: what an older roomba-bt noted
+
     class StopAtTheTrip(logging.Handler):
         def emit(self, record: logging.LogRecord) -> None:
             if "waiting up to" in record.getMessage():
+                at_the_stop.append(stack.connection.link.bytes_written)
                 stack.stop("stopped by the test")
 
     class CtrlCAtTheTrip(logging.Handler):
@@ -729,3 +732,34 @@ def test_a_run_stopped_in_a_stall_over_the_pty_replays_byte_for_byte(
     replay = finished([*CLI, "replay", str(path)])
     assert replay.returncode == 0, replay.stdout + replay.stderr
     assert "first difference" not in replay.stdout, replay.stdout
+    assert "miscount" not in replay.stdout, replay.stdout
+    if by == "stack.stop":
+        _an_older_records_count_is_said_as_its_miscount(path, stack, at_the_stop[0])
+
+
+def _an_older_records_count_is_said_as_its_miscount(
+    path: Path, stack: RunStack, at_the_stop: int
+) -> None:
+    """The same record, its end note's count as roomba-bt wrote it before 2e6d3655 (the link's
+    count at the stop, moved on at the end by what the link alone wrote since: the probe's
+    Query List, written past the link after the stop, among it): its replay waited for
+    bytes that came after the stop, "first difference ... expected Drive (137) 89 00 00 00
+    00, sent nothing", exit 1. It is said as that record's known miscount, and the replay
+    ends at the stop, byte for byte."""
+    record = load_record(path)
+    written = record.ending["written"] if record.ending else None
+    since = stack.connection.link.bytes_written - at_the_stop
+    old_count = record.out_bytes - since  # RunStack._written_when_interrupted, until then
+    assert isinstance(written, int) and old_count == written + len(PROBE_QUERY), old_count
+    old = path.with_name("older.jsonl")
+    note = f'"written": {written}}}'
+    old.write_text(path.read_text().replace(note, f'"written": {old_count}}}'))
+    replay = finished([*CLI, "replay", str(old)])
+    assert replay.returncode == 0, replay.stdout + replay.stderr
+    assert "first difference" not in replay.stdout, replay.stdout
+    assert (
+        f"replay: the end note counts {old_count} bytes written when the recorded run was "
+        f"stopped, {old_count - written} more than the {written} it wrote before its stop: a "
+        "known miscount of records made before roomba-bt 0.2.0"
+    ) in replay.stdout, replay.stdout
+    assert "not a difference in behaviour" in replay.stdout
