@@ -58,6 +58,7 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.interface import Odometry, Snapshot
 from roomba_bt.runtime.display import node_kind
+from roomba_bt.runtime.summary import LOOP_SAID, loop_said
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
@@ -420,7 +421,7 @@ class RunFeed:
         self._layout: FrameLayout | None = None
         self._mode: object = None
         self._refused_seen = 0
-        self._guard_seen, self._guard_counts = 0, (0, 0, 0)  # tick_guard_said's
+        self._guard_seen, self._guard_counts = 0, (0, 0, 0, 0)  # tick_guard_said's
         self._unnamed: frozenset[int] = frozenset()
 
     # ---------------------------------------------------------------- tree
@@ -463,7 +464,9 @@ class RunFeed:
             self._mode = snapshot.mode
         if summary.refused_commands != self._refused_seen:
             self._refused(runner, snapshot)
-        if summary.tick_halts + summary.tick_stills + summary.tick_cycles != self._guard_seen:
+        if summary.tick_halts + summary.tick_stills + summary.tick_cycles + summary.loop_slow != (
+            self._guard_seen
+        ):
             self._tick_guard_saw(summary, snapshot)
         self._watch_board(runner.blackboard or run_board())
         if not ticked and self.thin_pauses and snapshot is not None:
@@ -632,8 +635,8 @@ class RunFeed:
         time = snapshot.time if snapshot is not None else None
         for text in tick_guard_said(summary, self._guard_counts):
             self.event("note", f"tick guard: {text}", time)
-        self._guard_counts = (summary.tick_halts, summary.tick_stills, summary.tick_cycles)
-        self._guard_seen = sum(self._guard_counts)
+        counts = (summary.tick_halts, summary.tick_stills, summary.tick_cycles, summary.loop_slow)
+        self._guard_counts, self._guard_seen = counts, sum(counts)
 
     # ---------------------------------------------------------------- any thread
     def end(self, finished: str, ending: Ending | None, no_end: str | None = None) -> None:
@@ -743,12 +746,14 @@ class RunFeed:
 IN_THE_EVENT_LOG = {"in_the_event_log": True}
 
 
-def tick_guard_said(summary: RunSummary, seen: tuple[int, int, int]) -> list[str]:
-    """The tick guard's events since ``seen`` (its halts, still ticks and ticks in a cycle as
-    the feed last counted them): a halt, and a tick past the limit in which it sent nothing,
-    with nothing moving or while a built-in cycle could drive the robot (the guard ends
-    none), as a halt is (those were a log warning only, and only when the gap they left came
-    out a second or more); each with where the last was and how many so far."""
+def tick_guard_said(summary: RunSummary, seen: tuple[int, int, int, int]) -> list[str]:
+    """The tick guard's events since ``seen`` (its halts, still ticks, ticks in a cycle and a
+    program's slow loop passes as the feed last counted them): a halt, and a tick past the
+    limit in which it sent nothing, with nothing moving or while a built-in cycle could
+    drive the robot (the guard ends none), as a halt is (those were a log warning only, and
+    only when the gap they left came out a second or more); each with where the last was
+    and how many so far; a pass of a program's loop over ``stack.ticks()`` past the limit,
+    as the loop's (it was said as a tick's)."""
     said = []
     if summary.tick_halts != seen[0]:
         said.append(
@@ -766,6 +771,8 @@ def tick_guard_said(summary: RunSummary, seen: tuple[int, int, int]) -> list[str
             f"{summary.tick_cycle_last} (the cycle went on: the guard ends none; "
             f"{summary.tick_cycles} so far)"
         )
+    if summary.loop_slow != seen[3]:  # a program's loop over stack.ticks(), not a tick
+        said.append(f"{LOOP_SAID} ran over the tick limit: {loop_said(summary)}")
     return said
 
 

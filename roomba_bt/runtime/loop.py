@@ -743,10 +743,10 @@ def guarded_between_ticks(
 ) -> Callable[[], object]:
     """``work``, done between two ticks in the ticking thread, watched as a tick is by the
     run's tick guard (none: ``work`` itself): past the limit with the wheels moving, drive
-    0, counted and said as a tick's halt ``where`` (the summary's ``tick_halt_first``), the
-    wheels' last command sent again once it returns. ``RunStack.ticks()`` has the
-    program's loop body watched so: the robot drives on while it runs, as while a
-    behaviour blocks."""
+    0, said as a tick's halt is, ``where``, the wheels' last command sent again once it
+    returns; counted as the loop's own, not the tree's ticks' (the summary's ``loop_slow``,
+    ``loop_halts``). ``RunStack.ticks()`` has the program's loop body watched so: the robot
+    drives on while it runs, as while a behaviour blocks."""
     tick_guard = runner.tick_guard
     if tick_guard is None:
         return work
@@ -754,9 +754,9 @@ def guarded_between_ticks(
 
     def slow(seconds: float, _where: str, halted: bool, cycle: str) -> None:
         if halted:
-            ride.tick_halted(tick_guard, seconds, where)
+            ride.tick_halted(tick_guard, seconds, where, loop=True)
         else:
-            ride.tick_still(seconds, where, cycle)
+            ride.tick_still(seconds, where, cycle, loop=True)
 
     return tick_guard.guarded(work, slow, lambda: runner.snapshot.tick)
 

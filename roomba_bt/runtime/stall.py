@@ -150,42 +150,57 @@ class StallRide:
 
     def tick_halted(
         self, tick_guard: TickGuardLike | None, seconds: float, where: str,
-        tree_running: bool = True,
+        tree_running: bool = True, loop: bool = False,
     ) -> None:  # fmt: skip
         """The tick guard stopped the wheels (and the motors) during the tick that just
         returned: counted, said, and, as after a watchdog stall, the last wheel command goes
         out again unless this tick queued another, and so does the last Motors command the
         guard turned off (the mission goes on where it was); not once the tick ended the
         tree (``tree_running`` False): the run's end follows, and the brushes went on again
-        for a moment before its motors off."""
+        for a moment before its motors off. ``loop``: it was a pass of a program's loop over
+        ``stack.ticks()``, between two ticks (:meth:`loop_counted`), not the tree's tick."""
         summary = self.summary
-        summary.tick_halts += 1
-        summary.tick_halt_last = where or "unknown"
-        if not summary.tick_halt_first:
-            summary.tick_halt_first = summary.tick_halt_last
         motors_off = self._motors_off()
-        if motors_off is not None:
-            summary.tick_halts_motors += 1
+        if not self.loop_counted(loop, True):
+            summary.tick_halts += 1
+            summary.tick_halt_last = where or "unknown"
+            summary.tick_halt_first = summary.tick_halt_first or summary.tick_halt_last
+            summary.tick_halts_motors += motors_off is not None
         log.warning(
-            "a tick ran over %g s (%s): the tick guard sent drive 0%s",
+            "%s ran over %g s (%s): the tick guard sent drive 0%s",
+            "the program's loop body" if loop else "a tick",
             tick_guard.limit_s if tick_guard else 0.0, where or "where: unknown",
             " and motors off" if motors_off is not None else "",
         )  # fmt: skip
-        self.blocked = (seconds, summary.tick_halt_last, True, "")  # the frames it left unread
+        self.blocked = (seconds, where or "unknown", True, "")  # the frames it left unread
         if tree_running:
             self._given_back(motors_off)
 
-    def tick_still(self, seconds: float, where: str, cycle: str = "") -> None:
+    def loop_counted(self, loop: bool, halted: bool) -> bool:
+        """Count a pass of a program's loop over ``stack.ticks()`` (``loop``) that ran past
+        the tick guard's limit, ``halted`` or not, as the loop's own (the summary's
+        ``loop_slow``, ``loop_halts``): the program's time between two ticks, not the
+        tree's. It was counted and said as a slow tick ("while the tree was busy"); True if
+        it was the loop's."""
+        if loop:
+            self.summary.loop_slow += 1
+            self.summary.loop_halts += halted
+        return loop
+
+    def tick_still(self, seconds: float, where: str, cycle: str = "", loop: bool = False) -> None:
         """The tick that just returned ran past the tick guard's limit with nothing moving, or
         while ``cycle`` (a built-in cycle, as :func:`~roomba_bt.runtime.tick_guard.cycle_said`
         says it) may have driven the robot, which the guard does not end (``seconds``: how
         long it had run when the guard saw it; ``where``: the behaviour and its line):
         nothing was sent, nothing is given back; counted (the summary's tick guard line, the
         monitor's timeline), and the frames it left unread are its own (:attr:`blocked`), not
-        a process that did not run."""
+        a process that did not run. ``loop``: a pass of a program's loop over
+        ``stack.ticks()`` (:meth:`loop_counted`)."""
         summary = self.summary
         where = where or "where: unknown"
-        if cycle:
+        if self.loop_counted(loop, False):
+            pass
+        elif cycle:
             summary.tick_cycles += 1
             summary.tick_cycle_last = where
             summary.tick_cycle_first = summary.tick_cycle_first or where

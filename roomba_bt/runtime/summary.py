@@ -313,6 +313,12 @@ class RunSummary:
     tick_cycles: int = 0
     tick_cycle_first: str = ""
     tick_cycle_last: str = ""
+    #: passes of a program's loop over ``stack.ticks()`` (its body, between two ticks: the
+    #: program's own time, not the tree's) that ran over ``--tick-limit``, and of those the
+    #: ones the guard stopped the robot in; none of them is among the ticks' counts above
+    #: (until session 40 they were, said as the tree's "slow tick(s)")
+    loop_slow: int = 0
+    loop_halts: int = 0
     commands_written: int = 0
     #: times the robot's wheels did not do what the command standing asked for a second (its
     #: encoders), put right by zeros and the command again (runtime/motion_watch.py); of
@@ -664,7 +670,9 @@ class RunSummary:
     def tick_guard_text(self) -> str:
         """The ticks the tick guard saw past its limit: those it stopped the robot in, then
         those with nothing moving (``1 slow tick(s) with nothing moving (nothing to stop);
-        the first in sleepy (Sleepy.update at ...)``); "" when it saw none."""
+        the first in sleepy (Sleepy.update at ...)``), then a program's loop over
+        ``stack.ticks()`` past the limit between two ticks, said as its own; "" when it saw
+        none."""
         parts = []
         if self.tick_halts:
             parts.append(
@@ -681,6 +689,8 @@ class RunSummary:
                 f"{self.tick_cycles} slow tick(s) while a built-in cycle could drive the robot "
                 f"(it went on: the guard ends no cycle); the first in {self.tick_cycle_first}"
             )
+        if self.loop_slow:
+            parts.append(f"{self.loop_slow} slow pass(es) of {LOOP_SAID}: {loop_said(self)}")
         return "; and ".join(parts)
 
     def tick_halts_said(self) -> str:
@@ -738,6 +748,27 @@ class RunSummary:
 
 # How the summary's lines word a measure (RunSummary.lines): out of the class, which
 # holds what was measured.
+
+
+#: how the tick guard line names a program's loop over ``stack.ticks()``, its slow passes
+LOOP_SAID = (
+    "the program's loop over stack.ticks(), between two ticks (the program's own time, not "
+    "the tree's)"
+)
+
+
+def loop_said(summary: RunSummary) -> str:
+    """What the tick guard did in the slow passes of a program's loop over ``stack.ticks()``:
+    stopped the robot in some, sent nothing in the others."""
+    said = []
+    if summary.loop_halts:
+        said.append(f"stopped the robot in {summary.loop_halts}")
+    if summary.loop_slow > summary.loop_halts:
+        said.append(
+            f"sent nothing in {summary.loop_slow - summary.loop_halts} (nothing moving, or a "
+            "built-in cycle, which it does not end)"
+        )
+    return "the tick guard " + ", ".join(said)
 
 
 def _unheard_said(summary: RunSummary) -> str:

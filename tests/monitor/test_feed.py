@@ -12,7 +12,7 @@ import py_trees
 from py_trees.common import Status
 
 from roomba_bt.mission import load_mission
-from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.feed import RunFeed, tick_guard_said
 from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.monitor.views import header_view, motors_view, state_view, world_view
@@ -23,6 +23,7 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.recording import load_record
 from roomba_bt.runtime.stack import Recording, RunStack
+from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.runtime.tick_guard import stop_first
 from roomba_bt.sim import SimLink, Simulator, load_world
 
@@ -297,3 +298,16 @@ def test_the_record_of_a_run_that_lost_its_link_is_compared_up_to_there_not_dive
     assert any(text.startswith(past) for text in events), events
     # the replay's own stop is not the recorded run's (which went into a port that was gone)
     assert feed.ending is None
+
+
+def test_a_programs_slow_loop_pass_is_an_event_of_its_own_not_a_ticks() -> None:
+    """A pass of a program's loop over ``stack.ticks()`` past the tick limit was counted as
+    the tree's slow tick and shown as "a tick ran over its limit with nothing moving, in the
+    program's loop ..."; it is the loop's own event, and no tick's."""
+    summary = RunSummary("m", loop_slow=2, loop_halts=1)
+    assert tick_guard_said(summary, (0, 0, 0, 1)) == [
+        "the program's loop over stack.ticks(), between two ticks (the program's own time, "
+        "not the tree's) ran over the tick limit: the tick guard stopped the robot in 1, sent "
+        "nothing in 1 (nothing moving, or a built-in cycle, which it does not end)"
+    ]
+    assert tick_guard_said(summary, (0, 0, 0, 2)) == []

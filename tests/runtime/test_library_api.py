@@ -225,8 +225,9 @@ def test_an_observer_given_still_sees_every_tick_of_a_loop() -> None:
 
 
 def test_the_tick_guard_watches_the_loops_body_on_the_wall_clock() -> None:
-    """On a robot the robot drives on while the body runs: a body that blocks is a tick
-    that blocks, and the guard's drive 0 is said as the loop's."""
+    """On a robot the robot drives on while the body runs: a body that blocks is watched as
+    a tick that blocks, and the guard's drive 0 is counted and said as the loop's, not as
+    a slow tick of the tree's (``tick_halts``, "while the tree was busy", until session 40)."""
     from roomba_bt.sim import RealtimeSimLink
 
     simulator = _simulator()
@@ -239,8 +240,12 @@ def test_the_tick_guard_watches_the_loops_body_on_the_wall_clock() -> None:
             if tick.number == 40:
                 wait_for_the_guard(stack)  # until the guard stopped the wheels
                 break
-    assert stack.summary.tick_halts == 1, stack.summary
-    assert stack.summary.tick_halt_first.startswith("the program's loop over stack.ticks()")
+    summary = stack.summary
+    assert (summary.loop_slow, summary.loop_halts, summary.tick_halts) == (1, 1, 0), summary
+    assert summary.tick_guard_text() == (
+        "1 slow pass(es) of the program's loop over stack.ticks(), between two ticks (the "
+        "program's own time, not the tree's): the tick guard stopped the robot in 1"
+    )
 
 
 def test_a_loops_body_that_blocks_with_the_robot_still_is_said_as_such(
@@ -249,8 +254,10 @@ def test_a_loops_body_that_blocks_with_the_robot_still_is_said_as_such(
     """A body that blocks before anything moves (Safe, no drive yet) gets nothing from the
     guard, and the 1.5 s of frames it left unread are said as the loop's, the robot still:
     not as a process suspended or starved while the robot went on, and not counted as
-    unread. The virtual clock, the guard given: the body waits until the guard has looked
-    where it is (``TickGuard._where``), then has the robot stream on."""
+    unread, nor as a slow tick of the tree's (``tick_stills``, "1 slow tick(s) with nothing
+    moving", until session 40): as a slow pass of the program's loop. The virtual clock,
+    the guard given: the body waits until the guard has looked where it is
+    (``TickGuard._where``), then has the robot stream on."""
     seen = guard_looks(monkeypatch)
     link = SimLink(_simulator())
     stack = RunStack(roomba_bt.load_mission_text(TO_THE_WALL), link, profile=CREATE2,
@@ -266,7 +273,14 @@ def test_a_loops_body_that_blocks_with_the_robot_still_is_said_as_such(
     assert len(said) == 1 and "no frame was read for 1.5" in said[0], said
     assert "a tick blocked (the program's loop over stack.ticks()" in said[0]
     assert "the robot stood still" in said[0] and "suspended" not in said[0]
-    assert stack.summary.unread_gaps == 0 and stack.summary.tick_halts == 0, stack.summary
+    summary = stack.summary
+    assert summary.unread_gaps == summary.tick_halts == summary.tick_stills == 0, summary
+    assert (summary.loop_slow, summary.loop_halts) == (1, 0), summary
+    assert summary.tick_guard_text() == (
+        "1 slow pass(es) of the program's loop over stack.ticks(), between two ticks (the "
+        "program's own time, not the tree's): the tick guard sent nothing in 1 (nothing "
+        "moving, or a built-in cycle, which it does not end)"
+    )
     assert seen.is_set()
 
 
