@@ -25,7 +25,7 @@ import threading
 import time
 import weakref
 from collections.abc import Iterator
-from typing import Any
+from typing import Any, cast
 
 import serial
 from serial import rfc2217, serialutil
@@ -134,11 +134,32 @@ class KernelExclusiveSerial(serial.Serial):
         super().close()
 
 
+class _Rfc2217Port(rfc2217.Serial):
+    """pyserial's RFC 2217 port, whose close closes its socket. pyserial's close skips
+    ``socket.close()`` when ``shutdown()`` fails (the server closed the connection first)
+    and forgets the socket, and its open calls that close when the negotiation fails: a
+    server that closes each connection at once (one serving another client, a bridge
+    rebooting) left the socket of every refused open, and of every try of a reconnection, to
+    the garbage collector (a ``ResourceWarning``), out of :func:`_close_port`'s reach."""
+
+    def close(self) -> None:
+        sock = getattr(self, "_socket", None)  # pyserial's own, not in its stubs
+        super().close()
+        if sock is not None:
+            with contextlib.suppress(OSError):
+                sock.close()
+
+
 def _device_port(url: str, baud: int, write_timeout: float | None) -> serial.Serial:
     """A closed port for ``url``: a device path in the kernel's exclusive mode where the
-    OS has one (:class:`KernelExclusiveSerial`), anything else as pyserial makes it."""
+    OS has one (:class:`KernelExclusiveSerial`), an RFC 2217 URL as :class:`_Rfc2217Port`,
+    anything else as pyserial makes it."""
     settings: dict[str, Any] = {"baudrate": baud, "timeout": 0, "write_timeout": write_timeout}
-    if "://" in url or not _POSIX:  # a URL (socket://, rfc2217://, loop://), or Windows
+    if url.lower().startswith("rfc2217://"):  # what serial_for_url makes, its close mended
+        rfc_port = _Rfc2217Port(None, **settings)
+        rfc_port.port = url
+        return cast(serial.Serial, rfc_port)  # as serial_for_url's stubs type every port
+    if "://" in url or not _POSIX:  # a URL (socket://, loop://), or Windows
         return serial.serial_for_url(url, do_not_open=True, **settings)
     port = KernelExclusiveSerial(None, **settings)
     port.port = url
