@@ -22,12 +22,15 @@ import importlib.util
 import os
 import select
 import signal
+import socket
 import subprocess
 import sys
 import threading
 import time
 from collections.abc import Callable, Generator, Iterator, Sequence
 from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 import py_trees
 import pytest
@@ -411,3 +414,43 @@ def pipe_read() -> PipeRead:
     """:func:`_read_beside_a_writer`: a test's check that a command never opens a pipe it
     was given (``validate``'s hint, ``monitor``'s record, ``eval --from``'s results)."""
     return _read_beside_a_writer
+
+
+class SocketsMade:
+    """The ``socket`` module as one module of the product (or pyserial's) sees it in a test,
+    each socket it makes kept in :attr:`made`: a test of an error path sees every one
+    closed, not left to the garbage collector (whose ``ResourceWarning`` fails whichever
+    test is running when it collects them). Every other name is the module's."""
+
+    def __init__(self) -> None:
+        self.made: list[socket.socket] = []
+
+    def socket(self, *args: Any, **kwargs: Any) -> socket.socket:
+        sock = socket.socket(*args, **kwargs)
+        self.made.append(sock)
+        return sock
+
+    def create_connection(self, *args: Any, **kwargs: Any) -> socket.socket:
+        sock = socket.create_connection(*args, **kwargs)
+        self.made.append(sock)
+        return sock
+
+    def all_closed(self) -> bool:
+        """Whether it made a socket and closed each one it made."""
+        return bool(self.made) and all(sock.fileno() == -1 for sock in self.made)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(socket, name)
+
+
+@pytest.fixture
+def sockets_made(monkeypatch: pytest.MonkeyPatch) -> Callable[[ModuleType], SocketsMade]:
+    """``sockets_made(module)``: the :class:`SocketsMade` that ``module``'s name ``socket``
+    is, for the test."""
+
+    def watch(module: ModuleType) -> SocketsMade:
+        made = SocketsMade()
+        monkeypatch.setattr(module, "socket", made)
+        return made
+
+    return watch

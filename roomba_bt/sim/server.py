@@ -167,10 +167,14 @@ class TcpEndpoint:
 
     def __init__(self, host: str, port: int) -> None:
         self._listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        self._listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        self._listener.bind((host, port))
-        self._listener.listen(1)
-        self._listener.setblocking(False)
+        try:
+            self._listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            self._listener.bind((host, port))
+            self._listener.listen(1)
+            self._listener.setblocking(False)
+        except BaseException:  # a port in use, a host not of this machine: nothing served
+            self._listener.close()
+            raise
         bound_host, bound_port = self._listener.getsockname()[:2]
         self.address = f"socket://{bound_host}:{bound_port}"
         self._client: socket.socket | None = None

@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import gc
 import signal
+import socket
 import subprocess
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 import pytest
 import serial
@@ -18,6 +20,11 @@ import serial
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.profiles import ROOMBA500
 from roomba_bt.oi.stream import StreamParser
+from roomba_bt.sim import server
+from roomba_bt.sim.server import Rfc2217Endpoint, TcpEndpoint
+
+if TYPE_CHECKING:
+    from conftest import SocketsMade  # tests/conftest.py: the fixture sockets_made's
 
 
 @pytest.fixture
@@ -198,8 +205,6 @@ def test_plot_on_exit(tmp_path: Path) -> None:
 
 
 def test_a_port_in_use_exits_3() -> None:
-    import socket
-
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen(1)
@@ -210,3 +215,23 @@ def test_a_port_in_use_exits_3() -> None:
         )  # fmt: skip
     assert proc.returncode == 3 and "cannot serve" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize(
+    "endpoint",
+    [TcpEndpoint, lambda host, port: Rfc2217Endpoint(host, port, 115200)],
+    ids=["tcp", "rfc2217"],
+)
+def test_a_port_in_use_leaves_no_listener_open(
+    endpoint: Callable[[str, int], TcpEndpoint],
+    sockets_made: Callable[[ModuleType], SocketsMade],
+) -> None:
+    """The listener whose bind was refused is closed: it was left to the garbage collector
+    (a ``ResourceWarning`` in whichever test ran when it collected)."""
+    made = sockets_made(server)
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen(1)
+        with pytest.raises(OSError):
+            endpoint("127.0.0.1", taken.getsockname()[1])
+    assert made.all_closed()

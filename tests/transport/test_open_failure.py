@@ -10,9 +10,10 @@ import shutil
 import socket
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from types import SimpleNamespace
-from typing import Any
+from types import ModuleType, SimpleNamespace
+from typing import TYPE_CHECKING
 
 import pytest
 from serial import rfc2217
@@ -20,6 +21,9 @@ from serial import rfc2217
 from roomba_bt.transport import SerialTransport, TransportError
 from roomba_bt.transport import open_failure as failures
 from roomba_bt.transport.open_failure import IN_USE, open_failure
+
+if TYPE_CHECKING:
+    from conftest import SocketsMade  # tests/conftest.py: the fixture sockets_made's
 
 
 def test_no_such_device_lists_the_serial_ports_present(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -118,26 +122,10 @@ def test_a_port_that_is_no_port_says_what_it_is(tmp_path: Path, port: str, said:
     assert str(refused.value).startswith(f"{url}: could not open the port: {said}")
 
 
-class _Sockets:
-    """The ``socket`` module as pyserial's RFC 2217 handler sees it in a test: each
-    connection it makes is kept in :attr:`made`, to see it closed."""
-
-    def __init__(self) -> None:
-        self.made: list[socket.socket] = []
-
-    def create_connection(self, *args: Any, **kwargs: Any) -> socket.socket:
-        sock = socket.create_connection(*args, **kwargs)
-        self.made.append(sock)
-        return sock
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(socket, name)
-
-
 # pyserial's RFC 2217 client names its reader thread with the deprecated setDaemon/setName
 @pytest.mark.filterwarnings("ignore:set(Daemon|Name)\\(\\) is deprecated:DeprecationWarning")
 def test_an_rfc2217_server_that_closes_at_once_is_said_as_a_network_s(
-    monkeypatch: pytest.MonkeyPatch,
+    sockets_made: Callable[[ModuleType], SocketsMade],
 ) -> None:
     """An ``rfc2217://`` server that closes the connection while it is negotiated (one that
     serves another client, a bridge that reboots) was "Broken pipe; likely causes: wrong
@@ -148,8 +136,7 @@ def test_an_rfc2217_server_that_closes_at_once_is_said_as_a_network_s(
     ``ResourceWarning``, hidden here by a filter until session 40)."""
     import threading
 
-    sockets = _Sockets()
-    monkeypatch.setattr(rfc2217, "socket", sockets)
+    sockets = sockets_made(rfc2217)
     listener = socket.create_server(("127.0.0.1", 0))
 
     def close_each() -> None:
@@ -173,7 +160,7 @@ def test_an_rfc2217_server_that_closes_at_once_is_said_as_a_network_s(
         f"{url}: could not open the port: {failures.RFC2217_UNANSWERED}",
     ), said
     assert "device path" not in said and "permission" not in said
-    assert len(sockets.made) == 1 and sockets.made[0].fileno() == -1  # closed, not left to GC
+    assert len(sockets.made) == 1 and sockets.all_closed()  # closed, not left to the GC
 
 
 def test_an_rfc2217_negotiation_left_unanswered_is_said_with_what_it_means() -> None:
