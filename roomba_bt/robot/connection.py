@@ -254,9 +254,14 @@ class Connection:
             transport = SerialTransport.open(url, baud, write_timeout=write_timeout)
         except TransportError as exc:
             raise port_not_opened(url, exc) from exc
-        return cls(
-            transport, profile, watchdog=watchdog, end_in=end_in, baud=baud, keep_awake=keep_awake
-        )
+        try:
+            return cls(
+                transport, profile, watchdog=watchdog, end_in=end_in, baud=baud,
+                keep_awake=keep_awake,
+            )  # fmt: skip
+        except BaseException:  # a setting refused: the port (and its locks) let go at once
+            transport.close()
+            raise
 
     def start(
         self,

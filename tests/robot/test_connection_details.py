@@ -94,6 +94,20 @@ def test_a_port_held_already_is_named_as_such_alone() -> None:
         os.close(slave)
 
 
+@pytest.mark.parametrize("settings", [{"watchdog": -1.0}, {"end_in": "sleep"}])
+def test_settings_refused_leave_the_port_closed(silent_port: str, settings: Any) -> None:
+    """A setting :class:`Connection` refuses, after ``open`` opened the port: the port is
+    closed, not held until the garbage collector came (its locks with it: the program's
+    ``except ValueError as exc:`` that opens again with the setting mended was told "this
+    process has it open already")."""
+    try:
+        Connection.open(silent_port, **settings)
+    except ValueError:  # the program's retry, the refusal's traceback (its frames) still held
+        Connection.open(silent_port).close()
+    else:
+        pytest.fail(f"{settings} was not refused")
+
+
 def test_firmware_text_in_the_stream_is_skipped_and_frames_go_on(fake_links: Any) -> None:
     link: Link = fake_links("pty")
     robot = link.scripted()
