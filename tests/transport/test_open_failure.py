@@ -140,16 +140,19 @@ def test_an_rfc2217_server_that_closes_at_once_is_said_as_a_network_s(
     listener = socket.create_server(("127.0.0.1", 0))
 
     def close_each() -> None:
-        with contextlib.suppress(OSError):  # the listener closed: the test is over
+        with contextlib.suppress(OSError):  # the listener shut: the test is over
             while True:
                 listener.accept()[0].close()
 
-    threading.Thread(target=close_each, daemon=True).start()
+    closer = threading.Thread(target=close_each, daemon=True)
+    closer.start()
     url = f"rfc2217://127.0.0.1:{listener.getsockname()[1]}"
     try:
         with pytest.raises(TransportError) as refused:
             SerialTransport.open(url)
     finally:
+        listener.shutdown(socket.SHUT_RDWR)  # ends the accept, which a close left waiting
+        closer.join()
         listener.close()
     # the write that meets the close fails (EPIPE), or, on a loaded host, pyserial's wait for
     # the negotiation runs out first ("Remote does not seem to support RFC2217", said raw

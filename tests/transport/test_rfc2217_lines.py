@@ -113,7 +113,8 @@ class _SwallowingProxy:
         self._upstream = upstream
         self.clients: list[socket.socket] = []
         self._sockets: list[socket.socket] = [self.listener]
-        threading.Thread(target=self._accept, daemon=True).start()
+        self._threads = [threading.Thread(target=self._accept, daemon=True)]
+        self._threads[0].start()
 
     def _accept(self) -> None:
         with contextlib.suppress(OSError):
@@ -123,10 +124,12 @@ class _SwallowingProxy:
                 self._sockets += [client, server]
                 swallowed = bool(self.clients)
                 self.clients.append(client)
-                threading.Thread(target=self._pipe, args=(server, client), daemon=True).start()
-                threading.Thread(
-                    target=self._pipe, args=(client, None if swallowed else server), daemon=True
-                ).start()
+                pipes = [(server, client), (client, None if swallowed else server)]
+                for ends in pipes:
+                    self._threads.append(
+                        threading.Thread(target=self._pipe, args=ends, daemon=True)
+                    )
+                    self._threads[-1].start()
 
     @staticmethod
     def _pipe(source: socket.socket, sink: socket.socket | None) -> None:
@@ -140,9 +143,17 @@ class _SwallowingProxy:
         self.clients[0].shutdown(socket.SHUT_RDWR)
 
     def close(self) -> None:
+        """Its sockets shut, which ends the accept and the reads its threads wait in (a
+        close alone leaves them waiting, each thread left running), then closed."""
+        self.listener.shutdown(socket.SHUT_RDWR)
+        self._threads[0].join()  # the accept's: no connection comes after it
+        for sock in self._sockets[1:]:
+            with contextlib.suppress(OSError):  # one the far end closed first
+                sock.shutdown(socket.SHUT_RDWR)
+        for thread in self._threads[1:]:
+            thread.join()
         for sock in self._sockets:
-            with contextlib.suppress(OSError):
-                sock.close()
+            sock.close()
 
 
 def test_a_reconnection_s_rfc2217_negotiation_waits_no_longer_than_asked(
