@@ -4,6 +4,7 @@ from the run's record, where the monitor notes each act."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -12,6 +13,7 @@ import signal
 import sys
 import time
 import urllib.request
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -22,8 +24,20 @@ termios = pytest.importorskip("termios")
 SHUTTLE = Path(__file__).resolve().parent / "missions" / "shuttle.yaml"  # drives for ever
 
 
+#: the terminals a test opened, closed after it (:func:`_terminals_closed`)
+_OPENED: list[Terminal] = []
+
+
+@pytest.fixture(autouse=True)
+def _terminals_closed() -> Iterator[None]:
+    yield
+    while _OPENED:
+        _OPENED.pop().close()
+
+
 class Terminal:
-    """The CLI on a pty of its own (``pty.fork``: its session, its controlling terminal)."""
+    """The CLI on a pty of its own (``pty.fork``: its session, its controlling terminal),
+    closed after the test (its pty's side was left open, three a module)."""
 
     def __init__(self, *args: str, cwd: Path, stderr: Path | None = None) -> None:
         """``stderr``: the run's log into that file, its hang-ups ignored (``trap '' HUP``:
@@ -37,6 +51,22 @@ class Terminal:
                 os.dup2(os.open(stderr, os.O_WRONLY | os.O_CREAT | os.O_APPEND), 2)
             os.execv(sys.executable, [sys.executable, "-m", "roomba_bt.cli", *args])
         self.screen = ""
+        self.hung_up = False
+        _OPENED.append(self)
+
+    def close(self) -> None:
+        """The run ended (killed if a failed test left it running) and its pty closed."""
+        with contextlib.suppress(ChildProcessError):  # reaped already by :meth:`wait`
+            if os.waitpid(self.pid, os.WNOHANG) == (0, 0):
+                os.kill(self.pid, signal.SIGKILL)
+                os.waitpid(self.pid, 0)
+        self.hang_up()
+
+    def hang_up(self) -> None:
+        """This side of the pty closed (once): the terminal gone, as an SSH session drops."""
+        if not self.hung_up:
+            self.hung_up = True
+            os.close(self.fd)
 
     def read(self, timeout: float) -> bool:
         """What the run wrote within ``timeout`` s, onto :attr:`screen`; False once it ended."""
@@ -176,7 +206,7 @@ def test_a_terminal_that_hangs_up_turns_the_keys_off_once(tmp_path: Path) -> Non
         run.type("x")
         run.read(0.5)
     typed = log.read_text(errors="replace").count("does nothing")
-    os.close(run.fd)  # the terminal hangs up
+    run.hang_up()  # the terminal hangs up
     _until_in(log, "keys: off (the terminal hung up")
     time.sleep(1.0)  # a spinning reader writes thousands of lines meanwhile
     said = log.read_text(errors="replace")

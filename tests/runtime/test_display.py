@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import logging
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +31,25 @@ from roomba_bt.runtime.display import (
 from roomba_bt.runtime.loop import MissionRunner
 
 from .simrun import RunMission
+
+
+@pytest.fixture(autouse=True)
+def _writers_closed(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    """Each :class:`OffTickWriter` a test made (a :class:`TerminalDisplay`'s too) is closed
+    after it: its thread waits for text until then, and was left running, one a display
+    (tests/conftest.py's ``Leftovers`` said so)."""
+    made: list[OffTickWriter] = []
+    made_by = OffTickWriter.__init__
+
+    def making(writer: OffTickWriter, *args: Any, **kwargs: Any) -> None:
+        made_by(writer, *args, **kwargs)
+        made.append(writer)
+
+    monkeypatch.setattr(OffTickWriter, "__init__", making)
+    yield
+    for writer in made:
+        writer.close(0)
+
 
 DRIVE = """
 tree:

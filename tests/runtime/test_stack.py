@@ -88,7 +88,10 @@ class _Terminal(io.StringIO):
 )
 def test_display_picks_the_observer(display: str, terminal: bool, kind: type) -> None:
     stream = _Terminal() if terminal else io.StringIO()
-    assert isinstance(observer_for(display, stream), kind)  # type: ignore[arg-type]
+    observer = observer_for(display, stream)  # type: ignore[arg-type]
+    assert isinstance(observer, kind)
+    if isinstance(observer, TerminalDisplay):
+        observer.close()  # its writer's thread ends (left running before)
 
 
 class _SlowClock:
