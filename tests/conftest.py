@@ -475,8 +475,14 @@ LEFT_RUNNING_S = 60.0
 WATCHED = ("socket:", "/dev/pts/", "/dev/ptmx")
 
 
+#: threads a library starts once for the whole process and keeps, by their names' start:
+#: Dask's offload pool (``distributed.utils._offload_executor``), made by whichever module
+#: uses Dask first
+PROCESS_THREADS = ("Dask-Offload",)
+
+
 def _threads() -> set[threading.Thread]:
-    return set(threading.enumerate())
+    return {t for t in threading.enumerate() if not t.name.startswith(PROCESS_THREADS)}
 
 
 def _descriptors() -> dict[int, str]:

@@ -33,7 +33,13 @@ SPECS = episode_specs(str(MISSIONS / "dock.yaml"), world="empty-room", runs=8, s
 DASK = str(Path(sys.executable).parent / "dask")
 #: every test here runs episodes on Dask, or reads what roomba-bt says of a cluster after
 #: Dask is imported
-pytestmark = pytest.mark.extra("cluster")
+pytestmark = [
+    pytest.mark.extra("cluster"),
+    # two of Dask's "IO loop" threads and their event loops' four sockets are still there
+    # after this module (tests/conftest.py's Leftovers, session 40): whose (Dask's, a
+    # client here, evaluate/cluster.py) is not yet known
+    pytest.mark.leaves_behind("Dask's IO loops, owner not yet found"),
+]
 
 
 def _episodes(results: list[EpisodeResult]) -> list[EpisodeResult]:
