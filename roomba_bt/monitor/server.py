@@ -85,6 +85,9 @@ HEARTBEAT_S = 1.0
 #: page woken after a minute showed 26 s of minute-old updates in turn. Held, it reads at
 #: most this long's updates on waking, then the newest state (the pump merges what it held)
 BEHIND_S = 1.0
+#: the longest ``start`` waits for the server to be bound: it waited 10 s, then gave the
+#: page's URL (port 0 where 0 was asked) of a server that was not serving
+START_WITHIN_S = 60.0
 #: how often the pump pings a page to learn how far it has read (one ping in flight at most:
 #: a browser answers at once, without its script, when it reads the frame)
 PING_EVERY_S = 0.5
@@ -477,7 +480,14 @@ class MonitorServer:
         the address cannot be bound."""
         self._thread = threading.Thread(target=self._serve, name="roomba-bt monitor", daemon=True)
         self._thread.start()
-        self._ready.wait(10)
+        began = time.monotonic()
+        while not self._ready.wait(0.05):  # bound, or failed; a thread that died is neither
+            if not self._thread.is_alive() or time.monotonic() - began > START_WITHIN_S:
+                raise OSError(
+                    f"the monitor's server did not start on {self.host}:{self.port} within "
+                    f"{START_WITHIN_S:g} s" if self._thread.is_alive() else
+                    "the monitor's server ended before it was serving"
+                )  # fmt: skip
         if self._error is not None:
             raise self._error
         if not self._freezing:
@@ -504,8 +514,9 @@ class MonitorServer:
         asyncio.set_event_loop(loop)
         self._loop = loop
         self._stopped = asyncio.Event()
-        runner = web.AppRunner(self.app(), handle_signals=False, access_log=None)
-        try:
+        runner: web.AppRunner | None = None
+        try:  # the app made in here too: a failure is start()'s error, not a thread's traceback
+            runner = web.AppRunner(self.app(), handle_signals=False, access_log=None)
             loop.run_until_complete(runner.setup())
             site = web.TCPSite(runner, self.host, self.port)
             loop.run_until_complete(site.start())
@@ -514,7 +525,8 @@ class MonitorServer:
         except BaseException as exc:
             self._error = exc
             self._ready.set()
-            loop.run_until_complete(runner.cleanup())
+            if runner is not None:
+                loop.run_until_complete(runner.cleanup())
             loop.close()
             return
         self._ready.set()

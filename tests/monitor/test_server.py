@@ -669,3 +669,42 @@ def test_a_page_that_stopped_reading_is_sent_the_newest_state_not_a_backlog() ->
     stale, behind = read[0]
     # 6 s of updates at 20 a second is 120: one second or so of them, at most 2 s
     assert stale <= 2 * round(1 / UPDATE_PERIOD_S) + 4, (stale, behind)
+
+
+def test_a_server_whose_app_cannot_be_made_says_so_from_start(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The app was made outside the serving thread's ``try``: its failure was a thread's
+    traceback on stderr, and ``start()`` returned the URL of a server that was not serving
+    after waiting 10 s. It is ``start()``'s error now, at once."""
+    feed = RunFeed(mission_name="dock")
+    server = MonitorServer(feed, None, host="127.0.0.1", port=0)
+
+    def broken() -> Any:
+        raise OSError("no page to serve")
+
+    monkeypatch.setattr(server, "app", broken)
+    tracebacks: list[object] = []
+    monkeypatch.setattr(threading, "excepthook", tracebacks.append)
+    with pytest.raises(OSError, match="no page to serve"):
+        server.start()
+    assert tracebacks == []
+
+
+def test_a_server_that_is_not_serving_in_time_is_an_error_not_a_url(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A bind that never completes (a host name whose lookup hangs) gave the URL with port
+    0 after 10 s; it is an error naming the address after ``START_WITHIN_S``."""
+    from roomba_bt.monitor import server as server_module
+
+    feed = RunFeed(mission_name="dock")
+    server = MonitorServer(feed, None, host="127.0.0.1", port=0)
+    held = threading.Event()
+    monkeypatch.setattr(server, "_serve", lambda: held.wait(10))
+    monkeypatch.setattr(server_module, "START_WITHIN_S", 0.2)
+    try:
+        with pytest.raises(OSError, match=r"did not start on 127\.0\.0\.1:0 within 0.2 s"):
+            server.start()
+    finally:
+        held.set()
