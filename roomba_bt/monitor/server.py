@@ -415,6 +415,30 @@ def _end_leftover_tasks(loop: asyncio.AbstractEventLoop) -> None:
     loop.run_until_complete(asyncio.gather(*leftover, return_exceptions=True))
 
 
+async def _close_pages(sockets: set[web.WebSocketResponse]) -> None:
+    """Tell each page the run is over (it keeps what it shows) instead of waiting on it."""
+    for ws in list(sockets):
+        with contextlib.suppress(Exception):
+            await asyncio.wait_for(
+                ws.close(code=WSCloseCode.GOING_AWAY, message=b"the run ended"), 1.0
+            )
+
+
+def _wait_until_serving(ready: threading.Event, thread: threading.Thread, address: str) -> None:
+    """Wait for the serving ``thread`` to set ``ready`` (bound, or failed with its error
+    kept): it waited 10 s, then gave the URL of a server not serving (port 0 where 0 was
+    asked). A thread that ended without either, or no answer by :data:`START_WITHIN_S`, is
+    an OSError."""
+    began = time.monotonic()
+    while not ready.wait(0.05):
+        if not thread.is_alive():
+            raise OSError("the monitor's server ended before it was serving")
+        if time.monotonic() - began > START_WITHIN_S:
+            raise OSError(
+                f"the monitor's server did not start on {address} within {START_WITHIN_S:g} s"
+            )
+
+
 class MonitorServer:
     """Serves one feed (a live run with its session, or a recorded run without one)."""
 
@@ -480,14 +504,7 @@ class MonitorServer:
         the address cannot be bound."""
         self._thread = threading.Thread(target=self._serve, name="roomba-bt monitor", daemon=True)
         self._thread.start()
-        began = time.monotonic()
-        while not self._ready.wait(0.05):  # bound, or failed; a thread that died is neither
-            if not self._thread.is_alive() or time.monotonic() - began > START_WITHIN_S:
-                raise OSError(
-                    f"the monitor's server did not start on {self.host}:{self.port} within "
-                    f"{START_WITHIN_S:g} s" if self._thread.is_alive() else
-                    "the monitor's server ended before it was serving"
-                )  # fmt: skip
+        _wait_until_serving(self._ready, self._thread, f"{self.host}:{self.port}")
         if self._error is not None:
             raise self._error
         if not self._freezing:
@@ -532,19 +549,11 @@ class MonitorServer:
         self._ready.set()
         try:
             loop.run_until_complete(self._stopped.wait())
-            loop.run_until_complete(self._close_sockets())
+            loop.run_until_complete(_close_pages(self._sockets))
         finally:
             loop.run_until_complete(runner.cleanup())
             _end_leftover_tasks(loop)
             loop.close()
-
-    async def _close_sockets(self) -> None:
-        """Tell each page the run is over (it keeps what it shows) instead of waiting on it."""
-        for ws in list(self._sockets):
-            with contextlib.suppress(Exception):
-                await asyncio.wait_for(
-                    ws.close(code=WSCloseCode.GOING_AWAY, message=b"the run ended"), 1.0
-                )
 
     # ---------------------------------------------------------------- app
     def app(self) -> web.Application:
