@@ -58,10 +58,13 @@ def other_package(text: str) -> str | None:
 @dataclass(frozen=True)
 class ShippedLookup:
     """What a mission argument names: ``path`` when found, else ``problem`` (one sentence
-    naming what was given and what exists)."""
+    naming what was given and what exists); ``missing``: no file and no shipped mission by
+    that name (not a folder, a broken link or another wrong file), so a caller that knows
+    other names (the command line: the shipped worlds) may say what the name is instead."""
 
     path: Path | None
     problem: str = ""
+    missing: bool = False
 
 
 @dataclass(frozen=True)
@@ -213,6 +216,7 @@ def _find_mission(text: str, given: Path, wording: Wording) -> ShippedLookup:
         None,
         f"{text}: no such mission file, and no shipped mission of that name "
         f"(shipped: {names}{wording.lists_missions}){hint}",
+        missing=True,
     )
 
 

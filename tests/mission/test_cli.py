@@ -64,6 +64,28 @@ def test_validate_a_missing_file(capsys: Capsys, tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     "command", [["validate"], ["show"], ["run", "--fast"], ["eval", "--runs", "1"]]
 )
+def test_a_shipped_world_s_name_given_for_a_mission_is_said_as_a_world(
+    command: list[str], capsys: Capsys, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``validate empty-room`` listed the shipped missions alone, as if the name were a typo
+    of one: it is a shipped world, which the error now says, with how to see it and how to
+    run a mission in it. A path (a ``/`` in it) is a file of the user's, never a world."""
+    monkeypatch.chdir(tmp_path)
+    assert main([command[0], "empty-room", *command[1:]]) == 2
+    err = capsys.readouterr().err
+    assert err.rstrip().endswith(
+        "; empty-room is a shipped world, not a mission: `roomba-bt worlds empty-room` shows "
+        "it, `roomba-bt run MISSION --world empty-room` runs a mission in it"
+    ), err
+    assert main([command[0], "worlds/empty-room.yaml", *command[1:]]) == 2
+    assert "shipped world" not in capsys.readouterr().err
+    assert main(["worlds", "empty-room"]) == 0  # what the hint gives runs
+    assert "name: empty-room" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "command", [["validate"], ["show"], ["run", "--fast"], ["eval", "--runs", "1"]]
+)
 def test_a_missing_file_s_name_is_said_on_one_line_by_every_command(
     command: list[str], capsys: Capsys, tmp_path: Path
 ) -> None:
