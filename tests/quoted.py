@@ -3,6 +3,10 @@ backquotes. :func:`quotes` finds them, :func:`assert_quoted` holds one to what t
 printed (tests/test_docs_run.py runs the cheap ones' commands; a test that already makes a
 harder one, a hung episode or a lost Dask worker, holds the page to its own output).
 
+Besides those, the other lines a page quotes as printed (:data:`MESSAGE_KINDS`): a
+diagnostic ``m.yaml:9:25: ...``, ``roomba-bt: ...``, ``replay: ...``, ``monitor: ...``, a
+record's ``r.jsonl: ...`` and a line of the run summary, in backquotes or in an output block.
+
 A quote may leave a part out as ``...``: it stands for any text there (``no such folder;
 ...``); the rest is compared to the character, the Markdown's line breaks aside."""
 
@@ -15,15 +19,60 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 #: a quoted line of a command's: ``roomba-bt run: ...``, ``roomba-bt eval: warning: ...``
 QUOTE = re.compile(r"`(roomba-bt [\w-]+: [^`]+)`")
+#: the run summary's labels (runtime/summary.py), each a line's first word(s)
+SUMMARY_LABELS = (
+    "outcome", "safe stop", "final mode", "ticks", "tick guard", "unread", "unheard", "strict",
+    "stalls", "falls", "paused", "forced", "commands", "battery", "charger",
+)  # fmt: skip
+#: the other kinds of line a page quotes as printed, by kind: a diagnostic
+#: (``m.yaml:9:25: ...``), the program's own line (``roomba-bt: timeout: ...``), replay's and
+#: the monitor's (``replay: ...``, ``monitor: ...``), a record's (``r.jsonl: ...``), a line
+#: of the run summary (``final mode   Passive``)
+MESSAGE_KINDS = {
+    "diagnostic": re.compile(r"(?:\.\.\./)?[\w./-]+\.(?:yaml|yml|py|jsonl|toml):\d+:\d+: \S"),
+    "program": re.compile(r"roomba-bt: \S"),
+    "replay": re.compile(r"replay: \S"),
+    "monitor": re.compile(r"monitor: \S"),
+    "record": re.compile(r"[\w./-]+\.jsonl: \S"),
+    "summary": re.compile(rf"(?:{'|'.join(SUMMARY_LABELS)}) \S"),
+}
+#: a fenced block: its language, its text
+FENCED = re.compile(r"^```(\w*)\n(.*?)^```", re.M | re.S)
+#: the fenced blocks whose lines are output a page shows (a shell block's are commands)
+OUTPUT_LANGS = ("", "text")
 
 
 def quotes(doc: str) -> list[str]:
-    """Every such quote of the page ``doc`` (a path from the repository's root), in order,
-    its line breaks made spaces."""
-    text = " ".join((ROOT / doc).read_text(encoding="utf-8").split())
-    return QUOTE.findall(text)
+    """Every quote of the page ``doc`` (a path from the repository's root) of a line a
+    command prints, in order, its line breaks made spaces: a ``roomba-bt CMD: ...`` in
+    backquotes, and a line of :data:`MESSAGE_KINDS` in backquotes or as a line of an output
+    block (its runs of spaces made one, as the summary's columns)."""
+    raw = (ROOT / doc).read_text(encoding="utf-8")
+    shown: list[str] = []
+
+    def fenced(block: re.Match[str]) -> str:
+        if block[1] in OUTPUT_LANGS:
+            shown.extend(" ".join(line.split()) for line in block[2].splitlines())
+        return "\n"
+
+    prose = " ".join(FENCED.sub(fenced, raw).split())
+    found = QUOTE.findall(" ".join(raw.split()))
+    inline = re.findall(r"`([^`]*)`", prose)  # an empty `` pairs its own two
+    return found + [
+        quote
+        for quote in (*inline, *shown)
+        if any(kind.match(quote) for kind in MESSAGE_KINDS.values())
+    ]
 
 
+def kind_of(quote: str) -> str:
+    """The kind of a quote :func:`quotes` found: a name of :data:`MESSAGE_KINDS`, else
+    ``command`` (``roomba-bt CMD: ...``)."""
+    return next((name for name, kind in MESSAGE_KINDS.items() if kind.match(quote)), "command")
+
+
+#: the YAML path that ends a diagnostic's line (``[tree.sequence[2].subtree]``)
+YAML_PATH = re.compile(r" \[[\w.\[\]-]+\]$")
 #: a number of a quote that gives an example's numbers (``3 episode(s)``, ``seeds 17, 18``)
 NUMBER = re.compile(r"\d+(?:\.\d+)?")
 
@@ -53,6 +102,9 @@ def assert_quoted(
     for name, page_name in (names or {}).items():
         printed = printed.replace(name, page_name)
     lines = [" ".join(line.split()) for line in printed.splitlines()]
+    # a diagnostic's ``[yaml.path]`` ends its line (``file:line:col: message [yaml.path]``,
+    # docs/missions.md): a quote may leave it out, as it leaves out the file's other lines
+    lines += [YAML_PATH.sub("", line) for line in lines if YAML_PATH.search(line)]
     for quote in quoted:
         assert any(pattern(quote, numbers).fullmatch(line) for line in lines), (
             f"{doc} quotes\n{quote}\nwhich the command did not print; it printed:\n{printed}"

@@ -70,9 +70,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import docs_inputs  # tests/docs_inputs.py: the files that make the docs' diagnostics
 import pytest
 import yaml
-from quoted import assert_quoted, quotes  # tests/quoted.py: the docs' quoted lines
+from quoted import assert_quoted, kind_of, quotes  # tests/quoted.py: the docs' quotes
 from runtime.simrun import finished  # tests/runtime: a child run to its end, no fixed wait
 
 from roomba_bt.cli import main
@@ -449,6 +450,9 @@ class Quoted:
     files: tuple[tuple[str, str | None], ...] = ()
     first: tuple[str, ...] = ()
     held: str | None = None
+    #: where the command prints the line: stderr (a command's message), or stdout
+    #: (``validate``'s diagnostics)
+    stream: str = "err"
 
 
 #: Every quote of a ``roomba-bt CMD: ...`` line whose command is cheap to run: each is run
@@ -495,6 +499,8 @@ QUOTED = [
     Quoted("docs/simulator.md", "roomba-bt sim: invalid world:",
            "roomba-bt sim --world bad.yaml --tcp 127.0.0.1:0", 2,
            files=(("bad.yaml", "name: bad\nrooms: 3\n"),)),
+    *(Quoted("docs/missions.md", start, f"roomba-bt validate {argv}", code, files=files,
+             stream="out") for start, argv, code, files in docs_inputs.MISSIONS_MD),
 ]  # fmt: skip
 
 #: The quotes whose command is a test of its own (a hung episode, a lost Dask worker, a
@@ -513,6 +519,14 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     "test_resume.py::test_an_interrupted_evaluation_says_its_plot_is_not_drawn",
     ("docs/evaluation.md", "roomba-bt eval: --from ab.jsonl.partial.jsonl:"): "tests/evaluate/"
     "test_seeds_and_from.py::test_from_leaves_out_the_last_record_a_killed_sweep_cut_short",
+    ("docs/missions.md", "many.yaml:3:50005: checking stopped"): "tests/mission/"
+    "test_hostile_files.py::test_a_missions_check_stops_at_the_cap_and_says_so_among_the_"
+    "first_listed",
+    ("docs/missions.md", "w.yaml:10002:31: warning: warnings stopped"): "tests/mission/"
+    "test_hostile_files.py::test_a_missions_warnings_stop_at_the_cap_and_say_so_among_the_"
+    "first_listed",
+    ("docs/missions.md", "roomba-bt: warning: .../pyproject.toml:"): "tests/mission/"
+    "test_include_path.py::test_a_project_file_grants_nothing_outside_its_own_folder",
     ("docs/missions.md", "roomba-bt validate: warning: plugin ..."): "tests/mission/"
     "test_half_loaded_plugin.py::test_the_pages_quote_what_each_command_says_of_it",
     ("docs/plugins.md", "roomba-bt behaviours: an installed plugin did not"): "tests/mission/"
@@ -551,21 +565,38 @@ def test_each_quoted_line_is_what_the_command_prints(
         record_held(workdir / quoted.held)
     capsys.readouterr()
     assert main(shlex.split(quoted.command)[1:]) == quoted.code, capsys.readouterr()
-    assert_quoted(quoted.doc, quoted.start, capsys.readouterr().err)
+    out, err = capsys.readouterr()
+    assert_quoted(quoted.doc, quoted.start, err if quoted.stream == "err" else out)
+
+
+def _listed(doc: str, quote: str, listed: set[tuple[str, str]]) -> bool:
+    """``quote`` of ``doc`` is one of ``listed``: (the page, how it begins, or ``kind:NAME``
+    for every quote of that kind on the page)."""
+    return any(
+        d == doc and (quote.startswith(start) or start == f"kind:{kind_of(quote)}")
+        for d, start in listed
+    )
 
 
 def test_every_quoted_line_is_held_to_what_its_command_prints() -> None:
-    """A quote of ``roomba-bt CMD: ...`` on any page is in :data:`QUOTED` or
-    :data:`QUOTED_ELSEWHERE`, whose test holds it (this test reads that it does): a new
-    quote, or one reworded past its start, is not left unchecked."""
+    """A quote of a line a command prints (tests/quoted.py: ``roomba-bt CMD: ...``, a
+    diagnostic, ``roomba-bt: ...``, ``replay: ...``, ``monitor: ...``, a record's, a summary
+    line) on any page is in :data:`QUOTED` or :data:`QUOTED_ELSEWHERE`, whose test holds it
+    (this test reads that it does), or in :data:`NOT_YET_HELD` with the reason: a new quote,
+    or one reworded past its start, is not left unchecked, and a listed one gone fails."""
     held = {(q.doc, q.start) for q in QUOTED} | set(QUOTED_ELSEWHERE)
+    pages = [path.relative_to(ROOT).as_posix() for path in DOCS]
+    found = [(doc, quote) for doc in pages for quote in quotes(doc)]
     unheld = [
         f"{doc}: `{quote}`"
-        for doc in (path.relative_to(ROOT).as_posix() for path in DOCS)
-        for quote in quotes(doc)
-        if not any(d == doc and quote.startswith(start) for d, start in held)
+        for doc, quote in found
+        if not _listed(doc, quote, held | set(NOT_YET_HELD))
     ]
     assert not unheld, "quoted lines no test compares with the command's:\n" + "\n".join(unheld)
+    for doc, start in (*held, *NOT_YET_HELD):
+        assert any(_listed(d, q, {(doc, start)}) for d, q in found), (
+            f"{doc} quotes no line that begins {start!r} (listed in this test)"
+        )
     for (doc, start), test in QUOTED_ELSEWHERE.items():
         file, name = test.split("::")
         source = (ROOT / file).read_text(encoding="utf-8")
@@ -574,6 +605,58 @@ def test_every_quoted_line_is_held_to_what_its_command_prints() -> None:
         assert called in "".join(body.split()), (
             f"{test} does not hold {doc}'s `{start}...` (assert_quoted)"
         )
+
+
+#: The quotes no test holds yet, by page and how they begin (``kind:NAME``: every quote of
+#: that kind on the page), each with why: session 40 held docs/missions.md's diagnostics
+#: first, and these are what is left, said here so that none is skipped unsaid.
+NOT_YET_HELD: dict[tuple[str, str], str] = {
+    ("docs/architecture.md", "kind:program"): "`roomba-bt: interrupted`, a Ctrl-C's line: "
+    "tests/runtime's signal tests make it, not yet held to the page",
+    ("docs/ci.md", "kind:diagnostic"): "the output block of a four-mission repository "
+    "(dock-home.yaml, hallway-patrol.yaml) that tests/mission/team_repo.py does not hold; "
+    "missions.md's quote of the same line is held on team_repo's",
+    ("docs/ci.md", "kind:program"): "run --strict's refusal, held on runtime.md's page next",
+    ("docs/doctor.md", "kind:program"): "a Roomba 500 behind the create2 profile: a robot",
+    ("docs/doctor.md", "kind:summary"): "a port that answers nothing: a robot's",
+    ("docs/evaluation.md", "kind:diagnostic"): "eval --from of a hand-broken results file: "
+    "tests/evaluate/test_seeds_and_from.py makes it, not yet held to the page",
+    ("docs/evaluation.md", "kind:summary"): "eval's falls and charger lines over 8 and 10 "
+    "apartment episodes (seconds of CPU each)",
+    ("docs/monitor.md", "kind:diagnostic"): "a plugin that fails to import, in a watched run",
+    ("docs/monitor.md", "kind:monitor"): "the monitor's own lines: a served page, its keys on "
+    "a terminal, a record read: tests/monitor makes them, not yet held to the page",
+    ("docs/monitor.md", "kind:replay"): "a replay of a 2 h record (--to): seconds of CPU",
+    ("docs/monitor.md", "kind:summary"): "a forced node, pauses: runs the monitor controls",
+    ("docs/plugins.md", "kind:diagnostic"): "broken plugins installed as the page names them "
+    "(tests/mission/test_broken_plugin_cli.py installs some): not yet held to the page",
+    ("docs/plugins.md", "kind:program"): "a plugin interrupted in its import, a record of an "
+    "uninstalled plugin: not yet held to the page",
+    ("docs/plugins.md", "kind:replay"): "a record of an uninstalled or edited plugin",
+    ("docs/reliability.md", "kind:summary"): "lost bytes, a baud change, a silent link: the "
+    "fault-injection tests of tests/robot make them, not yet held to the page",
+    ("docs/robot.md", "kind:program"): "a Roomba 500 behind the create2 profile",
+    ("docs/robot.md", "kind:summary"): "a baud change and a reconnected link: a robot's",
+    ("docs/routines.md", "kind:summary"): "the outcome of a routine's run: minutes of "
+    "mission time each",
+    ("docs/runtime.md", "kind:program"): "signals, a full disk, a closed stdout, an "
+    "internal error, an incomplete aiohttp, --fast's 2 h limit: each a test of tests/runtime "
+    "makes, not yet held to the page",
+    ("docs/runtime.md", "kind:replay"): "records of runs that lost their link, were stopped, "
+    "killed or made by 0.1.0: tests/runtime/test_recording.py and test_cli_pty.py make them, "
+    "not yet held to the page",
+    ("docs/runtime.md", "kind:summary"): "summary lines of stops not delivered, streams "
+    "without packet 35, slow or hung ticks, a host busy: tests/runtime makes them, not yet "
+    "held to the page",
+    ("docs/runtime.md", "kind:record"): "records moved out of their repository or made by "
+    "another installation",
+    ("docs/runtime.md", "kind:monitor"): "a record naming /etc/shadow as its world",
+    ("docs/simulator.md", "kind:diagnostic"): "world files' errors: tests/cli/"
+    "test_validate_world.py makes them, not yet held to the page",
+    ("docs/simulator.md", "kind:summary"): "the wall charger plugged in mid-run",
+    ("docs/unattended.md", "kind:program"): "a lost connection and the watchdog's grace: a robot's",
+    ("docs/unattended.md", "kind:summary"): "a Roomba 500 behind the create2 profile",
+}
 
 
 #: docs/evaluation.md's pandas example that reads the A/B records of the ``eval`` command

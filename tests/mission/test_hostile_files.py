@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
 
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions, compile_mission
@@ -378,6 +379,10 @@ def test_a_missions_check_stops_at_the_cap_and_says_so_among_the_first_listed(
         r"the rest of the file is not checked \(a file generated wrong\?\)",
         lines[99],
     ), lines[99]
+    # the page's column is its example's: a value's length moves it
+    assert_quoted(
+        "docs/missions.md", "many.yaml:3:50005: checking stopped", lines[99], numbers=True
+    )
     mission, diagnostics = compile_mission(tmp_path / "many.yaml")
     assert mission is None and len(diagnostics) == 10_000  # each kept, the note among them
 
@@ -426,6 +431,8 @@ def test_a_missions_warnings_stop_at_the_cap_and_say_so_among_the_first_listed(
         r"said\): the rest of the file is checked for errors only \(a file generated wrong\?\)",
         lines[99],
     ), lines[99]
+    said = lines[99].replace(f"{tmp_path}/", "")
+    assert_quoted("docs/missions.md", "w.yaml:10002:31: warning: warnings stopped", said)
     mission, diagnostics = compile_mission(tmp_path / "w.yaml")
     assert mission is not None and not diagnostics and len(mission.warnings) == 10_000
     (tmp_path / "w.yaml").write_text(f"mission: m\nblackboard:\n{keys}tree: {{sequence: [nope]}}\n")

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
 
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions, compile_mission
@@ -146,6 +147,7 @@ def test_a_project_file_grants_nothing_outside_its_own_folder(
     out, err = capsys.readouterr()
     assert "include '../../home/secret/lib.yaml' is outside the mission's folder" in out
     assert err.count("is outside this file's folder") == 3
+    assert_quoted("docs/missions.md", "roomba-bt: warning: .../pyproject.toml:", err)
 
 
 def test_a_project_file_of_another_user_is_not_read(

@@ -1,0 +1,228 @@
+"""The files that make the diagnostics docs/missions.md quotes (``m.yaml:9:25: drive: ...``),
+each written so that ``roomba-bt validate`` says the quoted line at the quoted line and
+column: the page shows the message, not the mission, so the test writes one
+(tests/test_docs_run.py's ``QUOTED``, run in the page's scratch folder).
+
+:data:`MISSIONS_MD`: (how the quote begins, ``validate``'s arguments, its exit code, the
+files). The quotes of 10,000 errors or warnings, and of a project file's grant, are held by
+the tests that already make them (tests/mission/test_hostile_files.py,
+tests/mission/test_include_path.py)."""
+
+from __future__ import annotations
+
+from mission.team_repo import ESCAPES, SAFE_DRIVE, TO_KITCHEN  # docs/ci.md's repository
+
+Files = tuple[tuple[str, str | None], ...]
+
+#: a song's notes written one a line, the third a German name (tests/mission/
+#: test_stranger_files.py's)
+NOTES = """\
+mission: m
+tree:
+  sequence:
+    - mode: safe
+    - song:
+        number: 0
+        notes:
+          - C4 250ms
+          - E4 250ms
+          - H4 250ms
+          - G4 1s
+"""
+
+#: a list parameter's default whose second item turns 9000 deg
+ROUTE = """\
+parameters:
+  route:
+    type: list
+    items: {fields: {distance: distance, turn: angle}}
+    default: [{distance: 3m, turn: 90deg}, {distance: 20cm, turn: 9000deg}]
+blackboard:
+  wp: {fields: {distance: distance, turn: angle}}
+tree:
+  sequence:
+    - mode: safe
+    - for_each:
+        key: wp
+        in: "${route}"
+        do: {turn: "@wp.turn"}
+"""
+
+#: ``selected:`` picking a child whose name is made with a parameter
+SELECTED = """\
+parameters:
+  side: {type: enum, choices: [left, right], default: left}
+tree:
+  parallel:
+    policy: selected
+    selected: ["w left"]
+    children:
+      - {wait: 10ms, name: "w ${side}"}
+      - {wait: 20ms, name: fixed}
+"""
+
+#: a subtree's drive given 900 mm/s at its second use
+GIVEN = """\
+mission: m
+subtrees:
+  go:
+   parameters: {speed: {type: speed}}
+   tree:
+    sequence:
+    - wait: 10ms
+    - wait: 10ms
+    - drive: {velocity: "${speed}", distance: 10cm}
+tree:
+  sequence:
+    - mode: safe
+    - subtree: {id: go, speed: 200 mm/s}
+    - wait: 10ms
+    - subtree: {id: go, speed: 900 mm/s}
+"""
+
+#: a subtree's own key passed down and read before anything writes it
+#: (tests/mission/test_own_keys_passed.py's)
+OWN_KEY = """\
+mission: early
+subtrees:
+  measure:
+    parameters: {out: {type: str}}
+    tree: {check: {key: "${out}", value: 1}}
+  leg:
+    blackboard: {n: int}
+    tree:
+      sequence: [{subtree: {id: measure, out: n}}, {set: {key: n, value: 1}}]
+tree: {subtree: leg}
+"""
+
+#: a step after a drive that never ends, in a subtree of the mission's own file
+NUDGE = """\
+subtrees:
+  nudge:
+    parameters:
+      speed: {type: speed, default: 100 mm/s}
+    tree:
+      sequence:
+        - drive: {velocity: "${speed}"}
+        - log: after
+tree:
+  sequence:
+    - mode: safe
+    - subtree: nudge
+"""
+
+#: a turn at a speed no wheel turns at, from a parameter's default
+PATROL_SLOW = (
+    "mission: patrol-slow\n"
+    "description: Up and down the hall, slowly round at the end.\n"
+    "parameters:\n"
+    "  side: {type: distance, default: 1 m}\n"
+    "  speed: {type: speed, default: 200 mm/s}\n"
+    "  turn: {type: angle, default: 90 deg}\n"
+    "  creep: {type: speed, default: 10 mm/s}\n"
+    "tree:\n"
+    "  sequence:\n"
+    "    - mode: safe\n"
+    + '    - drive: {velocity: "${speed}", distance: "${side}"}\n    - turn: "${turn}"\n' * 7
+    + "    - wait: 1s\n"
+    + "    - sequence:\n"
+    '        - turn: {angle: 180 deg, speed: "${creep}"}\n'
+    '        - drive: {velocity: "${speed}", distance: "${side}"}\n'
+)
+
+#: 0.1.0's dollars: ``$${price}`` and ``$$5``
+DOLLARS = """\
+mission: m
+parameters:
+  price: {type: int, default: 5}
+tree:
+  sequence:
+  - mode: safe
+  - wait: 10ms
+  - wait: 10ms
+  - log: {message: "$${price}"}
+  - log: "price: $$5"
+"""
+
+#: a ``${`` that starts no parameter
+BRACE = """\
+mission: m
+tree:
+  sequence:
+    - mode: safe
+    - wait: 10ms
+    - wait: 10ms
+    - log: "cost ${ x"
+"""
+
+#: a library's drive reached in Passive through the mission's use
+RECOVERY = (
+    "# Recovery subtrees shared by the team's missions.\n"
+    "subtrees:\n"
+    "  back_off:\n"
+    "    doc: Back away from what the bumper met.\n"
+    "    tree:\n"
+    "      sequence:\n"
+    "        - drive: {velocity: -100 mm/s, distance: 5cm}\n"
+    "        - turn: 45deg\n" + "        - wait: 100ms\n" * 18 + "  drive_leg:\n"
+    "    doc: One leg of a patrol, a metre ahead.\n"
+    "    tree:\n"
+    "      drive: {velocity: 200 mm/s, distance: 1 m}\n"
+)
+BP_REACTIVE = """\
+mission: bp_reactive
+include: [../common/lib/recovery.yaml]
+tree:
+  sequence:
+    - wait: 1s
+    - wait: 1s
+    - subtree: drive_leg
+"""
+
+#: a library's display given a text too long for it at the use (a Roomba 500's display)
+WARNS = """\
+# Subtrees that show things on the Roomba 500's four-digit display.
+subtrees:
+  show_text:
+   doc: Show a text of at most four characters.
+   parameters:
+     t: {type: str, default: "OK"}
+   # said on the display, as it is
+   tree: {display: "${t}"}
+"""
+WARNUSE = """\
+mission: warnuse
+include: [../common/lib/warns.yaml]
+# the text is a parameter of the subtree
+tree:
+  sequence:
+    - mode: safe
+    - subtree: {id: show_text, t: TOOLONG}
+"""
+
+#: docs/ci.md's repository (tests/mission/team_repo.py), its library broken
+TEAM: Files = (
+    ("missions/common/lib/escapes.yaml", ESCAPES),
+    ("missions/common/lib/safe_drive.yaml", SAFE_DRIVE),
+    ("missions/delivery/to-kitchen.yaml", TO_KITCHEN),
+)
+
+MISSIONS_MD: list[tuple[str, str, int, Files]] = [
+    ("m.yaml:10:13: song.notes:", "m.yaml", 2, (("m.yaml", NOTES),)),
+    ("m.yaml:5:44: for_each item", "m.yaml", 2, (("m.yaml", ROUTE),)),
+    ("m.yaml:8:28: parallel.selected", "m.yaml", 2, (("m.yaml", SELECTED),)),
+    ("m.yaml:9:25: drive:", "m.yaml", 2, (("m.yaml", GIVEN),)),
+    ("m.yaml:9:19: subtree measure", "m.yaml", 2, (("m.yaml", OWN_KEY),)),
+    ("m.yaml:8:11: warning: log(after)", "m.yaml", 0, (("m.yaml", NUDGE),)),
+    ("patrol-slow.yaml:27:41:", "patrol-slow.yaml", 2, (("patrol-slow.yaml", PATROL_SLOW),)),
+    ("m.yaml:9:21: warning:", "m.yaml", 0, (("m.yaml", DOLLARS),)),
+    ("m.yaml:10:18: warning:", "m.yaml", 0, (("m.yaml", DOLLARS),)),
+    ("m.yaml:7:12: log.message:", "m.yaml", 2, (("m.yaml", BRACE),)),
+    ("missions/common/lib/escapes.yaml:7:50:",
+     "--include-dir missions/common missions/delivery/to-kitchen.yaml", 2, TEAM),
+    ("missions/bp_reactive.yaml:7:7:", "--include-dir common missions/bp_reactive.yaml", 2,
+     (("common/lib/recovery.yaml", RECOVERY), ("missions/bp_reactive.yaml", BP_REACTIVE))),
+    ("missions/warnuse.yaml:7:7:",
+     "--profile roomba500 --include-dir common missions/warnuse.yaml", 2,
+     (("common/lib/warns.yaml", WARNS), ("missions/warnuse.yaml", WARNUSE))),
+]  # fmt: skip
