@@ -433,6 +433,9 @@ def test_the_prose_commands_run_as_a_wheel_s_user_runs_them(
 
 #: A mission that ends at once (a quote's command needs a file, not a run)
 TINY = "mission: m\ntree:\n  sequence:\n    - mode: safe\n    - stop\n"
+#: a mission whose one warning (a YAML 1.1 number) fails it under --strict
+W1 = (("w1.yaml", "mission: w1\nblackboard:\n  k: {type: int, initial: 1_0}\n"
+       "tree: {sequence: [stop]}\n"),)
 
 
 @dataclass(frozen=True)
@@ -464,12 +467,10 @@ QUOTED = [
            env=(("ROOMBA_BT_PROFILE", "roomba560"),)),
     Quoted("docs/ci.md", "roomba-bt eval: w1.yaml: failed --strict",
            "roomba-bt eval w1.yaml --strict --runs 1", 7,
-           files=(("w1.yaml", "mission: w1\nblackboard:\n  k: {type: int, initial: 1_0}\n"
-                   "tree: {sequence: [stop]}\n"),)),
+           files=W1),
     Quoted("docs/evaluation.md", "roomba-bt eval: w1.yaml: failed --strict",
            "roomba-bt eval w1.yaml --strict --runs 1", 7,
-           files=(("w1.yaml", "mission: w1\nblackboard:\n  k: {type: int, initial: 1_0}\n"
-                   "tree: {sequence: [stop]}\n"),)),
+           files=W1),
     Quoted("docs/evaluation.md", "roomba-bt eval: 2 of 3 missions",
            "roomba-bt eval dock nope.yaml gone.yaml", 2),
     Quoted("docs/evaluation.md", "roomba-bt eval: warning: ./dock.yaml is dock.yaml again",
@@ -499,6 +500,18 @@ QUOTED = [
     Quoted("docs/simulator.md", "roomba-bt sim: invalid world:",
            "roomba-bt sim --world bad.yaml --tcp 127.0.0.1:0", 2,
            files=(("bad.yaml", "name: bad\nrooms: 3\n"),)),
+    Quoted("docs/ci.md", "roomba-bt: w1.yaml: failed --strict",
+           "roomba-bt run w1.yaml --strict --fast", 7, files=W1),
+    Quoted("docs/runtime.md", "roomba-bt: w1.yaml: failed --strict",
+           "roomba-bt run w1.yaml --strict --fast", 7, files=W1),
+    Quoted("docs/runtime.md", "strict passed:", "roomba-bt run m.yaml --strict --fast", 0,
+           files=(("m.yaml", TINY),), stream="out"),
+    Quoted("docs/runtime.md", "replay: m2.yaml is not the recorded mission",
+           "roomba-bt replay r.jsonl --mission m2.yaml", 1,
+           files=(("m.yaml", TINY), ("m2.yaml", "tree: {sequence: [{mode: safe}, wait: 1s]}\n")),
+           first=("roomba-bt run m.yaml --fast --record r.jsonl",), stream="out"),
+    Quoted("docs/runtime.md", "roomba-bt replay: nope.jsonl: record:",
+           "roomba-bt replay nope.jsonl", 2),
     *(Quoted("docs/missions.md", start, f"roomba-bt validate {argv}", code, files=files,
              stream="out") for start, argv, code, files in docs_inputs.MISSIONS_MD),
 ]  # fmt: skip
