@@ -226,3 +226,29 @@ MISSIONS_MD: list[tuple[str, str, int, Files]] = [
      "--profile roomba500 --include-dir common missions/warnuse.yaml", 2,
      (("common/lib/warns.yaml", WARNS), ("missions/warnuse.yaml", WARNUSE))),
 ]  # fmt: skip
+
+#: docs/simulator.md's world files: an empty one (comments only, in place of the page's
+#: my-flat.yaml), a start whose body reaches over the stairs (tests/cli/
+#: test_validate_world.py's), a list of more obstacles than a world may hold
+EMPTY_WORLD: Files = (("my-flat.yaml", "# my flat, to be drawn\n"),)
+EDGE = """\
+name: edge
+rooms:
+  - {rect: [0, 0, 5, 4]}
+drops:
+  - {name: stairs, rect: [3, 0, 5, 4]}
+robot:
+  start: {at: [2.9, 2], heading: 0}
+"""
+#: the list is refused by its count before an item is read: empty items cost least to parse
+#: (12,000 rectangles took 4 s of CPU)
+CROWDED = "name: w\nrooms: [{rect: [0, 0, 50, 50]}]\nobstacles:\n" + "  - {}\n" * 12_000
+
+#: (how the quote begins, the command, its exit code, the files, the stream it prints on)
+SIMULATOR_MD: list[tuple[str, str, int, Files, str]] = [
+    ("my-flat.yaml:1:1: an empty file", "roomba-bt validate my-flat.yaml", 2, EMPTY_WORLD, "out"),
+    ("my-flat.yaml:1:1: (document)", "roomba-bt sensors --world my-flat.yaml --count 1", 2,
+     EMPTY_WORLD, "err"),
+    ("edge.yaml:7:10: warning:", "roomba-bt validate edge.yaml", 0, (("edge.yaml", EDGE),), "out"),
+    ("w.yaml:4:3: obstacles:", "roomba-bt validate w.yaml", 2, (("w.yaml", CROWDED),), "out"),
+]  # fmt: skip

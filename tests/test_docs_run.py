@@ -512,6 +512,8 @@ QUOTED = [
            first=("roomba-bt run m.yaml --fast --record r.jsonl",), stream="out"),
     Quoted("docs/runtime.md", "roomba-bt replay: nope.jsonl: record:",
            "roomba-bt replay nope.jsonl", 2),
+    *(Quoted("docs/simulator.md", start, command, code, files=files, stream=stream)
+      for start, command, code, files, stream in docs_inputs.SIMULATOR_MD),
     *(Quoted("docs/missions.md", start, f"roomba-bt validate {argv}", code, files=files,
              stream="out") for start, argv, code, files in docs_inputs.MISSIONS_MD),
 ]  # fmt: skip
@@ -664,8 +666,6 @@ NOT_YET_HELD: dict[tuple[str, str], str] = {
     ("docs/runtime.md", "kind:record"): "records moved out of their repository or made by "
     "another installation",
     ("docs/runtime.md", "kind:monitor"): "a record naming /etc/shadow as its world",
-    ("docs/simulator.md", "kind:diagnostic"): "world files' errors: tests/cli/"
-    "test_validate_world.py makes them, not yet held to the page",
     ("docs/simulator.md", "kind:summary"): "the wall charger plugged in mid-run",
     ("docs/unattended.md", "kind:program"): "a lost connection and the watchdog's grace: a robot's",
     ("docs/unattended.md", "kind:summary"): "a Roomba 500 behind the create2 profile",
