@@ -434,8 +434,12 @@ def test_the_prose_commands_run_as_a_wheel_s_user_runs_them(
 #: A mission that ends at once (a quote's command needs a file, not a run)
 TINY = "mission: m\ntree:\n  sequence:\n    - mode: safe\n    - stop\n"
 #: a mission whose one warning (a YAML 1.1 number) fails it under --strict
-W1 = (("w1.yaml", "mission: w1\nblackboard:\n  k: {type: int, initial: 1_0}\n"
-       "tree: {sequence: [stop]}\n"),)
+W1 = (
+    (
+        "w1.yaml",
+        "mission: w1\nblackboard:\n  k: {type: int, initial: 1_0}\ntree: {sequence: [stop]}\n",
+    ),
+)
 
 
 @dataclass(frozen=True)
@@ -534,6 +538,12 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     "test_resume.py::test_an_interrupted_evaluation_says_its_plot_is_not_drawn",
     ("docs/evaluation.md", "roomba-bt eval: --from ab.jsonl.partial.jsonl:"): "tests/evaluate/"
     "test_seeds_and_from.py::test_from_leaves_out_the_last_record_a_killed_sweep_cut_short",
+    ("docs/evaluation.md", "ab.jsonl:41:201: not JSON"): "tests/evaluate/test_seeds_and_"
+    "from.py::test_from_a_file_that_holds_no_results_says_which_and_why_in_one_line",
+    ("docs/runtime.md", "safe stop nothing to send: the tree's Stop"): "tests/runtime/"
+    "test_tree_ends_the_oi.py::test_a_tree_that_turns_the_oi_off_ends_the_run_at_once",
+    ("docs/runtime.md", "final mode Off"): "tests/runtime/"
+    "test_tree_ends_the_oi.py::test_a_tree_that_turns_the_oi_off_ends_the_run_at_once",
     ("docs/missions.md", "many.yaml:3:50005: checking stopped"): "tests/mission/"
     "test_hostile_files.py::test_a_missions_check_stops_at_the_cap_and_says_so_among_the_"
     "first_listed",
@@ -626,49 +636,45 @@ def test_every_quoted_line_is_held_to_what_its_command_prints() -> None:
 #: that kind on the page), each with why: session 40 held docs/missions.md's diagnostics
 #: first, and these are what is left, said here so that none is skipped unsaid.
 NOT_YET_HELD: dict[tuple[str, str], str] = {
-    ("docs/architecture.md", "kind:program"): "`roomba-bt: interrupted`, a Ctrl-C's line: "
-    "tests/runtime's signal tests make it, not yet held to the page",
+    ("docs/architecture.md", "kind:program"): "`roomba-bt: interrupted`, a signal in the "
+    "start-up (tests/cli/test_entry.py makes it in a child process)",
     ("docs/ci.md", "kind:diagnostic"): "the output block of a four-mission repository "
-    "(dock-home.yaml, hallway-patrol.yaml) that tests/mission/team_repo.py does not hold; "
-    "missions.md's quote of the same line is held on team_repo's",
-    ("docs/ci.md", "kind:program"): "run --strict's refusal, held on runtime.md's page next",
-    ("docs/doctor.md", "kind:program"): "a Roomba 500 behind the create2 profile: a robot",
-    ("docs/doctor.md", "kind:summary"): "a port that answers nothing: a robot's",
-    ("docs/evaluation.md", "kind:diagnostic"): "eval --from of a hand-broken results file: "
-    "tests/evaluate/test_seeds_and_from.py makes it, not yet held to the page",
+    "(dock-home.yaml, hallway-patrol.yaml, includes at line 5) that tests/mission/team_repo.py "
+    "is not; missions.md's quote of the same chain is held on team_repo's",
+    ("docs/doctor.md", "kind:program"): "a Roomba 500 read with the create2 profile",
+    ("docs/doctor.md", "kind:summary"): "a port where no robot answers",
     ("docs/evaluation.md", "kind:summary"): "eval's falls and charger lines over 8 and 10 "
     "apartment episodes (seconds of CPU each)",
     ("docs/monitor.md", "kind:diagnostic"): "a plugin that fails to import, in a watched run",
-    ("docs/monitor.md", "kind:monitor"): "the monitor's own lines: a served page, its keys on "
-    "a terminal, a record read: tests/monitor makes them, not yet held to the page",
-    ("docs/monitor.md", "kind:replay"): "a replay of a 2 h record (--to): seconds of CPU",
-    ("docs/monitor.md", "kind:summary"): "a forced node, pauses: runs the monitor controls",
-    ("docs/plugins.md", "kind:diagnostic"): "broken plugins installed as the page names them "
-    "(tests/mission/test_broken_plugin_cli.py installs some): not yet held to the page",
-    ("docs/plugins.md", "kind:program"): "a plugin interrupted in its import, a record of an "
-    "uninstalled plugin: not yet held to the page",
-    ("docs/plugins.md", "kind:replay"): "a record of an uninstalled or edited plugin",
-    ("docs/reliability.md", "kind:summary"): "lost bytes, a baud change, a silent link: the "
-    "fault-injection tests of tests/robot make them, not yet held to the page",
-    ("docs/robot.md", "kind:program"): "a Roomba 500 behind the create2 profile",
-    ("docs/robot.md", "kind:summary"): "a baud change and a reconnected link: a robot's",
+    ("docs/monitor.md", "kind:monitor"): "the monitor's own lines: a served page and its "
+    "addresses, its keys on a terminal, a long or changed record",
+    ("docs/monitor.md", "kind:replay"): "a replay of a 2 h record cut with --to",
+    ("docs/monitor.md", "kind:summary"): "a node forced and pauses: the monitor's controls",
+    ("docs/plugins.md", "kind:diagnostic"): "broken plugins installed under the page's names",
+    ("docs/plugins.md", "kind:program"): "a plugin interrupted in its import; a record of a "
+    "plugin not installed",
+    ("docs/plugins.md", "kind:replay"): "a record of a plugin not installed, or edited",
+    ("docs/reliability.md", "kind:summary"): "lost bytes, a baud change, a silent link, a "
+    "stall: faults of a link",
+    ("docs/robot.md", "kind:program"): "a Roomba 500 read with the create2 profile",
+    ("docs/robot.md", "kind:summary"): "a baud change and a reconnected link",
     ("docs/routines.md", "kind:summary"): "the outcome of a routine's run: minutes of "
     "mission time each",
-    ("docs/runtime.md", "kind:program"): "signals, a full disk, a closed stdout, an "
-    "internal error, an incomplete aiohttp, --fast's 2 h limit: each a test of tests/runtime "
-    "makes, not yet held to the page",
-    ("docs/runtime.md", "kind:replay"): "records of runs that lost their link, were stopped, "
-    "killed or made by 0.1.0: tests/runtime/test_recording.py and test_cli_pty.py make them, "
-    "not yet held to the page",
-    ("docs/runtime.md", "kind:summary"): "summary lines of stops not delivered, streams "
-    "without packet 35, slow or hung ticks, a host busy: tests/runtime makes them, not yet "
-    "held to the page",
+    ("docs/runtime.md", "kind:program"): "the rest: signals, a full disk, a closed stdout, an "
+    "internal error, an incomplete aiohttp, --fast's 2 h limit (2 h of ticks)",
+    ("docs/runtime.md", "kind:replay"): "the rest: records of runs that lost their link, were "
+    "stopped, killed, or made by 0.1.0; some quote what an older release printed ('Before, "
+    "each of these was `replay: first difference ...`')",
+    ("docs/runtime.md", "kind:summary"): "the rest: stops not delivered, a stream without "
+    "packet 35, slow or hung ticks, a busy host, a dock; some quote what an older release "
+    "printed (`outcome SUCCESS` of a robot that spun on)",
     ("docs/runtime.md", "kind:record"): "records moved out of their repository or made by "
     "another installation",
     ("docs/runtime.md", "kind:monitor"): "a record naming /etc/shadow as its world",
     ("docs/simulator.md", "kind:summary"): "the wall charger plugged in mid-run",
-    ("docs/unattended.md", "kind:program"): "a lost connection and the watchdog's grace: a robot's",
-    ("docs/unattended.md", "kind:summary"): "a Roomba 500 behind the create2 profile",
+    ("docs/unattended.md", "kind:program"): "a lost connection and the watchdog's grace: a "
+    "robot's link",
+    ("docs/unattended.md", "kind:summary"): "a Roomba 500 read with the create2 profile",
 }
 
 

@@ -261,6 +261,10 @@ def test_from_a_file_that_holds_no_results_says_which_and_why_in_one_line(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err
     assert err.startswith(f"roomba-bt eval: --from {said.format(path=path)}"), err
+    if "not JSON" in said:  # the page quotes the message after the command's words
+        message = err.removeprefix("roomba-bt eval: --from ")
+        names = {str(path): "ab.jsonl"}  # its line and column are an example's
+        assert_quoted("docs/evaluation.md", "ab.jsonl:41:201: not JSON", message, True, names)
 
 
 def test_from_leaves_out_the_last_record_a_killed_sweep_cut_short(

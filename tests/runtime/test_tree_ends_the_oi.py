@@ -12,6 +12,7 @@ import threading
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
 
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
@@ -132,6 +133,10 @@ def test_a_tree_that_turns_the_oi_off_ends_the_run_at_once(
     assert summary.final_mode is OIMode.OFF
     assert summary.safe_stop.startswith(f"nothing to send: the tree's {sent} left the robot in Off")
     assert summary.mission_time_s < 1.0  # the drive's 0.5 s and a tick, not the timeout
+    if leaf == "off_and_wait":  # the page's Stop (173)
+        said = str(summary)
+        assert_quoted("docs/runtime.md", "safe stop nothing to send: the tree's Stop", said)
+        assert_quoted("docs/runtime.md", "final mode Off", said)
 
 
 def test_the_owners_stop_as_the_last_leaf_ends_the_run_with_the_tree(
