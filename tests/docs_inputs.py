@@ -6,7 +6,12 @@ column: the page shows the message, not the mission, so the test writes one
 :data:`MISSIONS_MD`: (how the quote begins, ``validate``'s arguments, its exit code, the
 files). The quotes of 10,000 errors or warnings, and of a project file's grant, are held by
 the tests that already make them (tests/mission/test_hostile_files.py,
-tests/mission/test_include_path.py)."""
+tests/mission/test_include_path.py).
+
+Three texts are written as a test of tests/mission writes its own (NUDGE, OWN_KEY, ROUTE):
+kept apart on purpose, as each here is held to the page's line and column, and an edit of
+that test's mission (a line added) must not move the page's quote, nor the page that
+test's."""
 
 from __future__ import annotations
 
