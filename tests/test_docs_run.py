@@ -544,6 +544,10 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     "test_tree_ends_the_oi.py::test_a_tree_that_turns_the_oi_off_ends_the_run_at_once",
     ("docs/runtime.md", "final mode Off"): "tests/runtime/"
     "test_tree_ends_the_oi.py::test_a_tree_that_turns_the_oi_off_ends_the_run_at_once",
+    ("docs/runtime.md", "roomba-bt: the summary was lost with stdout"): "tests/cli/"
+    "test_streams.py::test_a_closed_pipe_keeps_a_failed_runs_exit_code_and_says_its_outcome",
+    ("docs/runtime.md", "roomba-bt: the report was cut short:"): "tests/cli/"
+    "test_exit_signals.py::test_last_words_that_never_end_are_ended_with_the_signal_s_code",
     ("docs/missions.md", "many.yaml:3:50005: checking stopped"): "tests/mission/"
     "test_hostile_files.py::test_a_missions_check_stops_at_the_cap_and_says_so_among_the_"
     "first_listed",

@@ -11,6 +11,7 @@ import subprocess
 import sys
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
 
 #: the command run as the process (``roomba-bt validate dock``), then a Ctrl-C as it exits:
 #: Python's finalization put its handlers back to the default action, which killed it
@@ -72,6 +73,9 @@ def test_last_words_that_never_end_are_ended_with_the_signal_s_code() -> None:
         "roomba-bt: the report was cut short: SIGTERM came and it was not written within "
         "2 s; exit 143, where the command's answer was 4" in done.stderr
     ), done.stderr
+    # the page's answer is a run's that succeeded (0), this program's 4
+    said = done.stderr
+    assert_quoted("docs/runtime.md", "roomba-bt: the report was cut short:", said, numbers=True)
 
 
 def test_last_words_out_and_a_slow_exit_keep_the_command_s_answer() -> None:

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
@@ -64,6 +65,7 @@ def test_a_closed_pipe_keeps_a_failed_runs_exit_code_and_says_its_outcome(
     lost = "roomba-bt: the summary was lost with stdout (Broken pipe): outcome TIMEOUT"
     assert lost in done.stderr
     assert "final mode Passive" in done.stderr
+    assert_quoted("docs/runtime.md", "roomba-bt: the summary was lost with stdout", done.stderr)
 
 
 def test_a_closed_pipe_keeps_validates_exit_code(tmp_path: Path) -> None:
