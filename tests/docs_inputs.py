@@ -8,14 +8,15 @@ files). The quotes of 10,000 errors or warnings, and of a project file's grant, 
 the tests that already make them (tests/mission/test_hostile_files.py,
 tests/mission/test_include_path.py).
 
-Three texts are written as a test of tests/mission writes its own (NUDGE, OWN_KEY, ROUTE):
-kept apart on purpose, as each here is held to the page's line and column, and an edit of
-that test's mission (a line added) must not move the page's quote, nor the page that
-test's."""
+Two texts are the tests' own: NUDGE is tests/mission/test_subtree_uses.py's with its use
+added, OWN_KEY the mission tests/mission/test_own_keys_passed.py reads (an edit of either
+moves the page's quote: this test then says so). ROUTE is written apart: the page's patrol
+turns 9000 deg, test_list_parameters.py's waypoints do not."""
 
 from __future__ import annotations
 
 from mission.team_repo import ESCAPES, SAFE_DRIVE, TO_KITCHEN  # docs/ci.md's repository
+from mission.test_subtree_uses import NUDGE as SUBTREE_NUDGE  # its nudge, not yet used
 
 Files = tuple[tuple[str, str | None], ...]
 
@@ -101,20 +102,7 @@ tree: {subtree: leg}
 """
 
 #: a step after a drive that never ends, in a subtree of the mission's own file
-NUDGE = """\
-subtrees:
-  nudge:
-    parameters:
-      speed: {type: speed, default: 100 mm/s}
-    tree:
-      sequence:
-        - drive: {velocity: "${speed}"}
-        - log: after
-tree:
-  sequence:
-    - mode: safe
-    - subtree: nudge
-"""
+NUDGE = SUBTREE_NUDGE + "    - subtree: nudge\n"
 
 #: a turn at a speed no wheel turns at, from a parameter's default
 PATROL_SLOW = (

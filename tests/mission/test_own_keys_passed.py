@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+from docs_inputs import OWN_KEY  # tests/docs_inputs.py: the mission docs/missions.md quotes
 from runtime.own_keys import PASSED  # tests/runtime: the mission the run test runs
 
 from roomba_bt.behaviours.blackboard import BlackboardRef
@@ -126,18 +127,7 @@ def test_the_key_type_is_the_callers(errors_of: Errors) -> None:
 
 
 def test_read_before_written_through_the_use(errors_of: Errors) -> None:
-    text = """
-    mission: early
-    subtrees:
-      measure:
-        parameters: {out: {type: str}}
-        tree: {check: {key: "${out}", value: 1}}
-      leg:
-        blackboard: {n: int}
-        tree:
-          sequence: [{subtree: {id: measure, out: n}}, {set: {key: n, value: 1}}]
-    tree: {subtree: leg}
-    """
+    text = OWN_KEY  # docs/missions.md quotes what it says
     """Said at the use that passes the key (leg's line, the body to fix), naming the read
     in the nested body: said at that read (5:25), in ``measure``, which has no key ``n``,
     it did not say which use passed it."""
