@@ -18,12 +18,14 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from roomba_bt.oi.encode import Command, decode_command
 from roomba_bt.oi.errors import OIError
 from roomba_bt.oi.frames import layout_for
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
+from roomba_bt.robot.discovery import PROBE_QUERY
 from roomba_bt.sim.server import Endpoint
 
 SLOT = 0.015
@@ -53,6 +55,35 @@ class RobotDouble:
     def opcodes(self) -> list[int]:
         with self._lock:
             return [r.command.opcode for r in self.commands]
+
+    def wait_until(self, predicate: Callable[[Any], bool], timeout: float = 5.0) -> bool:
+        """Whether ``predicate`` of the robot came true within ``timeout`` s (each double's own)."""
+        raise NotImplementedError
+
+    def ended_with(self, stop: bytes) -> bool:
+        """Whether ``stop`` is the last the host wrote, but for the Query Lists that ask
+        whether the robot heard it (``robot.discovery.PROBE_QUERY``, written by
+        ``robot.ending.asked_after``). The safe stop asks so when the quiet after the stop
+        shows nothing: the robot had sent no frame for over three stream periods before it.
+        A robot double whose thread a loaded machine held that long before the stop had its
+        stop asked after, answered and confirmed: the bytes ended with the query, not the
+        stop (1 of 6 rounds beside two busy loops)."""
+        with self._lock:
+            written = bytes(self.received)
+        while written.endswith(PROBE_QUERY):
+            written = written[: -len(PROBE_QUERY)]
+        return written.endswith(stop)
+
+    def wait_for_stop(self, stop: bytes, timeout: float = 5.0) -> None:
+        """Wait until :meth:`ended_with` ``stop``; else fail, saying the last bytes the host
+        wrote (the query after it, bytes before it, or nothing of it)."""
+        if not self.wait_until(lambda robot: robot.ended_with(stop), timeout):
+            with self._lock:
+                last = list(self.received[-40:])
+            raise AssertionError(
+                f"the stop {list(stop)} is not the last the robot received (Query Lists "
+                f"asking after it aside) within {timeout:g} s; its last bytes: {last}"
+            )
 
     def actuator_commands_outside_safe_or_full(self) -> list[Received]:
         with self._lock:

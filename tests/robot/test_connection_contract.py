@@ -24,6 +24,8 @@ PACKETS = (7, 9, 10, 11, 12, 34, 35, 43, 44)
 #: drive 0, motors off, pause stream, Start: the end of every ending from Safe or Full.
 STOP_TO_PASSIVE = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 128])
 STOP_TO_OFF = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 173])
+#: pause the stream, Start: the end of every ending from Passive (no actuator byte there).
+PASSIVE_TO_PASSIVE = bytes([150, 0, 128])
 
 
 def frames_until(connection: Connection, predicate: object, timeout: float = 5.0) -> None:
@@ -54,7 +56,7 @@ def test_start_confirms_enters_mode_and_streams(link: Link) -> None:
         assert latest is not None and latest.index >= 5 and latest.time >= first.time
         assert connection.counters.checksum_failures == 0
     if link.robot is not None:
-        assert link.robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+        link.robot.wait_for_stop(STOP_TO_PASSIVE)
         assert link.robot.opcodes()[:6] == [
             128,
             150,
@@ -75,7 +77,7 @@ def test_normal_exit_ends_with_drive_0_motors_off_pause_and_start(link: Link) ->
     assert connection.status is LinkStatus.CLOSED
     assert connection.safe_stopped is True
     robot = link.scripted()
-    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+    robot.wait_for_stop(STOP_TO_PASSIVE)
     assert robot.wait_until(lambda r: r.mode is OIMode.PASSIVE)
 
 
@@ -85,7 +87,7 @@ def test_exception_inside_the_block_still_stops_the_robot(link: Link) -> None:
         connection.start("full", PACKETS)
         connection.send(oi.drive_direct(200, 200))
         raise RuntimeError("mission crashed")
-    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+    robot.wait_for_stop(STOP_TO_PASSIVE)
 
 
 def test_end_in_stop_sends_stop_on_profiles_that_have_it(link: Link) -> None:
@@ -105,7 +107,7 @@ def test_end_in_stop_falls_back_to_start_on_the_500(
         with pytest.raises(UnsupportedCommandError, match="stop is not available on roomba500"):
             connection.send(oi.stop())
     assert "has no Stop (173)" in caplog.text
-    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+    robot.wait_for_stop(STOP_TO_PASSIVE)
 
 
 def test_fall_to_passive_refuses_the_next_drive_and_names_the_cause(link: Link) -> None:
@@ -128,8 +130,12 @@ def test_fall_to_passive_refuses_the_next_drive_and_names_the_cause(link: Link) 
         connection.poll(0.05)
         assert len(robot.received) == sent_before  # nothing of it reached the wire
         assert connection.counters.commands_refused == 1
-    # from Passive the ending sends no actuator byte: pause the stream, then Start
-    assert robot.wait_until(lambda r: r.received.endswith(bytes([150, 0, 128])))
+    # from Passive the ending sends no actuator byte: pause the stream, then Start, first
+    # and last (a Query List after it asks whether it was heard, where the robot had been
+    # silent before it: a robot double held by a loaded machine)
+    robot.wait_for_stop(PASSIVE_TO_PASSIVE)
+    ending = bytes(robot.received[sent_before:])
+    assert ending.startswith(PASSIVE_TO_PASSIVE), f"the ending wrote {list(ending)}"
     no_actuator_outside_safe(robot)
 
 
@@ -167,7 +173,7 @@ def test_no_actuator_byte_ever_leaves_in_passive_or_off(link: Link) -> None:
             connection.send_many([oi.drive(50, 0), oi.sensors(7)])
         connection.poll(0.05)
     robot = link.scripted()
-    robot.wait_until(lambda r: r.received.endswith(bytes([150, 0, 128])))
+    robot.wait_for_stop(PASSIVE_TO_PASSIVE)
     no_actuator_outside_safe(robot)
     opcodes = robot.opcodes()
     assert opcodes.count(137) == 1  # the one drive sent after safe in the batch
@@ -189,7 +195,7 @@ def test_watchdog_sends_drive_0_and_reports_a_stalled_stream(link: Link) -> None
         assert robot.wait_until(lambda r: r.received.endswith(bytes([137, 0, 0, 0, 0])))
         robot.muted = False
         frames_until(connection, lambda: connection.status is LinkStatus.STREAMING)
-    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+    robot.wait_for_stop(STOP_TO_PASSIVE)
 
 
 def test_robot_that_does_not_answer_fails_with_the_port_and_likely_causes(

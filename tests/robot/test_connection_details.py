@@ -35,7 +35,7 @@ def test_a_600_that_reports_mode_plus_one_is_corrected_end_to_end(fake_links: An
         connection.send(oi.full())
         frames_until(connection, lambda: connection.counters.frames >= 40)
         assert connection.mode is OIMode.FULL  # reads 4: no crash, no false report
-    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+    robot.wait_for_stop(STOP_TO_PASSIVE)
 
 
 def test_send_many_writes_allowed_commands_in_one_batch_and_reports_refusals() -> None:
@@ -120,7 +120,7 @@ def test_firmware_text_in_the_stream_is_skipped_and_frames_go_on(fake_links: Any
         counters = connection.counters
         assert counters.skipped_bytes >= len(b"bl-start\r\nRoomba by iRobot!\r\n")
         assert connection.mode is OIMode.SAFE and connection.status is LinkStatus.STREAMING
-    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+    robot.wait_for_stop(STOP_TO_PASSIVE)
 
 
 @pytest.mark.parametrize("profile_name", ["create2", "roomba600", "roomba500"])

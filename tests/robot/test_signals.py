@@ -53,7 +53,7 @@ def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(
         out, err = connection.communicate(timeout=10)
         assert connection.returncode == 130, err
         assert out.strip() == raised
-        assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+        robot.wait_for_stop(STOP_TO_PASSIVE)
         assert robot.wait_until(lambda r: r.mode.label == "Passive")
         assert robot.actuator_commands_outside_safe_or_full() == []
 
