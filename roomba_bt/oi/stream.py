@@ -98,9 +98,14 @@ def byte_sum_for(frame_size: int) -> tuple[ByteSum, int]:
 RESET_BANNER_MARKERS: tuple[bytes, ...] = (b"bl-start", b"bootloader id", b"Roomba by iRobot")
 
 
-def shows_reset_banner(data: bytes) -> bool:
-    """Whether ``data`` holds a line of the firmware's start-up banner."""
-    return any(marker in data for marker in RESET_BANNER_MARKERS)
+def shows_reset_banner(data: bytes, stream: StreamParser | None = None) -> bool:
+    """Whether ``data`` holds a line of the firmware's start-up banner and, given a fresh
+    ``stream`` parser of the stream that ran, no valid frame of it after the banner's last
+    line: a robot that reset has its OI Off, which streams nothing, so a banner the stream
+    went on after is text the parser skipped, not a reset (a stop unconfirmed after one
+    said "the robot reset" and wrote Start again)."""
+    at = max(data.rfind(marker) for marker in RESET_BANNER_MARKERS)
+    return at >= 0 and not (stream is not None and stream.feed(data[at:]))
 
 
 @dataclass(slots=True)

@@ -256,8 +256,12 @@ class StreamLink:
         )
 
     def banner_seen(self) -> bool:
-        """Whether the firmware's start-up banner is in the last chunks read: it reset."""
-        return shows_reset_banner(b"".join(self._recent))
+        """Whether the firmware's start-up banner is in the last chunks read with no valid
+        frame of the stream after it: it reset (:func:`~roomba_bt.oi.stream.shows_reset_banner`).
+        Off the tick path: a stall's and an unconfirmed stop's question."""
+        ids = self.stream_ids
+        stream = StreamParser(ids, self.profile, mode_plus_one=self.mode_plus_one) if ids else None
+        return shows_reset_banner(b"".join(self._recent), stream)
 
     @property
     def silent_since(self) -> float:

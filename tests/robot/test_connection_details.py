@@ -12,6 +12,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import ROOMBA600, get_profile
 from roomba_bt.robot.connection import Connection, LinkStatus
+from roomba_bt.robot.discovery import PROBE_QUERY
 from roomba_bt.robot.errors import ConnectionFailed, ModeError
 from roomba_bt.transport import SerialTransport
 
@@ -121,6 +122,29 @@ def test_firmware_text_in_the_stream_is_skipped_and_frames_go_on(fake_links: Any
         assert counters.skipped_bytes >= len(b"bl-start\r\nRoomba by iRobot!\r\n")
         assert connection.mode is OIMode.SAFE and connection.status is LinkStatus.STREAMING
     robot.wait_for_stop(STOP_TO_PASSIVE)
+
+
+def test_a_banner_the_stream_went_on_after_is_no_reset_at_the_stop(
+    fake_links: Any, caplog: pytest.LogCaptureFixture
+) -> None:
+    """The robot silent before the stop (held for 0.1 s, as a loaded machine holds a robot
+    double), the stop is asked after; a reset banner read before frames that went on is
+    firmware text, not a reset: no Start written again before the Query List, and no "the
+    robot reset" said (both were, the banner still in the link's last chunks)."""
+    link: Link = fake_links("pty")
+    robot = link.scripted()
+    with caplog.at_level(logging.INFO), link.connect() as connection:
+        connection.start("safe", PACKETS)
+        frames_until(connection, lambda: connection.counters.frames >= 3)
+        robot.inject(b"bl-start\r\nRoomba by iRobot!\r\n")
+        before = connection.counters.frames
+        frames_until(connection, lambda: connection.counters.frames >= before + 3)
+        robot.muted = True
+        connection.poll(0.1)
+    assert connection.safe_stopped is True
+    robot.wait_for_stop(STOP_TO_PASSIVE)
+    assert robot.received.endswith(STOP_TO_PASSIVE + PROBE_QUERY), list(robot.received[-30:])
+    assert "reset" not in caplog.text
 
 
 @pytest.mark.parametrize("profile_name", ["create2", "roomba600", "roomba500"])
