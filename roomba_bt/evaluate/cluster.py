@@ -166,18 +166,44 @@ def dask_client(
     with dask_logs_as_detail() as level:
         if scheduler is not None:
             check_scheduler_address(scheduler)
-            try:
-                client = distributed.Client(scheduler, timeout=SCHEDULER_CONNECT_TIMEOUT_S)
-            except (OSError, TimeoutError) as exc:
-                raise SchedulerUnreachableError(
-                    f"--scheduler {scheduler}: cannot connect ({exc})"
-                ) from None
-            with client:
+            with scheduler_client(scheduler) as client:
                 say_when_no_worker(client, scheduler, worker_wait_s)
                 yield client
             return
         with _local_cluster(distributed, workers, level) as client:
             yield client
+
+
+@contextlib.contextmanager
+def scheduler_client(scheduler: str, timeout: float = SCHEDULER_CONNECT_TIMEOUT_S) -> Iterator[Any]:
+    """A client of the scheduler at ``scheduler`` (closed on exit, its IO loop thread
+    ended: :func:`_end_loop`); :class:`SchedulerUnreachableError` if it cannot connect
+    within ``timeout`` s."""
+    distributed = _import_distributed()
+    client = distributed.Client.__new__(distributed.Client)  # kept if __init__ fails
+    try:
+        client.__init__(scheduler, timeout=timeout)
+    except (OSError, TimeoutError) as exc:
+        _end_loop(client)
+        why = f"--scheduler {scheduler}: cannot connect ({exc})"
+        raise SchedulerUnreachableError(why) from None
+    try:
+        with client:
+            yield client
+    finally:
+        _end_loop(client)
+
+
+def _end_loop(client: Any) -> None:
+    """End the IO loop thread ``client`` started, if it still runs. Dask's ``Client.close``
+    returns at once for a client already closed, without ending it: one whose scheduler was
+    lost (it closes itself) or that could not connect (its ``__init__`` closes it before
+    raising, and the client is never ours to close). Each such evaluation left an "IO loop"
+    thread and its event loop's two sockets for the rest of the process (tests/conftest.py's
+    Leftovers found them after test_cluster.py)."""
+    runner = getattr(client, "_loop_runner", None)  # Dask's own: no public way to it
+    if runner is not None and runner.is_started():
+        runner.stop()
 
 
 @contextlib.contextmanager

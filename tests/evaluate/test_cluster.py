@@ -15,6 +15,7 @@ import dataclasses
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -35,10 +36,6 @@ DASK = str(Path(sys.executable).parent / "dask")
 #: Dask is imported
 pytestmark = [
     pytest.mark.extra("cluster"),
-    # two of Dask's "IO loop" threads and their event loops' four sockets are still there
-    # after this module (tests/conftest.py's Leftovers, session 40): whose (Dask's, a
-    # client here, evaluate/cluster.py) is not yet known
-    pytest.mark.leaves_behind("Dask's IO loops, owner not yet found"),
 ]
 
 
@@ -106,17 +103,20 @@ def scheduler(tmp_path: Path) -> Iterator[Callable[[int], Separate]]:
         log.close()
 
 
-def _connect_when_ready(address: str) -> object:
-    from distributed import Client
-
+@contextlib.contextmanager
+def _connected_when_ready(address: str) -> Iterator[Any]:
+    """A client of the scheduler at ``address`` once it takes one (it is starting)."""
     deadline = time.monotonic() + 60
-    while True:
-        try:
-            return Client(address, timeout="2s")
-        except OSError:
-            if time.monotonic() > deadline:
-                raise
-            time.sleep(0.2)
+    with contextlib.ExitStack() as stack:
+        while True:
+            try:
+                client = stack.enter_context(cluster.scheduler_client(address, timeout=2.0))
+                break
+            except cluster.SchedulerUnreachableError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.2)
+        yield client
 
 
 def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_dies(
@@ -126,9 +126,8 @@ def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_
 ) -> None:
     """Two workers: one killed after the first episode, the other runs what it held."""
     address, workers, _ = scheduler(2)
-    client = _connect_when_ready(address)
-    with client:  # type: ignore[attr-defined]
-        client.wait_for_workers(2, timeout=60)  # type: ignore[attr-defined]
+    with _connected_when_ready(address) as client:
+        client.wait_for_workers(2, timeout=60)
     (done,) = evaluate([SPECS], Engine("dask", scheduler=address))
     assert _episodes(done.results) == one_job
     assert done.retried == 0
@@ -189,7 +188,7 @@ def _evaluation_under_way(
     """``roomba-bt eval`` (run as ``roomba_bt``) of 400 dock episodes on the cluster at
     ``address`` once its ``workers`` have joined, writing ``out``, once its first episode is
     in the partial file (another process's file: polled)."""
-    with _connect_when_ready(address) as client:  # type: ignore[attr-defined]
+    with _connected_when_ready(address) as client:
         client.wait_for_workers(workers, timeout=60)
     evaluation = child(
         [*roomba_bt, "eval", str(MISSIONS / "dock.yaml"), "--runs", "400", "--within", "1.5",
@@ -304,16 +303,26 @@ def test_an_unreachable_scheduler_exits_3(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Nothing listens on the port: Dask's client retries the refused connection until the
-    timeout, then exit code 3. The timeout is 1 s here, not the user's 10 s spent waiting."""
+    timeout, then exit code 3. The timeout is 1 s here, not the user's 10 s spent waiting.
+    The client's IO loop thread is ended: Dask's client, closed by its own failed
+    ``__init__``, left it running for the rest of the process (``Client.close`` returns at
+    once for a closed client)."""
     from roomba_bt.cli import main
     from roomba_bt.evaluate import cluster
 
     monkeypatch.setattr(cluster, "SCHEDULER_CONNECT_TIMEOUT_S", 1.0)
     port = _free_port()  # nothing listens there
+    loops = _io_loops()
     code = main(["eval", str(MISSIONS / "dock.yaml"), "--runs", "1", "--no-progress",
                  "--scheduler", f"tcp://127.0.0.1:{port}"])  # fmt: skip
     assert code == 3
     assert f"--scheduler tcp://127.0.0.1:{port}: cannot connect" in capsys.readouterr().err
+    assert _io_loops() == loops
+
+
+def _io_loops() -> set[threading.Thread]:
+    """Dask's event loop threads (``distributed.utils.LoopRunner``'s) running now."""
+    return {thread for thread in threading.enumerate() if thread.name == "IO loop"}
 
 
 @pytest.mark.parametrize(
