@@ -14,6 +14,7 @@ import re
 import shutil
 import threading
 import time
+import weakref
 from collections import deque
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -419,40 +420,96 @@ class OffTickWriter:
     --fast``: on the virtual clock nothing drives while the loop waits, and ``2>&1 | less``,
     the usual way to read a run, lost 4965 of 7033 lines behind a slow pipe). A signal
     raised while it waits (the run's Ctrl-C or SIGTERM) ends the waiting for good: the run's
-    stop that follows must not wait on the same pipe, its lines are dropped and counted."""
+    stop that follows must not wait on the same pipe, its lines are dropped and counted.
+
+    The thread holds only the lines (:class:`_Lines`), not the writer: a writer a program
+    drops without :meth:`close` (a library user's ``TerminalDisplay``) is collected, and its
+    finalizer ends the thread once what was posted is written; before, the thread kept the
+    writer alive and waited for ever, one per display, for the rest of the process."""
 
     def __init__(self, stream: TextIO, limit: int = 1000, *, blocks: bool = False) -> None:
+        self._lines = lines = _Lines(stream, limit, blocks)
+        self._thread = threading.Thread(target=lines.drain, name="roomba-bt terminal", daemon=True)
+        self._thread.start()
+        weakref.finalize(self, lines.end)
+
+    @property
+    def stream(self) -> TextIO:
+        return self._lines.stream
+
+    @property
+    def limit(self) -> int:
+        """Lines that wait at most (the oldest then dropped, or, with :attr:`blocks`, the
+        next post waits)."""
+        return self._lines.limit
+
+    @limit.setter
+    def limit(self, limit: int) -> None:
+        self._lines.limit = limit
+
+    @property
+    def blocks(self) -> bool:
+        return self._lines.blocks
+
+    @property
+    def dropped(self) -> int:
+        """Lines dropped: the terminal did not take them."""
+        return self._lines.dropped
+
+    @property
+    def gone(self) -> bool:
+        """The stream failed: nothing more is written."""
+        return self._lines.gone
+
+    def post(self, text: str, *, latest_only: bool = False) -> None:
+        self._lines.post(text, latest_only)
+
+    def wait_written(self, timeout: float | None) -> bool:
+        """Wait up to ``timeout`` s (None: until it is) for what was posted to be written;
+        False if it was not (the terminal still stalled)."""
+        return self._lines.idle.wait(timeout)
+
+    def close(self, timeout: float | None = 1.0) -> None:
+        """Write what is pending (for up to ``timeout`` s; None: all of it, however long),
+        then stop posting and writing."""
+        self.wait_written(timeout)
+        self._lines.end()
+
+
+class _Lines:
+    """What an :class:`OffTickWriter` posts and its thread writes (see there): the waiting
+    texts, the stream, and the counts; the thread's whole state, so that it holds no
+    writer."""
+
+    def __init__(self, stream: TextIO, limit: int, blocks: bool) -> None:
         self.stream = stream
         self.limit = limit
         self.blocks = blocks
         self.dropped = 0
-        #: the stream failed: nothing more is written
         self.gone = False
-        self._items: deque[tuple[str, bool]] = deque()
-        self._ready = threading.Condition()
-        self._closing = False
-        self._idle = threading.Event()
-        self._idle.set()
-        self._thread = threading.Thread(target=self._drain, name="roomba-bt terminal", daemon=True)
-        self._thread.start()
+        self.items: deque[tuple[str, bool]] = deque()
+        self.ready = threading.Condition()
+        self.closing = False
+        self.idle = threading.Event()
+        self.idle.set()
 
-    def post(self, text: str, *, latest_only: bool = False) -> None:
-        with self._ready:
-            if self.gone or self._closing:
+    def post(self, text: str, latest_only: bool) -> None:
+        with self.ready:
+            if self.gone or self.closing:
                 return
-            items = self._items
+            items = self.items
             if latest_only and items and items[-1][1]:
                 items.pop()  # the screen not drawn yet: this one replaces it
             else:
                 self._wait_for_room()
-                if self.gone or self._closing:
+                if self.gone or self.closing:
                     return
                 if len(items) >= self.limit:
                     items.popleft()
                     self.dropped += 1
             items.append((text, latest_only))
-            self._idle.clear()
-            self._ready.notify_all()
+            self.idle.clear()
+            self.ready.notify_all()
 
     def _wait_for_room(self) -> None:
         """With :attr:`blocks`, wait (holding nothing but the condition) until the thread has
@@ -460,50 +517,42 @@ class OffTickWriter:
         blocking for good and goes on up (the run unwinds into its stop)."""
         try:
             while (
-                self.blocks
-                and len(self._items) >= self.limit
-                and not self.gone
-                and not self._closing
+                self.blocks and len(self.items) >= self.limit and not self.gone and not self.closing
             ):
-                self._ready.wait()
+                self.ready.wait()
         except BaseException:
             self.blocks = False
             raise
 
-    def _drain(self) -> None:
+    def drain(self) -> None:
+        """The thread: write each text posted, until the writing ends (what waits written
+        first) or the stream fails."""
         while True:
-            with self._ready:
-                while not self._items and not self._closing:
-                    self._idle.set()
-                    self._ready.wait()
-                if not self._items:
-                    self._idle.set()
+            with self.ready:
+                while not self.items and not self.closing:
+                    self.idle.set()
+                    self.ready.wait()
+                if not self.items:
+                    self.idle.set()
                     return
-                text, _ = self._items.popleft()
-                self._ready.notify_all()  # a post waiting for room (blocks) has one
+                text, _ = self.items.popleft()
+                self.ready.notify_all()  # a post waiting for room (blocks) has one
             try:
                 self.stream.write(text)
                 self.stream.flush()
             except (OSError, ValueError):  # gone (EIO after a hang-up), or closed
-                with self._ready:
+                with self.ready:
                     self.gone = True
-                    self._items.clear()
-                    self._idle.set()
-                    self._ready.notify_all()
+                    self.items.clear()
+                    self.idle.set()
+                    self.ready.notify_all()
                 return
 
-    def wait_written(self, timeout: float | None) -> bool:
-        """Wait up to ``timeout`` s (None: until it is) for what was posted to be written;
-        False if it was not (the terminal still stalled)."""
-        return self._idle.wait(timeout)
-
-    def close(self, timeout: float | None = 1.0) -> None:
-        """Write what is pending (for up to ``timeout`` s; None: all of it, however long),
-        then stop posting and writing."""
-        self.wait_written(timeout)
-        with self._ready:
-            self._closing = True
-            self._ready.notify_all()
+    def end(self) -> None:
+        """No more posts; the thread ends once what waits is written."""
+        with self.ready:
+            self.closing = True
+            self.ready.notify_all()
 
 
 class OffTickHandler(logging.Handler):

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import gc
 import io
 import logging
 import threading
+import weakref
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -38,12 +40,12 @@ def _writers_closed(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     """Each :class:`OffTickWriter` a test made (a :class:`TerminalDisplay`'s too) is closed
     after it: its thread waits for text until then, and was left running, one a display
     (tests/conftest.py's ``Leftovers`` said so)."""
-    made: list[OffTickWriter] = []
+    made: weakref.WeakSet[OffTickWriter] = weakref.WeakSet()  # a dropped one ends by itself
     made_by = OffTickWriter.__init__
 
     def making(writer: OffTickWriter, *args: Any, **kwargs: Any) -> None:
         made_by(writer, *args, **kwargs)
-        made.append(writer)
+        made.add(writer)
 
     monkeypatch.setattr(OffTickWriter, "__init__", making)
     yield
@@ -199,7 +201,7 @@ def test_a_stalled_terminal_holds_up_nothing_and_sees_the_newest_screen() -> Non
     assert terminal.entered.wait(5.0)  # the writer's thread is stuck in the write
     for i in range(100):  # the tick loop goes on: each post returns at once
         writer.post(f"screen {i}", latest_only=True)
-    assert len(writer._items) == 1  # only the newest waits
+    assert len(writer._lines.items) == 1  # only the newest waits
     terminal.go.set()
     assert writer.wait_written(5.0)
     assert terminal.getvalue() == "first screen" + "screen 99"
@@ -218,6 +220,25 @@ def test_log_lines_wait_up_to_a_limit_then_the_oldest_are_dropped_and_counted() 
     assert terminal.getvalue().splitlines() == ["line 0", *(f"line {i}" for i in range(21, 31))]
 
 
+def test_a_display_dropped_without_close_ends_its_thread_once_its_screen_is_written() -> None:
+    """A program that drops its :class:`TerminalDisplay` (or an :class:`OffTickWriter`)
+    without ``close()``: its writer is collected, and its thread writes what was posted and
+    ends. The thread held the writer and waited for text for the rest of the process, one
+    a display."""
+    terminal = _StalledTerminal()
+    display = TerminalDisplay(terminal)
+    thread = display.writer._thread
+    display.writer.post("first screen", latest_only=True)
+    assert terminal.entered.wait(5.0)  # the thread is in the write
+    display.writer.post("last screen", latest_only=True)
+    del display
+    gc.collect()
+    terminal.go.set()
+    thread.join(10.0)
+    assert not thread.is_alive()
+    assert terminal.getvalue() == "first screen" + "last screen"
+
+
 def test_a_terminal_that_fails_ends_the_writing_not_the_caller() -> None:
     class Gone(io.StringIO):
         def write(self, text: str) -> int:
@@ -227,7 +248,7 @@ def test_a_terminal_that_fails_ends_the_writing_not_the_caller() -> None:
     writer.post("screen", latest_only=True)
     assert writer.wait_written(5.0) and writer.gone
     writer.post("more")  # nothing raised, nothing kept
-    assert not writer._items
+    assert not writer._lines.items
 
 
 def test_log_lines_go_through_the_writer_only_during_the_block() -> None:
