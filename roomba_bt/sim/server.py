@@ -98,10 +98,15 @@ class PtyEndpoint:
 
     def __init__(self) -> None:
         self._master, self._slave = os.openpty()
-        # Raw mode: no echo, no line editing, no CR/LF translation; bytes stay bytes.
-        tty.setraw(self._slave)
-        os.set_blocking(self._master, False)
-        self.address = os.ttyname(self._slave)
+        try:
+            # Raw mode: no echo, no line editing, no CR/LF translation; bytes stay bytes.
+            tty.setraw(self._slave)
+            os.set_blocking(self._master, False)
+            self.address = os.ttyname(self._slave)
+        except BaseException:  # both ends closed: nobody else has them (they were left open)
+            os.close(self._master)
+            os.close(self._slave)
+            raise
         self._hung_up = False
 
     def _speed(self) -> int | None:

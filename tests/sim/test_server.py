@@ -4,10 +4,12 @@ write (pycreate2, pyserial), through the ``roomba-bt sim`` command."""
 from __future__ import annotations
 
 import gc
+import os
 import signal
 import socket
 import subprocess
 import sys
+import termios
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -21,7 +23,7 @@ from roomba_bt.oi import commands as C
 from roomba_bt.oi.profiles import ROOMBA500
 from roomba_bt.oi.stream import StreamParser
 from roomba_bt.sim import server
-from roomba_bt.sim.server import Rfc2217Endpoint, TcpEndpoint
+from roomba_bt.sim.server import PtyEndpoint, Rfc2217Endpoint, TcpEndpoint
 
 if TYPE_CHECKING:
     from conftest import SocketsMade  # tests/conftest.py: the fixture sockets_made's
@@ -235,3 +237,29 @@ def test_a_port_in_use_leaves_no_listener_open(
         with pytest.raises(OSError):
             endpoint("127.0.0.1", taken.getsockname()[1])
     assert made.all_closed()
+
+
+def test_a_pty_that_cannot_be_made_raw_leaves_no_descriptor_open(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Both ends of the pty are closed when setting it up fails (``tty.setraw`` refused):
+    they were left open for the rest of the process."""
+    opened: list[int] = []
+    openpty = server.os.openpty
+
+    def recorded() -> tuple[int, int]:
+        ends = openpty()
+        opened.extend(ends)
+        return ends
+
+    def refused(fd: int) -> None:
+        raise termios.error(5, "Input/output error")
+
+    monkeypatch.setattr(server.os, "openpty", recorded)
+    monkeypatch.setattr(server.tty, "setraw", refused)
+    with pytest.raises(termios.error):
+        PtyEndpoint()
+    assert len(opened) == 2
+    for fd in opened:
+        with pytest.raises(OSError):
+            os.fstat(fd)  # closed
