@@ -54,6 +54,7 @@ import asyncio
 import contextlib
 import gc
 import json
+import logging
 import math
 import threading
 import time
@@ -70,6 +71,8 @@ from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
 from roomba_bt.monitor.views import header_view, path_view, run_view, state_view, tree_view
 from roomba_bt.oi.frames import SLOT_SECONDS
+
+log = logging.getLogger(__name__)
 
 UPDATE_PERIOD_S = 0.05  # at most 20 updates a second per page
 TICK_WAIT_S = 0.05  # the longest a pump waits for a tick's end before it sends anyway
@@ -88,6 +91,11 @@ BEHIND_S = 1.0
 #: the longest ``start`` waits for the server to be bound: it waited 10 s, then gave the
 #: page's URL (port 0 where 0 was asked) of a server that was not serving
 START_WITHIN_S = 60.0
+#: the longest ``close`` waits for the server's thread to end (the pages told the run ended,
+#: up to 1 s each, and aiohttp's cleanup), its port free again. It waited 5 s and returned
+#: with the thread still serving on a loaded machine, its port bound: a server started
+#: again there was refused (address in use)
+CLOSE_WITHIN_S = 60.0
 #: how often the pump pings a page to learn how far it has read (one ping in flight at most:
 #: a browser answers at once, without its script, when it reads the frame)
 PING_EVERY_S = 0.5
@@ -524,7 +532,12 @@ class MonitorServer:
             threading.Event().wait(grace_s)
         with contextlib.suppress(RuntimeError):
             loop.call_soon_threadsafe(stopped.set)
-        self._thread.join(5)
+        self._thread.join(CLOSE_WITHIN_S)
+        if self._thread.is_alive():  # its port stays bound while it runs
+            log.warning(
+                "the monitor's server on %s:%s did not stop within %g s: its port stays taken "
+                "until it does", self.host, self.port, CLOSE_WITHIN_S,
+            )  # fmt: skip
 
     def _serve(self) -> None:
         loop = asyncio.new_event_loop()

@@ -3,6 +3,7 @@ HTTP error and change nothing; a stalled page never holds up a tick."""
 
 from __future__ import annotations
 
+import asyncio
 import gc
 import json
 import socket
@@ -17,6 +18,7 @@ from typing import Any
 import pytest
 
 from roomba_bt.mission import load_mission
+from roomba_bt.monitor import server as monitor_server
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.server import AFTER_TICK_S, UPDATE_PERIOD_S, MonitorServer, next_look
 from roomba_bt.monitor.session import MonitorSession
@@ -708,3 +710,26 @@ def test_a_server_that_is_not_serving_in_time_is_an_error_not_a_url(
             server.start()
     finally:
         held.set()
+
+
+def test_close_returns_once_the_server_has_ended_and_its_port_is_free(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The server's shutdown held for 6 s (a loaded machine's thread, a slow cleanup):
+    ``close`` returns once its thread has ended and the port is free to listen on again. It
+    gave up on the thread after 5 s and returned with it serving, its port still bound: a
+    server started again there was refused (address in use)."""
+    server = _serve()
+    told = monitor_server._close_pages
+
+    async def held(sockets: set[Any]) -> None:
+        await asyncio.sleep(6.0)
+        await told(sockets)
+
+    monkeypatch.setattr(monitor_server, "_close_pages", held)
+    server.close()
+    assert server._thread is not None and not server._thread.is_alive()
+    with socket.socket() as again:  # as aiohttp binds
+        again.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        again.bind(("127.0.0.1", server.port))  # no listener left: no OSError (in use)
+        again.listen(1)
