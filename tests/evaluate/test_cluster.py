@@ -320,6 +320,23 @@ def test_an_unreachable_scheduler_exits_3(
     assert _io_loops() == loops
 
 
+def test_a_client_whose_scheduler_was_lost_ends_its_io_loop(
+    scheduler: Callable[[int], Separate],
+) -> None:
+    """The scheduler killed under a connected client: the client closes itself once it
+    cannot reconnect (2 s here), and Dask's ``Client.close`` then returns at once without
+    ending the client's IO loop thread; :func:`cluster.scheduler_client` ends it."""
+    address, _, scheduler_process = scheduler(0)
+    loops = _io_loops()
+    with _connected_when_ready(address) as client:
+        scheduler_process.kill()
+        deadline = time.monotonic() + 60
+        while client.status != "closed" and time.monotonic() < deadline:
+            time.sleep(0.1)  # Dask's own thread closes it: no event to wait on
+        assert client.status == "closed"
+    assert _io_loops() == loops
+
+
 def _io_loops() -> set[threading.Thread]:
     """Dask's event loop threads (``distributed.utils.LoopRunner``'s) running now."""
     return {thread for thread in threading.enumerate() if thread.name == "IO loop"}
