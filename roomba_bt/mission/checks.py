@@ -102,7 +102,7 @@ from roomba_bt.oi.frames import (
     HAZARD_PACKETS,
 )
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
-from roomba_bt.oi.opcodes import COMMANDS, Effect
+from roomba_bt.oi.opcodes import COMMANDS, Effect, opcodes
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PASSIVE_SLEEP_S, SEND_BAUD, RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 
@@ -149,6 +149,10 @@ def _label(modes: frozenset[OIMode]) -> str:
 #: The opcodes that end the run when the tree sends them (Reset 7, Stop 173: the opcode
 #: table's :attr:`~roomba_bt.oi.opcodes.Effect.SILENCES`).
 SILENCING = frozenset(op for op, spec in COMMANDS.items() if spec.effect is Effect.SILENCES)
+
+#: what makes a stored song sound (a ``song`` alone only stores its notes)
+(PLAY,) = opcodes("play")
+
 #: Why nothing may follow a leaf that sends Reset or Stop (the validator's error,
 #: docs/runtime.md); ``{end_in_stop}``: how the caller ends in Off (:attr:`Wording.end_in_stop`)
 ENDS_THE_RUN = (
@@ -1158,5 +1162,40 @@ def undefined_songs(root: Node) -> list[Diagnostic]:
                 f"{defined}): the robot plays what an earlier program left in slot "
                 f"{number}, kept until it is switched off, or nothing; add "
                 f"`song: {{number: {number}, notes: [...]}}` before it"
+            ).as_warning())  # fmt: skip
+    return warnings
+
+
+def unplayed_songs(root: Node) -> list[Diagnostic]:
+    """Warnings: each ``song`` whose slot no ``play`` of this mission plays. ``song`` only
+    stores the notes (Song 140); a writer who expects to hear it has forgotten the ``play``
+    (Play 141), and the run succeeds in silence. A warning, not an error: the robot keeps
+    the song until it is switched off, so a later program may play it. Not said when the
+    mission may play a slot not known here: a ``play`` whose number is a blackboard key, or
+    a leaf of a plugin that sends Play itself."""
+    songs: list[Node] = []
+    played: set[object] = set()
+    for node in root.walk():
+        decl = node.decl
+        if decl is None:
+            continue
+        if decl.name == "song":
+            songs.append(node)
+        elif PLAY in decl.sends:
+            if decl.name != "play":
+                return []
+            played.add(node.params.get("number", 0))
+    if not all(isinstance(number, int) for number in played):
+        return []
+    warnings: list[Diagnostic] = []
+    for node in songs:
+        number = node.params.get("number", 0)
+        if isinstance(number, int) and number not in played:
+            loc = node.options.get("loc:number", node.loc)
+            warnings.append(loc.at(
+                f"song: song {number} is stored but no `play` of this mission plays it "
+                f"(song only gives the robot the notes): add `play: {number}` where it "
+                f"should sound; a song left for a later program is kept until the robot is "
+                f"switched off"
             ).as_warning())  # fmt: skip
     return warnings

@@ -45,6 +45,7 @@ from roomba_bt.mission.checks import (
     restarted_runs,
     sensor_ranges,
     undefined_songs,
+    unplayed_songs,
     waits_past_sleep,
 )
 from roomba_bt.mission.deadends import dead_ends
@@ -338,6 +339,7 @@ def _tree_warnings(
         *ignored,
         *sensor_ranges(tree, profile),
         *undefined_songs(tree),
+        *unplayed_songs(tree),
     )
 
 

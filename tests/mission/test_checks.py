@@ -1034,6 +1034,92 @@ tree:
     assert not mission.warnings
 
 
+def test_a_song_no_play_plays_is_a_warning_at_its_number(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    """A stranger's mission (session 41) stored a tune with ``song`` and never played it:
+    ``validate`` said ok, and the run succeeded in silence."""
+    mission = compile_text(
+        """
+mission: silent tune
+tree:
+  sequence:
+    - mode: safe
+    - song: {number: 1, notes: [C4 125ms, E4 125ms]}
+    - song: {number: 2, notes: [G4 250ms]}
+    - play: 2
+"""
+    )
+    assert [(w.line, w.column) for w in mission.warnings] == [(5, 22)]
+    said = mission.warnings[0].message
+    assert said.startswith("song: song 1 is stored but no `play` of this mission plays it")
+    assert "add `play: 1` where it should sound" in said
+
+
+def test_a_song_of_the_default_slot_is_warned_at_the_song(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    mission = compile_text(
+        "tree:\n  sequence:\n    - mode: safe\n    - song: {notes: [C4 100ms]}\n"
+    )
+    assert [(w.line, w.column, w.message[:12]) for w in mission.warnings] == [
+        (4, 7, "song: song 0")
+    ]
+
+
+def test_a_song_played_by_a_key_is_no_warning(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    """The slot a key holds is known only when the run reads it."""
+    mission = compile_text(
+        """
+mission: by key
+blackboard:
+  slot: {type: int, initial: 1}
+tree:
+  sequence:
+    - song: {number: 1, notes: [C4 100ms]}
+    - mode: safe
+    - play: "@slot"
+"""
+    )
+    assert not mission.warnings
+
+
+PLAYS_ITSELF = """
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.opcodes import opcodes
+
+
+@declare("fanfare", kind="action", sends=opcodes({sends}))
+class Fanfare(Action):
+    \"\"\"Plays slot 3.\"\"\"
+
+    def update(self):
+        self.send(commands.play(3))
+        return Status.SUCCESS
+"""
+
+
+@pytest.mark.parametrize(("sends", "warned"), [('"play"', False), ('"leds"', True)])
+def test_a_song_a_plugin_may_play_is_no_warning(
+    mission_file: Callable[..., Path], sends: str, warned: bool
+) -> None:
+    """A plugin's leaf that declares it sends Play may play any slot: nothing is said."""
+    mission_file(PLAYS_ITSELF.format(sends=sends), "fanfare.py")
+    path = mission_file(
+        "plugins: [./fanfare.py]\ntree:\n  sequence:\n    - mode: safe\n"
+        "    - song: {number: 3, notes: [C4 100ms]}\n    - fanfare\n"
+    )
+    mission = load_mission(path, permissions=Permissions(plugin_files=True))
+    assert [w.message.startswith("song: song 3 is stored") for w in mission.warnings] == (
+        [True] if warned else []
+    )
+
+
 @pytest.mark.parametrize(
     ("count", "parts"),
     [(17, ["[notes 1-16]", "[note 17]"]), (40, ["[notes 1-16]", "[notes 17-32]", "[notes 33-40]"])],
