@@ -1134,68 +1134,71 @@ def check_stream(
     return None
 
 
-def undefined_songs(root: Node) -> list[Diagnostic]:
-    """Warnings: each ``play`` of a slot no ``song`` of this mission defines (``play: 3``
-    where only slot 0 was written: a typo, most likely). A warning, not an error: the robot
-    keeps the songs it was given earlier, until it is switched off, so the slot may hold
-    one; it may also be empty, and then the robot plays nothing. Said where the number is
-    written; a song or play whose number is a blackboard key is not known here: none said."""
-    songs: set[object] = set()
+def song_slots(root: Node) -> list[Diagnostic]:
+    """Warnings of the song slots a mission writes and plays, said where the number is
+    written (or at the leaf, for the default slot 0):
+
+    - each ``play`` of a slot no ``song`` of this mission defines (``play: 3`` where only
+      slot 0 was written: a typo, most likely);
+    - each ``song`` whose slot no ``play`` of this mission plays (``song`` only stores the
+      notes, Song 140: a tune written and never played ran in silence, validated ok).
+
+    Warnings, not errors: the robot keeps the songs it was given until it is switched off,
+    so a slot may hold an earlier program's song (or be empty: the robot plays nothing),
+    and a song may be left for a later program. A slot not known here says nothing of the
+    slots on the other side: a ``song`` or ``play`` whose number is a blackboard key, or a
+    plugin's leaf that declares it sends Play (any slot)."""
+    songs: list[Node] = []
     plays: list[Node] = []
     for node in root.walk():
         decl = node.decl
         if decl is not None and decl.name == "song":
-            songs.add(node.params.get("number", 0))
-        elif decl is not None and decl.name == "play":
-            plays.append(node)
-    defined_slots = sorted(number for number in songs if isinstance(number, int))
-    if len(defined_slots) < len(songs):
-        return []
-    warnings: list[Diagnostic] = []
-    for node in plays:
-        number = node.params.get("number", 0)
-        if isinstance(number, int) and number not in songs:
-            defined = ", ".join(map(str, defined_slots)) if songs else "none"
-            loc = node.options.get("loc:number", node.loc)
-            warnings.append(loc.at(
-                f"play: song {number} is not defined by this mission (its song slots: "
-                f"{defined}): the robot plays what an earlier program left in slot "
-                f"{number}, kept until it is switched off, or nothing; add "
-                f"`song: {{number: {number}, notes: [...]}}` before it"
-            ).as_warning())  # fmt: skip
-    return warnings
-
-
-def unplayed_songs(root: Node) -> list[Diagnostic]:
-    """Warnings: each ``song`` whose slot no ``play`` of this mission plays. ``song`` only
-    stores the notes (Song 140); a writer who expects to hear it has forgotten the ``play``
-    (Play 141), and the run succeeds in silence. A warning, not an error: the robot keeps
-    the song until it is switched off, so a later program may play it. Not said when the
-    mission may play a slot not known here: a ``play`` whose number is a blackboard key, or
-    a leaf of a plugin that sends Play itself."""
-    songs: list[Node] = []
-    played: set[object] = set()
-    for node in root.walk():
-        decl = node.decl
-        if decl is None:
-            continue
-        if decl.name == "song":
             songs.append(node)
-        elif PLAY in decl.sends:
-            if decl.name != "play":
-                return []
-            played.add(node.params.get("number", 0))
-    if not all(isinstance(number, int) for number in played):
-        return []
+        elif decl is not None and PLAY in decl.sends:
+            plays.append(node)
+    defined = _slots(songs)
+    played = _slots(plays)
     warnings: list[Diagnostic] = []
-    for node in songs:
-        number = node.params.get("number", 0)
-        if isinstance(number, int) and number not in played:
-            loc = node.options.get("loc:number", node.loc)
-            warnings.append(loc.at(
-                f"song: song {number} is stored but no `play` of this mission plays it "
-                f"(song only gives the robot the notes): add `play: {number}` where it "
-                f"should sound; a song left for a later program is kept until the robot is "
-                f"switched off"
-            ).as_warning())  # fmt: skip
+    if defined is not None:
+        for node in plays:
+            number = node.params.get("number", 0) if _is(node, "play") else None
+            if isinstance(number, int) and number not in defined:
+                slots = ", ".join(map(str, sorted(defined))) or "none"
+                warnings.append(_at_number(node,
+                    f"play: song {number} is not defined by this mission (its song slots: "
+                    f"{slots}): the robot plays what an earlier program left in slot "
+                    f"{number}, kept until it is switched off, or nothing; add "
+                    f"`song: {{number: {number}, notes: [...]}}` before it"
+                ))  # fmt: skip
+    if played is not None:
+        for node in songs:
+            number = node.params.get("number", 0)
+            if isinstance(number, int) and number not in played:
+                warnings.append(_at_number(node,
+                    f"song: song {number} is stored but no `play` of this mission plays it "
+                    f"(song only gives the robot the notes): add `play: {number}` where it "
+                    f"should sound; a song left for a later program is kept until the robot is "
+                    f"switched off"
+                ))  # fmt: skip
     return warnings
+
+
+def _slots(nodes: list[Node]) -> set[int] | None:
+    """The song slots ``nodes`` (songs, or the leaves that play) name; None where one is
+    not known before the run (a blackboard key; a plugin's leaf that sends Play)."""
+    slots: set[int] = set()
+    for node in nodes:
+        number = node.params.get("number", 0)
+        if not isinstance(number, int) or not (_is(node, "song") or _is(node, "play")):
+            return None
+        slots.add(number)
+    return slots
+
+
+def _is(node: Node, name: str) -> bool:
+    return node.decl is not None and node.decl.name == name
+
+
+def _at_number(node: Node, message: str) -> Diagnostic:
+    loc: Loc = node.options.get("loc:number", node.loc)
+    return loc.at(message).as_warning()

@@ -44,8 +44,7 @@ from roomba_bt.mission.checks import (
     restarted_limits,
     restarted_runs,
     sensor_ranges,
-    undefined_songs,
-    unplayed_songs,
+    song_slots,
     waits_past_sleep,
 )
 from roomba_bt.mission.deadends import dead_ends
@@ -338,8 +337,7 @@ def _tree_warnings(
         *restarted_runs(tree),
         *ignored,
         *sensor_ranges(tree, profile),
-        *undefined_songs(tree),
-        *unplayed_songs(tree),
+        *song_slots(tree),
     )
 
 

@@ -1016,24 +1016,6 @@ tree:
     assert "kept until it is switched off" in said
 
 
-def test_a_play_of_a_slot_a_blackboard_key_may_define_is_no_warning(
-    compile_text: Callable[..., CompiledMission],
-) -> None:
-    mission = compile_text(
-        """
-mission: by key
-blackboard:
-  slot: {type: int, initial: 1}
-tree:
-  sequence:
-    - song: {number: "@slot", notes: [C4 100ms]}
-    - mode: safe
-    - play: 1
-"""
-    )
-    assert not mission.warnings
-
-
 def test_a_song_no_play_plays_is_a_warning_at_its_number(
     compile_text: Callable[..., CompiledMission],
 ) -> None:
@@ -1067,20 +1049,22 @@ def test_a_song_of_the_default_slot_is_warned_at_the_song(
     ]
 
 
-def test_a_song_played_by_a_key_is_no_warning(
-    compile_text: Callable[..., CompiledMission],
+@pytest.mark.parametrize(("song", "play"), [('"@slot"', "1"), ("1", '"@slot"')])
+def test_a_slot_a_blackboard_key_holds_is_no_warning(
+    compile_text: Callable[..., CompiledMission], song: str, play: str
 ) -> None:
-    """The slot a key holds is known only when the run reads it."""
+    """The slot a key holds is known only when the run reads it: the song it may define,
+    the play it may play."""
     mission = compile_text(
-        """
+        f"""
 mission: by key
 blackboard:
-  slot: {type: int, initial: 1}
+  slot: {{type: int, initial: 1}}
 tree:
   sequence:
-    - song: {number: 1, notes: [C4 100ms]}
+    - song: {{number: {song}, notes: [C4 100ms]}}
     - mode: safe
-    - play: "@slot"
+    - play: {play}
 """
     )
     assert not mission.warnings
