@@ -267,8 +267,9 @@ class EpisodeResult:
     #: the wall clock (the run summary's ``slowest ... ms in sleepy (Sleepy.update at
     #: x.py:11)``: runtime/tick_watch.py, :data:`~roomba_bt.runtime.tick_watch.WHEN_SLOW`),
     #: and that tick's host seconds; "" and 0 for an episode at its usual pace. The
-    #: evaluation's report says it once; measured on the host, not part of the episode, and
-    #: not written to a results file
+    #: evaluation's report says it once; measured on the host, not part of the episode: a
+    #: results file's ``slowest_tick_in`` and ``slowest_tick`` (left empty by
+    #: ``--reproducible``), so that ``eval --from`` and ``--resume`` say it again
     slowest_in: str = field(default="", compare=False)
     slowest_tick_s: float = field(default=0.0, compare=False)
 

@@ -33,6 +33,12 @@ ran as (``create2``, ``roomba600``...; empty in files written before it was reco
 declare, with who wrote it first and where (``{"secret": "by 'probe' at lab.py:17"}``; its JSON
 text in CSV; empty or absent: none, or a file written before it was recorded): the warning
 ``run`` says, which the summary of a resumed run or of ``eval --from`` says again.
+``slowest_tick_in`` names the behaviour that held the episode's slowest tick on the wall clock
+(a plugin's ``time.sleep`` or I/O in its ``update``: ``sleepy (Sleepy.update at
+sleepy.py:11)``, as the report's ``slowest tick ... in ...`` warning and ``--json``'s
+``slow_ticks`` name it) and ``slowest_tick`` that tick's host seconds; empty (null) for an
+episode no behaviour held, in files written before they were recorded, and under
+``--reproducible`` (measured on the host, as ``wall_time`` is).
 
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
@@ -126,6 +132,8 @@ COLUMNS: dict[str, tuple[str, str, Allowed]] = {
     "mission_said": ("said", "str?", None),
     "profile": ("profile", "str?", None),
     "undeclared_keys": ("undeclared", "undeclared", None),
+    "slowest_tick": ("slowest_tick_s", "float?", AT_LEAST_0),
+    "slowest_tick_in": ("slowest_in", "str?", None),
 }
 
 #: the coverage columns (empty when the episode did not clean): name -> (Coverage field,
@@ -157,8 +165,9 @@ PATH_COLUMN = "path"
 #: figure (8 inches at 110 dpi for a room of 4 m or more: about 5 mm a pixel)
 PATH_TOLERANCE_M = 0.005
 #: the columns ``--reproducible`` leaves empty: measured on the wall clock, or naming a
-#: process, they differ on every run of the same episodes
-MEASURED_COLUMNS = ("wall_time", "cpu_time", "worker")
+#: process, they differ on every run of the same episodes (whether a behaviour is found
+#: holding a tick, and for how long, is the host's: the watch looks on the wall clock)
+MEASURED_COLUMNS = ("wall_time", "cpu_time", "worker", "slowest_tick", "slowest_tick_in")
 
 
 class ResultsFileError(ValueError):
@@ -194,6 +203,8 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
         elif kind == "undeclared":
             value = dict(value)
         out[column] = value
+    if not result.slowest_in:  # no behaviour held its ticks: no such tick, not one of 0 s
+        out["slowest_tick"] = None
     out.update(_coverage_record(result))
     if result.trajectory:  # an episode run for a plot: what the plot draws of it
         out[PATH_COLUMN] = [[x, y] for x, y in kept_path(result.trajectory)]

@@ -73,6 +73,41 @@ def test_a_record_keeps_the_profile_and_the_undeclared_keys(
     assert from_record(older) == replace(odd, undeclared=(), profile="", trajectory=kept)
 
 
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_a_record_keeps_the_behaviour_that_held_its_ticks(
+    tmp_path: Path, results: list[EpisodeResult], suffix: str
+) -> None:
+    """The report's ``slowest tick ... in sleepy (...)`` warning was said on the run alone:
+    no column held it, and ``eval --from`` of the records a sweep is read from afterwards
+    said none. ``slowest_tick_in`` and ``slowest_tick`` hold it (a ``:`` and ``(`` kept in
+    CSV), empty for an episode no behaviour held; ``--reproducible`` leaves them empty
+    (measured on the host); a file written before them reads back as no such tick."""
+    where = "sleepy (Sleepy.update at a;b=c.py:11)"
+    held = replace(results[0], slowest_in=where, slowest_tick_s=0.24093)
+    path = tmp_path / f"results{suffix}"
+    write_results(path, [held, *results[1:]])
+    again = read_results(path)
+    assert (again[0].slowest_in, again[0].slowest_tick_s) == (where, 0.24093)
+    assert [(r.slowest_in, r.slowest_tick_s) for r in again[1:]] == [("", 0.0)] * 2
+    assert (
+        summarize(BUMP, "apartment", again)
+        .slow_said()[0]
+        .startswith(
+            f"slowest tick 240.93 ms in {where}, in 1 of 3 episodes: a behaviour held the ticks"
+        )
+    )
+    record = to_record(held)
+    assert (record["slowest_tick_in"], record["slowest_tick"]) == (where, 0.24093)
+    assert (to_record(results[1])["slowest_tick_in"], to_record(results[1])["slowest_tick"]) == (
+        "",
+        None,
+    )
+    write_results(path, [held], reproducible=True)
+    assert (read_results(path)[0].slowest_in, read_results(path)[0].slowest_tick_s) == ("", 0.0)
+    older = {k: v for k, v in record.items() if k not in ("slowest_tick", "slowest_tick_in")}
+    assert (from_record(older).slowest_in, from_record(older).slowest_tick_s) == ("", 0.0)
+
+
 def test_a_record_has_the_columns_a_script_needs(results: list[EpisodeResult]) -> None:
     from roomba_bt.evaluate.records import COVERAGE_COLUMNS
 

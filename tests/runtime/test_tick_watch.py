@@ -376,19 +376,23 @@ def test_eval_names_the_behaviour_that_held_its_episode_s_ticks(
     """``eval`` started no watch: a plugin blocked in its ``update`` was said only by
     ``--wall-limit``'s HUNG. Its dormant watch wakes once the episode goes slower than the
     wall clock, the tick already blocked, and the report names the behaviour once, as
-    ``run``'s ticks line does. In this process (``--wall-limit none``): the fixture's pipe."""
+    ``run``'s ticks line does. In this process (``--wall-limit none``): the fixture's pipe.
+    ``--out``'s records hold it too (``slowest_tick_in``), so ``eval --from`` says it again:
+    it said nothing, the records a sweep is read from afterwards without it."""
+    out_file = watched_mission.parent / "results.jsonl"
     argv = ["eval", str(watched_mission), "--runs", "1", "--allow-plugin-files",
-            "--no-progress", "--wall-limit", "none"]  # fmt: skip
+            "--no-progress", "--wall-limit", "none", "--out", str(out_file)]  # fmt: skip
     assert main(argv) == ExitCode.OK
-    out = capsys.readouterr().out
-    warnings = [line for line in out.splitlines() if line.startswith("warning ")]
     plugin = watched_mission.parent / "sleepy.py"
-    assert len(warnings) == 1, out
-    assert warnings[0].startswith("warning      slowest tick "), out
-    assert (
-        f" ms in sleepy (Sleepy.update at {plugin}:21), in 1 of 1 episodes: a behaviour "
-        in (warnings[0])
-    )
+    said = f" ms in sleepy (Sleepy.update at {plugin}:21), in 1 of 1 episodes: a behaviour "
+    for again in (False, True):
+        if again:
+            assert main(["eval", "--from", str(out_file)]) == ExitCode.OK
+        out = capsys.readouterr().out
+        warnings = [line for line in out.splitlines() if line.startswith("warning ")]
+        assert len(warnings) == 1, out
+        assert warnings[0].startswith("warning      slowest tick "), out
+        assert said in warnings[0], out
 
 
 def _dormant(thread: FakeThread) -> SlowTickWatch:
