@@ -753,23 +753,7 @@ def mission_file(text: str) -> str | tuple[str]:
     found = find_mission(text)
     if found.path is not None:
         return str(found.path)
-    return (escaped(found.problem + (_a_world_s_name(text) if found.missing else ""), ANY_CONTROL),)
-
-
-def _a_world_s_name(text: str) -> str:
-    """What a name given for a mission is when it is a shipped world's (``validate
-    empty-room``): how to see that world and run a mission in it; else nothing. The mission
-    layer knows no worlds (the simulator is above it), so the command line says it: the
-    error listed the shipped missions alone, as if the name were a typo of one."""
-    from roomba_bt.sim.world import shipped_worlds
-
-    name = text.removesuffix(".yaml")
-    if "/" in text or name not in shipped_worlds():
-        return ""
-    return (
-        f"; {name} is a shipped world, not a mission: `roomba-bt worlds {name}` shows it, "
-        f"`roomba-bt run MISSION --world {name}` runs a mission in it"
-    )
+    return (escaped(found.problem, ANY_CONTROL),)
 
 
 def given_once(command: str, found: list[tuple[str, str]], done: str) -> list[tuple[str, str]]:

@@ -31,6 +31,11 @@ from roomba_bt.printable import LINK_LOOP, broken_link, yaml_written
 #: Where the shipped missions live: the package's data directory (a sibling of ``mission/``).
 SHIPPED_DIR = Path(__file__).resolve().parent.parent / "missions"
 
+#: Where the simulator's shipped worlds are (:data:`roomba_bt.sim.world.WORLDS_DIR`, the
+#: same folder): looked at as files, only to say that a name given for a mission is a
+#: world's (:func:`a_world_s_name`); the mission layer imports no simulator
+SHIPPED_WORLDS_DIR = SHIPPED_DIR.parent / "sim" / "worlds"
+
 #: An include (or a mission argument) starting with this names a file of the shipped missions'
 #: directory, e.g. ``roomba-bt:lib/docking.yaml``.
 SHIPPED_PREFIX = "roomba-bt:"
@@ -58,13 +63,10 @@ def other_package(text: str) -> str | None:
 @dataclass(frozen=True)
 class ShippedLookup:
     """What a mission argument names: ``path`` when found, else ``problem`` (one sentence
-    naming what was given and what exists); ``missing``: no file and no shipped mission by
-    that name (not a folder, a broken link or another wrong file), so a caller that knows
-    other names (the command line: the shipped worlds) may say what the name is instead."""
+    naming what was given and what exists)."""
 
     path: Path | None
     problem: str = ""
-    missing: bool = False
 
 
 @dataclass(frozen=True)
@@ -215,9 +217,19 @@ def _find_mission(text: str, given: Path, wording: Wording) -> ShippedLookup:
     return ShippedLookup(
         None,
         f"{text}: no such mission file, and no shipped mission of that name "
-        f"(shipped: {names}{wording.lists_missions}){hint}",
-        missing=True,
+        f"(shipped: {names}{wording.lists_missions}){hint}{a_world_s_name(text, wording)}",
     )
+
+
+def a_world_s_name(text: str, wording: Wording) -> str:
+    """What a name given for a mission is when it is a shipped world's (``validate
+    empty-room``, ``load_mission("empty-room")``): how to see that world and run a mission
+    in it, in the caller's words; else nothing. The error listed the shipped missions alone,
+    as if the name were a typo of one. A path (a ``/`` in it) is a file of the user's."""
+    name = text.removesuffix(".yaml")
+    if "/" in text or not any(p.stem == name for p in SHIPPED_WORLDS_DIR.glob("*.yaml")):
+        return ""
+    return f"; {name} is a shipped world, not a mission: " + wording.on_world_name.format(name=name)
 
 
 def _broken_link(link: Path) -> str:

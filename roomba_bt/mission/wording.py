@@ -39,6 +39,9 @@ class Wording:
     profile: str
     #: how to run a mission on the world file ``{path}``
     on_world: str
+    #: how to see the shipped world ``{name}``, given where a mission was asked for, and
+    #: run a mission in it (:func:`~roomba_bt.mission.shipped.a_world_s_name`)
+    on_world_name: str
     #: how the caller lists the shipped missions ("" when it has no such command)
     lists_missions: str
     #: how the caller leaves the robot in Off (Stop, 173) at the end of a mission
@@ -80,6 +83,7 @@ PYTHON = Wording(
     set_instead="params= sets it when the mission is loaded",
     profile="profile= (roomba_bt.PROFILES)",
     on_world="load_world({path!r}) and a Simulator on it",
+    on_world_name="load_world({name!r}) loads it, a Simulator on it runs a mission in it",
     lists_missions="",
     end_in_stop="end_in='stop' (RunStack's or Connection's)",
 )
@@ -97,6 +101,10 @@ COMMAND_LINE = Wording(
     on_world=(
         "--world {path} (roomba-bt run dock --world {path} --fast); roomba-bt validate {path} "
         "checks it"
+    ),
+    on_world_name=(
+        "`roomba-bt worlds {name}` shows it, `roomba-bt run MISSION --world {name}` runs a "
+        "mission in it"
     ),
     lists_missions="; `roomba-bt missions` lists them",
     end_in_stop="--end-in stop",

@@ -97,3 +97,40 @@ def test_a_mistyped_shipped_name_gets_its_did_you_mean_from_load_mission(
     assert main(["validate", "dok"]) == 2  # the command line's, as it was
     err = capsys.readouterr().err
     assert "(shipped: " in err and "`roomba-bt missions` lists them) (did you mean 'dock'?)" in err
+
+
+@pytest.mark.parametrize("name", ["empty-room", "empty-room.yaml"])
+def test_a_shipped_world_s_name_given_to_load_mission_is_said_as_a_world(
+    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``load_mission("empty-room")`` listed the shipped missions alone, where ``roomba-bt
+    validate empty-room`` says it is a shipped world (``tests/mission/test_cli.py``): the
+    same sentence, with the Python call that loads the world, and no flag; what it names
+    loads that world."""
+    from roomba_bt import load_world
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(MissionError) as raised:
+        load_mission(name)
+    [said] = raised.value.diagnostics
+    assert said.message.startswith("no such mission file, and no shipped mission of that name")
+    assert said.message.endswith(
+        "; empty-room is a shipped world, not a mission: load_world('empty-room') loads it, "
+        "a Simulator on it runs a mission in it"
+    ), said.message
+    assert not any(flag in said.message for flag in FLAGS), said.message
+    assert load_world("empty-room").name == "empty-room"
+    (tmp_path / "worlds").mkdir()
+    with pytest.raises(MissionError) as raised:  # a path is the user's file, never a world
+        load_mission("worlds/empty-room.yaml")
+    assert "shipped world" not in raised.value.diagnostics[0].message
+
+
+def test_the_mission_layer_looks_for_shipped_worlds_where_the_simulator_keeps_them() -> None:
+    """The mission layer imports no simulator: it names the worlds' folder itself, which
+    must stay the simulator's (a moved folder would drop the hint without a word)."""
+    from roomba_bt.mission.shipped import SHIPPED_WORLDS_DIR
+    from roomba_bt.sim.world import WORLDS_DIR, shipped_worlds
+
+    assert SHIPPED_WORLDS_DIR.resolve() == WORLDS_DIR.resolve()
+    assert "empty-room" in shipped_worlds()
