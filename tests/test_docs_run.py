@@ -568,6 +568,9 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     ("docs/plugins.md", "roomba-bt behaviours: error: ..."): "tests/mission/"
     "test_broken_plugin_cli.py::test_the_page_quotes_what_schema_and_behaviours_say_of_a_"
     "plugin_that_does_not_import",
+    ("docs/runtime.md", "m.yaml:1:1: cannot read mission file"): "tests/mission/"
+    "test_hostile_files.py::test_a_mission_file_that_cannot_be_read_is_named_with_what_is_"
+    "wanted",
 }
 
 

@@ -76,6 +76,12 @@ def loc_of(node: yaml.Node, file: str, path: str) -> Loc:
     return Loc(file, mark.line + 1, mark.column + 1, path)
 
 
+#: what a mission file that exists and cannot be read is said to want, after what the system
+#: said of it, as an include or a plugin file says it ("cannot read mission file: Permission
+#: denied" named neither the file nor what would do)
+MISSION_WANTED = "wanted: a mission file (YAML text) this user may read"
+
+
 def compose(
     path: Path, display: str, include: tuple[str, Loc] | None = None
 ) -> tuple[yaml.Node | None, list[Diagnostic]]:
@@ -87,11 +93,12 @@ def compose(
     except yamlsource.FileTooLarge as exc:
         return None, [Diagnostic(display, 1, 1, f"mission file of {exc}")]
     except OSError as exc:
+        why = exc.strerror or exc
         if include is not None:
             name, where = include
-            why = exc.strerror or exc
             return None, [where.at(f"cannot read included file {path_written(name)}: {why}")]
-        return None, [Diagnostic(display, 1, 1, f"cannot read mission file: {exc.strerror}")]
+        said = f"cannot read mission file {path_written(display)}: {why}; {MISSION_WANTED}"
+        return None, [Diagnostic(display, 1, 1, said)]
     except UnicodeDecodeError as exc:
         line, column = yamlsource.undecodable_position(exc)
         byte = bytes(exc.object)[exc.start]

@@ -46,6 +46,19 @@ def lock(monkeypatch: pytest.MonkeyPatch, folder: str) -> None:
     monkeypatch.setattr(Path, "open", open_)
 
 
+def refuse_open(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
+    """Make opening a file called ``name`` fail with "Permission denied", as ``chmod 000`` on
+    the file does for a user who is not root (its folder still lets one see it)."""
+    real_open = Path.open
+
+    def open_(self: Path, *args: object, **kwargs: object) -> object:
+        if self.name == name:
+            raise PermissionError(errno.EACCES, "Permission denied", str(self))
+        return real_open(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Path, "open", open_)
+
+
 def test_a_mission_in_a_folder_the_user_cannot_enter_is_rc_2(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
 ) -> None:
@@ -88,19 +101,64 @@ def test_an_include_that_cannot_be_opened_is_named_at_the_include(
     (tmp_path / "z.yaml").write_text("subtrees: {z: {tree: {wait: 1s}}}\n")
     mission = tmp_path / "m.yaml"
     mission.write_text("mission: m\ninclude: [z.yaml]\ntree: {wait: 1s}\n")
-    real_open = Path.open
-
-    def open_(self: Path, *args: object, **kwargs: object) -> object:
-        if self.name == "z.yaml":
-            raise PermissionError(errno.EACCES, "Permission denied", str(self))
-        return real_open(self, *args, **kwargs)  # type: ignore[arg-type]
-
-    monkeypatch.setattr(Path, "open", open_)
+    refuse_open(monkeypatch, "z.yaml")
     _, problems = compile_mission(mission)
     (problem,) = problems
     assert (problem.line, problem.column) == (2, 11)
     assert problem.file.endswith("m.yaml")
     assert problem.message == "cannot read included file 'z.yaml': Permission denied"
+
+
+#: what every command says of a mission file that is there and cannot be read: named, with
+#: what is wanted, as an include or a plugin file is (it was "cannot read mission file:
+#: Permission denied")
+UNREADABLE = (
+    "m.yaml:1:1: cannot read mission file 'm.yaml': {why}; wanted: a mission file (YAML text) "
+    "this user may read"
+)
+
+
+@pytest.mark.parametrize(
+    "command", [["validate"], ["show"], ["run", "--fast"], ["eval", "--runs", "1"]]
+)
+def test_a_mission_file_that_cannot_be_read_is_named_with_what_is_wanted(
+    command: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """``chmod 000 m.yaml``, as the file's open fails for a user who is not root (the tests
+    run as root, which it does not stop): exit 2 (INVALID, docs/runtime.md), nothing sent."""
+    (tmp_path / "m.yaml").write_text("tree: {wait: 1s}\n")
+    monkeypatch.chdir(tmp_path)
+    refuse_open(monkeypatch, "m.yaml")
+    assert main([command[0], "m.yaml", *command[1:]]) == 2
+    out, err = capsys.readouterr()
+    assert UNREADABLE.format(why="Permission denied") in (out + err).splitlines(), out + err
+    assert "Traceback" not in out + err
+    assert_quoted("docs/runtime.md", "m.yaml:1:1: cannot read mission file", out + err)
+
+
+@pytest.mark.skipif(
+    not hasattr(os, "geteuid") or os.geteuid() == 0, reason="root reads a file chmod 000"
+)
+def test_a_mission_file_chmod_000_is_named_with_what_is_wanted(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """The same, with the file system's own refusal (a user who is not root)."""
+    (tmp_path / "m.yaml").write_text("tree: {wait: 1s}\n")
+    (tmp_path / "m.yaml").chmod(0)
+    monkeypatch.chdir(tmp_path)
+    assert main(["validate", "m.yaml"]) == 2
+    assert UNREADABLE.format(why="Permission denied") in capsys.readouterr().out.splitlines()
+
+
+@pytest.mark.skipif(not Path("/proc/self/mem").is_file(), reason="Linux's /proc/self/mem")
+def test_a_mission_file_the_system_fails_to_read_is_named_with_what_is_wanted(
+    capsys: Capsys,
+) -> None:
+    """A regular file whose read fails for root too (``/proc/self/mem`` at offset 0: an
+    input/output error): the system's words, the file, and what is wanted."""
+    assert main(["validate", "/proc/self/mem"]) == 2
+    said = UNREADABLE.replace("m.yaml", "/proc/self/mem").format(why="Input/output error")
+    assert said in capsys.readouterr().out.splitlines()
 
 
 def test_a_library_reached_through_two_files_is_read_once(tmp_path: Path) -> None:
