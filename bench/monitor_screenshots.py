@@ -94,7 +94,10 @@ def main() -> int:
         page.wait_for_timeout(800)
         page.screenshot(path=str(IMAGES / "monitor-dock-approach.png"))
         approach = next(i.index for i in feed.infos if i.name.startswith("dock_approach"))
-        page.click(f'.node[data-node="{approach}"] .name')
+        # clicked near the name's start: the menu opens where the click was, and from the
+        # middle of the long name it ran past the picture's right edge (its title and its
+        # last button cut off)
+        page.click(f'.node[data-node="{approach}"] .name', position={"x": 12, "y": 8})
         page.wait_for_timeout(200)
         page.screenshot(
             path=str(IMAGES / "monitor-node-menu.png"),

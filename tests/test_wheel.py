@@ -161,3 +161,19 @@ def test_every_link_of_a_shipped_page_leads_to_a_file_of_the_wheel(
             if path not in held and SDIST not in after:
                 lost.append(f"{name}.md: {match[0]}")
     assert not lost, "links of the installed pages to files the wheel lacks:\n" + "\n".join(lost)
+
+
+def test_every_picture_of_the_docs_is_shown_by_a_page() -> None:
+    """``docs/images/monitor-node-menu.png`` was made by ``make monitor-screenshots`` and
+    shipped in the source distribution, and no page showed it: a picture no page shows is
+    checked against nothing (its tree's labels had gone stale). Each is shown by a page of
+    ``docs/`` or README.md, or deleted. Read from the files: no wheel needed."""
+    shown = set()
+    for page in (ROOT / "README.md", *(ROOT / "docs").glob("*.md")):
+        folder = page.parent.relative_to(ROOT).as_posix()
+        for match in LINK.finditer(page.read_text(encoding="utf-8")):
+            if match[1] and not re.match(r"https?://", match[3]):
+                shown.add(posixpath.normpath(posixpath.join(folder, match[3])))
+    pictures = {p.relative_to(ROOT).as_posix() for p in (ROOT / "docs").rglob("*.png")}
+    assert "docs/images/monitor-dock-approach.png" in pictures  # the pictures are found
+    assert not pictures - shown, f"pictures no page shows: {sorted(pictures - shown)}"
