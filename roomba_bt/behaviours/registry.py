@@ -29,6 +29,7 @@ import importlib
 import importlib.util
 import inspect
 import logging
+import os
 import re
 import reprlib
 import sys
@@ -465,7 +466,10 @@ class Registry:
                 if not code_failure(exc):  # a Ctrl-C (not the plugin's KeyboardInterrupt)
                     _cut_short(exc, f"importing plugin {origin}", [path.resolve()])
                     raise
-                failed = _import_failed(exc, [path.resolve()], origin)
+                if isinstance(exc, OSError) and _is_the_file(exc, path):
+                    failed = f"cannot be read: {exc.strerror or exc}; {PLUGIN_FILE_WANTED}"
+                else:
+                    failed = _import_failed(exc, [path.resolve()], origin)
                 return copy, [PluginError(origin, failed, imported=False)]
         before = len(copy._errors)
         copy.register_provider(module, origin)
@@ -731,6 +735,23 @@ def _qualname(cls: object) -> str:
     module = getattr(cls, "__module__", "?")
     qualname = getattr(cls, "__qualname__", repr(cls))
     return qualname if str(module).startswith(_FILE_MODULE) else f"{module}.{qualname}"
+
+
+#: what a plugin file that is there and cannot be read is said to want, as a mission file
+#: says it (it was "failed to import: PermissionError: [Errno 13] ...", Python's words for
+#: what is no failure of the plugin's code)
+PLUGIN_FILE_WANTED = "wanted: a Python file this user may read"
+
+
+def _is_the_file(exc: OSError, path: Path) -> bool:
+    """Whether ``exc`` is the system refusing to read the plugin file itself (not an
+    ``OSError`` its code raised while it ran, such as a calibration file it opened)."""
+    if exc.filename is None:
+        return False
+    try:
+        return Path(os.fsdecode(exc.filename)).resolve() == path.resolve()
+    except (OSError, TypeError, ValueError):
+        return False
 
 
 def _import_failed(exc: BaseException, home: list[Path], origin: str) -> str:

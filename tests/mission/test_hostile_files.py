@@ -5,6 +5,7 @@ wrote, never a traceback."""
 from __future__ import annotations
 
 import errno
+import importlib.machinery
 import os
 import re
 from collections.abc import Callable
@@ -107,6 +108,42 @@ def test_an_include_that_cannot_be_opened_is_named_at_the_include(
     assert (problem.line, problem.column) == (2, 11)
     assert problem.file.endswith("m.yaml")
     assert problem.message == "cannot read included file 'z.yaml': Permission denied"
+
+
+def test_a_plugin_file_that_cannot_be_read_is_named_with_what_is_wanted(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``chmod 000 p.py`` (its folder lets one see it): the import's read fails. It was
+    ``failed to import: PermissionError: [Errno 13] Permission denied: '/.../p.py'``, Python's
+    words for what is no failure of the plugin's code. An ``OSError`` the plugin's own code
+    raises (a file it opens) is still its import's failure, with its line."""
+    (tmp_path / "p.py").write_text("")
+    (tmp_path / "q.py").write_text("\nopen('/nonexistent/calibration.json')\n")
+    mission = tmp_path / "m.yaml"
+    mission.write_text("mission: m\nplugins: [p.py, q.py]\ntree: {wait: 1s}\n")
+    real_get_data = importlib.machinery.SourceFileLoader.get_data
+
+    def get_data(self: importlib.machinery.SourceFileLoader, path: str) -> bytes:
+        if Path(path).name == "p.py":
+            raise PermissionError(errno.EACCES, "Permission denied", path)
+        return real_get_data(self, path)
+
+    monkeypatch.setattr(importlib.machinery.SourceFileLoader, "get_data", get_data)
+    _, problems = compile_mission(mission, permissions=Permissions(plugin_files=True))
+    assert [(p.line, p.column, p.message) for p in problems] == [
+        (
+            2,
+            11,
+            f"plugin {tmp_path / 'p.py'}: cannot be read: Permission denied; wanted: a Python "
+            "file this user may read",
+        ),
+        (
+            2,
+            17,
+            f"plugin {tmp_path / 'q.py'}: failed to import: FileNotFoundError: [Errno 2] No such "
+            f"file or directory: '/nonexistent/calibration.json' (at {tmp_path / 'q.py'}:2)",
+        ),
+    ]
 
 
 #: what every command says of a mission file that is there and cannot be read: named, with
