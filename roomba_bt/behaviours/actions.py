@@ -875,7 +875,7 @@ class Play(Action):
     0.25 s), else on the next frame. A song of at most 45 ms that this run defined and no
     frame showed succeeds once its length and a frame have passed: the stream can miss a
     song that short. FAILURE at once out of Safe and Full, where the robot refuses Play,
-    nothing sent (it said SUCCESS until session 33).
+    nothing sent (in 0.1.0 it said SUCCESS).
 
     Packet 37 alone cannot tell this song from one still playing, which the robot goes on
     with, ignoring the Play: a mission that reads ``song_number`` too has that told apart.
