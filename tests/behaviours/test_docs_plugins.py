@@ -45,18 +45,24 @@ def _section_2_files(folder: Path) -> None:
     (folder / "custom_condition.yaml").write_text(mission, encoding="utf-8")
 
 
-def test_the_stub_robot_example_passes_beside_the_plugin(tmp_path: Path) -> None:
-    """§3's first test, saved where the page says (``plugins/test_near_wall.py``, beside
-    §2's plugin), passes under pytest. The page named no place, and in the mission's folder
-    its ``from near_wall import NearWall`` is a ModuleNotFoundError (session 39's stranger)."""
+def test_the_testing_files_pass_as_the_page_runs_them(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """§3's three files, each saved where its first line says (``plugins/test_near_wall.py``
+    beside §2's plugin, ``plugins/conftest.py``, ``plugins/test_on_the_simulator.py``), pass
+    under ``pytest plugins`` run from the mission's folder, as the page runs them. The page
+    named no place for the first (in the mission's folder its ``from near_wall import
+    NearWall`` is a ModuleNotFoundError) nor for the other two (the simulator's test names
+    the mission by a path relative to the folder pytest runs in)."""
     _section_2_files(tmp_path)
-    [test] = _blocks("## 3. Test it without a robot")[:1]
-    named = re.match(r"# ([\w-]+(?:/[\w-]+)*\.py)\n", test)
-    assert named is not None, "§3's test names no file to save it in"
-    path = tmp_path / named[1]
-    path.write_text(test, encoding="utf-8")
-    done = finished([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(path)])
-    assert done.returncode == 0 and "1 passed" in done.stdout, done.stdout + done.stderr
+    blocks = _blocks("## 3. Test it without a robot")
+    for block in blocks:
+        named = re.match(r"# ([\w-]+(?:/[\w-]+)*\.py)\n", block)
+        assert named is not None, f"a block of §3 names no file to save it in: {block[:60]!r}"
+        (tmp_path / named[1]).write_text(block, encoding="utf-8")
+    monkeypatch.chdir(tmp_path)  # the mission's folder: the child runs there
+    done = finished([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "plugins"])
+    assert done.returncode == 0 and "3 passed" in done.stdout, done.stdout + done.stderr
 
 
 def test_the_testing_examples_run(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
@@ -174,7 +180,7 @@ def test_the_held_for_condition_counts_only_while_it_is_ticked() -> None:
     """The example of a condition's state: low for ``held`` while ticked every tick holds,
     across frames the link lost too; a hold from before a tick it missed (the guard was left)
     counts for nothing."""
-    example = _blocks("## 2. A condition in a file next to the mission")[-1]
+    example = _blocks("#### A condition's state across ticks")[0]
     cls = _run(example, "battery_low_for")["BatteryLowFor"]
     robot = StubRobot()
     node = cls("battery_low_for", {"below": "15%", "held": "3s"})
