@@ -8,7 +8,11 @@ diagnostic ``m.yaml:9:25: ...``, ``roomba-bt: ...``, ``replay: ...``, ``monitor:
 record's ``r.jsonl: ...`` and a line of the run summary, in backquotes or in an output block.
 
 A quote may leave a part out as ``...``: it stands for any text there (``no such folder;
-...``); the rest is compared to the character, the Markdown's line breaks aside."""
+...``); the rest is compared to the character, the Markdown's line breaks aside.
+
+A test names the quotes it holds by how they begin (:func:`begins`); a start that ends ``$``
+is a whole quote, so that ``final mode Passive$`` is not also ``final mode Passive (not in
+the stream: ...)``, a line of another run."""
 
 from __future__ import annotations
 
@@ -77,6 +81,12 @@ YAML_PATH = re.compile(r" \[[\w.\[\]-]+\]$")
 NUMBER = re.compile(r"\d+(?:\.\d+)?")
 
 
+def begins(quote: str, start: str) -> bool:
+    """``quote`` begins ``start``, or is it when ``start`` ends ``$`` (a whole quote: a short
+    line such as ``outcome SUCCESS$`` begins longer ones of other runs)."""
+    return quote == start[:-1] if start.endswith("$") else quote.startswith(start)
+
+
 def pattern(quote: str, numbers: bool = False) -> re.Pattern[str]:
     """The quote as a pattern of the whole line: ``...`` for any text, with ``numbers`` each
     number for any number, the rest as written."""
@@ -92,12 +102,12 @@ def pattern(quote: str, numbers: bool = False) -> re.Pattern[str]:
 def assert_quoted(
     doc: str, start: str, printed: str, numbers: bool = False, names: dict[str, str] | None = None
 ) -> None:
-    """Each quote of ``doc`` that begins ``start`` (one, or the same said again) is one of
-    the lines ``printed`` (a command's stderr), whitespace runs made one space. With
-    ``numbers``, the quote's numbers are an example's (the test makes 4 episodes hang where
-    the page says 3) and stand for any number: its words are compared; ``names``, the
-    test's paths (a ``tmp_path``'s) each replaced by the page's name of it."""
-    quoted = [q for q in quotes(doc) if q.startswith(start)]
+    """Each quote of ``doc`` that begins ``start`` (:func:`begins`: one, or the same said
+    again) is one of the lines ``printed`` (a command's stderr), whitespace runs made one
+    space. With ``numbers``, the quote's numbers are an example's (the test makes 4 episodes
+    hang where the page says 3) and stand for any number: its words are compared; ``names``,
+    the test's paths (a ``tmp_path``'s) each replaced by the page's name of it."""
+    quoted = [q for q in quotes(doc) if begins(q, start)]
     assert quoted, f"{doc} quotes no line that begins {start!r}"
     for name, page_name in (names or {}).items():
         printed = printed.replace(name, page_name)

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt._entry import INTERRUPTED
 from roomba_bt.runtime.summary import ExitCode
@@ -148,3 +149,8 @@ def test_a_signal_as_soon_as_the_command_takes_it_is_exit_130_without_a_tracebac
         assert proc.returncode == ExitCode.INTERRUPTED, err
         assert "Traceback" not in err
         assert err.startswith("roomba-bt: interrupted"), err
+        if signum == signal.SIGINT:  # the pages' line of a signal in the start-up
+            assert_quoted("docs/runtime.md", "roomba-bt: interrupted$", err)
+            assert_quoted("docs/architecture.md", "roomba-bt: interrupted$", err)
+        if signum == signal.SIGQUIT:
+            assert_quoted("docs/runtime.md", "roomba-bt: interrupted by SIGQUIT", err)

@@ -121,6 +121,8 @@ def test_a_closed_stdout_is_no_traceback(tmp_path: Path, args: list[str], code: 
     assert "stdout is closed" in done.stderr or "lost with stdout (closed)" in done.stderr
     if args[0] == "run":
         assert "outcome SUCCESS" in done.stderr
+    else:  # docs/runtime.md's `>&-`
+        assert_quoted("docs/runtime.md", "roomba-bt: stdout is closed", done.stderr)
 
 
 def test_a_closed_stdout_nothing_was_printed_to_is_not_said(tmp_path: Path) -> None:
@@ -177,6 +179,14 @@ def test_a_full_disk_on_stdout_is_one_line_and_the_outcomes_exit_code(tmp_path: 
     assert done.returncode == 0, done.stderr
     assert "Traceback" not in done.stderr
     assert "(No space left on device): outcome SUCCESS" in done.stderr
+    # a command with no summary to keep: docs/runtime.md's line of any other stdout failure
+    with open("/dev/full", "w") as full:
+        done = subprocess.run(
+            [*CLI, "missions"], stdout=full, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
+            text=True, cwd=tmp_path, env=_env(), timeout=120,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert_quoted("docs/runtime.md", "roomba-bt: cannot write to stdout", done.stderr)
 
 
 @pytest.mark.parametrize(
@@ -347,6 +357,7 @@ def test_a_signal_python_wraps_in_a_runtime_error_is_still_exit_130(
     assert proc.returncode == 130, err
     assert err.endswith("roomba-bt: interrupted by SIGTERM\n")
     assert "Traceback" not in err
+    assert_quoted("docs/runtime.md", "roomba-bt: interrupted by SIGTERM$", err)
 
 
 def test_record_to_stdout_is_refused(tmp_path: Path, monkeypatch: Any) -> None:

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main, run_cmd
 from roomba_bt.cli.arguments import parse_timeout
@@ -680,6 +681,9 @@ def test_fast_without_a_timeout_stops_at_its_own_limit_and_says_how_to_change_it
     ], err
     assert "--timeout 30" not in out + err
     assert failure_stage(reason) == "wait"
+    # docs/runtime.md quotes the limit unpatched, 2 h
+    assert_quoted("docs/runtime.md", "roomba-bt: timeout: --fast's", err, names={"30 s": "2 h"})
+    assert_quoted("docs/runtime.md", "roomba-bt: no --timeout was given", err)
     assert main(["run", str(forever), "--fast", "--display", "none", "--timeout", "20s"]) == 1
     out, err = capsys.readouterr()
     assert "(--timeout 20 s of mission time ran out in wait)" in out

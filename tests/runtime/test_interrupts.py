@@ -16,6 +16,7 @@ from pathlib import Path
 
 import py_trees
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.mission import load_mission
@@ -231,6 +232,7 @@ def test_a_ctrl_c_before_the_first_byte_says_nothing_needed_stopping() -> None:
     assert summary.outcome is Outcome.INTERRUPTED
     assert summary.safe_stop == "nothing to stop: the robot was never started"
     assert summary.stop_delivered
+    assert_quoted("docs/runtime.md", "safe stop nothing to stop", str(summary))
     assert "NOT DELIVERED" not in str(summary)
 
 

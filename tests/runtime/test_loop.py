@@ -9,6 +9,7 @@ from typing import Any
 
 import py_trees
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import motor_bits
@@ -331,6 +332,7 @@ def test_a_gap_nobody_read_is_counted_and_said(
     assert summary.unread_gaps == 1 and summary.stalls == 0
     assert summary.longest_unread_s == pytest.approx(2.5, abs=0.03)
     assert "unread       1 gap(s) with no frame read, the longest 2.5" in str(summary)
+    assert_quoted("docs/runtime.md", "unread 1 gap(s)", str(summary), numbers=True)  # 4 s there
     assert "no frame was read for 2.5" in caplog.text
     assert summary.mission_time_s == pytest.approx(4.0, abs=0.05)  # the slots still count
 

@@ -8,6 +8,7 @@ import logging
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, RobotProfile
@@ -58,6 +59,8 @@ def test_a_wait_under_the_clocks_last_bit_at_the_record_s_end_still_moves_it(
         (Faults(reset_at=1.0), CREATE2, SPIN, "lost its link at mission time"),
         # woken by BRC; asleep in Passive, as only there a robot sleeps
         (Faults(sleep_at=1.0), CREATE2, WAIT_IN_PASSIVE, "lost its link at mission time"),
+        # pulled before the start-up's end: no tree's byte to compare
+        (Faults(disconnect_at=0.0), CREATE2, SPIN, "lost its link before its tree's first tick"),
         # the listen at the new rate replayed whole (its reads stamped past their waits
         # too): the same bytes to the end, the stop's own
         (Faults(baud_change_at=1.0), CREATE2, SPIN, "the same 51 bytes as the recorded run"),
@@ -65,7 +68,7 @@ def test_a_wait_under_the_clocks_last_bit_at_the_record_s_end_still_moves_it(
         # the replay's own: no difference at all (it went on querying through the grace)
         (Faults(), ROOMBA500, SPIN, "the tree wrote the same 28 bytes as the recorded run"),
     ],
-    ids=["port gone", "reset", "asleep", "baud change", "wrong profile"],
+    ids=["port gone", "reset", "asleep", "before the first tick", "baud change", "wrong profile"],
 )
 def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and_exits_0(
     tmp_path: Path,
@@ -79,7 +82,9 @@ def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and
     """Each ending of the noisy cable's table. Past the recorded run's last tick it wrote
     what its link's failure had it write (nothing, the port gone; a Query List; a wake),
     which the replay, on a line that cannot fail, does not: that was its "first
-    difference", exit 1, read as "your mission changed"."""
+    difference", exit 1, read as "your mission changed". docs/runtime.md quotes the reset's
+    replay (its port /dev/pts/0, its numbers a longer run's), the one before the first tick
+    and the wrong profile's."""
     link = SimLink(Simulator(load_world("empty-room"), profile, 0, faults))
     record = record_run(tmp_path, link, mission)
     capsys.readouterr()
@@ -88,6 +93,19 @@ def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and
     out = capsys.readouterr().out
     assert verdict in out, out
     assert "first difference" not in out
+    if faults.reset_at is not None:
+        port = {"sim://empty-room": "/dev/pts/0"}
+        assert_quoted("docs/runtime.md", "outcome CONNECTION LOST (the recorded run's", out,
+                      names=port)  # fmt: skip
+        assert_quoted("docs/runtime.md", "safe stop not replayed", out)
+        assert_quoted("docs/runtime.md", "replay: the recorded run lost its link at", out,
+                      numbers=True)  # fmt: skip
+        assert_quoted("docs/runtime.md", "replay: past there the replay", out)
+    if faults.disconnect_at == 0.0:
+        assert_quoted("docs/runtime.md", "replay: the recorded run lost its link before", out,
+                      numbers=True)  # fmt: skip
+    if profile is ROOMBA500:
+        assert_quoted("docs/runtime.md", "replay: the tree wrote the same 28 bytes as", out)
     if "lost its link" not in verdict:
         ended = "wrong profile" if profile is ROOMBA500 else "connection lost"
         assert f"replay: the recorded run ended in {ended}" in out

@@ -17,6 +17,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
@@ -389,6 +390,10 @@ def test_a_stop_at_a_followed_rate_the_robot_does_not_answer_is_unconfirmed(
     assert "unconfirmed: the port followed the robot to 19200 baud" in summary.safe_stop
     assert summary.final_mode_text().startswith("unknown"), summary.final_mode_text()
     assert simulator.mode is not OIMode.PASSIVE, "it never heard the stop"
+    said = str(summary)
+    assert_quoted("docs/runtime.md", "safe stop NOT DELIVERED: ... unconfirmed: the port", said)
+    assert_quoted("docs/reliability.md", "safe stop NOT DELIVERED: ... the stop was", said)
+    assert_quoted("docs/reliability.md", "final mode unknown: last seen in ...", said)
 
 
 def test_a_robot_at_another_rate_from_the_start_is_named_and_left_in_passive(
@@ -557,6 +562,8 @@ def test_a_roomba500_read_by_the_default_profile_ends_the_run_at_the_watchdog_tr
     assert ended_at < DEFAULT_GRACE, ended_at  # the grace was not waited
     assert summary.safe_stop == "sent pause_resume_stream, start", summary.safe_stop
     assert summary.stop_delivered
+    # the stop confirmed by a query, docs/runtime.md's table of silences
+    assert_quoted("docs/runtime.md", "safe stop sent pause_resume_stream, start$", str(summary))
     assert summary.headline.startswith(f"{link.name}: the robot is most likely a Roomba 500")
 
 

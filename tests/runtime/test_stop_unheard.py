@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
@@ -82,6 +83,9 @@ def test_a_run_whose_stop_the_robot_never_heard_is_no_success(tmp_path: Path) ->
     # what the frames after the stop showed: still in Safe, still spinning
     assert "packet 35 still reading Safe, the wheels turning (-" in summary.safe_stop
     assert "final mode   unknown: last seen in Safe, the stop was not delivered" in str(summary)
+    # the tester's relay, docs/runtime.md: its wire cut, "it is now the line above"
+    assert_quoted("docs/runtime.md", "outcome CONNECTION LOST (the safe stop did not reach the "
+                  "robot (the run had ended: success", str(summary))  # fmt: skip
 
 
 class SilentThenCtrlC(SimLink):

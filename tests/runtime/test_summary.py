@@ -9,6 +9,7 @@ from pathlib import Path
 
 import py_trees
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.behaviours.actions import Mode
 from roomba_bt.evaluate.episode import failure_stage
@@ -330,3 +331,5 @@ def test_the_final_mode_of_a_stream_without_packet_35_is_said_as_the_models(
     assert summary.outcome is Outcome.SUCCESS, summary
     assert summary.final_mode_text() == final
     assert f"final mode   {final}" in summary.lines()
+    if packets is not None:
+        assert_quoted("docs/runtime.md", "final mode Passive (not in", "\n".join(summary.lines()))

@@ -18,6 +18,7 @@ from pathlib import Path
 from types import ModuleType
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.runtime import ending
@@ -263,4 +264,5 @@ def test_ctrl_c_while_the_run_waits_for_a_terminate_that_never_returns_is_exit_1
         "safe stop    drive 0, motors off before the tree's stop, then sent drive, motors, "
         "pause_resume_stream, start"
     ) in out, out
+    assert_quoted("docs/runtime.md", "safe stop drive 0, motors off before", out)
     assert outbound(record).endswith(oi.halt().data + oi.motors_off().data + SAFE_END)
