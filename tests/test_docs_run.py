@@ -665,6 +665,37 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
         "tests/cli/test_streams.py::test_a_full_disk_on_stdout_is_one_line_and_the_outcomes_"
         "exit_code"
     ),
+    ("docs/runtime.md", "ticks 447"): (
+        "tests/runtime/test_docs_replays.py::test_a_reproducible_run_s_ticks_line_is_the_count_"
+        "alone"
+    ),
+    ("docs/runtime.md", "replay: the tree wrote the same 43 bytes as"): (
+        "tests/runtime/test_docs_replays.py::test_a_replay_of_the_same_bytes_says_how_many"
+    ),
+    ("docs/runtime.md", "replay: compared up to"): (
+        "tests/runtime/test_docs_replays.py::test_a_replay_cut_with_to_says_how_far_it_compared"
+    ),
+    ("docs/monitor.md", "replay: compared up to"): (
+        "tests/runtime/test_docs_replays.py::test_a_replay_cut_with_to_says_how_far_it_compared"
+    ),
+    ("docs/runtime.md", "replay: recorded with roomba-bt 0.2.0 (this release too)"): (
+        "tests/runtime/test_docs_replays.py::test_a_replay_on_an_edited_library_counts_the_"
+        "files_changed"
+    ),
+    ("docs/runtime.md", "replay: the record ends at"): (
+        "tests/runtime/test_docs_replays.py::test_a_record_cut_short_is_compared_up_to_its_end"
+    ),
+    ("docs/runtime.md", "replay: the tree wrote the same 28 bytes up to"): (
+        "tests/runtime/test_docs_replays.py::test_a_record_cut_short_is_compared_up_to_its_end"
+    ),
+    ("docs/runtime.md", "replay: first difference at mission time 1.005 s"): (
+        "tests/runtime/test_docs_replays.py::test_another_mission_s_first_difference_names_"
+        "both_commands"
+    ),
+    ("docs/runtime.md", "r.jsonl: mission '../missions/x.yaml' is not beside"): (
+        "tests/runtime/test_docs_replays.py::test_a_record_moved_out_of_its_repository_replays_"
+        "the_mission_where_recorded"
+    ),
 }
 
 
