@@ -696,6 +696,65 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
         "tests/runtime/test_docs_replays.py::test_a_record_moved_out_of_its_repository_replays_"
         "the_mission_where_recorded"
     ),
+    ("docs/runtime.md", "outcome SUCCESS$"): (
+        "tests/runtime/test_strict.py::test_a_leaf_driving_on_after_a_fall_succeeds_without_"
+        "strict_but_warns"
+    ),
+    ("docs/runtime.md", "strict FAILED (exit 7)"): (
+        "tests/runtime/test_strict.py::test_with_strict_it_exits_7_naming_each_count_and_its_"
+        "first_instance"
+    ),
+    ("docs/runtime.md", "roomba-bt: --strict: the mode guard refused"): (
+        "tests/runtime/test_strict.py::test_with_strict_it_exits_7_naming_each_count_and_its_"
+        "first_instance"
+    ),
+    ("docs/runtime.md", "roomba-bt: the monitor's web server (aiohttp)"): (
+        "tests/cli/test_broken_installation.py::test_a_half_installed_extra_names_its_extra_"
+        "and_shows_the_traceback_with_v"
+    ),
+    ("docs/runtime.md", "roomba-bt: timeout: ..."): (
+        "tests/runtime/test_cli_run.py::test_fast_without_a_timeout_stops_at_its_own_limit_and_"
+        "says_how_to_change_it"
+    ),
+    ("docs/runtime.md", "falls the robot fell"): (
+        "tests/runtime/test_summary.py::test_falls_of_several_causes_are_said_the_commonest_first"
+    ),
+    ("docs/runtime.md", "charger docked 2 times"): (
+        "tests/runtime/test_summary.py::test_dockings_are_counted_apart_from_the_falls_with_"
+        "the_time_on_the_charger"
+    ),
+    ("docs/runtime.md", "battery 67%"): (
+        "tests/runtime/test_summary.py::test_the_lowest_battery_level_is_said_when_it_was_"
+        "lower_than_the_last"
+    ),
+    ("docs/runtime.md", "roomba-bt: warning: r.jsonl: include"): (
+        "tests/runtime/test_record_checkouts.py::test_a_record_grants_no_folder_outside_the_"
+        "one_that_holds_it_and_its_mission"
+    ),
+    ("docs/runtime.md", "replay: recorded by roomba-bt 0.1.0 or earlier"): (
+        "tests/runtime/test_replay_of_0_1_0_records.py::test_a_0_1_0_record_that_differs_says_"
+        "which_release_made_it"
+    ),
+    ("docs/runtime.md", "replay: the record's mission m.yaml is refused"): (
+        "tests/runtime/test_replay_of_0_1_0_records.py::test_a_0_1_0_record_whose_mission_is_"
+        "refused_says_to_pass_the_fixed_file"
+    ),
+    ("docs/runtime.md", "replay: first difference at mission time 1.020 s"): (
+        "tests/runtime/test_recording.py::test_a_command_the_replayed_tree_writes_before_its_"
+        "frames_is_a_difference"
+    ),
+    ("docs/runtime.md", "replay: roomba-bt:lib/undock.yaml changed"): (
+        "tests/runtime/test_recording.py::test_a_replay_that_differs_names_the_files_changed_"
+        "since_the_record_was_made"
+    ),
+    ("docs/runtime.md", "r.jsonl: mission '/usr/lib/"): (
+        "tests/runtime/test_recording.py::test_a_record_of_a_shipped_mission_made_before_"
+        "replays_it_where_its_path_is_gone"
+    ),
+    ("docs/runtime.md", "replay: recorded with roomba-bt 0.1.0 (this is"): (
+        "tests/runtime/test_recording.py::test_a_replay_says_in_one_line_that_it_ran_on_other_"
+        "files_than_the_record_was_made_with"
+    ),
 }
 
 

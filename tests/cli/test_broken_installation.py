@@ -12,6 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.cli.arguments import plot_file
@@ -132,6 +133,7 @@ def test_a_half_installed_extra_names_its_extra_and_shows_the_traceback_with_v()
         "roomba-bt: the monitor's web server (aiohttp) is installed incompletely: No module "
         f"named 'yarl'; reinstall it: {MONITOR_REINSTALL}\n"
     )
+    assert_quoted("docs/runtime.md", "roomba-bt: the monitor's web server (aiohttp)", done.stderr)
     shown = _without_yarl("-v", *argv)
     assert shown.returncode == 2
     assert "Traceback (most recent call last)" in shown.stderr and "from yarl import" in (

@@ -684,6 +684,7 @@ def test_fast_without_a_timeout_stops_at_its_own_limit_and_says_how_to_change_it
     # docs/runtime.md quotes the limit unpatched, 2 h
     assert_quoted("docs/runtime.md", "roomba-bt: timeout: --fast's", err, names={"30 s": "2 h"})
     assert_quoted("docs/runtime.md", "roomba-bt: no --timeout was given", err)
+    assert_quoted("docs/runtime.md", "roomba-bt: timeout: ...", err)  # what a run says as it ends
     assert main(["run", str(forever), "--fast", "--display", "none", "--timeout", "20s"]) == 1
     out, err = capsys.readouterr()
     assert "(--timeout 20 s of mission time ran out in wait)" in out

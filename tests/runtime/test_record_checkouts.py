@@ -8,6 +8,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
@@ -267,6 +268,8 @@ def test_a_record_grants_no_folder_outside_the_one_that_holds_it_and_its_mission
     assert "include folder '/etc' of the recorded run is outside the folder" in err
     assert "include folder '../../elsewhere' of the recorded run is outside" in err
     assert "common" not in err
+    page = {"records/patrol.jsonl": "r.jsonl", str(repo): "/home/me/repo"}
+    assert_quoted("docs/runtime.md", "roomba-bt: warning: r.jsonl: include", err, names=page)
     # the library moved outside: the record's word does not reach it
     shutil.copy(repo / "missions/common/escapes.yaml", elsewhere / "escapes.yaml")
     patrol = repo / "missions/patrol/patrol.yaml"

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
@@ -600,6 +601,7 @@ def test_a_command_the_replayed_tree_writes_before_its_frames_is_a_difference(
         "expected Drive (137) 89 00 64 00 01, sent Drive (137) 89 00 64 00 01 2.00 s early: "
         "the recorded run read 133 more of the robot's chunks before writing it"
     ) in out, out
+    assert_quoted("docs/runtime.md", "replay: first difference at mission time 1.020 s", out)
     summary, difference, _ = _replayed(path)
     assert difference is not None
     assert summary.frames_lost == 0 and summary.unread_gaps == 0
@@ -896,6 +898,7 @@ def test_a_replay_that_differs_names_the_files_changed_since_the_record_was_made
         f"replay: roomba-bt:lib/undock.yaml changed since this record was made (roomba-bt "
         f"0.1.0 -> {__version__}): a difference may come from it" in out
     )
+    assert_quoted("docs/runtime.md", "replay: roomba-bt:lib/undock.yaml changed", out)
     assert str(mission.resolve()) not in out  # the mission file itself is as it was
     older = tmp_path / "older.jsonl"
     before = {k: v for k, v in header.items() if k not in ("roomba_bt_version", "sources")}
@@ -927,6 +930,8 @@ def test_a_record_of_a_shipped_mission_made_before_replays_it_where_its_path_is_
         f"{moved}: mission {gone!r} is not here (the installation that made the record had "
         "it); replaying the shipped mission 'bump-and-turn' of roomba-bt" in err
     )
+    page = {str(moved): "r.jsonl", "bump-and-turn": "dock"}  # the page's record is of dock
+    assert_quoted("docs/runtime.md", "r.jsonl: mission '/usr/lib/", err, names=page)
     elsewhere = "/home/me/missions/bump-and-turn.yaml"  # not the shipped one's folder
     moved.write_text("".join([json.dumps({**header, "mission": elsewhere}) + "\n", *lines[1:]]))
     assert main(["replay", str(moved)]) == 2
@@ -1203,6 +1208,7 @@ def test_a_replay_says_in_one_line_that_it_ran_on_other_files_than_the_record_wa
     assert main(["replay", str(older)]) == 1
     out = capsys.readouterr().out
     assert f"replay: recorded with roomba-bt 0.1.0 (this is {__version__})\n" in out
+    assert_quoted("docs/runtime.md", "replay: recorded with roomba-bt 0.1.0 (this is", out)
     assert "changed since" not in out
 
 

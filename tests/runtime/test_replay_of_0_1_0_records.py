@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt import __version__
 from roomba_bt.cli import main
@@ -60,6 +61,7 @@ def test_a_0_1_0_record_that_differs_says_which_release_made_it(
     assert main(["replay", str(record)]) == 1
     out = capsys.readouterr().out
     assert f"{SAID}\nreplay: first difference at mission time" in out
+    assert_quoted("docs/runtime.md", "replay: recorded by roomba-bt 0.1.0 or earlier", out)
 
 
 def test_a_0_1_0_record_whose_mission_is_refused_says_to_pass_the_fixed_file(
@@ -76,6 +78,8 @@ def test_a_0_1_0_record_whose_mission_is_refused_says_to_pass_the_fixed_file(
         'copy as said above (the CHANGELOG\'s "Upgrading from 0.1.0") and pass --mission FILE '
         "with the fixed file to replay this record\n"
     )
+    assert_quoted("docs/runtime.md", "replay: the record's mission m.yaml is refused", err,
+                  names={str(mission): "m.yaml"})  # fmt: skip
     fixed = _mission(tmp_path / "fixed.yaml", FIXED)
     assert main(["replay", str(record), "--mission", str(fixed)]) == 0  # byte for byte
     assert "the tree wrote the same" in capsys.readouterr().out

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import py_trees
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.cli import main
@@ -101,6 +102,7 @@ def test_a_leaf_driving_on_after_a_fall_succeeds_without_strict_but_warns(
         f"{FIRST_REFUSAL}): --strict fails such a run (exit 7)\n"
     ) in out
     assert "\nstrict " not in out
+    assert_quoted("docs/runtime.md", "outcome SUCCESS$", out)  # "the tree still succeeds"
 
 
 def test_with_strict_it_exits_7_naming_each_count_and_its_first_instance(
@@ -116,6 +118,8 @@ def test_with_strict_it_exits_7_naming_each_count_and_its_first_instance(
     assert f"strict       FAILED (exit 7): {findings}\n" in out
     assert f"roomba-bt: --strict: {findings}\n" in err
     assert "warning      " not in out  # the strict line says it
+    assert_quoted("docs/runtime.md", "strict FAILED (exit 7)", out)
+    assert_quoted("docs/runtime.md", "roomba-bt: --strict: the mode guard refused", err)
 
 
 def test_a_clean_mission_passes_strict(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -191,6 +191,7 @@ def test_falls_of_several_causes_are_said_the_commonest_first() -> None:
     assert "falls        the robot fell to Passive by itself 21 times (cliff 20, wheel drop 1)" in (
         summary.lines()
     )
+    assert_quoted("docs/runtime.md", "falls the robot fell", "\n".join(summary.lines()))
     summary = RunSummary("m", falls={"charger": 1, "cliff": 2})
     assert summary.falls_text() == "the robot fell to Passive by itself 2 times (cliff)"
     assert "charger      docked once" in summary.lines()
@@ -232,6 +233,9 @@ def test_dockings_are_counted_apart_from_the_falls_with_the_time_on_the_charger(
     assert "falls        the robot fell to Passive by itself once (cliff)" in summary.lines()
     assert RunSummary("m", on_charger_s=0.5).charger_text() == ""  # the dock's last frame
     assert RunSummary("m", on_charger_s=75.0).charger_text() == "on it 1 min 15 s in all"
+    # docs/runtime.md's night: two dockings, 2 h 41 min on the charger
+    page = RunSummary("m", falls={"charger": 2}, on_charger_s=2 * 3600 + 41 * 60)
+    assert_quoted("docs/runtime.md", "charger docked 2 times", "\n".join(page.lines()))
 
 
 def test_the_lowest_battery_level_is_said_when_it_was_lower_than_the_last() -> None:
@@ -242,6 +246,8 @@ def test_the_lowest_battery_level_is_said_when_it_was_lower_than_the_last() -> N
         "46%"
     )
     assert RunSummary("m").battery_text() == "n/a"
+    page = RunSummary("m", battery_percent=67.3, lowest_battery_percent=19.8)  # docs/runtime.md's
+    assert_quoted("docs/runtime.md", "battery 67%", "\n".join(page.lines()))
 
 
 DOCK_AND_REST = """\
