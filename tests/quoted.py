@@ -8,7 +8,9 @@ diagnostic ``m.yaml:9:25: ...``, ``roomba-bt: ...``, ``replay: ...``, ``monitor:
 record's ``r.jsonl: ...`` and a line of the run summary, in backquotes or in an output block.
 
 A quote may leave a part out as ``...``: it stands for any text there (``no such folder;
-...``); the rest is compared to the character, the Markdown's line breaks aside.
+...``); the rest is compared to the character, the Markdown's line breaks aside. A quote of a
+message the page says is logged leaves out the log line's time, level and logger
+(``t=0.015 INFO roomba_bt.monitor: ``), and one of a diagnostic its ``[yaml.path]``.
 
 A test names the quotes it holds by how they begin (:func:`begins`); a start that ends ``$``
 is a whole quote, so that ``final mode Passive$`` is not also ``final mode Passive (not in
@@ -77,6 +79,8 @@ def kind_of(quote: str) -> str:
 
 #: the YAML path that ends a diagnostic's line (``[tree.sequence[2].subtree]``)
 YAML_PATH = re.compile(r" \[[\w.\[\]-]+\]$")
+#: what begins a log line: its mission time on a run's log, its level and its logger
+LOG_PREFIX = re.compile(r"(?:t=\d+\.\d+ )?(?:DEBUG|INFO|WARNING|ERROR|CRITICAL) [\w.]+: ")
 #: a number of a quote that gives an example's numbers (``3 episode(s)``, ``seeds 17, 18``)
 NUMBER = re.compile(r"\d+(?:\.\d+)?")
 
@@ -115,6 +119,9 @@ def assert_quoted(
     # a diagnostic's ``[yaml.path]`` ends its line (``file:line:col: message [yaml.path]``,
     # docs/missions.md): a quote may leave it out, as it leaves out the file's other lines
     lines += [YAML_PATH.sub("", line) for line in lines if YAML_PATH.search(line)]
+    # a log line's time, level and logger begin it (``t=0.015 INFO roomba_bt.monitor: ...``): a
+    # quote of the message the page says is logged leaves them out
+    lines += [LOG_PREFIX.sub("", line) for line in lines if LOG_PREFIX.match(line)]
     for quote in quoted:
         assert any(pattern(quote, numbers).fullmatch(line) for line in lines), (
             f"{doc} quotes\n{quote}\nwhich the command did not print; it printed:\n{printed}"

@@ -755,6 +755,69 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
         "tests/runtime/test_recording.py::test_a_replay_says_in_one_line_that_it_ran_on_other_"
         "files_than_the_record_was_made_with"
     ),
+    ("docs/monitor.md", "monitor: ended by SIGTERM"): (
+        "tests/monitor/test_cli.py::test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c"
+    ),
+    ("docs/monitor.md", "monitor: http://127.0.0.1:8765/"): (
+        "tests/monitor/test_cli.py::test_the_url_is_said_once_the_robot_s_port_is_open_with_"
+        "the_mission_and_robot"
+    ),
+    ("docs/monitor.md", "monitor: http://127.0.0.1:8766/"): (
+        "tests/monitor/test_cli.py::test_a_run_s_label_is_on_its_url_line_page_summary_and_record"
+    ),
+    ("docs/monitor.md", "monitor: http://0.0.0.0:8765/?token=CONTROL"): (
+        "tests/monitor/test_cli.py::test_a_wildcard_address_is_said_by_the_machine_s_lan_"
+        "addresses_too"
+    ),
+    ("docs/monitor.md", "monitor: it listens on every address"): (
+        "tests/monitor/test_cli.py::test_a_wildcard_address_is_said_by_the_machine_s_lan_"
+        "addresses_too"
+    ),
+    ("docs/monitor.md", "monitor: view only: http://0.0.0.0:8765/view/?token=VIEW"): (
+        "tests/monitor/test_cli.py::test_a_wildcard_address_is_said_by_the_machine_s_lan_"
+        "addresses_too"
+    ),
+    ("docs/monitor.md", "monitor: view only: it listens"): (
+        "tests/monitor/test_cli.py::test_a_wildcard_address_is_said_by_the_machine_s_lan_"
+        "addresses_too"
+    ),
+    ("docs/monitor.md", "monitor: http://0.0.0.0:8765/ (dock on"): (
+        "tests/monitor/test_cli.py::test_a_chosen_token_outlives_the_run_and_is_printed_nowhere"
+    ),
+    ("docs/monitor.md", "monitor: view only: http://0.0.0.0:8765/view/ (add"): (
+        "tests/monitor/test_cli.py::test_a_chosen_view_token_opens_the_page_without_controls_"
+        "and_is_printed_nowhere"
+    ),
+    ("docs/monitor.md", "monitor: reading long.jsonl"): (
+        "tests/monitor/test_cli.py::test_a_record_of_a_megabyte_says_at_once_that_it_is_read_"
+        "before_its_page"
+    ),
+    ("docs/monitor.md", "monitor: R.jsonl: its world ../worlds/mine.yaml"): (
+        "tests/monitor/test_cli.py::test_a_recorded_view_draws_the_world_its_record_names_from_"
+        "where_the_robot_started"
+    ),
+    ("docs/runtime.md", "monitor: r.jsonl: its world /etc/shadow"): (
+        "tests/monitor/test_cli.py::test_a_records_world_outside_its_folder_is_not_read_and_"
+        "its_header_texts_are_escaped"
+    ),
+    ("docs/monitor.md", "monitor: R.jsonl: its world living"): (
+        "tests/monitor/test_cli.py::test_a_records_world_of_another_digest_is_said_and_not_drawn"
+    ),
+    ("docs/monitor.md", "monitor: key r (resume) refused"): (
+        "tests/monitor/test_keys.py::test_a_key_that_does_nothing_says_why"
+    ),
+    ("docs/monitor.md", "monitor: key 'x' does nothing"): (
+        "tests/monitor/test_keys.py::test_a_key_that_does_nothing_says_why"
+    ),
+    ("docs/monitor.md", "monitor: keys: off"): (
+        "tests/monitor/test_keys.py::test_a_terminal_that_hangs_up_turns_the_keys_off_once"
+    ),
+    ("docs/runtime.md", "replay: the recorded run was stopped by"): (
+        "tests/monitor/test_keys.py::test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back"
+    ),
+    ("docs/monitor.md", "paused 369.20 s"): (
+        "tests/monitor/test_operator.py::test_a_run_never_paused_has_no_paused_line"
+    ),
 }
 
 

@@ -3,6 +3,7 @@ before anything moves."""
 
 from __future__ import annotations
 
+import hashlib
 import ipaddress
 import json
 import logging
@@ -18,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 from runtime.test_terminate_never_returns import HANG_ON_STOP, MISSION, WAIT_LINE
 
 from roomba_bt.cli import main
@@ -186,6 +188,10 @@ def test_the_url_is_said_once_the_robot_s_port_is_open_with_the_mission_and_robo
         r"monitor: http://127\.0\.0\.1:\d+/ \(shuttle on simulator empty-room\)",
         out.splitlines()[0],
     ), out
+    # the page's run is bump-and-turn on a robot's port: the line's words, its mission and robot
+    robot = {"shuttle on simulator empty-room": "bump-and-turn on /dev/ttyUSB0"}
+    assert_quoted("docs/monitor.md", "monitor: http://127.0.0.1:8765/", out, numbers=True,
+                  names=robot)  # fmt: skip
     assert "mission      shuttle\nrobot        simulator empty-room\nstarted      " in out
 
 
@@ -629,6 +635,9 @@ def test_a_run_s_label_is_on_its_url_line_page_summary_and_record(
     url_line = r"monitor: http://127\.0\.0\.1:\d+/ \(robot 3: shuttle on simulator empty-room\)"
     assert re.match(url_line, out), out
     assert "\nlabel        robot 3\nmission      shuttle\n" in out
+    robot = {"shuttle on simulator empty-room": "dock on /dev/ttyUSB1"}  # the page's robot
+    assert_quoted("docs/monitor.md", "monitor: http://127.0.0.1:8766/", out, numbers=True,
+                  names=robot)  # fmt: skip
     assert runs[0]["label"] == "robot 3"
     loaded = load_record(record)
     assert loaded.header["label"] == "robot 3"
@@ -687,6 +696,7 @@ def test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c(
     out, err = served_record(record)  # up to its URL, then SIGTERM
     assert "monitor: ended by SIGTERM" in out
     assert err == "", err
+    assert_quoted("docs/monitor.md", "monitor: ended by SIGTERM", out)
 
 
 @pytest.mark.parametrize("level", [logging.INFO, logging.DEBUG], ids=["default", "-v"])
@@ -820,6 +830,18 @@ def test_a_wildcard_address_is_said_by_the_machine_s_lan_addresses_too(
     assert view != token
     assert lines[3].startswith("monitor: view only: it listens on every address of this machine")
     assert lines[3].endswith(f" or, by address, http://192.0.2.77:{port}/view/?token={view}")
+    # the page's: its tokens CONTROL and VIEW, its machine vm, its run dock on a robot's port
+    page = {token: "CONTROL", view: "VIEW", socket.gethostname(): "vm",
+            "shuttle on simulator empty-room": "dock on /dev/ttyUSB0"}  # fmt: skip
+    said = "\n".join(lines)
+    assert_quoted("docs/monitor.md", "monitor: http://0.0.0.0:8765/?token=CONTROL", said,
+                  numbers=True, names=page)  # fmt: skip
+    assert_quoted("docs/monitor.md", "monitor: it listens on every address", said, numbers=True,
+                  names=page)  # fmt: skip
+    assert_quoted("docs/monitor.md", "monitor: view only: http://0.0.0.0:8765/view/?token=VIEW",
+                  said, numbers=True, names=page)  # fmt: skip
+    assert_quoted("docs/monitor.md", "monitor: view only: it listens", said, numbers=True,
+                  names=page)  # fmt: skip
 
 
 def test_the_lan_addresses_leave_out_loopback_and_link_local() -> None:
@@ -959,6 +981,9 @@ def test_a_chosen_token_outlives_the_run_and_is_printed_nowhere(
                         r"\(add \?token= and your --monitor-token, or open your bookmark\)",
                         first), first  # fmt: skip
     assert CHOSEN not in out + err + caplog.text + record.read_text()
+    robot = {"shuttle on simulator empty-room": "dock on /dev/ttyUSB0"}  # the page's robot
+    assert_quoted("docs/monitor.md", "monitor: http://0.0.0.0:8765/ (dock on", first,
+                  numbers=True, names=robot)  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -1045,6 +1070,8 @@ def test_a_chosen_view_token_opens_the_page_without_controls_and_is_printed_nowh
     view_line += r"--monitor-view-token, or open its bookmark\)"
     assert re.fullmatch(view_line, lines[2]), lines[2]
     assert VIEW_CHOSEN not in out + err + caplog.text + record.read_text()
+    assert_quoted("docs/monitor.md", "monitor: view only: http://0.0.0.0:8765/view/ (add", out,
+                  numbers=True)  # fmt: skip
 
 
 def test_a_view_token_that_is_the_control_token_is_a_usage_error(
@@ -1103,6 +1130,9 @@ def test_a_record_of_a_megabyte_says_at_once_that_it_is_read_before_its_page(
         "page's timeline is the whole run's, so every tick is replayed first",
         first,
     ), first
+    if name == "run.jsonl":
+        assert_quoted("docs/monitor.md", "monitor: reading long.jsonl", first, numbers=True,
+                      names={str(record): "long.jsonl"})  # fmt: skip
 
 
 def test_a_record_s_page_names_the_robot_and_start_its_header_gives(tmp_path: Path) -> None:
@@ -1216,6 +1246,8 @@ def test_a_recorded_view_draws_the_world_its_record_names_from_where_the_robot_s
     assert problem.endswith("; the page draws the odometry alone")
     _, err = viewed_record(by_path)
     assert f"monitor: {by_path}: its world ../worlds/mine.yaml: " in err, err
+    assert_quoted("docs/monitor.md", "monitor: R.jsonl: its world ../worlds/mine.yaml", err,
+                  names={str(by_path): "R.jsonl"})  # fmt: skip
 
     robot = load_record(shipped)
     del robot.header[SIMULATOR]
@@ -1253,6 +1285,10 @@ def test_a_records_world_outside_its_folder_is_not_read_and_its_header_texts_are
         assert f"its world {world} is outside the folder that holds the record" in problem
         _, err = viewed_record(stranger)
         assert "S3cret" not in err and "is outside the folder" in err, err
+        if world == str(secret):  # docs/runtime.md's, a record naming /etc/shadow
+            page = {str(stranger): "r.jsonl", str(secret): "/etc/shadow"}
+            assert_quoted("docs/runtime.md", "monitor: r.jsonl: its world /etc/shadow", err,
+                          names=page)  # fmt: skip
 
     header[SIMULATOR]["world"] = "W\x1b]0;PWNED\x07\u202e"
     stranger.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
@@ -1352,6 +1388,10 @@ def test_a_records_world_of_another_digest_is_said_and_not_drawn(
     ), problem
     _, err = viewed_record(record)
     assert f"monitor: {record}: its world living (" in err and "not the file the run" in err
+    found = hashlib.sha256((elsewhere / "living.yaml").read_bytes()).hexdigest()
+    page = {str(record): "R.jsonl", str(elsewhere): "/home/me/worlds",
+            found[:12]: "3f2a9c01b7e4", recorded[:12]: "dac2aafaa32f"}  # fmt: skip
+    assert_quoted("docs/monitor.md", "monitor: R.jsonl: its world living", err, names=page)
     _, err = viewed_record(record, "--world", str(elsewhere / "living.yaml"))
     assert "its world" not in err, err
 

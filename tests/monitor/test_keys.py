@@ -17,6 +17,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+
+from roomba_bt.cli import main
 
 pty = pytest.importorskip("pty")
 termios = pytest.importorskip("termios")
@@ -106,7 +109,9 @@ def _acts(record: Path) -> list[str]:
     return [next(iter(n["note"])) for n in notes if n.get("d") == "note"]
 
 
-def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(tmp_path: Path) -> None:
+def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     record = tmp_path / "run.jsonl"
     run = Terminal(
         "run", str(SHUTTLE), "--monitor", "127.0.0.1:0", "--display", "log",
@@ -131,6 +136,11 @@ def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(tmp_path: Pat
     # turned at the stop, is a note of its own
     acts = [act for act in _acts(record) if act != "tick_guard"]
     assert acts == ["pause", "resume", "ended"]  # the run's end note last: q, the stop
+    # its replay says how the recorded run ended (docs/runtime.md)
+    capsys.readouterr()
+    assert main(["replay", str(record), "--display", "none"]) == 0
+    out = capsys.readouterr().out
+    assert_quoted("docs/runtime.md", "replay: the recorded run was stopped by", out, numbers=True)
 
 
 def test_a_key_that_does_nothing_says_why(tmp_path: Path) -> None:
@@ -151,6 +161,8 @@ def test_a_key_that_does_nothing_says_why(tmp_path: Path) -> None:
     run.type("q")
     run.until("outcome      INTERRUPTED (stopped by the operator)")
     assert run.wait() == 130
+    assert_quoted("docs/monitor.md", "monitor: key r (resume) refused", run.screen)
+    assert_quoted("docs/monitor.md", "monitor: key 'x' does nothing", run.screen)
 
 
 def test_a_read_only_page_leaves_the_keys_to_the_operator(tmp_path: Path) -> None:
@@ -213,6 +225,7 @@ def test_a_terminal_that_hangs_up_turns_the_keys_off_once(tmp_path: Path) -> Non
     assert said.count("keys: off (the terminal hung up") == 1
     assert said.count("does nothing") == typed, said.count("does nothing")
     assert "Traceback" not in said and "Exception in thread" not in said
+    assert_quoted("docs/monitor.md", "monitor: keys: off", said)
     base = f"http://127.0.0.1:{port.group(1)}"
     with urllib.request.urlopen(f"{base}/api/state", timeout=10) as answer:
         run_id = json.load(answer)["header"]["run"]["id"]

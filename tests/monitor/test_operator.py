@@ -9,6 +9,7 @@ import re
 from collections.abc import Callable
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.monitor.feed import NodeInfo
 from roomba_bt.monitor.session import find_node
@@ -59,6 +60,8 @@ def test_a_run_never_paused_has_no_paused_line() -> None:
     assert not [line for line in RunSummary("m").lines() if line.startswith("paused")]
     two = RunSummary("m", paused_s=369.2, pauses=2)
     assert "paused       369.20 s in 2 pauses, left out of mission time" in two.lines()
+    stepped = RunSummary("m", paused_s=369.2, pauses=2, steps=1)  # docs/monitor.md's
+    assert_quoted("docs/monitor.md", "paused 369.20 s", "\n".join(stepped.lines()))
 
 
 def test_the_event_log_says_who_asked_for_each_act(until: Callable[..., None]) -> None:
