@@ -818,6 +818,59 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     ("docs/monitor.md", "paused 369.20 s"): (
         "tests/monitor/test_operator.py::test_a_run_never_paused_has_no_paused_line"
     ),
+    ("docs/doctor.md", "roomba-bt: wrong profile: PORT:"): (
+        "tests/cli/test_wrong_profile.py::test_sensors_with_the_default_profile_on_a_roomba500_"
+        "names_the_profile"
+    ),
+    ("docs/robot.md", "roomba-bt: wrong profile: ...$"): (
+        "tests/cli/test_wrong_profile.py::test_sensors_with_the_default_profile_on_a_roomba500_"
+        "names_the_profile"
+    ),
+    ("docs/runtime.md", "roomba-bt: wrong profile: PORT:"): (
+        "tests/cli/test_wrong_profile.py::test_run_with_the_default_profile_on_a_roomba500_"
+        "names_the_profile"
+    ),
+    ("docs/unattended.md", "outcome WRONG PROFILE"): (
+        "tests/cli/test_wrong_profile.py::test_run_with_the_default_profile_on_a_roomba500_"
+        "names_the_profile"
+    ),
+    ("docs/robot.md", "outcome WRONG PROFILE ("): (
+        "tests/cli/test_wrong_profile.py::test_a_wrong_profile_set_elsewhere_is_fixed_where_it_"
+        "was_set"
+    ),
+    ("docs/robot.md", "roomba-bt: wrong profile: /dev/ttyUSB0"): (
+        "tests/cli/test_wrong_profile.py::test_a_wrong_profile_set_elsewhere_is_fixed_where_it_"
+        "was_set"
+    ),
+    ("docs/runtime.md", "final mode unknown: last seen in Passive, the run set"): (
+        "tests/runtime/test_summary.py::test_an_unconfirmed_stop_of_a_robot_the_run_set_"
+        "nothing_going_is_said_calmly"
+    ),
+    ("docs/runtime.md", "replay: 30% of long.jsonl"): (
+        "tests/runtime/test_recording.py::test_the_replay_of_a_long_record_says_how_far_it_has_gone"
+    ),
+    ("docs/monitor.md", "monitor: 10% of long.jsonl"): (
+        "tests/runtime/test_recording.py::test_the_replay_of_a_long_record_says_how_far_it_has_gone"
+    ),
+    ("docs/runtime.md", "outcome INTERRUPTED (Ctrl-C or kill -INT"): (
+        "tests/runtime/test_stuck_tick.py::test_an_interrupt_in_a_stuck_tick_names_the_leaf_"
+        "and_its_line"
+    ),
+    ("docs/runtime.md", "outcome HUNG (--wall-limit"): (
+        "tests/runtime/test_stuck_tick.py::test_the_wall_limit_ends_a_stuck_run_naming_the_"
+        "leaf_after_the_safe_stop"
+    ),
+    ("docs/runtime.md", "ticks 8001 ("): (
+        "tests/runtime/test_tick_watch.py::test_a_tick_the_host_kept_from_running_is_said_so_"
+        "not_blamed_on_its_behaviour"
+    ),
+    ("docs/runtime.md", "tick guard 7 slow tick(s)"): (
+        "tests/runtime/test_tick_guard.py::test_a_tick_that_blocks_with_the_motors_on_gets_"
+        "them_off_and_back_after"
+    ),
+    ("docs/runtime.md", "replay: the end note counts"): (
+        "tests/runtime/test_cli_pty.py::_an_older_records_count_is_said_as_its_miscount"
+    ),
 }
 
 
@@ -950,6 +1003,9 @@ HISTORY: dict[tuple[str, str], tuple[str, ...]] = {
     ("docs/reliability.md", "final mode Passive$"): ("its summary said",),
     ("docs/reliability.md", "stalls 11 (watchdog drive 0)"): ("while the summary said",),
     ("docs/plugins.md", "roomba-bt: interrupted$"): ("where it said",),
+    # the rfc2217 pulses that each tripped the watchdog; a replay of a cut record (session 32)
+    ("docs/runtime.md", "stalls 12"): ("each pulse tripped the watchdog:",),
+    ("docs/runtime.md", "safe stop NOT DELIVERED$"): ("heard nothing past the cut and said",),
 }
 
 

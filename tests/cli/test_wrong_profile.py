@@ -9,6 +9,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 from robot.sim_backend import sim_pty_server  # tests/robot: the simulator on a pty
 
 from roomba_bt.cli import main
@@ -43,6 +44,9 @@ def test_sensors_with_the_default_profile_on_a_roomba500_names_the_profile(
     err = capsys.readouterr().err
     _says_roomba500(err)
     assert f"roomba-bt: wrong profile: {roomba500_port}: " in err, err
+    assert_quoted("docs/doctor.md", "roomba-bt: wrong profile: PORT:", err,
+                  names={roomba500_port: "PORT"})  # fmt: skip
+    assert_quoted("docs/robot.md", "roomba-bt: wrong profile: ...$", err)
     # certain at the first trip: said once, not again after a grace waited for nothing
     assert "waiting up to" not in err and err.count("failed the checksum") == 1, err
 
@@ -66,6 +70,9 @@ def test_run_with_the_default_profile_on_a_roomba500_names_the_profile(
     assert line.startswith(f"roomba-bt: wrong profile: {roomba500_port}: the robot is most ")
     assert "use --profile roomba500" in line and "failed the checksum" not in line
     assert (out + err).count("failed the checksum") == 1
+    assert_quoted("docs/runtime.md", "roomba-bt: wrong profile: PORT:", err,
+                  names={roomba500_port: "PORT"})  # fmt: skip
+    assert_quoted("docs/unattended.md", "outcome WRONG PROFILE", out)
 
 
 @pytest.mark.parametrize("where", ["environment", "project file"])
@@ -93,6 +100,10 @@ def test_a_wrong_profile_set_elsewhere_is_fixed_where_it_was_set(
     out, err = capsys.readouterr()
     assert fix in out and fix in err, (out, err)
     assert "use --profile" not in out + err
+    if where == "environment":  # docs/robot.md's, on the page's port
+        port = {roomba500_port: "/dev/ttyUSB0"}
+        assert_quoted("docs/robot.md", "outcome WRONG PROFILE (", out, numbers=True, names=port)
+        assert_quoted("docs/robot.md", "roomba-bt: wrong profile: /dev/ttyUSB0", err, names=port)
 
 
 def test_the_right_profile_reads_it(

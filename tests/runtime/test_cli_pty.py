@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
@@ -767,3 +768,4 @@ def _an_older_records_count_is_said_as_its_miscount(
         "known miscount of records made before roomba-bt 0.2.0"
     ) in replay.stdout, replay.stdout
     assert "not a difference in behaviour" in replay.stdout
+    assert_quoted("docs/runtime.md", "replay: the end note counts", replay.stdout, numbers=True)

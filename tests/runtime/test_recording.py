@@ -520,6 +520,19 @@ def test_the_replay_of_a_long_record_says_how_far_it_has_gone(
     said = [line for line in capsys.readouterr().err.splitlines() if "% of" in line]
     assert said[0].startswith(f"replay: 10% of {path} (0:02 of 0:20 of the run)"), said
     assert len(said) == 10 and said[-1].startswith(f"replay: 100% of {path}"), said
+    # the pages' long.jsonl, a run of 1 h 10 min: its clock said in hours, as replay and
+    # monitor RECORD say it (one function for both)
+    long = load_record(path)
+    long.last_t = 70 * 60.0
+    page = {str(path): "long.jsonl"}
+    said: dict[str, str] = {}
+    for who, fraction in (("replay", 0.3), ("monitor", 0.1)):
+        progress = run_cmd.replay_progress(who, long)
+        assert progress is not None
+        progress(fraction)
+        said[who] = capsys.readouterr().err
+    assert_quoted("docs/runtime.md", "replay: 30% of long.jsonl", said["replay"], names=page)
+    assert_quoted("docs/monitor.md", "monitor: 10% of long.jsonl", said["monitor"], names=page)
 
 
 def test_a_command_written_late_after_its_frame_replays_at_its_recorded_time(

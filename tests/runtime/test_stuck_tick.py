@@ -11,6 +11,7 @@ import time
 
 import py_trees
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.oi.frames import SLOT_SECONDS
@@ -75,6 +76,13 @@ def _stopped(stack: RunStack, summary: RunSummary) -> None:
     assert simulator.requested_left == simulator.requested_right == 0
 
 
+def _the_pages(reason: str) -> dict[str, str]:
+    """The names docs/runtime.md gives the stuck leaf and its line (``sequence / hang``,
+    ``/home/me/bad.py:30``), for this test's (``root / stuck``, its spinning line)."""
+    at = reason.rsplit(" (at ", 1)[-1].removesuffix(")")
+    return {"root / stuck": "sequence / hang", at: "/home/me/bad.py:30"}
+
+
 @pytest.mark.parametrize(
     ("signum", "said"),
     [(signal.SIGINT, SIGINT_SAID), (signal.SIGTERM, "SIGTERM")],
@@ -96,6 +104,9 @@ def test_an_interrupt_in_a_stuck_tick_names_the_leaf_and_its_line(signum: int, s
     assert summary.reason.startswith(f"{said} in a tick that had run "), summary.reason
     assert stuck.named(summary.reason, " s, in behaviour root / stuck"), summary.reason
     _stopped(stack, summary)
+    if signum == signal.SIGINT:  # docs/runtime.md's, its leaf sequence / hang in bad.py
+        assert_quoted("docs/runtime.md", "outcome INTERRUPTED (Ctrl-C or kill -INT", str(summary),
+                      numbers=True, names=_the_pages(summary.reason))  # fmt: skip
 
 
 def test_an_ordinary_tick_s_interrupt_says_only_the_signal() -> None:
@@ -140,6 +151,9 @@ def test_the_wall_limit_ends_a_stuck_run_naming_the_leaf_after_the_safe_stop(
     assert summary.reason.startswith(said), summary.reason
     assert stuck.named(summary.reason, said), summary.reason
     _stopped(stack, summary)
+    if caller is wording.COMMAND_LINE:  # docs/runtime.md's, its leaf sequence / hang in bad.py
+        assert_quoted("docs/runtime.md", "outcome HUNG (--wall-limit", str(summary),
+                      numbers=True, names=_the_pages(summary.reason))  # fmt: skip
 
 
 def test_a_run_within_its_wall_limit_is_not_touched() -> None:

@@ -339,3 +339,18 @@ def test_the_final_mode_of_a_stream_without_packet_35_is_said_as_the_models(
     assert f"final mode   {final}" in summary.lines()
     if packets is not None:
         assert_quoted("docs/runtime.md", "final mode Passive (not in", "\n".join(summary.lines()))
+
+
+def test_an_unconfirmed_stop_of_a_robot_the_run_set_nothing_going_is_said_calmly() -> None:
+    """A robot seen only in Passive, its wheels never commanded (a Roomba 500 read with the
+    Create 2's profile), its stop unconfirmed: the run may have left nothing moving, so the
+    final mode says so rather than "the stop was not delivered" (docs/runtime.md)."""
+    from roomba_bt.oi.modes import OIMode
+
+    summary = RunSummary(
+        "m", final_mode=OIMode.PASSIVE, stop_delivered=False, set_nothing_going=True
+    )
+    assert_quoted("docs/runtime.md", "final mode unknown: last seen in Passive, the run set",
+                  "\n".join(summary.lines()))  # fmt: skip
+    summary.set_nothing_going = False
+    assert "the run set nothing going" not in "\n".join(summary.lines())

@@ -13,6 +13,7 @@ import types
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
@@ -710,6 +711,13 @@ def test_a_tick_that_blocks_with_the_motors_on_gets_them_off_and_back_after(
     assert after[:2] == [FORWARD, MOTORS_ON], after  # the tree's commands back, wheels first
     notes = [n for _, n in load_record(record_path).notes if "tick_guard" in n]
     assert [n.get("motors") for n in notes] == [True]
+    # docs/runtime.md's line, its leaf slow in /home/me/boom.py
+    page = {
+        "stuck (Stuck.update": "slow (Slow.update",
+        str(plugin_dir / "stuck.py"): "/home/me/boom.py",
+    }
+    assert_quoted("docs/runtime.md", "tick guard 7 slow tick(s)", str(run.summary), numbers=True,
+                  names=page)  # fmt: skip
     (plugin_dir / "stuck.py").write_text(_blocking_for(MOTORS_PLUGIN, "0.0"))
     mission = load_mission(plugin_dir / "mission.yaml", permissions=allowed)
     record = load_record(record_path)

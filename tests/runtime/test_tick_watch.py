@@ -21,6 +21,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
@@ -187,6 +188,7 @@ def test_a_tick_the_host_kept_from_running_is_said_so_not_blamed_on_its_behaviou
     assert watch.host_kept_it() == said
     assert f"slowest 125.00 ms: the host was busy ({said}))" in str(watch.summary)
     assert "wall_follow" not in str(watch.summary)
+    assert_quoted("docs/runtime.md", "ticks 8001 (", str(watch.summary), numbers=True)
 
 
 def test_a_wait_counted_from_before_the_window_never_says_more_than_its_time() -> None:
