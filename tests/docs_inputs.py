@@ -15,6 +15,8 @@ turns 9000 deg, test_list_parameters.py's waypoints do not."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from mission.team_repo import ESCAPES, SAFE_DRIVE, TO_KITCHEN  # docs/ci.md's repository
 from mission.test_subtree_uses import NUDGE as SUBTREE_NUDGE  # its nudge, not yet used
 
@@ -245,3 +247,65 @@ SIMULATOR_MD: list[tuple[str, str, int, Files, str]] = [
     ("edge.yaml:7:10: warning:", "roomba-bt validate edge.yaml", 0, (("edge.yaml", EDGE),), "out"),
     ("w.yaml:4:3: obstacles:", "roomba-bt validate w.yaml", 2, (("w.yaml", CROWDED),), "out"),
 ]  # fmt: skip
+
+#: docs/plugins.md's key parameters ("Key parameters and their types"): the page's own
+#: ``dirt_seen`` (its python block, written as the lab's plugin file) given a key declared
+#: ``str``, and a ``count_into`` (a key parameter that left ``from_blackboard`` at its
+#: default) given ``@pointer``; each in a lab.yaml whose value is at the quoted line:column
+PLUGINS_PAGE = Path(__file__).resolve().parents[1] / "docs" / "plugins.md"
+KEY_PARAMETERS = PLUGINS_PAGE.read_text(encoding="utf-8").split(
+    "\n### Key parameters and their types\n", 1
+)[1]
+DIRT_SEEN = KEY_PARAMETERS.split("```python\n", 1)[1].split("```", 1)[0]
+LAB_DIRT = """\
+mission: lab
+description: the lab's dirt round
+plugins: [dirt.py]
+blackboard:
+  dirt_level: {type: str, initial: none}
+tree:
+  sequence:
+    - mode: safe
+    - wait: 1s
+    - wait: 1s
+    - wait: 1s
+    - wait: 1s
+    - wait: 1s
+    - fallback:
+      - dirt_seen: {level: 2, key: dirt_level}
+      - wait: 1s
+"""
+COUNTING = '''\
+from roomba_bt.behaviours import INT, STR, Condition, Param, declare, write_key
+
+
+@declare("count_into", kind="condition", params=(Param("key", STR, doc="an int key"),),
+         writes_keys={"key": INT})
+class CountInto(Condition):
+    """Writes 1 to the key its parameter names."""
+
+    def check(self, snapshot):
+        write_key(str(self.value("key")), 1, self.name)
+        return True
+'''
+LAB_COUNT = """\
+mission: lab
+plugins: [counting.py]
+blackboard:
+  count: {type: int, initial: 0}
+  pointer: {type: str, initial: count}
+tree:
+  sequence:
+    - count_into: {key: "@pointer"}
+"""
+PLUGINS_MD: list[tuple[str, Files]] = [
+    ("lab.yaml:15:36: dirt_seen.key", (("dirt.py", DIRT_SEEN), ("lab.yaml", LAB_DIRT))),
+    ("lab.yaml:8:25: count_into.key", (("counting.py", COUNTING), ("lab.yaml", LAB_COUNT))),
+]
+
+#: docs/monitor.md's reload of a watched mission whose plugin file no longer imports: the
+#: same compile as ``validate``'s, refused at the line that lists the plugin
+BROKEN_PLUGIN: Files = (
+    ("main.yaml", "mission: main\nplugins: [broken.py]\ntree:\n  wait: 1s\n"),
+    ("broken.py", "def oops(:\n    pass\n"),
+)

@@ -460,6 +460,9 @@ class Quoted:
     #: where the command prints the line: stderr (a command's message), or stdout
     #: (``validate``'s diagnostics)
     stream: str = "err"
+    #: the page's name of the folder the command ran in (``/home/me/lab``), where the line
+    #: names it
+    workdir_as: str | None = None
 
 
 #: Every quote of a ``roomba-bt CMD: ...`` line whose command is cheap to run: each is run
@@ -520,6 +523,11 @@ QUOTED = [
       for start, command, code, files, stream in docs_inputs.SIMULATOR_MD),
     *(Quoted("docs/missions.md", start, f"roomba-bt validate {argv}", code, files=files,
              stream="out") for start, argv, code, files in docs_inputs.MISSIONS_MD),
+    *(Quoted("docs/plugins.md", start, "roomba-bt validate lab.yaml --allow-plugin-files", 2,
+             files=files, stream="out", workdir_as="/home/me/lab")
+      for start, files in docs_inputs.PLUGINS_MD),
+    Quoted("docs/monitor.md", "main.yaml:2:11: plugin", "roomba-bt validate main.yaml "
+           "--allow-plugin-files", 2, files=docs_inputs.BROKEN_PLUGIN, stream="out"),
 ]  # fmt: skip
 
 #: The quotes whose command is a test of its own (a hung episode, a lost Dask worker, a
@@ -871,6 +879,77 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     ("docs/runtime.md", "replay: the end note counts"): (
         "tests/runtime/test_cli_pty.py::_an_older_records_count_is_said_as_its_miscount"
     ),
+    ("docs/plugins.md", "replay: plugin roomba-bt-dirt 0.1.0's code"): (
+        "tests/runtime/test_recording.py::test_a_record_names_its_plugins_and_a_replay_that_"
+        "differs_names_the_one_changed"
+    ),
+    ("docs/runtime.md", "replay: plugin roomba-bt-dirt changed"): (
+        "tests/runtime/test_recording.py::test_a_record_names_its_plugins_and_a_replay_that_"
+        "differs_names_the_one_changed"
+    ),
+    ("docs/plugins.md", "roomba-bt: this record was made with plugin"): (
+        "tests/runtime/test_recording.py::test_a_replay_whose_recorded_plugin_is_not_installed_"
+        "says_so_first"
+    ),
+    ("docs/plugins.md", "replay: the record's mission lab.yaml"): (
+        "tests/runtime/test_recording.py::test_a_replay_whose_recorded_plugin_is_not_installed_"
+        "says_so_first"
+    ),
+    ("docs/robot.md", "safe stop sent drive, motors, pause_resume_stream, start ("): (
+        "tests/runtime/test_cli_pty.py::test_a_bridge_that_drops_the_run_gets_the_stop_through_"
+        "a_new_connection"
+    ),
+    ("docs/doctor.md", "outcome NO CONNECTION"): (
+        "tests/runtime/test_cli_pty.py::test_no_robot_at_any_rate_has_its_summary_and_names_"
+        "its_port"
+    ),
+    ("docs/doctor.md", "safe stop nothing of the mission sent"): (
+        "tests/runtime/test_cli_pty.py::test_no_robot_at_any_rate_has_its_summary_and_names_"
+        "its_port"
+    ),
+    ("docs/runtime.md", "roomba-bt: internal error: RuntimeError"): (
+        "tests/cli/test_internal_errors.py::test_a_bug_in_the_runner_after_the_safe_stop_"
+        "closes_the_port_and_exits_70"
+    ),
+    ("docs/unattended.md", "roomba-bt: connection lost: ..."): (
+        "tests/runtime/test_cli_run.py::test_a_long_lost_link_line_is_said_a_clause_a_line_for_"
+        "the_journal"
+    ),
+    ("docs/unattended.md", "roomba-bt: the watchdog sent drive 0"): (
+        "tests/runtime/test_cli_run.py::test_a_long_lost_link_line_is_said_a_clause_a_line_for_"
+        "the_journal"
+    ),
+    ("docs/robot.md", "safe stop sent ... (the robot had moved to 300"): (
+        "tests/runtime/test_stop_at_another_rate.py::test_a_robot_a_lost_byte_put_on_300_baud_"
+        "is_stopped_there_and_put_back"
+    ),
+    ("docs/reliability.md", "safe stop sent ... (not taken at first"): (
+        "tests/runtime/test_stop_swallowed.py::test_the_record_of_a_stop_written_again_replays_"
+        "byte_for_byte"
+    ),
+    ("docs/reliability.md", "unheard the robot did not do"): (
+        "tests/runtime/test_unheard_commands.py::test_a_drive_whose_byte_was_lost_is_sent_"
+        "again_and_the_robot_drives"
+    ),
+    ("docs/simulator.md", "falls the robot fell"): (
+        "tests/runtime/test_passive_after_a_fall.py::test_the_wall_charger_plugged_in_mid_"
+        "drive_is_followed_and_named"
+    ),
+    ("docs/evaluation.md", "falls the robot fell to Passive by itself 5 times"): (
+        "tests/evaluate/test_falls.py::test_each_episode_carries_its_falls_and_the_report_sums_them"
+    ),
+    ("docs/evaluation.md", "falls the robot fell to Passive by itself 3 times"): (
+        "tests/evaluate/test_falls.py::test_the_charger_s_falls_are_dockings_said_apart_from_"
+        "the_hazards"
+    ),
+    ("docs/evaluation.md", "charger docked 10 times in 10 of 10"): (
+        "tests/evaluate/test_falls.py::test_the_charger_s_falls_are_dockings_said_apart_from_"
+        "the_hazards"
+    ),
+    ("docs/monitor.md", "safe stop replayed drive"): (
+        "tests/monitor/test_session.py::test_a_replayed_pause_says_its_safe_stop_was_replayed_"
+        "not_sent"
+    ),
 }
 
 
@@ -898,7 +977,8 @@ def test_each_quoted_line_is_what_the_command_prints(
     capsys.readouterr()
     assert main(shlex.split(quoted.command)[1:]) == quoted.code, capsys.readouterr()
     out, err = capsys.readouterr()
-    assert_quoted(quoted.doc, quoted.start, err if quoted.stream == "err" else out)
+    names = {str(workdir): quoted.workdir_as} if quoted.workdir_as else None
+    assert_quoted(quoted.doc, quoted.start, err if quoted.stream == "err" else out, names=names)
 
 
 def _listed(doc: str, quote: str, listed: set[tuple[str, str]]) -> bool:
@@ -1006,6 +1086,8 @@ HISTORY: dict[tuple[str, str], tuple[str, ...]] = {
     # the rfc2217 pulses that each tripped the watchdog; a replay of a cut record (session 32)
     ("docs/runtime.md", "stalls 12"): ("each pulse tripped the watchdog:",),
     ("docs/runtime.md", "safe stop NOT DELIVERED$"): ("heard nothing past the cut and said",),
+    # a plugin's import error, said before as a warning
+    ("docs/plugins.md", "roomba-bt: warning:$"): ("and said them as",),
 }
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.robot.connection import Connection
@@ -59,6 +60,8 @@ def test_a_bug_in_the_runner_after_the_safe_stop_closes_the_port_and_exits_70(
     assert "the robot was stopped (the safe stop was delivered) and its port closed" in err
     assert "roomba-bt: internal error: RuntimeError: a bug put in by the test (at " in err
     assert ("Traceback (most recent call last)" in err) is verbose
+    if not verbose:
+        assert_quoted("docs/runtime.md", "roomba-bt: internal error: RuntimeError", err)
     assert ("with the traceback (run with -v)" in err) is not verbose
     assert '"ended": ' in record.read_text()  # the record's end note
 

@@ -11,6 +11,7 @@ import pickle
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 from runtime.simrun import LEDGE, TWICE_OVER_THE_EDGE  # tests/runtime: the room with a drop
 
 from roomba_bt.cli import main
@@ -76,6 +77,8 @@ def test_each_episode_carries_its_falls_and_the_report_sums_them(
     ) in summary.lines()
     assert summary.to_dict()["falls"] == {"cliff": len(fell)}
     assert summary.to_dict()["episodes_with_falls"] == len(fell)
+    assert_quoted("docs/evaluation.md", "falls the robot fell to Passive by itself 5 times",
+                  "\n".join(summary.lines()), numbers=True)  # fmt: skip
 
 
 def test_an_episode_s_falls_are_the_ones_its_run_summary_says(
@@ -137,6 +140,10 @@ def test_the_charger_s_falls_are_dockings_said_apart_from_the_hazards() -> None:
         "charger      docked 10 times in 10 of 10 episodes (the robot drops to Passive by itself "
         "on the charger: how docking in Safe ends, not a hazard)"
     ) in lines
+    assert_quoted(
+        "docs/evaluation.md", "falls the robot fell to Passive by itself 3 times", str(summary)
+    )
+    assert_quoted("docs/evaluation.md", "charger docked 10 times in 10 of 10", str(summary))
     said = summary.to_dict()
     assert (said["hazard_falls"], said["episodes_with_hazard_falls"]) == ({"cliff": 3}, 3)
     assert (said["charger_arrivals"], said["episodes_with_charger_arrivals"]) == (10, 10)

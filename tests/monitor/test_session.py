@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 from runtime.simrun import (  # tests/runtime: a room with a drop, a recorded stall
     LEDGE,
     BusyAfterTheFall,
@@ -1046,6 +1047,8 @@ def test_a_replayed_pause_says_its_safe_stop_was_replayed_not_sent(
     resume = next(t for t in texts if t.startswith("resume"))
     assert "safe stop sent" not in pause and "safe stop replayed drive" in pause, pause
     assert "sent to no robot" in pause and "sent to no robot" in resume, resume
+    # docs/monitor.md quotes the event's words after its act ("pause (...): ")
+    assert_quoted("docs/monitor.md", "safe stop replayed drive", pause.split("): ", 1)[1])
 
 
 @pytest.mark.parametrize("keep_awake", [False, None])

@@ -454,6 +454,9 @@ def test_a_bridge_that_drops_the_run_gets_the_stop_through_a_new_connection(
     ), out
     assert "final mode   Passive" in out
     assert proxy.clients == 2  # the run's connection, then the stop's
+    if "silent" in came_back:  # docs/robot.md's, its seconds the page's example's
+        assert_quoted("docs/robot.md", "safe stop sent drive, motors, pause_resume_stream, start (",
+                      out, numbers=True)  # fmt: skip
     _, logged = sim.stop(signal.SIGINT)
     assert "turned a second client away" not in logged  # the same robot took the new one
     assert logged.count("mode: Off->Passive") == 1, logged  # ... not started again
@@ -518,6 +521,8 @@ def test_no_robot_at_any_rate_has_its_summary_and_names_its_port(
     assert "outcome      NO CONNECTION (" in result.stdout
     assert "--baud auto: no answer at any OI rate" in result.stdout
     assert "safe stop    nothing of the mission sent, only the probe's" in result.stdout
+    assert_quoted("docs/doctor.md", "outcome NO CONNECTION", result.stdout)
+    assert_quoted("docs/doctor.md", "safe stop nothing of the mission sent", result.stdout)
     assert f"run roomba-bt doctor --port {silent_port} for each step" in result.stderr
     assert "URL" not in result.stderr
     assert "(the last 2 after the wake: pulsed BRC by a 1 s hang-up (" in result.stderr

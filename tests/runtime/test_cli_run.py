@@ -865,6 +865,10 @@ def test_a_long_lost_link_line_is_said_a_clause_a_line_for_the_journal() -> None
     )
     assert "; ".join(line.strip() for line in lines) == said
     assert run_cmd._journal_lines("connection lost: a; b") == ["connection lost: a; b"]
+    # as the run prints them on stderr, each after "roomba-bt: " (docs/unattended.md's journal)
+    journal = "\n".join(f"roomba-bt: {line}" for line in lines)
+    assert_quoted("docs/unattended.md", "roomba-bt: connection lost: ...", journal)
+    assert_quoted("docs/unattended.md", "roomba-bt: the watchdog sent drive 0", journal)
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="a file size limit (RLIMIT_FSIZE)")

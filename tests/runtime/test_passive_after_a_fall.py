@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import motor_bits
@@ -215,3 +216,4 @@ tree:
     assert "the robot fell to Passive by itself once (internal charger)" in "\n".join(
         summary.lines()
     )
+    assert_quoted("docs/simulator.md", "falls the robot fell", "\n".join(summary.lines()))

@@ -1114,12 +1114,18 @@ def test_a_record_names_its_plugins_and_a_replay_that_differs_names_the_one_chan
         "replay: plugin bt-far-s29 1.0's code changed since this record was made (the same "
         "version: an editable install, or a rebuild): a difference may come from it" in out
     )
+    dirt = {"bt-far-s29": "roomba-bt-dirt"}  # the pages' plugin, their versions
+    assert_quoted("docs/plugins.md", "replay: plugin roomba-bt-dirt 0.1.0's code", out,
+                  numbers=True, names=dirt)  # fmt: skip
     _plugin(monkeypatch, site, "2.0", far=False)  # upgraded
     assert main(["replay", str(record)]) == 1
+    out = capsys.readouterr().out
     assert (
         "replay: plugin bt-far-s29 changed since this record was made (1.0 -> 2.0): a "
-        "difference may come from it" in capsys.readouterr().out
+        "difference may come from it" in out
     )
+    assert_quoted("docs/runtime.md", "replay: plugin roomba-bt-dirt changed", out, numbers=True,
+                  names=dirt)  # fmt: skip
     lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
     header = json.loads(lines[0])
     bad = tmp_path / "bad.jsonl"
@@ -1153,7 +1159,8 @@ def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
     capsys.readouterr()
     _plugin(monkeypatch, site, None)  # pip uninstall bt-far-s29
     assert main([command, str(record)]) == 2
-    first, second, *_, last = capsys.readouterr().err.splitlines()
+    err = capsys.readouterr().err
+    first, second, *_, last = err.splitlines()
     assert first == (
         "roomba-bt: this record was made with plugin bt-far-s29 1.0, which is not "
         "installed (pip install bt-far-s29==1.0)"
@@ -1168,6 +1175,10 @@ def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
             "not installed here as the record's run had it: install it as said above and "
             "replay again (the mission needs no fix)"
         ), last
+        lab = {"bt-far-s29": "roomba-bt-lab", str(mission): "lab.yaml"}  # docs/plugins.md's
+        assert_quoted("docs/plugins.md", "roomba-bt: this record was made with plugin", err,
+                      numbers=True, names=lab)  # fmt: skip
+        assert_quoted("docs/plugins.md", "replay: the record's mission lab.yaml", err, names=lab)
     header = load_record(record).header
     _plugin(monkeypatch, site, "2.0", far=True)  # another version: said by its version
     [other] = absent_plugins(header)

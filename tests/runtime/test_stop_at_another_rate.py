@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.evaluate import episode
@@ -83,6 +84,7 @@ def test_a_robot_a_lost_byte_put_on_300_baud_is_stopped_there_and_put_back(
     assert "the robot had moved to 300 baud" in summary.safe_stop, summary.safe_stop
     assert "stopped there" in summary.safe_stop
     assert "sent Baud back to 115200, it answered in Passive at 115200" in summary.safe_stop
+    assert_quoted("docs/robot.md", "safe stop sent ... (the robot had moved to 300", str(summary))
 
 
 class LosesTheBaudBackToo(LosesTheOpcodeOf):

@@ -13,6 +13,7 @@ import logging
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
@@ -126,6 +127,7 @@ def test_the_record_of_a_stop_written_again_replays_byte_for_byte(
     assert main(["replay", str(record)]) == 0
     out = capsys.readouterr().out
     assert "sent 512 zeros and the stop again, heard at write 2" in out, out
+    assert_quoted("docs/reliability.md", "safe stop sent ... (not taken at first", out)
     assert "replay: the tree wrote the same 564 bytes as the recorded run" in out, out
 
 

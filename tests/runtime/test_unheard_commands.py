@@ -8,6 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as C
@@ -83,6 +84,7 @@ def test_a_drive_whose_byte_was_lost_is_sent_again_and_the_robot_drives(
     assert "the wheels stood still for a second under Drive (137) velocity 200" in unheard
     assert "bytes from the computer to the robot were lost once" in unheard
     assert "check the cable" in unheard
+    assert_quoted("docs/reliability.md", "unheard the robot did not do", unheard, numbers=True)
 
 
 def test_a_stop_whose_byte_was_lost_is_sent_again_and_the_robot_stops(
