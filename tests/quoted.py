@@ -42,6 +42,20 @@ MESSAGE_KINDS = {
     "record": re.compile(r"[\w./-]+\.jsonl: \S"),
     "summary": re.compile(rf"(?:{'|'.join(SUMMARY_LABELS)}) \S"),
 }
+#: eval's report labels (cli/eval_report.py, evaluate/stats.py) and the run summary's
+#: ``profile``, each a line's first word(s)
+REPORT_LABELS = (
+    "variant", "success", "time", "bumps", "docked", "trapped", "simulated", "A/B", "paired",
+    "engine", "coverage", "key", "interrupted", "profile",
+)  # fmt: skip
+#: the kinds of line found only in an output block, where a page shows what a command
+#: printed: a command's own line (``roomba-bt eval: ...``; in backquotes :data:`QUOTE` finds
+#: it) and a line of eval's report (inline, a page names its labels: ``time B - A``). A block
+#: that starts ``$ `` (a transcript, docs/doctor.md's) is compared whole by its own test.
+SHOWN_KINDS = {
+    "command": re.compile(r"roomba-bt [\w-]+: \S"),
+    "report": re.compile(rf"(?:{'|'.join(map(re.escape, REPORT_LABELS))}) \S"),
+}
 #: a fenced block: its language, its text
 FENCED = re.compile(r"^```(\w*)\n(.*?)^```", re.M | re.S)
 #: the fenced blocks whose lines are output a page shows (a shell block's are commands)
@@ -52,37 +66,47 @@ def quotes(doc: str) -> list[str]:
     """Every quote of the page ``doc`` (a path from the repository's root) of a line a
     command prints, in order, its line breaks made spaces: a ``roomba-bt CMD: ...`` in
     backquotes, and a line of :data:`MESSAGE_KINDS` in backquotes or as a line of an output
-    block (its runs of spaces made one, as the summary's columns)."""
+    block (its runs of spaces made one, as the summary's columns), and one of
+    :data:`SHOWN_KINDS` in an output block."""
     raw = (ROOT / doc).read_text(encoding="utf-8")
     shown: list[str] = []
+    reports: list[str] = []
 
     def fenced(block: re.Match[str]) -> str:
         if block[1] in OUTPUT_LANGS:
-            shown.extend(" ".join(line.split()) for line in block[2].splitlines())
+            lines = [" ".join(line.split()) for line in block[2].splitlines()]
+            shown.extend(lines)
+            if not block[2].startswith("$ "):
+                reports.extend(line for line in lines if _kind(line, MESSAGE_KINDS) is None)
         return "\n"
 
     prose = " ".join(FENCED.sub(fenced, raw).split())
     found = QUOTE.findall(" ".join(raw.split()))
     inline = re.findall(r"`([^`]*)`", prose)  # an empty `` pairs its own two
-    return found + [
-        quote
-        for quote in (*inline, *shown)
-        if any(kind.match(quote) for kind in MESSAGE_KINDS.values())
-    ]
+    return (
+        found
+        + [quote for quote in (*inline, *shown) if _kind(quote, MESSAGE_KINDS) is not None]
+        + [line for line in reports if _kind(line, SHOWN_KINDS) is not None]
+    )
+
+
+def _kind(line: str, kinds: dict[str, re.Pattern[str]]) -> str | None:
+    return next((name for name, kind in kinds.items() if kind.match(line)), None)
 
 
 def kind_of(quote: str) -> str:
-    """The kind of a quote :func:`quotes` found: a name of :data:`MESSAGE_KINDS`, else
-    ``command`` (``roomba-bt CMD: ...``)."""
-    return next((name for name, kind in MESSAGE_KINDS.items() if kind.match(quote)), "command")
+    """The kind of a quote :func:`quotes` found: a name of :data:`MESSAGE_KINDS` or
+    :data:`SHOWN_KINDS`, else ``command`` (``roomba-bt CMD: ...``)."""
+    return _kind(quote, MESSAGE_KINDS) or _kind(quote, SHOWN_KINDS) or "command"
 
 
 #: the YAML path that ends a diagnostic's line (``[tree.sequence[2].subtree]``)
 YAML_PATH = re.compile(r" \[[\w.\[\]-]+\]$")
 #: what begins a log line: its mission time on a run's log, its level and its logger
 LOG_PREFIX = re.compile(r"(?:t=\d+\.\d+ )?(?:DEBUG|INFO|WARNING|ERROR|CRITICAL) [\w.]+: ")
-#: a number of a quote that gives an example's numbers (``3 episode(s)``, ``seeds 17, 18``)
-NUMBER = re.compile(r"\d+(?:\.\d+)?")
+#: a number of a quote that gives an example's numbers (``3 episode(s)``, ``seeds 17, 18``),
+#: its sign with it (an interval's ``-12.6..+8.5 s``)
+NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?")
 
 
 def begins(quote: str, start: str) -> bool:

@@ -950,6 +950,40 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
         "tests/monitor/test_session.py::test_a_replayed_pause_says_its_safe_stop_was_replayed_"
         "not_sent"
     ),
+    ("docs/evaluation.md", "variant"): (
+        "tests/evaluate/test_docs_reports.py::test_each_variant_s_lines_are_the_reports"
+    ),
+    ("docs/evaluation.md", "success"): (
+        "tests/evaluate/test_docs_reports.py::test_each_variant_s_lines_are_the_reports"
+    ),
+    ("docs/evaluation.md", "time"): (
+        "tests/evaluate/test_docs_reports.py::test_each_variant_s_lines_are_the_reports"
+    ),
+    ("docs/evaluation.md", "trapped"): (
+        "tests/evaluate/test_docs_reports.py::test_each_variant_s_lines_are_the_reports"
+    ),
+    ("docs/evaluation.md", "A/B"): (
+        "tests/evaluate/test_docs_reports.py::test_the_a_b_lines_are_the_reports"
+    ),
+    ("docs/evaluation.md", "paired"): (
+        "tests/evaluate/test_docs_reports.py::test_the_a_b_lines_are_the_reports"
+    ),
+    ("docs/robot.md", "roomba-bt run: --profile auto:"): (
+        "tests/cli/test_profile_auto.py::test_run_profile_auto_identifies_the_robot_and_the_"
+        "summary_says_how"
+    ),
+    ("docs/robot.md", "profile roomba600"): (
+        "tests/cli/test_profile_auto.py::test_run_profile_auto_identifies_the_robot_and_the_"
+        "summary_says_how"
+    ),
+    ("docs/evaluation.md", "roomba-bt eval: m4.yaml"): (
+        "tests/evaluate/test_worker_plugins.py::test_eval_says_a_worker_without_the_plugin_"
+        "once_and_exits_3"
+    ),
+    ("docs/evaluation.md", "roomba-bt eval: install on every worker"): (
+        "tests/evaluate/test_worker_plugins.py::test_eval_says_a_worker_without_the_plugin_"
+        "once_and_exits_3"
+    ),
 }
 
 
@@ -1104,48 +1138,50 @@ def test_each_quote_of_history_is_said_to_be_history() -> None:
 
 
 #: The quotes no test holds yet, by page and how they begin (``kind:NAME``: every quote of
-#: that kind on the page), each with why: session 40 held docs/missions.md's diagnostics
-#: first, and these are what is left, said here so that none is skipped unsaid.
+#: that kind on the page), each with why: sessions 40 and 41 held the rest, and these are
+#: what is left, said here so that none is skipped unsaid.
 NOT_YET_HELD: dict[tuple[str, str], str] = {
-    ("docs/architecture.md", "kind:program"): "`roomba-bt: interrupted`, a signal in the "
-    "start-up (tests/cli/test_entry.py makes it in a child process)",
-    ("docs/ci.md", "kind:diagnostic"): "the output block of a four-mission repository "
-    "(dock-home.yaml, hallway-patrol.yaml, includes at line 5) that tests/mission/team_repo.py "
-    "is not; missions.md's quote of the same chain is held on team_repo's",
-    ("docs/doctor.md", "kind:program"): "a Roomba 500 read with the create2 profile",
-    ("docs/doctor.md", "kind:summary"): "a port where no robot answers",
-    ("docs/evaluation.md", "kind:summary"): "eval's falls and charger lines over 8 and 10 "
-    "apartment episodes (seconds of CPU each)",
-    ("docs/monitor.md", "kind:diagnostic"): "a plugin that fails to import, in a watched run",
-    ("docs/monitor.md", "kind:monitor"): "the monitor's own lines: a served page and its "
-    "addresses, its keys on a terminal, a long or changed record",
-    ("docs/monitor.md", "kind:replay"): "a replay of a 2 h record cut with --to",
-    ("docs/monitor.md", "kind:summary"): "a node forced and pauses: the monitor's controls",
-    ("docs/plugins.md", "kind:diagnostic"): "broken plugins installed under the page's names",
-    ("docs/plugins.md", "kind:program"): "a plugin interrupted in its import; a record of a "
-    "plugin not installed",
-    ("docs/plugins.md", "kind:replay"): "a record of a plugin not installed, or edited",
-    ("docs/reliability.md", "kind:summary"): "lost bytes, a baud change, a silent link, a "
-    "stall: faults of a link",
-    ("docs/robot.md", "kind:program"): "a Roomba 500 read with the create2 profile",
-    ("docs/robot.md", "kind:summary"): "a baud change and a reconnected link",
-    ("docs/routines.md", "kind:summary"): "the outcome of a routine's run: minutes of "
+    ("docs/ci.md", "missions/common/lib/escapes.yaml:12:52:"): "the output block of a "
+    "four-mission repository (dock-home.yaml, hallway-patrol.yaml, includes at line 5) that "
+    "tests/mission/team_repo.py is not; missions.md's quote of the same chain is held on "
+    "team_repo's",
+    ("docs/evaluation.md", "key "): "wall-ahead.yaml's keys over 20 apartment episodes; "
+    "its command runs (2 episodes), whose key lines say fewer values",
+    ("docs/monitor.md", "forced by the operator: no bump to SUCCESS"): "one force released; "
+    "tests/monitor/test_session.py's run forces two, and its line holds both",
+    ("docs/monitor.md", "paused 4 min without keep-awake"): "the sleep's warning 4 minutes "
+    "into a pause; tests/monitor/test_session.py makes it at 1.5 s (its limits patched), "
+    "said in seconds",
+    ("docs/monitor.md", "monitor: run1.jsonl: replay diverged"): "a record of an older "
+    "roomba-bt that diverges on a Motors; tests/monitor/test_cli.py's diverges on another "
+    "mission's Drive",
+    ("docs/plugins.md", "roomba-bt: interrupted while importing plugin 'slow'"): "a Ctrl-C in "
+    "an installed package's import (named with its distribution); "
+    "tests/runtime/test_what_a_plugin_raises.py holds a plugin file's",
+    ("docs/plugins.md", "m.yaml:5:7: unknown node 'u_metres'"): "a package installed with "
+    "its distribution's name; tests/behaviours/test_plugin_errors.py loads the entry point "
+    "without one",
+    ("docs/plugins.md", "lab.yaml:14:7: unknown node 'wall_follow_for'"): "the record's "
+    "mission at its line; tests/runtime/test_recording.py's is far.yaml's far_s29 (its other "
+    "two lines are held there)",
+    ("docs/reliability.md", "falls the robot fell to Passive by itself once (unknown)"): "a "
+    "wheel command's lost byte; tests/runtime/test_unheard_commands.py's is the stream "
+    "request's",
+    ("docs/routines.md", "outcome SUCCESS"): "the outcome of a routine's run: minutes of "
     "mission time each",
-    ("docs/runtime.md", "kind:program"): "the rest: signals, a full disk, a closed stdout, an "
-    "internal error, an incomplete aiohttp, --fast's 2 h limit (2 h of ticks)",
-    ("docs/runtime.md", "kind:replay"): "the rest: records of runs that lost their link, were "
-    "stopped, killed, or made by 0.1.0; some quote what an older release printed ('Before, "
-    "each of these was `replay: first difference ...`')",
-    ("docs/runtime.md", "kind:summary"): "the rest: stops not delivered, a stream without "
-    "packet 35, slow or hung ticks, a busy host, a dock; some quote what an older release "
-    "printed (`outcome SUCCESS` of a robot that spun on)",
-    ("docs/runtime.md", "kind:record"): "records moved out of their repository or made by "
-    "another installation",
-    ("docs/runtime.md", "kind:monitor"): "a record naming /etc/shadow as its world",
-    ("docs/simulator.md", "kind:summary"): "the wall charger plugged in mid-run",
-    ("docs/unattended.md", "kind:program"): "a lost connection and the watchdog's grace: a "
-    "robot's link",
-    ("docs/unattended.md", "kind:summary"): "a Roomba 500 read with the create2 profile",
+    ("docs/runtime.md", "roomba-bt: the run's record, monitor and port are being closed"): (
+        "a signal while the run's record, monitor and port are closed: no test sends one there"
+    ),
+    ("docs/runtime.md", "safe stop NOT DELIVERED: ... the safe stop's wait"): "a link whose "
+    "clock stands still; tests/robot/test_undelivered_stop.py holds the connection's report, "
+    "not a run's summary",
+    ("docs/runtime.md", "r.jsonl: replaying /old/venv/"): "a record whose installation is "
+    "still on the machine, another roomba-bt's",
+    ("docs/runtime.md", "ticks 90 (21 overruns"): "a wall-clock run's overruns; "
+    "tests/runtime/test_tick_watch.py's run is --fast's, whose ticks line says host time",
+    ("docs/runtime.md", "replay: first difference at mission time 5.025 s"): "a shipped "
+    "library changed by an upgrade (its drive at 150 mm/s); tests/runtime/test_recording.py "
+    "holds the line that names the library",
 }
 
 

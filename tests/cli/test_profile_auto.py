@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 MISSION = """\
 mission: short
@@ -58,6 +59,9 @@ def test_run_profile_auto_identifies_the_robot_and_the_summary_says_how(
     assert f"roomba-bt run: {said}" in done.stderr
     assert f"profile      {summary}\n" in done.stdout
     assert "outcome      SUCCESS" in done.stdout
+    if served == "roomba600":  # docs/robot.md's verdict, on stderr and in the summary
+        assert_quoted("docs/robot.md", "roomba-bt run: --profile auto:", done.stderr)
+        assert_quoted("docs/robot.md", "profile roomba600", done.stdout)
     if served == "create2":  # what it fell back to, and what to give if that is wrong
         assert "speaking to it as the iRobot Create 2: give --profile NAME if its label " \
             "says otherwise" in done.stderr  # fmt: skip

@@ -7,9 +7,11 @@ of the files under ``/tmp/roomba-bt-...`` (session 32)."""
 from __future__ import annotations
 
 import pickle
+import socket
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.evaluate import episode_specs, run_episode
@@ -90,6 +92,12 @@ def test_eval_says_a_worker_without_the_plugin_once_and_exits_3(
         "roomba-bt release (exit 3: the run environment failed, not the mission)\n"
     ) in err
     assert "internal error" not in err
+    # docs/evaluation.md's: its mission m4.yaml, its plugin lab4.py and node helped4, a
+    # worker of another machine
+    page = {"lab.yaml": "m4.yaml", "lab.py": "lab4.py", "lab_ready": "helped4",
+            socket.gethostname(): "lab-7"}  # fmt: skip
+    assert_quoted("docs/evaluation.md", "roomba-bt eval: m4.yaml", err, numbers=True, names=page)
+    assert_quoted("docs/evaluation.md", "roomba-bt eval: install on every worker", err)
 
 
 #: A plugin file that writes a key its mission does not declare (line 11)
