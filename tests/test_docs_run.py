@@ -1117,7 +1117,7 @@ HISTORY: dict[tuple[str, str], tuple[str, ...]] = {
     ("docs/reliability.md", "final mode Passive$"): ("its summary said",),
     ("docs/reliability.md", "stalls 11 (watchdog drive 0)"): ("while the summary said",),
     ("docs/plugins.md", "roomba-bt: interrupted$"): ("where it said",),
-    # the rfc2217 pulses that each tripped the watchdog; a replay of a cut record (session 32)
+    # the rfc2217 pulses that each tripped the watchdog; a replay of a cut record
     ("docs/runtime.md", "stalls 12"): ("each pulse tripped the watchdog:",),
     ("docs/runtime.md", "safe stop NOT DELIVERED$"): ("heard nothing past the cut and said",),
     # a plugin's import error, said before as a warning
