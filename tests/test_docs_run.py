@@ -1121,7 +1121,7 @@ HISTORY: dict[tuple[str, str], tuple[str, ...]] = {
     ("docs/runtime.md", "stalls 12"): ("each pulse tripped the watchdog:",),
     ("docs/runtime.md", "safe stop NOT DELIVERED$"): ("heard nothing past the cut and said",),
     # a plugin's import error, said before as a warning
-    ("docs/plugins.md", "roomba-bt: warning:$"): ("and said them as",),
+    ("docs/plugins.md", "roomba-bt: warning:$"): ("0.1.0 said them as",),
 }
 
 
