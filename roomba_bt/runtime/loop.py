@@ -758,7 +758,7 @@ def guarded_between_ticks(
         else:
             ride.tick_still(seconds, where, cycle, loop=True)
 
-    return tick_guard.guarded(work, slow, lambda: runner.snapshot.tick)
+    return tick_guard.guarded(work, slow, lambda: runner.snapshot.tick, where)
 
 
 def tree_ended(root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:

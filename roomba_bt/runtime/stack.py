@@ -68,9 +68,14 @@ from roomba_bt.runtime.recording import (
     ending_text,
     tree_ended,
 )
-from roomba_bt.runtime.stepping import Tick, TickStepper, ticks
+from roomba_bt.runtime.stepping import Tick, TickStepper, replayed_loop, ticks
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, Outcome, RunSummary
-from roomba_bt.runtime.tick_guard import TickGuard, TickGuardLike, recorded_tick_guard
+from roomba_bt.runtime.tick_guard import (
+    RecordedTickGuard,
+    TickGuard,
+    TickGuardLike,
+    recorded_tick_guard,
+)
 from roomba_bt.transport.base import Transport
 from roomba_bt.transport.serial_port import DEFAULT_BAUD
 
@@ -829,12 +834,8 @@ def replay_record(
         replayed_notes=[note for _, note in record.notes],  # the tick guard's acts
     )
     follow_the_recorded_link(stack, record)
-    if until is not None:
-        gate = WindowEnd(until, gate, transport)
-    gate = link_lost_after(record, gate, transport)
-    end = recorded_end(record, gate, transport)
-    ends += [end] if end is not None else []
-    stack.runner.gate = end or gate  # the monitor's replay of the operator's acts inside
+    _watch_the_recorded_loop(stack.runner, observer)
+    stack.runner.gate = _replay_gates(record, transport, gate, until, ends)
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
     try:
         with stamped_logs(stack.runner if stamp_logs else None, record.label):
@@ -843,8 +844,35 @@ def replay_record(
         # as the recorded run's (``run``): a stop not delivered is tried once more there, and
         # its bytes are in the record; before, the replay's was left to the program's exit
         stack.close()
+    end = ends[0] if ends else None
     if end is not None and end.ended and summary.outcome is Outcome.INTERRUPTED:
         summary.outcome, summary.reason = Outcome.INPUT_ENDED, f"end of the record: {end.reason}"
     if end is not None and end.miscount is not None:  # said by replay, the stop the same
         record.miscounted = end.miscount
     return summary, transport
+
+
+def _watch_the_recorded_loop(runner: MissionRunner, observer: TickObserver | None) -> None:
+    """Where the record's tick guard acted or saw a slow pass between two ticks (a program's
+    loop over ``stack.ticks()``), the replay's observer watches that place after each tick
+    (:func:`~roomba_bt.runtime.stepping.replayed_loop`), ``observer`` first."""
+    guard = runner.tick_guard
+    if isinstance(guard, RecordedTickGuard) and guard.between_ticks:
+        runner.observer = replayed_loop(runner, observer)
+
+
+def _replay_gates(
+    record: Record,
+    transport: ReplayTransport,
+    gate: TickGate | None,
+    until: float | None,
+    ends: list[RecordedEnd],
+) -> TickGate | None:
+    """A replay's gates around ``gate`` (the monitor's replay of the operator's acts): the
+    window's end (``until``), the link's loss, and the recorded end (put in ``ends``)."""
+    if until is not None:
+        gate = WindowEnd(until, gate, transport)
+    gate = link_lost_after(record, gate, transport)
+    end = recorded_end(record, gate, transport)
+    ends += [end] if end is not None else []
+    return end or gate

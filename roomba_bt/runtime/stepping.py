@@ -180,6 +180,24 @@ def ticks(stack: RunStack) -> Generator[Tick, None, None]:
         raise interrupted(interrupt, stack.summary) from None
 
 
+def replayed_loop(runner: MissionRunner, inner: TickObserver | None) -> TickObserver:
+    """The observer a replay gives ``runner`` where its recorded run was a program's loop over
+    ``stack.ticks()`` whose tick guard acted or saw a pass past its limit there: after each
+    tick, ``inner`` (the replay's own observer), then the loop's place watched as the
+    stepper watches it live (:data:`LOOP_BODY`), its recorded acts done there (the drive 0
+    after the tick's flush, the wheels given back with the next tick's) and counted as the
+    loop's (``loop_slow``, ``loop_halts``). The replay did them inside the tree's tick: a
+    slow tick of the tree's, its wheels given back a tick early (a difference, exit 1)."""
+    watched = guarded_between_ticks(runner, lambda: None, LOOP_BODY)
+
+    def observe(runner: MissionRunner) -> None:
+        if inner is not None:
+            inner(runner)
+        watched()
+
+    return observe
+
+
 def _join(worker: threading.Thread) -> KeyboardInterrupt | None:
     """The worker's end awaited, its run's safe stop written, whatever comes meanwhile: a
     Ctrl-C (or SIGTERM) then is kept and returned, to be raised once the robot is stopped

@@ -55,7 +55,8 @@ import sys
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import PurePath
 from typing import Any, Protocol
 
 from roomba_bt.oi import commands as oi
@@ -86,6 +87,25 @@ CYCLE_NOTE = "tick_cycle"
 
 #: where the halt before the tree's stop is noted as done (the record's ``where``)
 AT_THE_END = "the run's end, before the tree's stop"
+
+#: the record's key of a note made while the guard watched work done between two ticks (a
+#: program's loop over ``stack.ticks()``: :func:`~roomba_bt.runtime.loop.
+#: guarded_between_ticks`), not the tree's tick: its replay does the act there, after the
+#: tick's flush, and counts it as the loop's (``loop_slow``, ``loop_halts``) as the run did
+LOOP_NOTE = "loop"
+
+
+def loop_noted(note: Mapping[str, Any]) -> bool:
+    """Whether the guard's ``note`` was made between two ticks (:data:`LOOP_NOTE`). A record
+    made before that key (session 41) says it only by its ``where``: the ticking thread's
+    innermost line, no behaviour on its stack, in Python's ``threading.py`` (the worker of a
+    ``stack.ticks()`` loop waiting for the loop to ask for the next tick); a tree's tick is
+    always inside a behaviour's method, named there. Its replay counted such a note as the
+    tree's slow tick, and did its act inside the tick, before its flush: a tick early."""
+    if LOOP_NOTE in note:
+        return note[LOOP_NOTE] is True
+    where = str(note.get("where", ""))
+    return where.startswith("at ") and PurePath(where[3:].rsplit(":", 1)[0]).name == "threading.py"
 
 
 def wheels_moving(connection: Connection) -> bool:
@@ -159,7 +179,7 @@ class TickGuardLike(Protocol):
     def close(self) -> None: ...
     def halt_before_stop(self, motors_on: bool = False) -> bool: ...
     def guarded(
-        self, tick: Callable[[], object], slow: Slow, index: Callable[[], int]
+        self, tick: Callable[[], object], slow: Slow, index: Callable[[], int], between: str = ""
     ) -> Callable[[], None]: ...
 
 
@@ -191,6 +211,9 @@ class TickGuard:
         #: the stream's tick index of the running tick (the runner's snapshot), for the note
         self._index: Callable[[], int] = lambda: 0
         self._owner = 0  # the thread that ticks
+        #: what runs between two ticks while the guard watches it (``guarded``'s
+        #: ``between``), "" while it watches the tree's tick: set and read with :attr:`lock` held
+        self._between = ""
         self._done = threading.Event()
         self._thread = threading.Thread(
             target=self._watch, name="roomba-bt tick guard", daemon=True
@@ -226,7 +249,7 @@ class TickGuard:
         return True
 
     def guarded(
-        self, tick: Callable[[], object], slow: Slow, index: Callable[[], int]
+        self, tick: Callable[[], object], slow: Slow, index: Callable[[], int], between: str = ""
     ) -> Callable[[], None]:
         """``tick`` with the lock released around it; ``slow(seconds, where, halted, cycle)``
         is called in the main thread, lock held, after a tick that ran past the limit,
@@ -234,7 +257,11 @@ class TickGuard:
         saw it; ``where``: :meth:`_where`; ``halted``: the guard stopped the wheels or the
         motors, else it sent nothing; ``cycle``: the built-in cycle that may have driven the
         robot meanwhile, "" if nothing moved). ``index()``: the running tick's index in the
-        stream."""
+        stream. ``between``: ``tick`` is work done between two ticks, said so (a program's
+        loop body: the ticking thread only waits for it, and its innermost line is that
+        wait): the notes say it (``where``, :data:`LOOP_NOTE`), for a replay to do their
+        acts there and count them as the run did. The tree's tick is left as it was (its
+        path not one store longer)."""
         lock = self.lock
         clock = self.clock
         self._index = index
@@ -252,7 +279,17 @@ class TickGuard:
                 if seen is not None and seen[0] == self._ticks:
                     slow(seen[1], seen[2], seen[3], seen[4])
 
-        return guarded_tick
+        if not between:
+            return guarded_tick
+
+        def guarded_between() -> None:
+            self._between = between  # the lock held: the guard reads it only with it
+            try:
+                guarded_tick()
+            finally:
+                self._between = ""
+
+        return guarded_between
 
     def _watch(self) -> None:
         period = self.limit_s / 5.0
@@ -294,6 +331,8 @@ class TickGuard:
             }  # fmt: skip
             if motors:
                 act["motors"] = True
+            if self._between:
+                act[LOOP_NOTE] = True
             note(act)
 
     def _note_still(self, ran: float, where: str, cycle: str) -> None:
@@ -310,6 +349,8 @@ class TickGuard:
             }  # fmt: skip
             if cycle:
                 kept["cycle"] = cycle
+            if self._between:
+                kept[LOOP_NOTE] = True
             note(kept)
 
     def _moving(self) -> bool:
@@ -317,7 +358,10 @@ class TickGuard:
         return wheels_moving(self.connection) or motors_running(self.connection)
 
     def _where(self) -> str:
-        """Where the ticking thread is (:func:`where_in`); "" if the thread is gone."""
+        """Where the ticking thread is (:func:`where_in`); "" if the thread is gone. Between
+        two ticks, what runs there (``guarded``'s ``between``): the thread only waits for it."""
+        if self._between:
+            return self._between
         return where_in(sys._current_frames().get(self._owner))
 
 
@@ -332,7 +376,10 @@ class RecordedTickGuard:
     flush, as live: drive 0 where the record has it, then the runner's reaction; and the
     ticks it saw past the limit with nothing moving (:data:`STILL_NOTE`) or a built-in
     cycle driving (:data:`CYCLE_NOTE`), told to the runner after that tick, as live
-    (nothing sent)."""
+    (nothing sent). Those of work between two ticks (:func:`loop_noted`: a program's loop
+    over ``stack.ticks()``) are done where that work was, by what ``guarded`` watches with
+    its ``between``, not in the tree's tick (:func:`replay_record
+    <roomba_bt.runtime.stack.replay_record>` has it watch that place)."""
 
     def __init__(self, connection: Connection, notes: Iterable[dict[str, Any]]) -> None:
         self.connection = connection
@@ -344,8 +391,22 @@ class RecordedTickGuard:
         first = (acts or stills)[:1]
         self.limit_s = float(first[0].get("limit", DEFAULT_TICK_LIMIT)) if first else 0.0
         acts = [n for n in acts if n.get("at") != "end"]
-        self._acts = deque(sorted(acts, key=lambda n: int(n["tick"])))
-        self._stills = deque(sorted(stills, key=lambda n: int(n["tick"])))
+        #: the acts and the still notes of the tree's ticks (False) and of the work between
+        #: two ticks (True), each in tick order
+        self._notes = {
+            loop: (
+                deque(sorted((n for n in acts if loop_noted(n) is loop), key=_tick_of)),
+                deque(sorted((n for n in stills if loop_noted(n) is loop), key=_tick_of)),
+            )
+            for loop in (False, True)
+        }
+
+    @property
+    def between_ticks(self) -> bool:
+        """Whether the recorded run's guard acted or saw a pass past its limit between two
+        ticks (a program's loop over ``stack.ticks()``): the replay watches that place."""
+        acts, stills = self._notes[True]
+        return bool(acts or stills)
 
     def start(self) -> None:
         pass
@@ -359,9 +420,9 @@ class RecordedTickGuard:
         return self._at_end and _send_stop_first(self.connection, motors_on)
 
     def guarded(
-        self, tick: Callable[[], object], slow: Slow, index: Callable[[], int]
+        self, tick: Callable[[], object], slow: Slow, index: Callable[[], int], between: str = ""
     ) -> Callable[[], None]:
-        acts, stills = self._acts, self._stills
+        acts, stills = self._notes[bool(between)]
 
         def replayed_tick() -> None:
             tick()
@@ -381,6 +442,10 @@ class RecordedTickGuard:
         return replayed_tick
 
 
+def _tick_of(note: Mapping[str, Any]) -> int:
+    return int(note["tick"])
+
+
 def _this_tick(notes: deque[dict[str, Any]], now: int) -> dict[str, Any] | None:
     """The note of tick ``now`` at the head of ``notes`` (in tick order), taken off, or None;
     those of earlier ticks, which the replay did not reach as recorded, are dropped."""
@@ -397,4 +462,4 @@ def recorded_tick_guard(
     """The record's tick guard, or None when the recorded run's guard never acted nor saw a
     tick past its limit."""
     guard = RecordedTickGuard(connection, notes)
-    return guard if guard._acts or guard._stills or guard._at_end else None
+    return guard if any(any(kept) for kept in guard._notes.values()) or guard._at_end else None

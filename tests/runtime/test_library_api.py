@@ -25,6 +25,9 @@ from roomba_bt import CREATE2, Outcome, RunStack, SimLink, Simulator, TreeMissio
 from roomba_bt.behaviours import DISTANCE, Condition, Param, declare
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.robot.testing import StubRobot
+from roomba_bt.runtime.recording import load_record
+from roomba_bt.runtime.stack import Recording, replay_record
+from roomba_bt.runtime.stepping import LOOP_BODY
 from roomba_bt.sim import Faults
 
 from .simrun import guard_looks, wait_for_the_guard
@@ -282,6 +285,62 @@ def test_a_loops_body_that_blocks_with_the_robot_still_is_said_as_such(
         "moving, or a built-in cycle, which it does not end)"
     )
     assert seen.is_set()
+
+
+def _loop_recorded(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, halted: bool) -> Path:
+    """A record of a program's loop over ``stack.ticks()`` whose body blocked past the tick
+    guard's limit once: while the robot drove (the guard's drive 0, ``halted``) or stood
+    still in Safe (nothing sent), on the virtual clock with the guard given."""
+    seen = guard_looks(monkeypatch)
+    source, path = tmp_path / "lab.yaml", tmp_path / "loop.jsonl"
+    source.write_text(TO_THE_WALL)
+    link = SimLink(_simulator())
+    mission = roomba_bt.load_mission(str(source), profile=CREATE2)
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=30.0, tick_limit=0.02,
+                     record=Recording(path, str(source)))  # fmt: skip
+    with stack:
+        for tick in stack.ticks():
+            if halted and tick.number == 40:
+                wait_for_the_guard(stack)
+            elif not halted and tick.number == 1:  # Safe sent, nothing moving yet
+                seen.wait(10.0)
+                link.advance(1.5)
+            if tick.number == 60:
+                break
+    counted = (stack.summary.loop_slow, stack.summary.loop_halts, stack.summary.tick_halts)
+    assert counted == (1, int(halted), 0), stack.summary
+    return path
+
+
+@pytest.mark.parametrize("made", ["now", "before"])
+@pytest.mark.parametrize("halted", [True, False], ids=["halted", "still"])
+def test_a_record_of_a_loops_slow_pass_replays_it_as_the_loops(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, halted: bool, made: str
+) -> None:
+    """The tick guard's note of a slow pass of the program's loop is replayed as the run
+    counted it (``loop_slow``, ``loop_halts``), its drive 0 after the tick's flush as live
+    (the wheels given back with the next tick's commands): byte for byte. The replay took it
+    for the tree's slow tick ("1 slow tick(s): drive 0 sent while the tree was busy; the
+    first in at .../threading.py:327", the worker's wait), its drive 0 and the wheels given
+    back inside the tick: "first difference ... 0.02 s early", exit 1. A record made before
+    the note said it was the loop's (``"loop": true``) says so by its ``where`` alone (the
+    worker's wait, in ``threading.py``; ``made="before"``: the note written back so)."""
+    path = _loop_recorded(tmp_path, monkeypatch, halted)
+    notes = [note for _, note in load_record(path).notes if note.get("at") != "end"]
+    guarded = [note for note in notes if "tick_guard" in note or "tick_still" in note]
+    assert [(n.get("loop"), n["where"]) for n in guarded] == [(True, LOOP_BODY)], notes
+    if made == "before":
+        text = path.read_text().replace(', "loop": true', "")
+        path.write_text(text.replace(LOOP_BODY, "at /usr/lib/python3.11/threading.py:327"))
+    record = load_record(path)
+    summary, transport = replay_record(
+        record, roomba_bt.load_mission(str(tmp_path / "lab.yaml"), profile=CREATE2),
+        profile=CREATE2, packets=record.header["packets"], baud=record.header["baud"],
+        name="loop.jsonl",
+    )  # fmt: skip
+    assert transport.first_difference() is None and transport.written == record.out_bytes
+    counted = (summary.loop_slow, summary.loop_halts, summary.tick_halts, summary.tick_stills)
+    assert counted == (1, int(halted), 0, 0), summary.tick_guard_text()
 
 
 # ------------------------------------------------------------------ 3. a mission from a string
