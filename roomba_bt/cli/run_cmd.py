@@ -1266,7 +1266,7 @@ def _replay_verdict(
     (``lost``: :func:`~roomba_bt.runtime.stack.past_the_link_loss`'s sentences; 0), or the
     first difference, with what changed since the record was made (1)."""
     from roomba_bt.runtime.provenance import changed_plugins, changed_sources, drift_line
-    from roomba_bt.runtime.recording import MISCOUNT
+    from roomba_bt.runtime.recording import miscount_said
 
     record, mission = recorded.record, recorded.mission
     difference = transport.first_difference()
@@ -1285,8 +1285,7 @@ def _replay_verdict(
         print(compared)
     if difference is None:
         if record.miscounted is not None:  # an older record's end note, not the tree
-            noted, before = record.miscounted
-            print(f"replay: {MISCOUNT.format(noted=noted, before=before, more=noted - before)}")
+            print(f"replay: {miscount_said(*record.miscounted)}")
         print(same)
         return ExitCode.OK
     offset, expected, sent = difference

@@ -793,7 +793,8 @@ def tree_ended(note: Mapping[str, Any]) -> str:
 #: of the tick ("expected Motors (138) 8a 04, sent Drive (137) 89 00 00 00 00"), exit 1
 WRITTEN = "written"
 #: What ``replay`` says of a record whose end note's :data:`WRITTEN` counts more than its run
-#: wrote before a stop asked for in a stall (``{noted}``, ``{before}``; ``{more}`` the
+#: wrote before a stop asked for in a stall, or a Ctrl-C or signal that came inside a tick
+#: before a stop that was asked after (``{noted}``, ``{before}``; ``{more}`` the
 #: difference): until session 39's fix (2e6d3655) the count was the link's at the stop,
 #: moved on at the end by what the link alone wrote since, so the Query List that asks
 #: after a stop not confirmed (written past the link, after the stop) was among it. Its
@@ -806,6 +807,27 @@ MISCOUNT = (
     "asks after the stop), not a difference in behaviour; replayed to the stop at byte "
     "{before}"
 )
+#: What ``replay`` says of a record whose end note of a Ctrl-C or signal that came in a stall
+#: the watchdog rode (after the last frame's tick, the watchdog's drive 0 written since)
+#: counts nothing (``{before}``: the bytes its run wrote before its stop): until session
+#: 39's fix (2e6d3655) such an interrupt was noted without :data:`WRITTEN`, and its replay
+#: ended at the tick, its stop compared with the watchdog's drive 0: "first difference ...
+#: expected Drive (137) 89 00 00 00 00, sent Motors (138) 8a 00", exit 1
+UNCOUNTED = (
+    "the end note counts no bytes written when the recorded run was interrupted in a stall "
+    "its watchdog rode: a known miscount of records made before roomba-bt 0.2.0 (its "
+    "development builds up to session 39 noted no count for a Ctrl-C or signal there), not "
+    "a difference in behaviour; replayed to the stop at byte {before}"
+)
+
+
+def miscount_said(noted: int | None, before: int) -> str:
+    """What ``replay`` says of an older record's end note whose count was wrong (``noted``,
+    :data:`MISCOUNT`) or missing (None, :data:`UNCOUNTED`), its run having written
+    ``before`` bytes before its stop (``Record.miscounted``)."""
+    if noted is None:
+        return UNCOUNTED.format(before=before)
+    return MISCOUNT.format(noted=noted, before=before, more=noted - before)
 
 
 def end_note(
@@ -915,8 +937,10 @@ class Record:
     #: killed, a full disk); None: none was
     cut_line: int | None = None
     #: the end note's ``written`` and the bytes the recorded run wrote before its stop,
-    #: where its replay found the first past the second (:data:`MISCOUNT`); None: not so
-    miscounted: tuple[int, int] | None = None
+    #: where its replay found the first past the second (:data:`MISCOUNT`), or found none
+    #: noted where the run rode a stall before its stop (None, :data:`UNCOUNTED`); None:
+    #: not so (:func:`miscount_said`)
+    miscounted: tuple[int | None, int] | None = None
 
     @property
     def label(self) -> str:

@@ -522,7 +522,11 @@ class RecordedEnd(InnerGate):
     00, sent Drive Direct ...`` at its last bytes)."""
 
     def __init__(
-        self, note: dict[str, Any], inner: TickGate | None, transport: ReplayTransport | None
+        self,
+        note: dict[str, Any],
+        inner: TickGate | None,
+        transport: ReplayTransport | None,
+        trips: Sequence[float] = (),
     ) -> None:
         self.tick, self.half = int(note["tick"]), str(note.get("at", "after"))
         self.reason = ending_text(note)
@@ -538,8 +542,15 @@ class RecordedEnd(InnerGate):
         #: when its stop came (:meth:`between_frames`): the record's end is no end yet
         self.waiting = False
         #: the note's count and the bytes the recorded run wrote before its stop, where the
-        #: first is past the second (:data:`~roomba_bt.runtime.recording.MISCOUNT`)
-        self.miscount: tuple[int, int] | None = None
+        #: first is past the second (:data:`~roomba_bt.runtime.recording.MISCOUNT`), or is
+        #: None where the run rode a stall past the tick (:attr:`uncounted`)
+        self.miscount: tuple[int | None, int] | None = None
+        #: when the recorded run's watchdog tripped (the record's notes, link time)
+        self.trips = trips
+        #: an "after" note with no count whose run's watchdog tripped past the end's tick: a
+        #: Ctrl-C or signal in a stall, in a record made before 2e6d3655, which noted none
+        #: (:data:`~roomba_bt.runtime.recording.UNCOUNTED`); set at that tick
+        self.uncounted = False
 
     def _end(self) -> None:
         self.ended = True
@@ -563,24 +574,43 @@ class RecordedEnd(InnerGate):
         transport = self.transport
         if self.written is None or transport is None or transport.written >= self.written:
             return False
-        transport.interrupt_at(self.written, self._end)
+        transport.interrupt_at(self.written, self._interrupt)
         return True
+
+    def _interrupt(self) -> None:
+        """The recorded run's interrupt, where the replay's tick writes past its count; not
+        once the replay has ended otherwise (:meth:`_miscounted`: its stop writes past it)."""
+        if not self.ended:
+            self._end()
 
     def after_tick(self, runner: MissionRunner) -> None:
         super().after_tick(runner)
         if runner.snapshot.tick >= self.tick:  # "after": the run ended with this tick...
+            self.uncounted = self._stall_uncounted()
             self.waiting = self._writes_to_come()
             if not self.waiting:
                 self._end()  # ...unless it wrote more before its stop (a stall's drive 0)
+
+    def _stall_uncounted(self) -> bool:
+        """Whether this "after" end with no count came in a stall the recorded run's
+        watchdog rode: it tripped after this tick (the record's trip notes), so its drive 0
+        came before the stop, which an older record did not count (:attr:`uncounted`)."""
+        transport = self.transport
+        if self.written is not None or self.half != "after" or transport is None:
+            return False
+        now = transport.now()
+        return any(trip > now for trip in self.trips)
 
     def between_frames(self, runner: MissionRunner) -> None:
         """A read with no frame past the end's tick: a stop the recorded run was asked for
         between frames (the monitor's Stop in a stall, after the watchdog's drive 0) ends
         the replay here, once it has written as much. It ended the replay at the tick
-        before, and the record's drive 0 was the replay's first difference (exit 1)."""
+        before, and the record's drive 0 was the replay's first difference (exit 1). So
+        does an interrupt "before" the tick whose count is past what the tick wrote (an
+        older record's miscount, :meth:`_miscounted`): it waited for ever."""
         super().between_frames(runner)
         past = runner.has_snapshot and runner.snapshot.tick >= self.tick
-        if self.half == "after" and past:
+        if past and (self.half == "after" or self.waiting):
             self.waiting = self._writes_to_come() and not self._miscounted()
             if not self.waiting:
                 self._end()
@@ -594,20 +624,28 @@ class RecordedEnd(InnerGate):
         MISCOUNT`). The replay then ends here, and its own stop is compared with the
         record's from there: the same bytes, and it is said so; others, a difference. It
         waited for bytes that came after the stop, and said the stop's drive 0 was its
-        first difference, "sent nothing", exit 1."""
+        first difference, "sent nothing", exit 1. The same of a Ctrl-C "before" a tick
+        whose stop was asked after (the count 5 past the tick's bytes: it waited for ever,
+        "sent nothing"), and of a note with no count where the run rode a stall
+        (:attr:`uncounted`: its count is where the replay has got to then)."""
         transport = self.transport
-        if self.written is None or transport is None or not transport.write_passed():
+        counted = self.written is not None or self.uncounted
+        if not counted or transport is None or not transport.write_passed():
             return False
         self.miscount = (self.written, transport.written)
         return True
 
     def _writes_to_come(self) -> bool:
         """Whether the recorded run wrote more after the end's tick, before its stop, than
-        the replay has so far (the end note's ``written``: none in an older record)."""
+        the replay has so far (the end note's ``written``: none in an older record; not
+        known where it rode a stall, :attr:`uncounted`, until the replay is past its
+        writes there)."""
         transport = self.transport
-        return (
-            self.written is not None and transport is not None and transport.written < self.written
-        )
+        if transport is None:
+            return False
+        if self.written is None:
+            return self.uncounted
+        return transport.written < self.written
 
 
 class AfterTickGate(InnerGate):
@@ -740,7 +778,7 @@ def recorded_end(
         return None
     if not isinstance(note.get("tick"), int) or note.get("at") not in ("before", "after"):
         return None
-    return RecordedEnd(note, gate, transport)
+    return RecordedEnd(note, gate, transport, record.watchdog_trips or ())
 
 
 def _window_end(until: float | None) -> str:
