@@ -116,6 +116,20 @@ RESET_RESTARTED = (
     "the robot reset (its start-up banner was read; a Reset (7) made of lost bytes, most "
     "likely): sent Start again after its banner, it answered in Passive"
 )
+#: What a stop that ends in Off (``end_in="stop"``) says when it was not confirmed and the
+#: robot, asked after, answered in Passive: the question needs Start (Off answers nothing),
+#: so Stop (173) is written again once it has answered (:func:`stop_again`)
+STOP_WRITTEN_AGAIN = (
+    "the Stop (173) was not confirmed at first: asked after, which needs Start (the OI answers "
+    "nothing in Off), the robot answered in Passive; Stop written again"
+)
+#: What it says instead where Stop could not be written again (the port failed): the robot is
+#: left in Passive, where the Start of the question put it
+STOP_LEFT_PASSIVE = (
+    "the Stop (173) was not confirmed at first: asked after, which needs Start (the OI answers "
+    "nothing in Off), the robot answered in Passive; Stop could not be written again ({error}): "
+    "left in Passive"
+)
 #: Why a quiet after a stop with bytes in it that make no frame (how many) does not show it
 #: heard: a robot a Baud (129) made of lost bytes moved to another rate streams on there
 GARBAGE_AFTER = (
@@ -972,7 +986,34 @@ def asked_after(ending: SafeStop, unconfirmed: str) -> str | None:
             back = put_back(link, found, writer.baud)
         ending.found_at = found_words(found, writer.baud, back=back)
         log.warning("%s: %s", link.name, ending.found_at)
-        if not back:
-            writer.baud = found
+        if not back:  # left in Passive at that rate, where it answered (docs/robot.md): so
+            writer.baud = found  # the model, which a Stop (end_in="stop") had put in Off
+            writer.modes.force(OIMode.PASSIVE, link.transport.now())
+            ending.answered = True
+            return None
     ending.answered = True
+    stop_again(ending)
     return None
+
+
+def stop_again(ending: SafeStop) -> None:
+    """After a stop that ends in Off (``end_in="stop"``) was not confirmed and the robot,
+    asked after, answered in Passive at the run's rate: the model in Passive, as the answer
+    showed (the question's Start put it there: the OI answers nothing in Off), and Stop (173)
+    written again, the line just shown to carry, so the robot ends in the Off it was asked
+    for, its wheels and motors stopped as in Passive. It was left in Passive while the model
+    held Off: the summary said ``final mode Off`` of a robot in Passive, and whether a run
+    ended in Off hung on the machine's load (a stall before the stop has it asked after). The
+    summary says it (:data:`STOP_WRITTEN_AGAIN`, after :attr:`SafeStop.found_at`'s words)."""
+    writer = ending.writer
+    if ending.end_in != "stop" or not writer.profile.has_command("stop"):
+        return
+    writer.modes.force(OIMode.PASSIVE, writer.link.transport.now())
+    said = STOP_WRITTEN_AGAIN
+    try:
+        with signals_deferred():
+            writer.send(oi.stop())
+    except _RECOVERABLE as exc:
+        said = STOP_LEFT_PASSIVE.format(error=exc)
+        log.warning("%s: %s", writer.link.name, said)
+    ending.found_at = f"{ending.found_at}; {said}" if ending.found_at else said

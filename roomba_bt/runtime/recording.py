@@ -119,7 +119,7 @@ from collections.abc import Callable, Iterator, Mapping, Sized
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import IO, Any, Protocol, TypeVar
+from typing import IO, Any, Literal, Protocol, TypeVar
 
 from roomba_bt import __version__
 from roomba_bt.errors import RoombaBtError
@@ -166,6 +166,22 @@ SIMULATOR = "simulator"
 #: the header field holding the run's options that decide its bytes besides the mission and
 #: the simulator, as given (``timeout``, ``include_dirs``, ``allow_plugin_files``, ``end_in``)
 RUN_OPTIONS = "options"
+
+#: header key, ``"stop"`` where the recorded run ended its stop in Off (``end_in="stop"``,
+#: ``run --end-in stop``: Stop (173) for Start); absent for Start, as in a record made
+#: before (session 41). Its replay ends so too (:func:`recorded_end_in`): it ended with
+#: Start, and such a record's last byte was its first difference ("expected Stop (173) ad,
+#: sent Start (128) 80", exit 1)
+END_IN = "end_in"
+
+
+def recorded_end_in(header: Mapping[str, Any]) -> Literal["passive", "stop"]:
+    """How the recorded run's stop ended: :data:`END_IN`, or in a record made before it the
+    run's ``options`` (``run --end-in``, :data:`RUN_OPTIONS`); Start (``"passive"``) else."""
+    options = header.get(RUN_OPTIONS)
+    given = header.get(END_IN, options.get("end_in") if isinstance(options, dict) else None)
+    return "stop" if given == "stop" else "passive"
+
 
 #: header key, true where the recorded run's stop was listened after and asked after (the
 #: wall clock, a real line; the simulator's line losing bytes to the robot:
@@ -1522,6 +1538,9 @@ def header_problem(header: dict[str, Any]) -> str | None:
         seconds = header.get(name, 0.0)
         if type(seconds) not in (int, float) or not 0.0 <= seconds < math.inf:
             return f"header field {name!r} is {seconds!r}; expected seconds, 0 or more"
+    end_in = header.get(END_IN, "passive")
+    if end_in not in ("passive", "stop"):
+        return f"header field {END_IN!r} is {end_in!r}; expected 'stop' (or none: Start)"
     relative_to = header.get(RELATIVE_TO, RELATIVE_TO_RECORD)
     if relative_to != RELATIVE_TO_RECORD:
         return f"header field {RELATIVE_TO!r} is {relative_to!r}; expected {RELATIVE_TO_RECORD!r}"

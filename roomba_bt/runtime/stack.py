@@ -52,6 +52,7 @@ from roomba_bt.runtime.loop import (
     stream_request,
 )
 from roomba_bt.runtime.recording import (
+    END_IN,
     ENDED_FROM_OUTSIDE,
     MISSION_AT,
     PLUGINS,
@@ -66,6 +67,7 @@ from roomba_bt.runtime.recording import (
     ReplayTransport,
     end_note,
     ending_text,
+    recorded_end_in,
     tree_ended,
 )
 from roomba_bt.runtime.stepping import Tick, TickStepper, replayed_loop, ticks
@@ -172,10 +174,11 @@ class Recording:
 
     def header(
         self, profile: RobotProfile, baud: int, packets: Sequence[int], watchdog: float,
-        grace: float,
+        grace: float, end_in: EndMode = "passive",
     ) -> dict[str, Any]:  # fmt: skip
         """The record's header: what ``replay`` runs it again with (``watchdog`` and
-        ``grace``: the run's, for the replay's watchdog and ride-through)."""
+        ``grace``: the run's, for the replay's watchdog and ride-through; ``end_in``: how its
+        stop ends, :data:`~roomba_bt.runtime.recording.END_IN`, written for Stop alone)."""
         return {
             "profile": profile.name,
             "baud": baud,
@@ -186,6 +189,7 @@ class Recording:
             "packets": list(packets),
             "watchdog": watchdog,
             "grace": grace,
+            **({END_IN: "stop"} if end_in == "stop" and profile.has_command("stop") else {}),
             **({"port": self.port} if self.port is not None else {}),
             **({"started": self.started} if self.started is not None else {}),
             **({"label": self.label} if self.label is not None else {}),
@@ -272,7 +276,8 @@ class RunStack:
         transport: Transport = link
         if record is not None:
             watchdog_s = connection.link.watchdog if connection else _made_watchdog(made)
-            header = record.header(profile, baud, self.packets, watchdog_s, grace)
+            ends: EndMode = connection.end_in if connection else end_in or "passive"
+            header = record.header(profile, baud, self.packets, watchdog_s, grace, ends)
             # OSError: the file cannot be written (FileInUse: another run writes it;
             # RecordNotStarted: a required record's header)
             transport = RecordingTransport(
@@ -866,6 +871,7 @@ def replay_record(
         packets=packets,
         watchdog=float(header.get("watchdog", DEFAULT_WATCHDOG)),  # as the recorded run's
         grace=float(header.get("grace", DEFAULT_GRACE)),
+        end_in=recorded_end_in(header),
         keep_awake=False,  # no robot to keep awake (it said a robot "sleeps after 5 minutes")
         observer=observer,
         input_ended=replay_input_ended(transport, record, until, ends),

@@ -15,6 +15,7 @@ from roomba_bt.oi.errors import BandwidthError, UnsupportedCommandError
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import ROOMBA500
 from roomba_bt.robot.connection import Connection, LinkStatus
+from roomba_bt.robot.discovery import PROBE_QUERY
 from roomba_bt.robot.errors import ConnectionFailed, ModeError, PortLost, StreamStalled
 
 from .conftest import Link
@@ -94,7 +95,43 @@ def test_end_in_stop_sends_stop_on_profiles_that_have_it(link: Link) -> None:
     robot = link.scripted()
     with link.connect(end_in="stop") as connection:
         connection.start("safe", PACKETS)
-    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_OFF) and r.mode is OIMode.OFF)
+    # the stop is the last bytes, or (a robot double held before it: a loaded machine) its
+    # Stop is written again after the question that confirmed it (the next test)
+    assert robot.wait_until(
+        lambda r: STOP_TO_OFF in r.received and r.received.endswith(bytes([173]))
+        and r.mode is OIMode.OFF
+    )  # fmt: skip
+    assert connection.mode is OIMode.OFF
+
+
+@pytest.mark.parametrize("kind", ["pty", "tcp"])
+def test_end_in_stop_not_confirmed_is_asked_after_and_written_again(
+    fake_links: object, kind: str
+) -> None:
+    """A Stop (173) the quiet after it cannot confirm (the robot silent before it) is asked
+    after, which needs Start (the OI answers nothing in Off): the robot answers in Passive,
+    and Stop is written again, so it ends in the Off asked for. It was left in Passive while
+    the summary said ``final mode Off``."""
+    link: Link = fake_links(kind)  # type: ignore[operator]
+    robot = link.scripted()
+    with link.connect(end_in="stop") as connection:
+        connection.start("safe", PACKETS)
+        connection.send(oi.drive(100, Radius.STRAIGHT))
+        frames_until(connection, lambda: connection.counters.frames >= 3)  # the stream read
+        robot.muted = True  # no frame before the stop: its quiet after shows nothing
+        time.sleep(0.1)  # over three stream periods of silence (more under load: the same)
+
+    def stopped_again(r: FakeRobot) -> bool:
+        """The Stop, the question (its Start among it) and the Stop again, the robot in Off:
+        a robot that took only the first Stop ends with the question, in Passive."""
+        written = bytes(r.received)
+        after = written[written.find(STOP_TO_OFF) + len(STOP_TO_OFF) :]
+        asked = STOP_TO_OFF in written and PROBE_QUERY in after and bytes([128]) in after
+        return asked and after.endswith(bytes([173])) and r.mode is OIMode.OFF
+
+    assert robot.wait_until(stopped_again), bytes(robot.received[-40:]).hex(" ")
+    assert connection.safe_stopped is True and connection.mode is OIMode.OFF
+    assert connection.ending.found_at.startswith("the Stop (173) was not confirmed at first")
 
 
 def test_end_in_stop_falls_back_to_start_on_the_500(

@@ -26,6 +26,7 @@ from roomba_bt.robot.discovery import PROBE_QUERY
 from roomba_bt.robot.safety import signal_reason
 from roomba_bt.runtime.recording import load_record
 from roomba_bt.runtime.stack import Recording, RunStack
+from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.transport import SerialTransport
 
 from .bridge import ResettingBridge
@@ -681,6 +682,47 @@ def test_ctrl_c_on_a_noisy_line_leaves_the_robot_stopped_in_passive(tmp_path: Pa
     assert SAFE_END in load_record(record).outbound  # then close()'s again, unconfirmed
 
 
+def _on_a_stream_gap(
+    served_sim: Callable[..., Any], tmp_path: Path, **given: Any
+) -> tuple[Any, RunStack, Path]:
+    """The simulator on a pty whose stream stops 1.5 s in for 3 s, and a run of SPIN on it in
+    this process (``RunStack``, ``given`` its settings), recorded: the simulator, the stack
+    and the record's path."""
+    sim = served_sim(
+        "--pty", "--stream-gap-at", "1.5", "--stream-gap-s", "3", "--faults-from-stream"
+    )
+    source, path = write_mission(tmp_path, SPIN), tmp_path / "run.jsonl"
+    stack = RunStack(
+        load_mission(source, {}, profile=CREATE2),
+        SerialTransport.open(sim.address),
+        profile=CREATE2,
+        record=Recording(path, str(source)),
+        **{"timeout_s": 30.0, **given},
+    )
+    return sim, stack, path
+
+
+class CtrlCAtTheTrip(logging.Handler):
+    """A Ctrl-C as the watchdog trips (its log line, on the run's own thread)."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if "waiting up to" in record.getMessage():
+            raise KeyboardInterrupt
+
+
+def _run_with(stack: RunStack, handler: logging.Handler | None) -> RunSummary:
+    """``stack``'s run, ``handler`` on the run loop's log meanwhile; the stack closed after."""
+    logger = logging.getLogger("roomba_bt.runtime.loop")
+    if handler is not None:
+        logger.addHandler(handler)
+    try:
+        return stack.run(raise_interrupts=False)
+    finally:
+        if handler is not None:
+            logger.removeHandler(handler)
+        stack.close()
+
+
 @pytest.mark.parametrize("by", ["stack.stop", "Ctrl-C"])
 def test_a_run_stopped_in_a_stall_over_the_pty_replays_byte_for_byte(
     served_sim: Callable[..., Any], tmp_path: Path, by: str
@@ -696,18 +738,7 @@ def test_a_run_stopped_in_a_stall_over_the_pty_replays_byte_for_byte(
 
     The run is in this process, on the pty, so that its stop is asked as the watchdog
     trips (on the run's own thread): the stall is the stop's, whatever the machine's load."""
-    sim = served_sim(
-        "--pty", "--stream-gap-at", "1.5", "--stream-gap-s", "3", "--faults-from-stream"
-    )
-    source, path = write_mission(tmp_path, SPIN), tmp_path / "run.jsonl"
-    stack = RunStack(
-        load_mission(source, {}, profile=CREATE2),
-        SerialTransport.open(sim.address),
-        profile=CREATE2,
-        timeout_s=30.0,
-        record=Recording(path, str(source)),
-    )
-
+    _, stack, path = _on_a_stream_gap(served_sim, tmp_path)
     at_the_stop: list[int] = []  # the link's count there: what an older roomba-bt noted
 
     class StopAtTheTrip(logging.Handler):
@@ -716,19 +747,7 @@ def test_a_run_stopped_in_a_stall_over_the_pty_replays_byte_for_byte(
                 at_the_stop.append(stack.connection.link.bytes_written)
                 stack.stop("stopped by the test")
 
-    class CtrlCAtTheTrip(logging.Handler):
-        def emit(self, record: logging.LogRecord) -> None:
-            if "waiting up to" in record.getMessage():
-                raise KeyboardInterrupt
-
-    logger = logging.getLogger("roomba_bt.runtime.loop")
-    handler = StopAtTheTrip() if by == "stack.stop" else CtrlCAtTheTrip()
-    logger.addHandler(handler)
-    try:
-        summary = stack.run(raise_interrupts=False)
-    finally:
-        logger.removeHandler(handler)
-        stack.close()
+    summary = _run_with(stack, StopAtTheTrip() if by == "stack.stop" else CtrlCAtTheTrip())
     assert summary.outcome.name == "INTERRUPTED", summary.reason
     record = load_record(path)
     ending = record.ending
@@ -774,3 +793,29 @@ def _an_older_records_count_is_said_as_its_miscount(
     ) in replay.stdout, replay.stdout
     assert "not a difference in behaviour" in replay.stdout
     assert_quoted("docs/runtime.md", "replay: the end note counts", replay.stdout, numbers=True)
+
+
+@pytest.mark.parametrize("stop", ["confirmed", "asked after"])
+def test_end_in_stop_leaves_the_simulator_in_off_and_says_so(
+    served_sim: Callable[..., Any], tmp_path: Path, stop: str
+) -> None:
+    """``end_in="stop"`` on a pty: a Stop the stream's quiet confirms (the run's time limit,
+    frames coming), and one it cannot (a Ctrl-C while the watchdog rides the stream's gap:
+    the robot silent before it), which is asked after: that needs Start (Off answers
+    nothing), the robot answers in Passive and Stop is written again. The robot ends in Off
+    either way, as the summary says; the second was left in Passive, the summary saying
+    ``final mode Off``. Each record replays byte for byte."""
+    confirmed = stop == "confirmed"  # the run's time limit, before the gap
+    timeout = 1.0 if confirmed else 30.0
+    sim, stack, path = _on_a_stream_gap(served_sim, tmp_path, timeout_s=timeout, end_in="stop")
+    summary = _run_with(stack, None if confirmed else CtrlCAtTheTrip())
+    _, said = sim.stop()
+    assert "mode Off, wheels 0/0" in said, said  # the simulator's own word at its end
+    assert summary.stop_delivered and summary.final_mode_text() == "Off", summary.safe_stop
+    outbound = load_record(path).outbound
+    again = "the Stop (173) was not confirmed at first" in summary.safe_stop
+    assert again is (stop == "asked after"), summary.safe_stop
+    assert (PROBE_QUERY in outbound) is again and outbound.endswith(oi.stop().data)
+    replay = finished([*CLI, "replay", str(path)])
+    assert replay.returncode == 0, replay.stdout + replay.stderr
+    assert "final mode   Off" in replay.stdout, replay.stdout

@@ -41,3 +41,22 @@ def test_end_in_stop_where_the_profile_has_it_runs(
     out, err = capsys.readouterr()
     assert code == 0, out + err
     assert "safe stop    sent" in out and out.rstrip().splitlines()[-1] != ""
+
+
+def test_a_record_of_a_run_ended_in_stop_replays_byte_for_byte(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The record says how its stop ended (``"end_in": "stop"`` in its header) and the replay
+    ends so too: it ended with Start, and the record's Stop was its first difference at its
+    last byte ("expected Stop (173) ad, sent Start (128) 80", exit 1)."""
+    mission = tmp_path / "sit.yaml"
+    mission.write_text(MISSION)
+    record = tmp_path / "run.jsonl"
+    assert main(["run", str(mission), "--fast", "--display", "none", "--end-in", "stop",
+                 "--record", str(record)]) == 0  # fmt: skip
+    assert "final mode   Off" in capsys.readouterr().out
+    assert '"end_in": "stop"' in record.read_text().splitlines()[0]
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    assert "first difference" not in out and "final mode   Off" in out, out
+    assert "the tree wrote the same 25 bytes as the recorded run" in out, out

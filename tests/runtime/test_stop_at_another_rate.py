@@ -56,15 +56,16 @@ def test_the_hunt_tries_every_rate_of_the_baud_table_but_the_runs() -> None:
 
 
 def _spun_on(
-    tmp_path: Path, lossy: type[LosesTheOpcodeOf]
+    tmp_path: Path, lossy: type[LosesTheOpcodeOf], **given: Any
 ) -> tuple[RunSummary, Simulator, LosesTheOpcodeOf]:
     """The spinning mission run to its end and closed on ``lossy``'s line, whose lost opcode
-    makes a Baud to 300 (:data:`BAUD_MAKER`): its summary, the robot, the line."""
+    makes a Baud to 300 (:data:`BAUD_MAKER`): its summary, the robot, the line; ``given``:
+    the stack's other settings (``end_in``)."""
     path = tmp_path / "m.yaml"
     path.write_text(SPINS)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
     link = lossy(simulator, BAUD_MAKER)
-    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2, **given)
     summary = stack.run()
     stack.close()
     return summary, simulator, link
@@ -108,6 +109,23 @@ def test_a_robot_that_does_not_come_back_to_the_runs_rate_is_left_where_it_answe
         in summary.safe_stop
     ), summary.safe_stop
     assert "`--baud auto` or roomba-bt doctor finds it" in summary.safe_stop
+
+
+@pytest.mark.parametrize("lossy", [LosesTheOpcodeOf, LosesTheBaudBackToo])
+def test_end_in_stop_found_at_another_rate_ends_as_the_summary_says(
+    tmp_path: Path, lossy: type[LosesTheOpcodeOf]
+) -> None:
+    """``end_in="stop"``: the question at the other rate needs Start, so the robot answers in
+    Passive. Put back at the run's rate, it is sent Stop again and ends in Off; left at 300
+    (the Baud back lost), it stays in Passive, and the summary says so: it said ``final mode
+    Off`` of both robots in Passive."""
+    summary, simulator, _ = _spun_on(tmp_path, lossy, end_in="stop")
+    assert summary.stop_delivered, summary.safe_stop
+    assert simulator.requested_left == simulator.requested_right == 0
+    back = lossy is LosesTheOpcodeOf
+    assert simulator.mode is (OIMode.OFF if back else OIMode.PASSIVE), summary.safe_stop
+    assert summary.final_mode_text() == simulator.mode.label, summary.safe_stop
+    assert ("Stop written again" in summary.safe_stop) is back, summary.safe_stop
 
 
 def test_a_baud_made_of_the_last_command_before_the_stop_is_no_quiet_and_is_hunted() -> None:
