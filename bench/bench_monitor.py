@@ -52,7 +52,7 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.mission import load_mission
-from roomba_bt.monitor import server as server_module
+from roomba_bt.monitor import pump as pump_module
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.monitor.session import MonitorSession
@@ -243,16 +243,16 @@ DESIGNS = {
 @contextlib.contextmanager
 def _variant(design: str) -> Iterator[None]:
     """The process-wide settings a design changes, restored after its block."""
-    interval, poll = sys.getswitchinterval(), server_module.TICK_POLL_S
+    interval, poll = sys.getswitchinterval(), pump_module.TICK_POLL_S
     if design.startswith("switch-"):
         sys.setswitchinterval(float(design.removeprefix("switch-").removesuffix("ms")) / 1e3)
     if design == "poll-10ms":
-        server_module.TICK_POLL_S = 0.010
+        pump_module.TICK_POLL_S = 0.010
     try:
         yield
     finally:
         sys.setswitchinterval(interval)
-        server_module.TICK_POLL_S = poll
+        pump_module.TICK_POLL_S = poll
 
 
 def paced_dock(seconds: float, monitor: bool, design: str | None = None) -> Block:

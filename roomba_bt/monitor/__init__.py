@@ -9,8 +9,10 @@ the simulator). Its pieces, each usable without the others:
   (never blocks, never waits for a page);
 * :mod:`~roomba_bt.monitor.session`: the runtime's tick gate: operator requests (pause,
   resume, step, stop, force, breakpoints, reload) applied between ticks;
-* :mod:`~roomba_bt.monitor.server`: the web server (aiohttp, an optional extra) and the page
-  in ``static/``;
+* :mod:`~roomba_bt.monitor.server`: the web server (aiohttp, an optional extra) in a thread of
+  its own, serving :mod:`~roomba_bt.monitor.routes` (what each URL answers, and who may ask:
+  the page in ``static/``, its API) and, on each page's socket, the updates'
+  :mod:`~roomba_bt.monitor.pump`;
 * :mod:`~roomba_bt.monitor.recorded`: a ``run --record`` file replayed into a feed.
 
 See ``docs/monitor.md``.

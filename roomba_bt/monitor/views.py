@@ -7,7 +7,7 @@ safe. Lengths are millimetres, angles radians, times seconds of mission time.
 from __future__ import annotations
 
 from collections.abc import Collection, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.monitor.board_text import board_text
 from roomba_bt.monitor.feed import TEXT_KEYS, Ending, RunFeed, TickRecord
@@ -34,6 +34,9 @@ from roomba_bt.oi.packets import PACKETS
 from roomba_bt.printable import shortened
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.runtime.recording import utc_stamp
+
+if TYPE_CHECKING:
+    from roomba_bt.monitor.session import MonitorSession
 
 #: How the page's streamed-packets table names each packet: the OI packet table's name (what
 #: a mission's ``sensor:`` and a plugin read it by), title and unit, by id. Sent once, in the
@@ -322,6 +325,24 @@ def path_view(records: list[TickRecord]) -> dict[str, list[list[float]]]:
 def tree_view(feed: RunFeed, generation: int | None = None) -> list[dict[str, Any]]:
     infos = feed.trees.get(feed.generation if generation is None else generation, [])
     return [info.as_json() for info in infos]
+
+
+def session_view(session: MonitorSession | None) -> dict[str, Any]:
+    """What the page shows of the operator's session: paused (why, since which tick, the
+    countdown to the robot's sleep), the breakpoints and forced conditions by node index; a
+    recorded run's: none of them."""
+    if session is None:
+        return {"paused": False, "pause_reason": "", "paused_tick": None, "sleep_note": "",
+                "breakpoints": {}, "forced": {}}  # fmt: skip
+    state = session.state
+    return {
+        "paused": state.paused,
+        "pause_reason": state.pause_reason,
+        "paused_tick": state.paused_tick,
+        "sleep_note": state.sleep_note,
+        "breakpoints": {str(k): v for k, v in state.breakpoints.items()},
+        "forced": {str(k): v for k, v in state.forced.items()},
+    }
 
 
 def world_view(simulator: Any) -> dict[str, Any]:
