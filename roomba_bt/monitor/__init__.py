@@ -8,7 +8,8 @@ the simulator). Its pieces, each usable without the others:
 * :mod:`~roomba_bt.monitor.feed`: the bounded per-tick history the tick thread appends to
   (never blocks, never waits for a page);
 * :mod:`~roomba_bt.monitor.session`: the runtime's tick gate: operator requests (pause,
-  resume, step, stop, force, breakpoints, reload) applied between ticks;
+  resume, step, stop, force, breakpoints, reload) applied between ticks, each checked first
+  (:mod:`~roomba_bt.monitor.controls`: what may be asked, and when it is refused);
 * :mod:`~roomba_bt.monitor.server`: the web server (aiohttp, an optional extra) in a thread of
   its own, serving :mod:`~roomba_bt.monitor.routes` (what each URL answers, and who may ask:
   the page in ``static/``, its API) and, on each page's socket, the updates'

@@ -48,9 +48,10 @@ from aiohttp import WSMsgType, web
 
 from roomba_bt.monitor.access import Access, Tokens
 from roomba_bt.monitor.address import is_loopback
+from roomba_bt.monitor.controls import ControlRefused
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.pump import Reading, Socket, pump, stamp
-from roomba_bt.monitor.session import ControlRefused, MonitorSession
+from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.monitor.views import (
     header_view,
     path_view,

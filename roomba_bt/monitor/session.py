@@ -23,12 +23,23 @@ import logging
 import math
 import queue
 import threading
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from py_trees.common import Status
 
+from roomba_bt.monitor.controls import (
+    BREAK_ON,
+    CONTROLS,
+    FORCEABLE,
+    Ahead,
+    ControlRefused,
+    Request,
+    check_request,
+    find_node,
+    node_path,
+)
 from roomba_bt.monitor.feed import IN_THE_EVENT_LOG, RunFeed
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command
@@ -39,10 +50,30 @@ from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.teardown import setup_tree
 
 if TYPE_CHECKING:
+    from roomba_bt.robot.interface import Snapshot
     from roomba_bt.runtime.loop import MissionRunner
 
-#: What a breakpoint may wait for: a node's start, or its end with a given status.
-BREAK_ON = ("start", "success", "failure", "end")
+#: the names this module held before what may be asked had a module of its own
+#: (``controls.py``): ``from roomba_bt.monitor.session import ControlRefused`` still works
+__all__ = [
+    "BREAK_ON",
+    "BY_OPERATOR",
+    "FORCEABLE",
+    "RELOADED_IN_A_STEP",
+    "ROBOT_SLEEPS_S",
+    "SLEEP_WARNING_S",
+    "STEP",
+    "STEPPED",
+    "ControlRefused",
+    "MonitorSession",
+    "Request",
+    "SessionState",
+    "find_node",
+    "node_path",
+    "pause_sequence",
+    "sleep_countdown",
+    "sleep_warning",
+]
 
 log = logging.getLogger(__name__)
 
@@ -56,43 +87,11 @@ BY_OPERATOR = "paused by the operator"
 RELOADED_IN_A_STEP = (
     "the mission reloaded during a step: held; the new tree starts from its root at the resume"
 )
-FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
 #: an OI robot's sleep after this long in Passive (keep-awake's BRC pulses prevent it)
 ROBOT_SLEEPS_S = 300.0
 #: how long into a pause a robot that will sleep is warned of in the event log and the
 #: terminal's log (the page's banner counts down from the pause's start: ``sleep_note``)
 SLEEP_WARNING_S = 240.0
-
-
-#: the channels the robot stops by itself when it falls to Passive (a cliff, a wheel drop)
-class ControlRefused(ValueError):
-    """A request that cannot be carried out as asked (the page gets HTTP 409 with this text)."""
-
-
-#: the requests that change whether the run goes on, pauses or ends (:meth:`MonitorSession._ahead`)
-_CONTROLS = ("pause", "resume", "step", "stop")
-
-
-@dataclass
-class _Ahead:
-    """The run's state as its queued requests will leave it: what :func:`_check_request`
-    checks a new one against."""
-
-    paused: bool
-    stepping: bool
-    stopping: bool
-    forced: set[int] = field(default_factory=set)
-
-
-@dataclass
-class Request:
-    action: str
-    node: int | None = None
-    value: str | None = None
-    payload: Any = None
-    #: who asked: the client's address (``192.0.2.7``) or ``the terminal's keys``; the event
-    #: log says it beside the act (two pages open: whose pause was it?)
-    by: str | None = None
 
 
 @dataclass
@@ -126,9 +125,10 @@ def pause_sequence(connection: Any) -> list[Command]:
     return out
 
 
-# long on purpose (about 430 lines): the one place an operator's request meets the run, its
-# check against the queued ones, its application between two ticks and the state each act
-# leaves (pause, resume, step, breakpoints, forces, reload) together, under one lock
+# the one place an operator's request meets the run, its check against the queued ones
+# (controls.py), its application between two ticks and the state each act leaves (pause,
+# resume, step, breakpoints, reload) together, under one lock; a pause's countdown to the
+# robot's sleep (SleepCountdown) and the forced conditions (Forces) are parts of their own
 class MonitorSession:
     """The tick gate the runner calls around each tick (see the module docstring)."""
 
@@ -174,13 +174,10 @@ class MonitorSession:
         self._held_end: str | None = None
         self._stop: str | None = None
         self._pending_mission: Any = None
-        #: the stream's tick at which a paused robot that sleeps in Passive (no keep-awake)
-        #: is warned of (None: not paused, warned already, or it does not sleep)
-        self._sleep_warn_tick: int | None = None
-        #: the stream's tick at which that robot sleeps (None: not paused, or it does not)
-        self._sleep_tick: int | None = None
-        #: each forced node's entry in the summary's ``forced``, until it is released
-        self._forcing: dict[int, int] = {}
+        #: a pause's countdown to the robot's sleep in Passive, where it sleeps (no keep-awake)
+        self._sleep = SleepCountdown(self.state, feed)
+        #: the conditions forced, as the node, the page and the summary have them
+        self._forces = Forces(self.state.forced, feed)
         self.listeners: list[Callable[[str], None]] = []  # told of pauses (the terminal)
         #: who asked for the request being applied (:attr:`Request.by`), said by :meth:`_said`
         self._asker: str | None = None
@@ -202,26 +199,19 @@ class MonitorSession:
         if isinstance(node, str):
             node = find_node(infos, node)
         with self._lock:
-            _check_request(self._ahead(), infos, self.allow_force, action, node, value)
-            if action in _CONTROLS:
+            check_request(self._ahead(), infos, self.allow_force, action, node, value)
+            if action in CONTROLS:
                 self._queued.append(action)
             self._requests.put(Request(action, node, value, by=by))
         self._wake.set()
 
-    def _ahead(self) -> _Ahead:
+    def _ahead(self) -> Ahead:
         """The run's state as the requests queued will leave it (under :attr:`_lock`): what a
         new request is checked against, so that a 202 is a request the run will apply."""
         state = self.state
-        ahead = _Ahead(state.paused, self._steps_left is not None, self._stop is not None)
-        ahead.forced = set(state.forced)
-        for action in self._queued:
-            if action == "stop":
-                ahead.stopping = True
-            elif action == "pause":
-                ahead.paused, ahead.stepping = True, False
-            else:  # resume, step
-                ahead.paused, ahead.stepping = False, action == "step"
-        return ahead
+        now = Ahead(state.paused, self._steps_left is not None, self._stop is not None)
+        now.forced = set(state.forced)
+        return now.after(self._queued)
 
     def reload(self, mission: Any) -> None:
         """A new, valid mission to run from its root at the next safe point."""
@@ -259,10 +249,8 @@ class MonitorSession:
         if self.state.paused:
             self.feed.observe(runner, ticked=False)
             self._tally_pause(runner)
-            if self._sleep_tick is not None and runner.has_snapshot:
-                self.state.sleep_note = sleep_countdown(self._sleep_tick - runner.snapshot.tick)
-            if self._sleep_warn_tick is not None and runner.snapshot.tick >= self._sleep_warn_tick:
-                self._warn_of_sleep(runner)
+            if runner.has_snapshot:
+                self._sleep.paused_frame(runner.snapshot)
             return False
         return True
 
@@ -278,7 +266,7 @@ class MonitorSession:
                 return
             while self._stop is None:  # up to the stop (queued: never empty before it)
                 req = self._requests.get_nowait()
-                if req.action in _CONTROLS:
+                if req.action in CONTROLS:
                     self._queued.pop(0)
                 if req.action == "stop":
                     self._asker = req.by
@@ -310,7 +298,7 @@ class MonitorSession:
         breakpoint on the last tick or by a step that was that tick, so the operator sees the
         end before the run's own; the resume (or a stop) then ends the run."""
         if self.state.forced and runner.mission.root.status is Status.SUCCESS:
-            _forced_success(runner, self.feed, self.state.forced)
+            self._forces.said_in_a_success(runner)
         held = self.state.paused or self._steps_left == 0
         if held and self._held_end is None:
             ended = runner.mission.root.status.value
@@ -326,7 +314,7 @@ class MonitorSession:
                 req = self._requests.get_nowait()
             except queue.Empty:
                 return
-            if req.action in _CONTROLS and self._queued:
+            if req.action in CONTROLS and self._queued:
                 self._queued.pop(0)
             self._asker = req.by
             try:
@@ -394,11 +382,7 @@ class MonitorSession:
         # a reload's own pause (not ``noted``) lasts no frame: no sleep to count down to
         sleeps = noted and self.WARN_OF_SLEEP and _sleeps_in_passive(connection)
         sleeps = sleeps and runner.has_snapshot
-        began = runner.snapshot.tick if sleeps else 0
-        self._sleep_warn_tick = began + round(SLEEP_WARNING_S / SLOT_SECONDS) if sleeps else None
-        self._sleep_tick = began + round(ROBOT_SLEEPS_S / SLOT_SECONDS) if sleeps else None
-        if sleeps:
-            self.state.sleep_note = sleep_countdown(round(ROBOT_SLEEPS_S / SLOT_SECONDS))
+        self._sleep.begin(runner.snapshot.tick if sleeps else None)
         sent = ", ".join(c.name for c in commands) or "nothing"
         asleep = f"; {_cannot_keep_awake()} unless resumed" if sleeps else ""
         # a reload's: said as what it is. It said "pause (reload): ...; tree frozen; this link
@@ -422,27 +406,13 @@ class MonitorSession:
         self._resume(runner, STEP)
         self._steps_left = 1
 
-    def _warn_of_sleep(self, runner: MissionRunner) -> None:
-        """The pause has lasted :data:`SLEEP_WARNING_S` on a link without keep-awake: an OI
-        robot sleeps after 5 minutes in Passive, and the run then ends (CONNECTION LOST, "the
-        robot fell asleep"): said in the page's event log and the terminal's log, which have
-        no countdown (the page's banner has had one since the pause began)."""
-        self._sleep_warn_tick = None
-        tick = runner.snapshot.tick
-        left = (self._sleep_tick - tick) * SLOT_SECONDS if self._sleep_tick is not None else 0.0
-        paused = (tick - (self.state.paused_tick or 0)) * SLOT_SECONDS
-        text = sleep_warning(paused, left)
-        self.feed.event("warning", text, runner.snapshot.time, tick)
-        log.warning("monitor: %s", text, extra=IN_THE_EVENT_LOG)  # in the terminal's log too
-
     def _resume(self, runner: MissionRunner, why: str) -> None:
         _note(runner, {"resume": why, "at": "before"})
         runner.wall_limit.hold(False)
         self._tally_pause(runner)
         self._paused_before_s = runner.summary.paused_s
         self.state.paused_tick = None
-        self._sleep_warn_tick = self._sleep_tick = None  # awake again: no sleep to count to
-        self.state.sleep_note = ""
+        self._sleep.end()  # awake again: no sleep to count to
         if self._held_end is not None:  # nothing to go on with: no mode, no wheels again
             self.state.paused, self.state.pause_reason = False, ""
             self._steps_left = None
@@ -453,7 +423,7 @@ class MonitorSession:
         again: list[Command] = []
         if mode in (OIMode.SAFE, OIMode.FULL):
             again.append(oi.safe() if mode is OIMode.SAFE else oi.full())
-            again += self._standing(runner)
+            again += _standing(runner)
         elif self._cycle_before_pause is not None:  # its leaf waits on it: started again
             again.append(self._cycle_before_pause)
         if again:
@@ -469,14 +439,6 @@ class MonitorSession:
         if again:
             back += self.WHERE
         self._said(runner, "control", f"resume ({why}): {back}; the tree goes on")
-
-    def _standing(self, runner: MissionRunner) -> list[Command]:
-        """The actuators' commands as the tree left them (its actions sent theirs once), to
-        send again on a resume: not Play or Buttons (they would play or press again). A wheel
-        or motor command from before the robot's own fall to Passive is not among them: the
-        run forgets it at the fall (runtime/loop.py ``FALL_STOPS``; a resume sent the forward
-        drive that took the robot over the edge)."""
-        return [c for c in runner.last_sent.values() if c.spec.sets_state]
 
     def _said(self, runner: MissionRunner, kind: str, text: str) -> None:
         """An operator's act (or what it caused) into the page's event log, and the run's
@@ -494,63 +456,26 @@ class MonitorSession:
         log.info("monitor: %s", text)
 
     def _force(self, runner: MissionRunner, index: int, value: str) -> None:
-        node = self.feed.nodes[index]
-        name = self.feed.infos[index].name
-        if value == "none":
-            if index not in self.state.forced:  # two releases queued: the first did it
-                return
-            node.__dict__.pop("update", None)
-            node.feedback_message = ""
-            self.state.forced.pop(index, None)
-            text = f"{name} no longer forced"
-        else:
-            status = FORCEABLE[value]
-            said = f"forced to {status.value} by the operator"
-
-            def forced() -> Status:
-                # said where the result is read: a mission failed by it says so in its
-                # summary (it read as the sensor's own failure)
-                node.feedback_message = said
-                return status
-
-            # an instance attribute: found before the class's update, removed to release
-            node.__dict__["update"] = forced
-            self.state.forced[index] = value
-            text = f"{name} forced to {status.value}"
-        self._said(runner, "force", text)
-        _note(runner, {"force": name, "node": index, "to": value, "at": "before"})
-        entry = f"{name} to {value.upper()}" if value != "none" else ""
-        _summarise_force(runner, self._forcing, index, entry)
+        """Force node ``index`` to ``value`` or release it (``none``), said and noted."""
+        text = self._forces.force(runner, index, value)
+        if text is not None:  # None: a second release queued, the first did it
+            self._said(runner, "force", text)
+            name = self.feed.infos[index].name
+            _note(runner, {"force": name, "node": index, "to": value, "at": "before"})
 
     def _check_breakpoints(self, runner: MissionRunner, changed: tuple[int, ...]) -> None:
-        record = self.feed.latest()
-        if record is None or self.state.paused:
-            return
-        statuses = record.statuses
-        previous = self._previous_statuses(record)
-        for index in changed:
-            on = self.state.breakpoints.get(index)
-            if on is None:
-                continue
-            now, before = statuses[index], previous[index] if previous else "I"
-            started = (now == "R" and before != "R") or (before == "I" and now in "SF")
-            hit = (
-                (on == "start" and started)
-                or (on == "success" and now == "S")
-                or (on == "failure" and now == "F")
-                or (on == "end" and now in "SF")
-            )
-            if hit:
-                name = self.feed.infos[index].name
-                self._said(
-                    runner, "breakpoint", f"breakpoint: {name} {_on(on)} at tick {record.tick}"
-                )
-                self._pause(runner, f"breakpoint: {name} {_on(on)}", at="after")
-                return
-
-    def _previous_statuses(self, record: Any) -> str | None:
-        previous = self.feed.record(record.seq - 1)
-        return previous.statuses if previous is not None and previous.tree == record.tree else None
+        """Pause after this tick when it met a breakpoint (the first of ``changed`` that did:
+        :func:`breakpoint_met`), unless paused already."""
+        met = (
+            None
+            if self.state.paused
+            else breakpoint_met(self.feed, self.state.breakpoints, changed)
+        )
+        if met is not None:
+            index, on, tick = met
+            name = self.feed.infos[index].name
+            self._said(runner, "breakpoint", f"breakpoint: {name} {_on(on)} at tick {tick}")
+            self._pause(runner, f"breakpoint: {name} {_on(on)}", at="after")
 
     def _replace_tree(self, runner: MissionRunner, mission: Any) -> None:
         """Reload at a safe point: safe stop, the old tree stopped, the new one from its root."""
@@ -570,9 +495,7 @@ class MonitorSession:
         # its name too, where a renamed one is shown: the page's header and the summary
         runner.summary.mission = self.feed.mission_name = mission.name
         setup_tree(mission.root, lambda: mission.setup(runner))  # what shutdown_nodes closes
-        for index in list(self._forcing):  # the nodes are gone: released with them
-            _summarise_force(runner, self._forcing, index, "")
-        self.state.forced.clear()
+        self._forces.release_all(runner)  # the nodes are gone: released with them
         self.state.breakpoints.clear()
         self._held_end = None
         self.feed.set_tree(mission.root)
@@ -580,8 +503,7 @@ class MonitorSession:
         self.state.paused = was_paused
         if not was_paused:  # the reload's own pause lasts no frame: nothing to count down
             self.state.paused_tick = None
-            self._sleep_warn_tick = self._sleep_tick = None
-            self.state.sleep_note = ""
+            self._sleep.end()
         runner.clock_held = was_paused
         runner.wall_limit.hold(was_paused)
         self._skip_tick = True
@@ -602,102 +524,36 @@ class MonitorSession:
         return None
 
 
-def _forced_success(runner: MissionRunner, feed: RunFeed, forced_nodes: dict[int, str]) -> None:
-    """A mission that ends in SUCCESS with a condition forced (still returning what the
-    operator chose): its summary says so, as a failure's reason does ("battery(below=15%):
-    forced to SUCCESS by the operator"); it read as the mission's own success."""
-    nodes, infos = feed.nodes, feed.infos
-    forced = [
-        f"{infos[i].name}: forced to {FORCEABLE[v].value} by the operator"
-        for i, v in sorted(forced_nodes.items())
-        if nodes[i].status is FORCEABLE[v]
-    ]
-    if forced:
-        runner.summary.reason = "; ".join(forced)
-
-
-def _check_request(
-    state: _Ahead,
-    infos: list[Any],
-    allow_force: bool,
-    action: str,
-    node: int | None,
-    value: str | None,
-) -> None:
-    """:meth:`MonitorSession.request`'s check: :class:`ControlRefused` for a request the
-    run's state (as the requests queued before it leave it) refuses, ValueError for a bad
-    one; nothing when it may be queued."""
-    if action in _CONTROLS:
-        if state.stopping:
-            raise ControlRefused(
-                "the run is already stopping" if action == "stop" else "the run is stopping"
-            )
-        if action == "pause" and state.paused:
-            raise ControlRefused("the run is already paused")
-        if action in ("resume", "step") and state.stepping:
-            raise ControlRefused(f"a step is under way: {action} when it has paused again")
-        if action == "resume" and not state.paused:
-            raise ControlRefused("the run is not paused")
-        if action == "step" and not state.paused:
-            raise ControlRefused("step needs a paused run: pause first")
-    elif action in ("break", "force"):
-        if node is None or not 0 <= node < len(infos):
-            raise ValueError(f"node {node!r}: allowed 0..{len(infos) - 1}")
-        if action == "break":
-            if value not in (*BREAK_ON, "none"):
-                raise ValueError(f"break on {value!r}: allowed {', '.join(BREAK_ON)}, none")
-        else:
-            if value not in (*FORCEABLE, "none"):
-                raise ValueError(f"force to {value!r}: allowed success, failure, none")
-            if not infos[node].condition:
-                raise ControlRefused(f"{infos[node].name} is not a condition: only "
-                                     "conditions can be forced")  # fmt: skip
-            if value == "none" and node not in state.forced:
-                raise ControlRefused(f"{infos[node].name} is not forced: nothing to release")
-            if not allow_force:
-                raise ControlRefused(
-                    "forcing a condition on a real robot is off; run with --monitor-force"
-                )
-    else:
-        raise ValueError(f"action {action!r}: allowed pause, resume, step, stop, break, force")
-
-
-def node_path(infos: list[Any], index: int) -> str:
-    """A node's names from the root down, joined by ``/`` (``root/dock/search``)."""
-    names: list[str] = []
-    at: int | None = index
-    while at is not None:
-        names.append(infos[at].name)
-        at = infos[at].parent
-    return "/".join(reversed(names))
-
-
-def find_node(infos: list[Any], wanted: str) -> int:
-    """The index of the node ``wanted`` names: its path from the root (:func:`node_path`) or,
-    when only one node has it, its name; else, a string of digits (``"3"``: a script that
-    quoted the index, or took it from a form's text field) is that index, range-checked as a
-    number is. A name wins over the index it looks like (a node may be named ``3``), so a
-    mission whose node is renamed never changes which node a digit string meant without a
-    word: the error listed the indices and then refused ``"3"`` as "no node has that name".
-    ValueError says which nodes were meant or found."""
-    paths = [node_path(infos, i) for i in range(len(infos))]
-    if wanted in paths:
-        return paths.index(wanted)
-    named = [i for i, info in enumerate(infos) if info.name == wanted]
-    if len(named) == 1:
-        return named[0]
-    if named:
-        raise ValueError(
-            f"node {wanted!r}: {len(named)} nodes have that name (indices "
-            f"{', '.join(map(str, named))}); give its index or its path, e.g. "
-            f"{paths[named[0]]!r}"
-        )
-    if wanted.isascii() and wanted.isdigit():
-        return int(wanted)
-    raise ValueError(
-        f"node {wanted!r}: no node has that name or path; give an index 0..{len(infos) - 1}, "
-        "a node's name or its path from the root (names joined by /)"
+def breakpoint_met(
+    feed: RunFeed, breakpoints: Mapping[int, str], changed: tuple[int, ...]
+) -> tuple[int, str, int] | None:
+    """The first node of ``changed`` (flipped on the feed's newest tick) whose breakpoint
+    that flip meets, with what the breakpoint waited for (:data:`BREAK_ON`) and the tick;
+    None. A start is RUNNING from another status, or SUCCESS or FAILURE straight from
+    INVALID (a node that started and ended in one tick); before a tree's first tick (or a
+    new tree's), every node was INVALID."""
+    record = feed.latest()
+    if record is None:
+        return None
+    statuses = record.statuses
+    previous = feed.record(record.seq - 1)
+    before_all = (
+        previous.statuses if previous is not None and previous.tree == record.tree else None
     )
+    for index in changed:
+        on = breakpoints.get(index)
+        if on is None:
+            continue
+        now, before = statuses[index], before_all[index] if before_all else "I"
+        started = (now == "R" and before != "R") or (before == "I" and now in "SF")
+        if (
+            (on == "start" and started)
+            or (on == "success" and now == "S")
+            or (on == "failure" and now == "F")
+            or (on == "end" and now in "SF")
+        ):
+            return index, on, record.tick
+    return None
 
 
 def _cannot_keep_awake() -> str:
@@ -724,6 +580,53 @@ def sleep_warning(paused_s: float, left_s: float) -> str:
     )
 
 
+class SleepCountdown:
+    """A pause's countdown to the robot's sleep: an OI robot sleeps after
+    :data:`ROBOT_SLEEPS_S` in Passive, and the run then ends (CONNECTION LOST, "the robot
+    fell asleep"), on a link that cannot keep it awake (:func:`_sleeps_in_passive`). From
+    the pause's tick, the page's banner counts down (:attr:`SessionState.sleep_note`, a
+    new text once a second) and, :data:`SLEEP_WARNING_S` into the pause, the event log and
+    the terminal's log, which have no countdown, warn once. The tick thread's alone."""
+
+    def __init__(self, state: SessionState, feed: RunFeed) -> None:
+        self._state = state
+        self._feed = feed
+        #: the stream's tick at which the paused robot is warned of (None: not paused,
+        #: warned already, or it does not sleep)
+        self._warn_tick: int | None = None
+        #: the stream's tick at which it sleeps (None: not paused, or it does not sleep)
+        self._sleep_tick: int | None = None
+
+    def begin(self, tick: int | None) -> None:
+        """A pause from the stream's ``tick`` in which the robot sleeps; None: one in which
+        it does not (keep-awake, a replay, a reload's pause that lasts no frame)."""
+        if tick is None:
+            self._warn_tick = self._sleep_tick = None
+            return
+        self._warn_tick = tick + round(SLEEP_WARNING_S / SLOT_SECONDS)
+        self._sleep_tick = tick + round(ROBOT_SLEEPS_S / SLOT_SECONDS)
+        self._state.sleep_note = sleep_countdown(round(ROBOT_SLEEPS_S / SLOT_SECONDS))
+
+    def end(self) -> None:
+        """The pause is over (or lasted no frame): nothing to count down to."""
+        self._warn_tick = self._sleep_tick = None
+        self._state.sleep_note = ""
+
+    def paused_frame(self, snapshot: Snapshot) -> None:
+        """A frame of the pause: the banner's countdown, and the warning once it is due."""
+        tick = snapshot.tick
+        if self._sleep_tick is not None:
+            self._state.sleep_note = sleep_countdown(self._sleep_tick - tick)
+        if self._warn_tick is None or tick < self._warn_tick:
+            return
+        self._warn_tick = None
+        left = (self._sleep_tick - tick) * SLOT_SECONDS if self._sleep_tick is not None else 0.0
+        paused = (tick - (self._state.paused_tick or 0)) * SLOT_SECONDS
+        text = sleep_warning(paused, left)
+        self._feed.event("warning", text, snapshot.time, tick)
+        log.warning("monitor: %s", text, extra=IN_THE_EVENT_LOG)  # in the terminal's log too
+
+
 def _sleeps_in_passive(connection: Any) -> bool:
     """Whether the robot falls asleep in a long pause: a robot that sleeps after 5 minutes in
     Passive, on a link without keep-awake (off, ``--no-keep-awake``, or a pty or plain socket
@@ -734,25 +637,93 @@ def _sleeps_in_passive(connection: Any) -> bool:
     return wake is None or wake.unavailable is not None
 
 
-def _summarise_force(
-    runner: MissionRunner, forcing: dict[int, int], index: int, forced: str
-) -> None:
-    """Every force into the summary (``forced``: "NAME to SUCCESS", or "" for a release),
-    with its ticks: it named only one still forced at the end, and a SUCCESS forced and
-    released before it went unsaid, though the run may have turned on it. ``forcing``: each
-    forced node's entry in the summary's list, until it is released."""
-    entries = runner.summary.forced
-    at = (
-        f"tick {runner.snapshot.tick} (t={runner.snapshot.time:.3f} s)"
-        if runner.has_snapshot
-        else "the start"
-    )
-    was = forcing.pop(index, None)
-    if was is not None:
-        entries[was] += f", {'released' if not forced else 'until'} at {at}"
-    if forced:
-        forcing[index] = len(entries)
-        entries.append(f"{forced} at {at}")
+class Forces:
+    """The conditions the operator forced: each node's ``update`` replaced by one that
+    answers the status chosen (an instance attribute, found before the class's ``update``,
+    removed to release it), the page's list of them (:attr:`SessionState.forced`, ``forced``
+    here), and the summary's entry of each (``forced``), with the ticks it was forced and
+    released at. The tick thread's alone."""
+
+    def __init__(self, forced: dict[int, str], feed: RunFeed) -> None:
+        self._forced = forced
+        self._feed = feed
+        #: each forced node's entry in the summary's ``forced``, until it is released
+        self._entries: dict[int, int] = {}
+
+    def force(self, runner: MissionRunner, index: int, value: str) -> str | None:
+        """Force node ``index`` to ``value`` (``success``, ``failure``; ``none`` releases
+        it); what the event log says of it, or None: a release of a node not forced (two
+        releases queued: the first did it)."""
+        node = self._feed.nodes[index]
+        name = self._feed.infos[index].name
+        if value == "none":
+            if index not in self._forced:
+                return None
+            node.__dict__.pop("update", None)
+            node.feedback_message = ""
+            self._forced.pop(index, None)
+            text = f"{name} no longer forced"
+        else:
+            status = FORCEABLE[value]
+            said = f"forced to {status.value} by the operator"
+
+            def forced() -> Status:
+                # said where the result is read: a mission failed by it says so in its
+                # summary (it read as the sensor's own failure)
+                node.feedback_message = said
+                return status
+
+            node.__dict__["update"] = forced
+            self._forced[index] = value
+            text = f"{name} forced to {status.value}"
+        self._summarise(runner, index, f"{name} to {value.upper()}" if value != "none" else "")
+        return text
+
+    def release_all(self, runner: MissionRunner) -> None:
+        """The tree is replaced (a reload): its nodes gone, their forces with them, each
+        said released in the summary."""
+        for index in list(self._entries):
+            self._summarise(runner, index, "")
+        self._forced.clear()
+
+    def said_in_a_success(self, runner: MissionRunner) -> None:
+        """A mission that ends in SUCCESS with a condition forced (still returning what the
+        operator chose): its summary says so, as a failure's reason does ("battery(below=15%):
+        forced to SUCCESS by the operator"); it read as the mission's own success."""
+        nodes, infos = self._feed.nodes, self._feed.infos
+        forced = [
+            f"{infos[i].name}: forced to {FORCEABLE[v].value} by the operator"
+            for i, v in sorted(self._forced.items())
+            if nodes[i].status is FORCEABLE[v]
+        ]
+        if forced:
+            runner.summary.reason = "; ".join(forced)
+
+    def _summarise(self, runner: MissionRunner, index: int, forced: str) -> None:
+        """Every force into the summary (``forced``: "NAME to SUCCESS", or "" for a
+        release), with its ticks: it named only one still forced at the end, and a SUCCESS
+        forced and released before it went unsaid, though the run may have turned on it."""
+        entries = runner.summary.forced
+        at = (
+            f"tick {runner.snapshot.tick} (t={runner.snapshot.time:.3f} s)"
+            if runner.has_snapshot
+            else "the start"
+        )
+        was = self._entries.pop(index, None)
+        if was is not None:
+            entries[was] += f", {'released' if not forced else 'until'} at {at}"
+        if forced:
+            self._entries[index] = len(entries)
+            entries.append(f"{forced} at {at}")
+
+
+def _standing(runner: MissionRunner) -> list[Command]:
+    """The actuators' commands as the tree left them (its actions sent theirs once), to
+    send again on a resume: not Play or Buttons (they would play or press again). A wheel
+    or motor command from before the robot's own fall to Passive is not among them: the
+    run forgets it at the fall (runtime/loop.py ``FALL_STOPS``; a resume sent the forward
+    drive that took the robot over the edge)."""
+    return [c for c in runner.last_sent.values() if c.spec.sets_state]
 
 
 def _on_home_base(runner: MissionRunner) -> bool:
