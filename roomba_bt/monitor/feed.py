@@ -81,7 +81,7 @@ _perf_counter = time.perf_counter
 #: blackboard values that cannot change in place: kept as they are
 _PLAIN = frozenset({str, int, float, bool, type(None), bytes, complex})
 #: a blackboard value whose text takes longer is shown as it is now, marked so (see
-#: :meth:`RunFeed._text_at_tick`)
+#: :meth:`BoardVersions._text_at_tick`)
 TEXT_BUDGET_S = 0.0002
 #: ... on this many ticks in a row: one text cut short by the machine (the thread
 #: descheduled, a garbage collection), not by the value, kept the cover's map as its object
@@ -342,6 +342,93 @@ class PausedMotion:
         return moving or was
 
 
+class BoardVersions:
+    """The run's blackboard as the page shows it at each tick: a new version, by number,
+    each time a key changed (a record names its tick's: :attr:`TickRecord.board`), with the
+    keys whose text is too slow to take every tick kept as their object. Versions that no
+    record in the ring refers to any more are dropped from time to time. The tick thread
+    writes (:meth:`watch`, every tick); the server's thread reads :attr:`versions`."""
+
+    def __init__(self, oldest: Callable[[], TickRecord | None]) -> None:
+        """``oldest``: the oldest record the feed's ring holds now, read when old versions
+        are dropped."""
+        self._oldest = oldest
+        self._current: Mapping[str, Any] = {}
+        #: the blackboard's contents by version, a new version when they changed; versions no
+        #: record in the ring refers to any more are dropped from time to time
+        self.versions: dict[int, Mapping[str, Any]] = {0: self._current}
+        self.version = 0  # the newest
+        self._limit = 64
+        #: keys whose value's text was too slow to take every tick: kept as the object
+        self.live_keys: set[str] = set()
+        #: keys whose text went over its budget on the last ticks: on how many in a row
+        self._slow_texts: dict[str, int] = {}
+
+    def watch(self, run: RunBoard) -> int:
+        """A new version of the blackboard when a key changed (the snapshot's mirror and the
+        keys' declared types are not keys): ``run``'s keys, by the names a user knows
+        (:meth:`RunBoard.shown <roomba_bt.behaviours.blackboard.RunBoard.shown>`).
+
+        A value that may change in place (the cover's map: one object, changed every tick)
+        is kept as its text at this tick (its key listed under :data:`TEXT_KEYS`): kept as
+        the object, a rewound tick showed its text of the moment the page asked (the whole
+        run's map at tick 100), and no new version was made when it changed. Numbers,
+        strings, enums and tuples of them are kept as they are (they cannot change). Returns
+        the newest version, the one this tick's record names."""
+        storage = py_trees.blackboard.Blackboard.storage
+        if len(storage) > 1 or run.snapshot_key not in storage:
+            board = run.shown()
+            texts: tuple[str, ...] = ()
+            for key, value in board.items():
+                if type(value) not in _PLAIN and not _fixed(value):
+                    text = self._text_at_tick(key, value)
+                    if text is not None:
+                        board[key] = text
+                        texts += (key,)
+            if texts:
+                board[TEXT_KEYS] = texts
+            if board != self._current:
+                self._new(board)
+        return self.version
+
+    def _text_at_tick(self, key: str, value: Any) -> str | None:
+        """``value``'s text now, or None (kept as the object) for a key whose text took over
+        :data:`TEXT_BUDGET_S` on :data:`SLOW_TEXT_TICKS` ticks in a row (the page marks it as
+        current, not at the tick shown): a plugin's object with a slow ``repr`` does not
+        slow every tick, and a quick one the machine held up once is still kept as text."""
+        if key in self.live_keys:
+            return None
+        began = _perf_counter()
+        text = board_text(value)
+        if _perf_counter() - began > TEXT_BUDGET_S:
+            self._slow_text(key)
+        elif self._slow_texts:  # a quick one again: the row is broken
+            self._slow_texts.pop(key, None)
+        return text
+
+    def _slow_text(self, key: str) -> None:
+        """``key``'s text went over its budget this tick: kept as the object from now on if
+        it did on :data:`SLOW_TEXT_TICKS` ticks in a row."""
+        slow = self._slow_texts.get(key, 0) + 1
+        if slow < SLOW_TEXT_TICKS:
+            self._slow_texts[key] = slow
+        else:
+            self._slow_texts.pop(key, None)
+            self.live_keys.add(key)
+
+    def _new(self, board: Mapping[str, Any]) -> None:
+        self._current = board
+        self.version += 1
+        boards = self.versions
+        boards[self.version] = board
+        if len(boards) > self._limit:  # drop what no record in the ring refers to
+            oldest = self._oldest()
+            keep = oldest.board if oldest is not None else self.version
+            for version in [v for v in boards if v < keep]:
+                del boards[version]
+            self._limit = max(64, 2 * len(boards))
+
+
 class RunFeed:
     """Everything the page shows, appended by the tick thread, read by the server thread.
     ``packed_from``: None, the last ``history`` ticks are kept (a live run's; a pause's
@@ -408,21 +495,24 @@ class RunFeed:
         self._last: list[Status] = []
         self._statuses = ""
         self._reasons: Mapping[int, str] = {}
-        self._blackboard: Mapping[str, Any] = {}
-        #: the blackboard's contents by version, a new version when they changed; versions no
-        #: record in the ring refers to any more are dropped from time to time
-        self.boards: dict[int, Mapping[str, Any]] = {0: self._blackboard}
-        self._board = 0
-        self._boards_limit = 64
-        #: keys whose value's text was too slow to take every tick: kept as the object
-        self.live_keys: set[str] = set()
-        #: keys whose text went over its budget on the last ticks: on how many in a row
-        self._slow_texts: dict[str, int] = {}
+        #: the blackboard's versions, which each record names (its ring read when old
+        #: versions are dropped: a test gives the feed a smaller ring after it is made)
+        self._boards = BoardVersions(lambda: self.ring.oldest())
         self._layout: FrameLayout | None = None
         self._mode: object = None
         self._refused_seen = 0
         self._guard_seen, self._guard_counts = 0, (0, 0, 0, 0)  # tick_guard_said's
         self._unnamed: frozenset[int] = frozenset()
+
+    @property
+    def boards(self) -> dict[int, Mapping[str, Any]]:
+        """The blackboard's contents by version (:attr:`BoardVersions.versions`)."""
+        return self._boards.versions
+
+    @property
+    def live_keys(self) -> set[str]:
+        """The keys kept as their object (:attr:`BoardVersions.live_keys`)."""
+        return self._boards.live_keys
 
     # ---------------------------------------------------------------- tree
     @property
@@ -468,7 +558,7 @@ class RunFeed:
             self._guard_seen
         ):
             self._tick_guard_saw(summary, snapshot)
-        self._watch_board(runner.blackboard or run_board())
+        board = self._boards.watch(runner.blackboard or run_board())
         if not ticked and self.thin_pauses and snapshot is not None:
             if self._thins(snapshot.tick, changed or mode_changed or self._motion.seen(snapshot)):
                 return changed
@@ -505,7 +595,7 @@ class RunFeed:
                     truth,
                     runner.count_written(),
                     summary.refused_commands,
-                    self._board,
+                    board,
                     self.generation,
                     ticked,
                     motor_bytes,
@@ -514,7 +604,7 @@ class RunFeed:
         else:
             record = TickRecord(ring.count, 0, 0.0, self._statuses, changed, self._reasons,
                                 None, -1, 0, None, 0, truth, runner.count_written(),
-                                summary.refused_commands, self._board, self.generation,
+                                summary.refused_commands, board, self.generation,
                                 ticked, motor_bytes)  # fmt: skip
         ring.append(record)
         return changed
@@ -530,68 +620,6 @@ class RunFeed:
             return True
         self._paused_kept = tick
         return False
-
-    def _watch_board(self, run: RunBoard) -> None:
-        """A new version of the blackboard when a key changed (the snapshot's mirror and the
-        keys' declared types are not keys): ``run``'s keys, by the names a user knows
-        (:meth:`RunBoard.shown <roomba_bt.behaviours.blackboard.RunBoard.shown>`).
-
-        A value that may change in place (the cover's map: one object, changed every tick)
-        is kept as its text at this tick (its key listed under :data:`TEXT_KEYS`): kept as
-        the object, a rewound tick showed its text of the moment the page asked (the whole
-        run's map at tick 100), and no new version was made when it changed. Numbers,
-        strings, enums and tuples of them are kept as they are (they cannot change)."""
-        storage = py_trees.blackboard.Blackboard.storage
-        if len(storage) > 1 or run.snapshot_key not in storage:
-            board = run.shown()
-            texts: tuple[str, ...] = ()
-            for key, value in board.items():
-                if type(value) not in _PLAIN and not _fixed(value):
-                    text = self._text_at_tick(key, value)
-                    if text is not None:
-                        board[key] = text
-                        texts += (key,)
-            if texts:
-                board[TEXT_KEYS] = texts
-            if board != self._blackboard:
-                self._new_board(board)
-
-    def _text_at_tick(self, key: str, value: Any) -> str | None:
-        """``value``'s text now, or None (kept as the object) for a key whose text took over
-        :data:`TEXT_BUDGET_S` on :data:`SLOW_TEXT_TICKS` ticks in a row (the page marks it as
-        current, not at the tick shown): a plugin's object with a slow ``repr`` does not
-        slow every tick, and a quick one the machine held up once is still kept as text."""
-        if key in self.live_keys:
-            return None
-        began = _perf_counter()
-        text = board_text(value)
-        if _perf_counter() - began > TEXT_BUDGET_S:
-            self._slow_text(key)
-        elif self._slow_texts:  # a quick one again: the row is broken
-            self._slow_texts.pop(key, None)
-        return text
-
-    def _slow_text(self, key: str) -> None:
-        """``key``'s text went over its budget this tick: kept as the object from now on if
-        it did on :data:`SLOW_TEXT_TICKS` ticks in a row."""
-        slow = self._slow_texts.get(key, 0) + 1
-        if slow < SLOW_TEXT_TICKS:
-            self._slow_texts[key] = slow
-        else:
-            self._slow_texts.pop(key, None)
-            self.live_keys.add(key)
-
-    def _new_board(self, board: Mapping[str, Any]) -> None:
-        self._blackboard = board
-        self._board += 1
-        boards = self.boards
-        boards[self._board] = board
-        if len(boards) > self._boards_limit:  # drop what no record in the ring refers to
-            oldest = self.ring.oldest()
-            keep = oldest.board if oldest is not None else self._board
-            for version in [v for v in boards if v < keep]:
-                del boards[version]
-            self._boards_limit = max(64, 2 * len(boards))
 
     def _flipped(self, statuses: list[Status], runner: MissionRunner) -> tuple[int, ...]:
         last = self._last
@@ -695,7 +723,7 @@ class RunFeed:
 
     def blackboard(self, record: TickRecord) -> Mapping[str, Any]:
         """The mission's blackboard keys at that tick ({} once its version was dropped)."""
-        return self.boards.get(record.board, {})
+        return self._boards.versions.get(record.board, {})
 
     def record(self, seq: int) -> TickRecord | None:
         """The record with sequence number ``seq``, if the ring still holds it."""
