@@ -40,6 +40,7 @@ import json
 import math
 import time
 from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any
 from urllib.parse import urlsplit
@@ -244,6 +245,7 @@ def token_access(tokens: Tokens, request: web.Request) -> Access | None:
     return tokens.access(given) if given else None
 
 
+@dataclass(eq=False, kw_only=True)
 class MonitorRoutes:
     """What each URL answers for one feed (a live run with its session, or a recorded run
     without one), behind the guard (:meth:`_guard`): the app :class:`~.server.MonitorServer`
@@ -251,25 +253,15 @@ class MonitorRoutes:
     sockets (told when the run ends), and the port the server bound, which the guard's
     refusal names."""
 
-    def __init__(
-        self,
-        feed: RunFeed,
-        session: MonitorSession | None,
-        *,
-        readonly: bool,
-        tokens: Tokens,
-        host: str,
-        port: int,
-    ) -> None:
-        self.feed = feed
-        self.session = session
-        self.readonly = readonly
-        self.tokens = tokens
-        self.host = host
-        #: the port asked, then the one bound (``MonitorServer.start``: port 0 is any)
-        self.port = port
-        self.pages = 0
-        self.sockets: set[Socket] = set()
+    feed: RunFeed
+    session: MonitorSession | None
+    readonly: bool
+    tokens: Tokens
+    host: str
+    #: the port asked, then the one bound (``MonitorServer.start``: port 0 is any)
+    port: int
+    pages: int = 0  # connected now
+    sockets: set[Socket] = field(default_factory=set)  # theirs, told when the run ends
 
     def app(self) -> web.Application:
         """The aiohttp app: each route at ``/`` and under :data:`VIEW_PATH`, behind the guard;

@@ -214,7 +214,12 @@ class MonitorServer:
             host, has_controls=not self.readonly, control=token, view=view_token
         )
         self.routes = MonitorRoutes(
-            feed, session, readonly=self.readonly, tokens=self.tokens, host=host, port=port
+            feed=feed,
+            session=session,
+            readonly=self.readonly,
+            tokens=self.tokens,
+            host=host,
+            port=port,
         )
         self._loop: asyncio.AbstractEventLoop | None = None
         self._stopped: asyncio.Event | None = None
