@@ -323,17 +323,13 @@ class TickGuard:
     def _note(self, ran: float, where: str, motors: bool) -> None:
         """The act in the record (``run --record``), for a replay to do it again; ``motors``:
         motors off went out with the drive 0 (a note without it: drive 0 alone)."""
-        note = getattr(self.connection.transport, "note", None)
-        if callable(note):
-            act: dict[str, Any] = {
-                "tick_guard": round(ran, 3), "limit": self.limit_s, "where": where,
-                "tick": self._index(), "at": "during",
-            }  # fmt: skip
-            if motors:
-                act["motors"] = True
-            if self._between:
-                act[LOOP_NOTE] = True
-            note(act)
+        act: dict[str, Any] = {
+            "tick_guard": round(ran, 3), "limit": self.limit_s, "where": where,
+            "tick": self._index(), "at": "during",
+        }  # fmt: skip
+        if motors:
+            act["motors"] = True
+        self._write_note(act)
 
     def _note_still(self, ran: float, where: str, cycle: str) -> None:
         """A tick past the limit with nothing moving (:data:`STILL_NOTE`), or while ``cycle``
@@ -341,17 +337,22 @@ class TickGuard:
         gap that tick left as the live run did. ``"at": "after"``: read after that tick (an
         earlier roomba-bt's monitor takes it for an operator's act it does not know, and
         passes it there, holding back no act of the next tick)."""
+        kept: dict[str, Any] = {
+            CYCLE_NOTE if cycle else STILL_NOTE: round(ran, 3), "limit": self.limit_s,
+            "where": where, "tick": self._index(), "at": "after",
+        }  # fmt: skip
+        if cycle:
+            kept["cycle"] = cycle
+        self._write_note(kept)
+
+    def _write_note(self, said: dict[str, Any]) -> None:
+        """``said`` in the record, when the run makes one (a transport with ``note``), with
+        :data:`LOOP_NOTE` where the pass was a program's loop body's, not the tree's."""
         note = getattr(self.connection.transport, "note", None)
         if callable(note):
-            kept: dict[str, Any] = {
-                CYCLE_NOTE if cycle else STILL_NOTE: round(ran, 3), "limit": self.limit_s,
-                "where": where, "tick": self._index(), "at": "after",
-            }  # fmt: skip
-            if cycle:
-                kept["cycle"] = cycle
             if self._between:
-                kept[LOOP_NOTE] = True
-            note(kept)
+                said[LOOP_NOTE] = True
+            note(said)
 
     def _moving(self) -> bool:
         """The wheels move or a brush or the vacuum runs: something to stop."""
