@@ -984,6 +984,12 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
         "tests/evaluate/test_worker_plugins.py::test_eval_says_a_worker_without_the_plugin_"
         "once_and_exits_3"
     ),
+    ("docs/robot.md", "final mode Off$"): "tests/runtime/"
+    "test_cli_pty.py::test_end_in_stop_leaves_the_simulator_in_off_and_says_so",
+    ("docs/runtime.md", "safe stop sent drive, motors, pause_resume_stream, stop ("): "tests/"
+    "runtime/test_cli_pty.py::test_end_in_stop_leaves_the_simulator_in_off_and_says_so",
+    ("docs/robot.md", "final mode Passive$"): "tests/runtime/"
+    "test_stop_at_another_rate.py::test_end_in_stop_found_at_another_rate_ends_as_the_summary_says",
 }
 
 

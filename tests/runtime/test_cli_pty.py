@@ -819,3 +819,11 @@ def test_end_in_stop_leaves_the_simulator_in_off_and_says_so(
     replay = finished([*CLI, "replay", str(path)])
     assert replay.returncode == 0, replay.stdout + replay.stderr
     assert "final mode   Off" in replay.stdout, replay.stdout
+    if again:
+        said_by_the_run = "\n".join(summary.lines())
+        assert_quoted("docs/robot.md", "final mode Off$", said_by_the_run)
+        assert_quoted(
+            "docs/runtime.md",
+            "safe stop sent drive, motors, pause_resume_stream, stop (",
+            said_by_the_run,
+        )

@@ -126,6 +126,8 @@ def test_end_in_stop_found_at_another_rate_ends_as_the_summary_says(
     assert simulator.mode is (OIMode.OFF if back else OIMode.PASSIVE), summary.safe_stop
     assert summary.final_mode_text() == simulator.mode.label, summary.safe_stop
     assert ("Stop written again" in summary.safe_stop) is back, summary.safe_stop
+    if not back:
+        assert_quoted("docs/robot.md", "final mode Passive$", "\n".join(summary.lines()))
 
 
 def test_a_baud_made_of_the_last_command_before_the_stop_is_no_quiet_and_is_hunted() -> None:
