@@ -35,6 +35,7 @@ from typing import Any
 
 import py_trees
 import pytest
+from waits import HANG_S  # tests/waits.py: the suite's one bound on a hang
 
 
 def _answer_the_signals_the_tests_send() -> None:
@@ -210,8 +211,8 @@ def clean_blackboard() -> Iterator[None]:
 #: The most a test waits for ``roomba-bt sim`` to print its address, or to end once told:
 #: each wait ends as soon as it does, so this stops only a hung simulator. Its start is an
 #: interpreter's (imports: seconds on a loaded 2-core machine), and 10 s for its end was as
-#: fixed a bet as the pty tests' 30 s that failed there.
-SIM_WAIT_S = 120.0
+#: fixed a bet as the pty tests' 30 s that failed there: the suite's hang bound.
+SIM_WAIT_S = HANG_S
 
 
 class ServedSim:
@@ -354,8 +355,9 @@ def usage_error(capsys: pytest.CaptureFixture[str]) -> Callable[..., str]:
 
 #: How long :func:`until` waits before the test fails: generous, for a loaded 2-core machine
 #: (what it waits for takes milliseconds on an idle one; a monitor session's run on the
-#: virtual clock did not reach its 1000th frame in 20 s with six busy loops on the 2 cores).
-UNTIL_SECONDS = 60.0
+#: virtual clock did not reach its 1000th frame in 20 s with six busy loops on the 2 cores):
+#: the suite's hang bound.
+UNTIL_SECONDS = HANG_S
 
 
 @pytest.fixture
@@ -465,8 +467,8 @@ def sockets_made(monkeypatch: pytest.MonkeyPatch) -> Callable[[ModuleType], Sock
 
 #: How long the threads a test module started are waited for to end, after the module,
 #: before they are said left running: a thread told to stop ends in milliseconds on an idle
-#: machine
-LEFT_RUNNING_S = 60.0
+#: machine (the suite's hang bound)
+LEFT_RUNNING_S = HANG_S
 
 
 #: the descriptors :class:`Leftovers` watches, by how ``/proc/self/fd`` names them: sockets

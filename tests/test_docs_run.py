@@ -74,7 +74,7 @@ import docs_inputs  # tests/docs_inputs.py: the files that make the docs' diagno
 import pytest
 import yaml
 from quoted import assert_quoted, begins, kind_of, quotes  # tests/quoted.py: the docs' quotes
-from runtime.simrun import finished  # tests/runtime: a child run to its end, no fixed wait
+from waits import finished  # tests/waits.py: a child run to its end, no fixed wait
 
 from roomba_bt.cli import main
 

@@ -1,7 +1,7 @@
 """``roomba-bt doctor`` against the simulator served on a pty and on RFC 2217, at both OI
 rates, awake and asleep, as three robot models; against a pty nobody answers; and
 ``--baud auto`` for ``run`` and ``sensors``. Every run is a subprocess waited for until it
-ends (runtime/simrun.py's ``ended``: a doctor still running at :data:`COMMAND_WAIT_S` is sent
+ends (tests/waits.py's ``ended``: a doctor still running at :data:`COMMAND_WAIT_S` is sent
 SIGTERM and fails the test). No test reads the wall clock: the 10 s acceptance bar of a
 line with nothing behind it, :data:`DOCTOR_TIMEOUT_S`, is read off doctor's own clock, the
 link's, on a line of a clock of its own (:class:`_NobodyThere`)."""
@@ -21,10 +21,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from runtime.simrun import (  # tests/runtime: a WiFi bridge on the virtual clock; a child's end
-    BridgeLink,
-    ended,
-)
+from runtime.simrun import BridgeLink  # tests/runtime: a WiFi bridge on the virtual clock
+from waits import HANG_S, ended  # tests/waits.py: a child's end, no fixed bet
 
 import roomba_bt.transport as transport_package
 from roomba_bt.cli.doctor_cmd import (
@@ -57,7 +55,7 @@ DOCTOR_TIMEOUT_S = 10.0
 #: subprocess.run's SIGKILL left the pty in the kernel's exclusive mode (a process killed
 #: outright cannot clear it: transport/serial_port.py), which refuses the next open of it
 #: as "another program has it open" while the simulator lives.
-COMMAND_WAIT_S = 60.0
+COMMAND_WAIT_S = HANG_S
 #: What a robot whose checksum covers the header and reports the mode as is may be, with no
 #: Reset tried: the 500 may sum the header too (its profile takes both rules).
 CREATE2_OR_500 = "iRobot Create 2 (or a Roomba 500 series, by its label)"

@@ -4,7 +4,6 @@ byte tapped."""
 from __future__ import annotations
 
 import random
-import subprocess
 import textwrap
 import threading
 import time
@@ -14,6 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import py_trees
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import opcodes
@@ -333,18 +333,19 @@ class SlowTerm(Action):
 
 #: the source of a function a plugin's blocking method calls (the plugin's source ends with
 #: it): the tick waits until the tick guard has stopped the wheels behind its back, at most
-#: 10 s, so that a test of the guard waits for its act, not for a time that depends on the
-#: machine's speed (tests/runtime/test_tick_guard.py, test_stop_on_a_slow_link.py;
+#: :data:`~waits.HANG_S` (10 s before: a guard thread kept from the 2 cores that long let the
+#: tick go on unguarded), so that a test of the guard waits for its act, not for a time that
+#: depends on the machine's speed (tests/runtime/test_tick_guard.py, test_stop_on_a_slow_link.py;
 #: :func:`wait_for_the_guard` in the test's own process)
-WAITS_FOR_THE_GUARD = '''
+WAITS_FOR_THE_GUARD = f'''
 
 import time
 
 
 def wait_for_the_guard(robot):
-    """Blocks until the wheels were stopped behind the tick's back (at most 10 s)."""
+    """Blocks until the wheels were stopped behind the tick's back (at most {HANG_S:g} s)."""
     writer = robot.connection.writer
-    deadline = time.monotonic() + 10.0
+    deadline = time.monotonic() + {HANG_S!r}
     while getattr(writer.last_wheels, "args", None) != (0, 0):
         if time.monotonic() > deadline:
             break
@@ -355,10 +356,10 @@ def wait_for_the_guard(robot):
 def wait_for_the_guard(robot: Any) -> None:
     """:data:`WAITS_FOR_THE_GUARD`'s wait, for a tick blocked in the test's own process (a
     plain behaviour, a program's loop over ``stack.ticks()``): until the tick guard has
-    stopped ``robot.connection``'s wheels behind its back, at most 10 s (3 s before, which a
-    guard thread on a loaded machine may need)."""
+    stopped ``robot.connection``'s wheels behind its back, at most :data:`~waits.HANG_S`
+    (3 s, then 10 s before, which a guard thread on a loaded machine may need)."""
     writer = robot.connection.writer
-    deadline = time.monotonic() + 10.0
+    deadline = time.monotonic() + HANG_S
     while getattr(writer.last_wheels, "args", None) != (0, 0) and time.monotonic() < deadline:
         time.sleep(0.002)
 
@@ -474,37 +475,3 @@ class LosesTheOpcodeOf(SimLink):
             data = data[1:]
         self.written += data
         super().write(data)
-
-
-#: The most a test waits for a child process (a run over a pty, its replay, the simulator)
-#: to end: :func:`ended` returns as soon as it does, so this stops only a hung test, never a
-#: slow one. Fixed 30 s waits failed on a loaded 2-core machine: a run's start alone (its
-#: imports, the simulator's first answer) took over 10 s there, and its end may wait out the
-#: safe stop's own last resort (10 s).
-CHILD_WAIT_S = 120.0
-
-
-def ended(proc: subprocess.Popen[str], ceiling: float = CHILD_WAIT_S) -> tuple[str, str]:
-    """What ``proc`` wrote on stdout and stderr, once it ended. Still running at
-    ``ceiling``: SIGTERM (a run closes its port and says why; SIGKILL would leave a pty in
-    the kernel's exclusive mode for the tests after), SIGKILL only if that is not heeded,
-    and the test fails with what it said."""
-    try:
-        return proc.communicate(timeout=ceiling)
-    except subprocess.TimeoutExpired:
-        proc.terminate()
-        try:
-            out, err = proc.communicate(timeout=ceiling)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            out, err = proc.communicate()
-    raise AssertionError(f"{proc.args} still ran after {ceiling:g} s; it said: {out}{err}")
-
-
-def finished(args: list[str], ceiling: float = CHILD_WAIT_S) -> subprocess.CompletedProcess[str]:
-    """``args`` run to its end, its output read through text pipes (:func:`ended`:
-    ``subprocess.run``'s timeout ends a late one with SIGKILL, and its ceiling was the
-    same fixed 30 s)."""
-    with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as proc:
-        out, err = ended(proc, ceiling)
-    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)

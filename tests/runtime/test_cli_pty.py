@@ -18,6 +18,7 @@ from typing import Any
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import HANG_S, ended, finished  # tests/waits.py: waits that end as it does
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
@@ -30,7 +31,7 @@ from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.transport import SerialTransport
 
 from .bridge import ResettingBridge
-from .simrun import SPIN, ended, finished, write_mission
+from .simrun import SPIN, write_mission
 
 SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
 
@@ -69,14 +70,6 @@ def _start_run(
     )  # fmt: skip
 
 
-#: The most a run is waited for to start driving (or to read its first frames, or to log
-#: what a test waits for): the waits end as soon as it does, so this bounds only a run that
-#: never will. A run's start (its imports, the simulator's answer) took over 10 s on 2 cores
-#: under load; 10 s failed such runs. Its end is waited for by :func:`~.simrun.ended`, up
-#: to :data:`~.simrun.CHILD_WAIT_S` (the safe stop's own last resort alone may take 10 s).
-RUN_WAIT_S = 60.0
-
-
 #: Frames the robot sent after the run's first Drive, in its record, before a test takes the
 #: run for driving on (its tick loop running, the stream coming): 75 ms of the stream. Before,
 #: a fixed 0.3 s after the Drive was seen, which the record (flushed every 0.25 s) had mostly
@@ -94,7 +87,7 @@ def _frames_after_the_first_drive(record: Path) -> int:
 def _wait_for_driving(record: Path, proc: subprocess.Popen[str] | None = None) -> None:
     """Until the run's record has its first Drive and :data:`FRAMES_DRIVING` frames after it
     (it drives on); fails at once with what ``proc`` said if it ended first."""
-    deadline = time.monotonic() + RUN_WAIT_S
+    deadline = time.monotonic() + HANG_S
     while time.monotonic() < deadline:
         if _frames_after_the_first_drive(record) >= FRAMES_DRIVING:
             return
@@ -103,7 +96,7 @@ def _wait_for_driving(record: Path, proc: subprocess.Popen[str] | None = None) -
             raise AssertionError(f"the run ended (exit {proc.returncode}) before it drove: "
                                  f"{out}{err}")  # fmt: skip
         time.sleep(0.05)
-    raise AssertionError(f"the run never started driving in {RUN_WAIT_S:g} s")
+    raise AssertionError(f"the run never started driving in {HANG_S:g} s")
 
 
 def _driving(port: str, tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
@@ -136,7 +129,7 @@ def _still_running(proc: subprocess.Popen[str], record: Path) -> bool:
     """Whether the run goes on: its record grows by 20 lines (about 0.3 s of the robot's
     frames) before it ends."""
     lines = record.read_text().count("\n") + 20
-    deadline = time.monotonic() + RUN_WAIT_S
+    deadline = time.monotonic() + HANG_S
     while proc.poll() is None and time.monotonic() < deadline:
         if record.read_text().count("\n") >= lines:
             return proc.poll() is None
@@ -585,14 +578,14 @@ def test_a_terminal_that_stops_reading_does_not_hold_up_the_run(
         stdout=out, stderr=err,
     )  # fmt: skip
     try:
-        deadline = time.monotonic() + RUN_WAIT_S
+        deadline = time.monotonic() + HANG_S
         while _frames_read(record) == 0 and time.monotonic() < deadline:
             time.sleep(0.05)
         _fill(write_end)
         filled_at = _frames_read(record)
         assert filled_at > 0, "the run never read a frame"
         frames = filled_at
-        deadline = time.monotonic() + RUN_WAIT_S  # the 200 frames' own: 3 s unloaded
+        deadline = time.monotonic() + HANG_S  # the 200 frames' own: 3 s unloaded
         while frames < filled_at + 200 and time.monotonic() < deadline:
             time.sleep(0.1)
             frames = _frames_read(record)
@@ -624,7 +617,7 @@ def _lines_of(path: Path) -> list[str]:
 def _wait_for_any(watched: dict[Path, str], proc: subprocess.Popen[str], count: int) -> str:
     """The first line of a watched file that matches its pattern ``count`` times (the first
     file's first match is enough), waiting while ``proc`` runs; "" if it ended first."""
-    deadline = time.monotonic() + RUN_WAIT_S
+    deadline = time.monotonic() + HANG_S
     while proc.poll() is None and time.monotonic() < deadline:
         for number, (path, pattern) in enumerate(watched.items()):
             hits = [line for line in _lines_of(path) if re.search(pattern, line)]

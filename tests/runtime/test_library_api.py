@@ -19,6 +19,7 @@ from typing import Any
 
 import py_trees
 import pytest
+from waits import HANG_S, waited  # tests/waits.py: a hang's bound
 
 import roomba_bt
 from roomba_bt import CREATE2, Outcome, RunStack, SimLink, Simulator, TreeMission, load_world
@@ -268,7 +269,7 @@ def test_a_loops_body_that_blocks_with_the_robot_still_is_said_as_such(
     with stack:
         for index, _ in enumerate(stack.ticks()):
             if index == 0:  # Safe sent, nothing moving yet
-                seen.wait(10.0)
+                waited(seen, "the tick guard's look at the loop's blocked body")
                 link.advance(1.5)
             if index == 5:
                 break
@@ -657,7 +658,7 @@ def test_import_roomba_bt_commands_is_the_module_from_roomba_bt_import_commands(
     done = subprocess.run(
         [sys.executable, "-c", "import roomba_bt.commands as c\nfrom roomba_bt import commands\n"
          "print(c is commands, c.drive(200, 32767).args)"],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True, text=True, timeout=HANG_S,
         env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
     )  # fmt: skip
     assert done.stdout == "True (200, 32767)\n", done.stderr

@@ -21,11 +21,12 @@ from typing import Any
 
 import pytest
 from transport.test_serial_transport import in_exclusive_mode  # tests/transport: TIOCGEXCL
+from waits import ended  # tests/waits.py: a child's end, no fixed bet
 
 from roomba_bt.robot.safety import CLOSING_UNDER_WAY
 from roomba_bt.runtime.recording import load_record
 
-from .simrun import SPIN, ended
+from .simrun import SPIN
 from .test_cli_pty import _wait_for_driving, ends_with_the_safe_stop
 
 pytestmark = pytest.mark.skipif(

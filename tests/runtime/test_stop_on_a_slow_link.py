@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.runtime.recording import load_record
@@ -43,7 +44,8 @@ tree:
 """
 
 #: spins with the motors on; its second tick blocks until the tick guard has stopped the
-#: wheels behind its back (at most 10 s), then fails: the frames of the blocked time queue
+#: wheels behind its back (at most the suite's hang bound), then fails: the frames of the
+#: blocked time queue
 BLOCKS = (
     '''
 from py_trees.common import Status
@@ -90,7 +92,7 @@ def _run(port: str, mission: Path, record: Path, *extra: str) -> subprocess.Comp
     return subprocess.run(
         [*CLI, "run", str(mission), "--port", port, "--record", str(record), "--display",
          "none", *extra],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True, text=True, timeout=HANG_S,
     )  # fmt: skip
 
 

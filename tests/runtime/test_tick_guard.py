@@ -2,7 +2,8 @@
 drive 0 from the guard's thread, never in the middle of the main thread's bytes; when the
 tick returns the run counts it, names the behaviour and its line, sends the last wheel
 command again and goes on. Event-driven: the blocking behaviour waits until the guard has
-acted (at most 10 s), so nothing here depends on the machine's speed."""
+acted (at most the suite's hang bound, tests/waits.py), so nothing here depends on the
+machine's speed."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from pathlib import Path
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import HANG_S, waited  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
@@ -33,7 +35,7 @@ from roomba_bt.behaviours import Action, declare
 
 @declare("stuck", kind="action")
 class Stuck(Action):
-    """Blocks its first tick until the wheels were stopped behind its back (at most 10 s)."""
+    """Blocks its first tick until the wheels were stopped behind its back."""
 
     def update(self):
         if not getattr(self, "waited", False):
@@ -86,14 +88,16 @@ def test_a_tick_that_blocks_gets_drive_0_and_the_run_goes_on(
 
 
 def _blocking_for(plugin: str, seconds: str) -> str:
-    """The plugin with its leaf blocking ``seconds`` at the most, not 10 s (the wait is
-    :data:`WAITS_FOR_THE_GUARD`'s): a plugin without that bound fails here, not silently."""
-    assert plugin.count("10.0") == 1, "the plugin's 10 s bound moved"
-    return plugin.replace("10.0", seconds)
+    """The plugin with its leaf blocking ``seconds`` at the most, not the hang bound (the
+    wait is :data:`WAITS_FOR_THE_GUARD`'s): a plugin without that bound fails here, not
+    silently."""
+    bound = f"+ {HANG_S!r}\n"
+    assert plugin.count(bound) == 1, "the plugin's hang bound moved"
+    return plugin.replace(bound, f"+ {seconds}\n")
 
 
 def test_no_guard_no_halt(run_mission: RunMission, plugin_dir: Path) -> None:
-    """Without the guard the same tick blocks until its own 10 s: the wheels are not
+    """Without the guard the same tick blocks until its own 0.05 s: the wheels are not
     stopped behind its back (the virtual clock: the robot did not move meanwhile)."""
     (plugin_dir / "stuck.py").write_text(_blocking_for(PLUGIN, "0.05"))
     run = run_mission(MISSION, permissions=Permissions(plugin_files=True), timeout=20.0)
@@ -181,7 +185,7 @@ def test_a_record_replays_the_guards_acts_byte_for_byte(
     assert run.summary.tick_halts == 1
     record = load_record(record_path)
     assert [n["tick_guard"] > 0 for _, n in record.notes if "ended" not in n] == [True]
-    # in the replay nothing stops the wheels during the tick: do not wait 10 s for it
+    # in the replay nothing stops the wheels during the tick: do not wait the hang bound
     (plugin_dir / "stuck.py").write_text(_blocking_for(PLUGIN, "0.0"))
     mission = load_mission(plugin_dir / "mission.yaml", permissions=allowed)
     summary, transport = replay_record(
@@ -398,7 +402,8 @@ def test_the_gap_a_blocked_tick_leaves_is_said_as_the_guards(
 
 
 #: a leaf that blocks its first tick with nothing moving (Safe, no drive yet) until the test's
-#: gate opens (``still_gate.seen``, at most 10 s), then has the robot stream on for 1.5 s
+#: gate opens (``still_gate.wait()``: the test fails, saying so, if it never does), then has
+#: the robot stream on for 1.5 s
 STILL_PLUGIN = '''
 import still_gate
 from py_trees.common import Status
@@ -413,7 +418,7 @@ class Still(Action):
     def update(self):
         if not getattr(self, "waited", False):
             self.waited = True
-            still_gate.seen.wait(10.0)
+            still_gate.wait()
             self.robot.connection.transport.advance(1.5)  # the robot streams on meanwhile
         return Status.SUCCESS
 '''
@@ -436,7 +441,12 @@ def still_gate(monkeypatch: pytest.MonkeyPatch, plugin_dir: Path) -> threading.E
     whose length depends on the machine."""
     (plugin_dir / "still.py").write_text(STILL_PLUGIN)
     gate = types.ModuleType("still_gate")
-    gate.seen = seen = guard_looks(monkeypatch)  # type: ignore[attr-defined]
+    seen = guard_looks(monkeypatch)
+
+    def wait() -> None:
+        waited(seen, "the tick guard's look at the still tick")
+
+    gate.wait = wait  # type: ignore[attr-defined]
     monkeypatch.setitem(sys.modules, "still_gate", gate)
     return seen
 
@@ -677,7 +687,7 @@ MOTORS_MISSION = MISSION.replace(
     "    - mode: safe\n",
     "    - mode: safe\n    - motors: {main_brush: true, side_brush: true, vacuum: true}\n",
 )
-#: blocks until the motors were turned off behind its back (at most 10 s)
+#: blocks until the motors were turned off behind its back
 MOTORS_PLUGIN = PLUGIN.replace(
     'getattr(writer.last_wheels, "args", None) != (0, 0)',
     'getattr(writer.last_motors, "args", None) != (0,)',

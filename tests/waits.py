@@ -1,0 +1,63 @@
+"""The suite's one bound on a wait that only guards against a hang, and the waits that use it.
+
+A test waits for things that take milliseconds on an idle machine: a thread told to stop, a
+child process's end, an event another thread sets. CI runs the suite on a shared 2-core
+machine, where a child's interpreter start alone took over 10 s and a thread was not
+scheduled for seconds: fixed bounds of 5, 10, 20 and 30 s failed there by chance (each one a
+lost submission), though nothing hung. Each wait here ends as soon as what it waits for
+happens, so :data:`HANG_S` costs nothing when all is well and stops only a real hang, and
+its failure names what hung (a bare ``assert event.wait(10)`` said ``assert False``).
+
+A bound that is what a test is about (the product's own timeout, on the virtual clock)
+is not one of these: it stays the test's own number.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import threading
+
+#: The most a test waits for something that only a hang would keep from happening: generous
+#: for a loaded 2-core machine (six busy loops on its 2 cores kept a monitor run from its
+#: 1000th virtual frame for 20 s), never reached when all is well.
+HANG_S = 120.0
+
+
+def waited(event: threading.Event, what: str, within: float = HANG_S) -> None:
+    """Return once ``event`` is set; fail, saying ``what`` never happened, if it is not
+    within ``within`` seconds."""
+    if not event.wait(within):
+        raise AssertionError(f"{what}: not within {within:g} s (hung?)")
+
+
+def joined(thread: threading.Thread, what: str, within: float = HANG_S) -> None:
+    """Return once ``thread`` has ended; fail, saying ``what`` hung, if it runs on after
+    ``within`` seconds."""
+    thread.join(within)
+    if thread.is_alive():
+        raise AssertionError(f"{what}: {thread.name!r} still ran after {within:g} s (hung?)")
+
+
+def ended(proc: subprocess.Popen[str], ceiling: float = HANG_S) -> tuple[str, str]:
+    """What ``proc`` wrote on stdout and stderr, once it ended. Still running at
+    ``ceiling``: SIGTERM (a run closes its port and says why; SIGKILL would leave a pty in
+    the kernel's exclusive mode for the tests after), SIGKILL only if that is not heeded,
+    and the test fails with its command line and what it said."""
+    try:
+        return proc.communicate(timeout=ceiling)
+    except subprocess.TimeoutExpired:
+        proc.terminate()
+        try:
+            out, err = proc.communicate(timeout=ceiling)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out, err = proc.communicate()
+    raise AssertionError(f"{proc.args} still ran after {ceiling:g} s; it said: {out}{err}")
+
+
+def finished(args: list[str], ceiling: float = HANG_S) -> subprocess.CompletedProcess[str]:
+    """``args`` run to its end, its output read through text pipes (:func:`ended`:
+    ``subprocess.run``'s timeout ends a late one with SIGKILL and loses what it said)."""
+    with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as proc:
+        out, err = ended(proc, ceiling)
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
