@@ -14,6 +14,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 import roomba_bt
 
@@ -118,7 +119,7 @@ def test_import_roomba_bt_loads_no_layer() -> None:
         "from roomba_bt import RunFailed\n"
         "print(RunFailed.__module__, 'roomba_bt.runtime.stack' in sys.modules)\n"
     )
-    output = subprocess.check_output([sys.executable, "-c", script], text=True, timeout=60)
+    output = subprocess.check_output([sys.executable, "-c", script], text=True, timeout=HANG_S)
     loaded, taken = output.splitlines()
     # the lazy names' module too, since session 36, at the first name asked for
     assert loaded == "['roomba_bt', 'roomba_bt._safe_path']"

@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -62,7 +63,7 @@ sys.exit(code)
 def _answer(port: str, when: str, signum: int, times: int = 1) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-c", CHILD, port, when, str(int(signum)), str(times)],
-        capture_output=True, text=True, timeout=120, env={"PYTHONPATH": str(ROOT), "PATH": ""},
+        capture_output=True, text=True, timeout=HANG_S, env={"PYTHONPATH": str(ROOT), "PATH": ""},
     )  # fmt: skip
 
 

@@ -12,6 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import build_parser, main
 from roomba_bt.cli.arguments import (
@@ -196,7 +197,7 @@ def _help_under_oo(*args: str) -> str:
     """``roomba-bt ARGS --help`` in a ``python -OO`` process (docstrings stripped)."""
     done = subprocess.run(
         [sys.executable, "-OO", "-m", "roomba_bt.cli", *args, "--help"],
-        capture_output=True, text=True, timeout=120, check=True,
+        capture_output=True, text=True, timeout=HANG_S, check=True,
         env={**os.environ, "COLUMNS": "100"},
     )  # fmt: skip
     return done.stdout

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.cli.arguments import plot_file
@@ -120,7 +121,7 @@ def test_what_an_import_error_names(module: str, error: ImportError, said: str |
 def _without_yarl(*argv: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-c", WITHOUT_YARL, *argv], capture_output=True, text=True,
-        timeout=120, env={**os.environ, "PYTHONWARNINGS": "ignore"},
+        timeout=HANG_S, env={**os.environ, "PYTHONWARNINGS": "ignore"},
     )  # fmt: skip
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt._entry import INTERRUPTED
 from roomba_bt.runtime.summary import ExitCode
@@ -48,7 +49,7 @@ def test_the_signals_are_taken_before_the_command_line_loads() -> None:
     on a loaded machine): a SIGTERM then was 143, a script's SIGINT or SIGQUIT lost."""
     done = subprocess.run(
         [sys.executable, "-c", HANDLERS_WHEN_CLI_LOADS],
-        capture_output=True, text=True, timeout=120, check=True,
+        capture_output=True, text=True, timeout=HANG_S, check=True,
     )  # fmt: skip
     assert done.stdout.splitlines()[-1] == str(["interrupted_early"] * 3)
 
@@ -77,7 +78,7 @@ def test_the_handlers_go_in_before_any_module_they_do_not_need() -> None:
     which ``site`` loads in every other start) and the entry point come first now."""
     done = subprocess.run(
         [sys.executable, "-S", "-c", MODULES_BEFORE_THE_HANDLERS],
-        capture_output=True, text=True, timeout=120, check=True,
+        capture_output=True, text=True, timeout=HANG_S, check=True,
         env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
     )  # fmt: skip
     handlers, imported = json.loads(done.stdout.splitlines()[-1])
@@ -99,7 +100,7 @@ def test_the_package_names_are_found_once_the_lazy_module_loads() -> None:
         [sys.executable, "-c", "import sys, roomba_bt\n"
          "print('roomba_bt._lazy' in sys.modules, roomba_bt.ExitCode.INTERRUPTED,\n"
          "      'ExitCode' in dir(roomba_bt), 'roomba_bt._lazy' in sys.modules)"],
-        capture_output=True, text=True, timeout=120, check=True,
+        capture_output=True, text=True, timeout=HANG_S, check=True,
         env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
     )  # fmt: skip
     assert done.stdout.split() == ["False", "130", "True", "True"]
@@ -145,7 +146,7 @@ def test_a_signal_as_soon_as_the_command_takes_it_is_exit_130_without_a_tracebac
         while proc.poll() is None and not _caught(proc.pid, signum):
             continue
         proc.send_signal(signum)
-        _, err = proc.communicate(timeout=120)
+        _, err = proc.communicate(timeout=HANG_S)
         assert proc.returncode == ExitCode.INTERRUPTED, err
         assert "Traceback" not in err
         assert err.startswith("roomba-bt: interrupted"), err

@@ -12,6 +12,7 @@ import sys
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 #: the command run as the process (``roomba-bt validate dock``), then a Ctrl-C as it exits:
 #: Python's finalization put its handlers back to the default action, which killed it
@@ -44,7 +45,7 @@ sys.exit(4)
 
 def _run(script: str, *args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-c", script, *args], capture_output=True, text=True, timeout=60
+        [sys.executable, "-c", script, *args], capture_output=True, text=True, timeout=HANG_S
     )
 
 

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import build_parser, main, setup_logging
 from roomba_bt.runtime.display import MissionClockFormatter, use_mission_clock
@@ -33,7 +34,7 @@ def test_an_unsupported_py_trees_is_a_message_and_exit_2_not_a_traceback(
         f"sys.exit(main(['validate', {str(mission)!r}]))\n"
     )
     done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=HANG_S,
         env={**os.environ, "PYTHONWARNINGS": "ignore"},
     )  # fmt: skip
     assert done.returncode == 2, done.stderr
@@ -48,20 +49,24 @@ def test_python_m_roomba_bt_is_the_command(mission: Path, tmp_path: Path) -> Non
     the same exit codes (0 valid, 2 invalid), named ``roomba-bt`` in its messages."""
     run = [sys.executable, "-m", "roomba_bt"]
     done = subprocess.run(
-        [*run, "validate", str(mission)], capture_output=True, text=True, timeout=60, cwd=tmp_path
+        [*run, "validate", str(mission)],
+        capture_output=True,
+        text=True,
+        timeout=HANG_S,
+        cwd=tmp_path,
     )
     assert (done.returncode, done.stdout.strip()) == (0, f"{mission}: ok"), done.stderr
     bad = tmp_path / "bad.yaml"
     bad.write_text("mission: bad\ntree:\n  drive: {velocity: 200}\n")
     done = subprocess.run(
-        [*run, "validate", bad.name], capture_output=True, text=True, timeout=60, cwd=tmp_path
+        [*run, "validate", bad.name], capture_output=True, text=True, timeout=HANG_S, cwd=tmp_path
     )
     assert done.returncode == 2
     # (the mode check's "drive ... can be reached in Passive" at 3:3 comes first: the same
     # pass, since session 25)
     assert "\nbad.yaml:3:21: drive.velocity" in done.stdout, done.stdout
     assert "Traceback" not in done.stdout + done.stderr
-    usage = subprocess.run([*run], capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    usage = subprocess.run([*run], capture_output=True, text=True, timeout=HANG_S, cwd=tmp_path)
     assert usage.returncode == 2 and usage.stderr.startswith("usage: roomba-bt"), usage.stderr
 
 
@@ -80,7 +85,7 @@ def test_python_m_roomba_bt_imports_nothing_from_the_current_folder(
     )
     done = subprocess.run(
         [sys.executable, "-m", "roomba_bt", "validate", str(mission)],
-        capture_output=True, text=True, timeout=60, cwd=tmp_path,
+        capture_output=True, text=True, timeout=HANG_S, cwd=tmp_path,
     )  # fmt: skip
     assert (done.returncode, done.stdout.strip()) == (0, f"{mission}: ok"), done.stderr
     assert not ran.exists()
@@ -92,7 +97,11 @@ def test_behaviour_descriptions_survive_python_OO(tmp_path: Path) -> None:
     run = [sys.executable, "-m", "roomba_bt", "behaviours", "--json"]
     plain, optimised = (
         subprocess.run(
-            [*run[:1], *flags, *run[1:]], capture_output=True, text=True, timeout=60, cwd=tmp_path
+            [*run[:1], *flags, *run[1:]],
+            capture_output=True,
+            text=True,
+            timeout=HANG_S,
+            cwd=tmp_path,
         )
         for flags in ((), ("-OO",))
     )
@@ -128,7 +137,7 @@ def test_display_none_prints_nothing_but_the_summary(
     done = subprocess.run(
         [sys.executable, "-m", "roomba_bt.cli", "run", str(mission), "--fast", "--display",
          "none"],
-        capture_output=True, text=True, timeout=120,
+        capture_output=True, text=True, timeout=HANG_S,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert done.stderr == ""  # no INFO line about the connection

@@ -12,6 +12,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from waits import HANG_S  # tests/waits.py: a hang's bound
+
 MISSION = Path(__file__).resolve().parents[2] / "missions" / "dock.yaml"
 
 
@@ -19,7 +21,7 @@ def modules_after(script: str) -> set[str]:
     """The modules loaded once ``script`` has run in a fresh interpreter."""
     script += "\nimport json, sys\nprint(json.dumps(sorted(sys.modules)))\n"
     done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=True
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=HANG_S, check=True
     )
     return set(json.loads(done.stdout.splitlines()[-1]))
 
@@ -90,6 +92,6 @@ def test_sigterm_raises_before_the_bulk_of_the_start_up_is_imported() -> None:
     handlers. They are set before the protocol package is imported now."""
     done = subprocess.run(
         [sys.executable, "-c", SIGTERM_WHEN_OI_LOADS, str(MISSION)],
-        capture_output=True, text=True, timeout=120, check=True,
+        capture_output=True, text=True, timeout=HANG_S, check=True,
     )  # fmt: skip
     assert done.stdout.splitlines()[-1] == "raise_terminated", done.stdout

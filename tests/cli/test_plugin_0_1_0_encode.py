@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from runtime.installed import install_distribution, installed_registry
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.oi import encode
@@ -125,7 +126,7 @@ def test_the_command_shows_the_warning_at_the_plugin_s_line(tmp_path: Path) -> N
     env.pop("PYTHONWARNINGS", None)
     done = subprocess.run(
         [sys.executable, "-m", "roomba_bt", *RUN],
-        cwd=tmp_path, env=env, capture_output=True, text=True, check=False, timeout=120,
+        cwd=tmp_path, env=env, capture_output=True, text=True, check=False, timeout=HANG_S,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "outcome      SUCCESS" in done.stdout

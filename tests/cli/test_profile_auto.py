@@ -15,6 +15,7 @@ from typing import Any
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 MISSION = """\
 mission: short
@@ -28,7 +29,7 @@ tree:
 def _cli(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "roomba_bt.cli", *args],
-        capture_output=True, text=True, timeout=30, env={**os.environ, **(env or {})},
+        capture_output=True, text=True, timeout=HANG_S, env={**os.environ, **(env or {})},
     )  # fmt: skip
 
 

@@ -21,6 +21,7 @@ from typing import Any
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
@@ -48,7 +49,7 @@ def _reader_gone(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]
         )  # fmt: skip
     finally:
         os.close(write_end)
-    _, err = proc.communicate(timeout=120)
+    _, err = proc.communicate(timeout=HANG_S)
     return subprocess.CompletedProcess(proc.args, proc.returncode, "", err)
 
 
@@ -114,7 +115,7 @@ def test_a_closed_stdout_is_no_traceback(tmp_path: Path, args: list[str], code: 
     ``sys.stdout`` is None: an AttributeError traceback in every subcommand, exit 1."""
     done = subprocess.run(
         [*CLI, *args], stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
-        cwd=tmp_path, env=_env(), preexec_fn=_closed_stdout, timeout=120,
+        cwd=tmp_path, env=_env(), preexec_fn=_closed_stdout, timeout=HANG_S,
     )  # fmt: skip
     assert done.returncode == code, done.stderr
     assert "Traceback" not in done.stderr
@@ -130,7 +131,7 @@ def test_a_closed_stdout_nothing_was_printed_to_is_not_said(tmp_path: Path) -> N
     lost, yet every run said "stdout is closed: what the command printed there is lost"."""
     done = subprocess.run(
         [*CLI, "validate", "-q", str(DOCK)], stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
-        text=True, cwd=tmp_path, env=_env(), preexec_fn=_closed_stdout, timeout=120,
+        text=True, cwd=tmp_path, env=_env(), preexec_fn=_closed_stdout, timeout=HANG_S,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert done.stderr == ""
@@ -174,7 +175,7 @@ def test_a_full_disk_on_stdout_is_one_line_and_the_outcomes_exit_code(tmp_path: 
         done = subprocess.run(
             [*CLI, "run", "dock", "--fast", "--timeout", "60s"], stdout=full,
             stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True, cwd=tmp_path,
-            env=_env(), timeout=120,
+            env=_env(), timeout=HANG_S,
         )  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "Traceback" not in done.stderr
@@ -209,7 +210,7 @@ def test_an_ascii_stdout_gets_an_ascii_report_and_the_outcomes_exit_code(
     for args in (["run", "clean", "--fast", "--timeout", "30s"], ["run", str(mission), "--fast"]):
         done = subprocess.run(
             [*CLI, *args], capture_output=True, stdin=subprocess.DEVNULL, cwd=tmp_path,
-            env=_env(**env), timeout=120,
+            env=_env(**env), timeout=HANG_S,
         )  # fmt: skip
         out, err = done.stdout.decode("ascii"), done.stderr.decode("ascii")  # all ASCII
         assert "Traceback" not in err
@@ -258,7 +259,7 @@ def test_a_report_blocked_on_a_pipe_nobody_reads_can_be_ended(tmp_path: Path) ->
         for _ in _until(lambda: proc.poll() is not None or _record_ended(record)):
             pass
         assert proc.poll() is None  # blocked on the pipe: the report after the record's end
-        for _ in _until(lambda: proc.poll() is not None):  # 30 s: a report never ended fails
+        for _ in _until(lambda: proc.poll() is not None):  # a report never ended fails
             proc.send_signal(signal.SIGTERM)
     finally:
         if proc.poll() is None:
@@ -278,16 +279,18 @@ def _record_ended(record: Path) -> bool:
         return False
 
 
-def _until(ready: Callable[[], bool], limit: int = 3000) -> Iterator[None]:
-    """Yield until ``ready()`` (polled every 10 ms, up to ``limit`` times: a hang fails)."""
+def _until(ready: Callable[[], bool]) -> Iterator[None]:
+    """Yield until ``ready()`` (polled every 10 ms, for up to :data:`~waits.HANG_S`: a hang
+    fails; 3000 polls before, 30 s, which a run's start on a loaded machine may take)."""
     import time
 
-    for _ in range(limit):
+    deadline = time.monotonic() + HANG_S
+    while time.monotonic() < deadline:
         if ready():
             return
         yield
         time.sleep(0.01)
-    pytest.fail("the process never got there")
+    pytest.fail(f"the process never got there in {HANG_S:g} s")
 
 
 def _plugin_run(tmp_path: Path, plugin: str) -> list[str]:
@@ -325,7 +328,7 @@ def test_a_signal_before_the_run_took_it_is_exit_130(
     line = proc.stderr.readline()
     assert "plugin importing" in line, line
     proc.send_signal(signum)
-    _, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130, err
     by = " by SIGTERM" if signum == signal.SIGTERM else ""  # a Ctrl-C is said as none
     # the import under way is named, at its line (session 38)
@@ -353,7 +356,7 @@ def test_a_signal_python_wraps_in_a_runtime_error_is_still_exit_130(
         "    field = Lands()\n"
     )
     proc = child([*CLI, *_plugin_run(tmp_path, plugin)])
-    _, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130, err
     assert err.endswith("roomba-bt: interrupted by SIGTERM\n")
     assert "Traceback" not in err

@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import build_parser
 from roomba_bt.robot.baud_hunt import hunt_seconds
@@ -94,11 +95,11 @@ def test_systemd_reads_every_option_of_the_unit_and_the_timer(tmp_path: Path) ->
     timer.write_text(TIMER)
     checked = subprocess.run(
         ["systemd-analyze", "verify", str(service), str(timer)],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True, text=True, timeout=HANG_S,
     )  # fmt: skip
     assert checked.returncode == 0 and not checked.stderr.strip(), checked.stderr
     calendar = subprocess.run(
         ["systemd-analyze", "calendar", _unit(TIMER)["OnCalendar"]],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True, text=True, timeout=HANG_S,
     )  # fmt: skip
     assert calendar.returncode == 0, calendar.stderr

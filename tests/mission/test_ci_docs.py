@@ -22,6 +22,7 @@ from pathlib import Path
 import pytest
 import yaml
 from team_repo import ESCAPES, team_repo  # beside this file
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 ROOT = Path(__file__).resolve().parents[2]
 CI_DOC = ROOT / "docs" / "ci.md"
@@ -67,7 +68,7 @@ def run_in(repo: Path, argv: list[str]) -> subprocess.CompletedProcess[str]:
     env = dict(os.environ)
     env["PATH"] = f"{repo.parent / 'bin'}{os.pathsep}{env['PATH']}"
     env["PYTHONPATH"] = str(ROOT)
-    return subprocess.run(argv, cwd=repo, env=env, capture_output=True, text=True, timeout=120)
+    return subprocess.run(argv, cwd=repo, env=env, capture_output=True, text=True, timeout=HANG_S)
 
 
 def break_the_library(repo: Path) -> None:

@@ -11,6 +11,7 @@ import subprocess
 import sys
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi.bits import ChargingState
 from roomba_bt.oi.frames import SensorFrame, layout_for
@@ -56,7 +57,7 @@ def test_a_pickled_frame_loads_in_another_process() -> None:
     )
     data = pickle.dumps(_frame(True)).hex()
     done = subprocess.run(
-        [sys.executable, "-c", script, data], capture_output=True, text=True, timeout=60
+        [sys.executable, "-c", script, data], capture_output=True, text=True, timeout=HANG_S
     )
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["roomba500", "100", "True"]

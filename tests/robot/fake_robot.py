@@ -20,6 +20,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from waits import HANG_S  # tests/waits.py: a hang's bound
+
 from roomba_bt.oi.encode import Command, decode_command
 from roomba_bt.oi.errors import OIError
 from roomba_bt.oi.frames import layout_for
@@ -56,7 +58,7 @@ class RobotDouble:
         with self._lock:
             return [r.command.opcode for r in self.commands]
 
-    def wait_until(self, predicate: Callable[[Any], bool], timeout: float = 5.0) -> bool:
+    def wait_until(self, predicate: Callable[[Any], bool], timeout: float = HANG_S) -> bool:
         """Whether ``predicate`` of the robot came true within ``timeout`` s (each double's own)."""
         raise NotImplementedError
 
@@ -74,7 +76,7 @@ class RobotDouble:
             written = written[: -len(PROBE_QUERY)]
         return written.endswith(stop)
 
-    def wait_for_stop(self, stop: bytes, timeout: float = 5.0) -> None:
+    def wait_for_stop(self, stop: bytes, timeout: float = HANG_S) -> None:
         """Wait until :meth:`ended_with` ``stop``; else fail, saying the last bytes the host
         wrote (the query after it, bytes before it, or nothing of it)."""
         if not self.wait_until(lambda robot: robot.ended_with(stop), timeout):
@@ -134,7 +136,7 @@ class FakeRobot(RobotDouble):
         self._running = False
         self.endpoint.close()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
-            self._thread.join(2.0)
+            self._thread.join(HANG_S)  # told to stop: ends within a frame, idle
 
     # ---------------------------------------------------------------- scripting
     def fall_to_passive(self, values: dict[int, int]) -> None:
@@ -159,7 +161,7 @@ class FakeRobot(RobotDouble):
         self._running = False
         self.endpoint.hang_up()
 
-    def wait_until(self, predicate: Callable[[FakeRobot], bool], timeout: float = 5.0) -> bool:
+    def wait_until(self, predicate: Callable[[FakeRobot], bool], timeout: float = HANG_S) -> bool:
         deadline = time.monotonic() + timeout
         with self._changed:
             while not predicate(self):

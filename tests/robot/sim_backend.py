@@ -19,6 +19,7 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi.encode import decode_command
 from roomba_bt.oi.modes import OIMode
@@ -43,7 +44,7 @@ class SimRobot(RobotDouble):
     def mode(self) -> OIMode:
         return OIMode(self.simulator.mode)
 
-    def wait_until(self, predicate: Callable[[Any], bool], timeout: float = 5.0) -> bool:
+    def wait_until(self, predicate: Callable[[Any], bool], timeout: float = HANG_S) -> bool:
         return bool(predicate(self))
 
     def fall_to_passive(self, values: dict[int, int]) -> None:
@@ -116,14 +117,14 @@ def sim_pty_server(profile: RobotProfile, *options: str) -> Iterator[str]:
         assert child.stdout is not None
         address = child.stdout.readline().strip()
         if not address:
-            _, err = child.communicate(timeout=10)
+            _, err = child.communicate(timeout=HANG_S)
             pytest.fail(f"roomba-bt sim --pty printed no address: {err}")
         yield address
     finally:
         if child.poll() is None:
             child.send_signal(signal.SIGINT)
             try:
-                child.communicate(timeout=10)
+                child.communicate(timeout=HANG_S)
             except subprocess.TimeoutExpired:
                 child.kill()
                 child.communicate()

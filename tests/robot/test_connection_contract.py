@@ -8,6 +8,7 @@ import threading
 import time
 
 import pytest
+from waits import HANG_S, waited  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Radius
@@ -29,13 +30,13 @@ STOP_TO_OFF = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 173])
 PASSIVE_TO_PASSIVE = bytes([150, 0, 128])
 
 
-def frames_until(connection: Connection, predicate: object, timeout: float = 5.0) -> None:
+def frames_until(connection: Connection, predicate: object, timeout: float = HANG_S) -> None:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         connection.poll(0.05)
         if callable(predicate) and predicate():
             return
-    raise AssertionError("condition not reached while polling")
+    raise AssertionError(f"condition not reached while polling for {timeout:g} s")
 
 
 def no_actuator_outside_safe(robot: FakeRobot) -> None:
@@ -266,7 +267,7 @@ def test_lost_port_is_reported_at_once_and_close_does_not_hang(link: Link) -> No
     connection.start("safe", PACKETS)
     frames_until(connection, lambda: connection.counters.frames >= 2)
     robot.hang_up()
-    assert robot.closed.wait(30.0), "the robot never saw its cable pulled"  # an event
+    waited(robot.closed, "the robot's seeing its cable pulled")  # an event
     with pytest.raises(PortLost, match="the link is lost"):
         for _ in range(100):
             connection.poll(0.02)
@@ -280,7 +281,7 @@ def test_lost_port_is_reported_at_once_and_close_does_not_hang(link: Link) -> No
         done.set()
 
     threading.Thread(target=close, daemon=True).start()
-    assert done.wait(30.0), "close() hung on a lost port"  # an event, not a timing
+    waited(done, "close() on a lost port")  # an event, not a timing
     assert closed == [False]
     assert connection.safe_stopped is False
 

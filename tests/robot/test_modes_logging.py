@@ -10,6 +10,7 @@ import sys
 
 import pytest
 from transitions import Machine
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.robot.modes import MACHINE_NAME, ModeModel
@@ -62,6 +63,6 @@ def test_the_library_configures_no_logger_level_or_handler() -> None:
         "print(root.level, len(root.handlers), ours.level, core.level)\n"
     )
     done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60, check=True
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=HANG_S, check=True
     )
     assert done.stdout.split() == [str(logging.WARNING), "0", "0", "0"]

@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 import roomba_bt.robot as robot
 
@@ -35,5 +36,5 @@ def test_from_import_in_a_fresh_interpreter() -> None:
         "from roomba_bt.robot import Connection, sigterm_raises\n"
         "print(Connection.__module__, sigterm_raises.__module__)\n"
     )
-    output = subprocess.check_output([sys.executable, "-c", script], text=True, timeout=60)
+    output = subprocess.check_output([sys.executable, "-c", script], text=True, timeout=HANG_S)
     assert output.split() == ["roomba_bt.robot.connection", "roomba_bt.robot.safety"]

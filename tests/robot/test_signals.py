@@ -12,6 +12,7 @@ import time
 from collections.abc import Callable, Sequence
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.robot.safety import (
     InterruptGuard,
@@ -50,7 +51,7 @@ def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(
         driving = bytes([137, 0, 120, 0x80, 0x00])
         assert robot.wait_until(lambda r: r.received.count(driving) >= 3)
         connection.send_signal(signum)
-        out, err = connection.communicate(timeout=10)
+        out, err = connection.communicate(timeout=HANG_S)
         assert connection.returncode == 130, err
         assert out.strip() == raised
         robot.wait_for_stop(STOP_TO_PASSIVE)
@@ -73,7 +74,7 @@ def test_only_a_hang_up_ignored_at_start_stays_ignored(
         "with InterruptGuard() as guard, sigterm_raises():\n"
         "    print(sorted(s for s in range(1, 32) if signal.getsignal(s) is signal.SIG_IGN))\n"
     )
-    out, err = child([sys.executable, "-c", script]).communicate(timeout=30)
+    out, err = child([sys.executable, "-c", script]).communicate(timeout=HANG_S)
     still_ignored = {int(s) for s in out.strip("[]\n").split(", ") if s}
     assert signal.SIGHUP in still_ignored, err
     assert not {signal.SIGINT, signal.SIGQUIT, signal.SIGTERM} & still_ignored
@@ -196,7 +197,7 @@ def test_a_hang_up_without_a_terminal_is_not_said_as_a_terminal_closed() -> None
     said = subprocess.run(
         [sys.executable, "-c", "import signal; from roomba_bt.robot import safety; "
          "print(safety.HAD_A_TERMINAL); print(safety.signal_reason(signal.SIGHUP))"],
-        capture_output=True, text=True, timeout=60, start_new_session=True, check=True,
+        capture_output=True, text=True, timeout=HANG_S, start_new_session=True, check=True,
         stdin=subprocess.DEVNULL,
     )  # fmt: skip
     had, reason = said.stdout.splitlines()

@@ -10,6 +10,7 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import SensorFrame
@@ -617,7 +618,7 @@ def test_a_stop_whose_waits_never_end_on_the_link_clock_is_given_up_in_wall_time
     stopped: list[bool] = []
     stopping = threading.Thread(target=lambda: stopped.append(connection.safe_stop()), daemon=True)
     stopping.start()
-    stopping.join(timeout=30)
+    stopping.join(timeout=HANG_S)
     assert stopped == [False], "the stop's wait never ended"
     report = connection.stop_report or ""
     assert "the stop was written but is unconfirmed: " in report, report

@@ -17,6 +17,8 @@ import struct
 import threading
 import time
 
+from waits import joined  # tests/waits.py: a hang's bound
+
 #: how long the proxy's loop waits for a socket to be ready before it looks at its state
 _POLL_S = 0.01
 
@@ -66,7 +68,7 @@ class ResettingBridge:
 
     def close(self) -> None:
         self._stop.set()
-        self._thread.join(timeout=5)
+        joined(self._thread, "the bridge's accepting thread, told to stop")
         with self._lock:
             self._drop()
             for sock in self._silent:

@@ -15,6 +15,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pty")
 
@@ -23,7 +24,7 @@ pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pty"
 #: when asked ``foreground``), keeps what the terminal's screen was sent in ``screen.out``
 #: and prints how it ended: ``exit N`` or ``stopped by SIGTTOU`` (then kills it).
 LEADER = textwrap.dedent(
-    """
+    f"""
     import fcntl, os, signal, subprocess, sys, termios, time
     how, command = sys.argv[1], sys.argv[2:]
     os.setsid()
@@ -37,7 +38,7 @@ LEADER = textwrap.dedent(
                            process_group=None if how == "foreground" else 0)
     os.set_blocking(master, False)
     screen = bytearray()
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + {HANG_S!r}
     while time.monotonic() < deadline:
         try:
             screen += os.read(master, 65536)  # read, so no write waits
@@ -56,7 +57,7 @@ LEADER = textwrap.dedent(
         time.sleep(0.02)
     else:
         job.kill()
-        print("still running after 60 s")
+        print("still running after {HANG_S:g} s")
     """
 )
 
@@ -83,7 +84,7 @@ def _job(tmp_path: Path, command: list[str], how: str) -> str:
     (tmp_path / "circle.yaml").write_text(CIRCLE)
     done = subprocess.run(
         [sys.executable, "-c", LEADER, how, *command],
-        capture_output=True, text=True, timeout=90, cwd=tmp_path,
+        capture_output=True, text=True, timeout=2 * HANG_S, cwd=tmp_path,  # the leader's first
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     return done.stdout.strip()

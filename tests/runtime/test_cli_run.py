@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main, run_cmd
 from roomba_bt.cli.arguments import parse_timeout
@@ -232,7 +233,7 @@ def test_a_replay_whose_tree_stops_short_of_the_record_ends_at_that_difference(
     assert main([*run, "--record", str(record)]) == 1
     done = subprocess.run(
         [sys.executable, "-m", "roomba_bt.cli", "replay", str(record), "--mission", str(wait)],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True, text=True, timeout=HANG_S,
     )  # fmt: skip
     assert done.returncode == 1, done.stderr
     assert "replay: first difference at mission time" in done.stdout
@@ -892,7 +893,7 @@ def test_a_required_record_that_cannot_be_written_leaves_the_earlier_record_in_i
     argv = ["run", str(mission), "--fast", "--display", "none", "--timeout", "1s"]
     done = subprocess.run(
         [sys.executable, "-m", "roomba_bt", *argv, "--record", str(record), "--require-record"],
-        capture_output=True, text=True, timeout=120, preexec_fn=limited,
+        capture_output=True, text=True, timeout=HANG_S, preexec_fn=limited,
         env={**os.environ, "PYTHONPATH": str(Path(__file__).parents[2])},
     )  # fmt: skip
     assert done.returncode == 2, done.stderr

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import IO
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.robot.safety import InterruptGuard
@@ -184,7 +185,7 @@ def test_a_compressed_record_cut_by_a_file_size_limit_says_so_as_a_plain_one_doe
     )
     run = child([sys.executable, "-c", script, "run", BUMP_AND_TURN, "--fast", "--display",
                  "none", "-p", "duration=20s", "--record", str(record)])  # fmt: skip
-    out, err = run.communicate(timeout=120)
+    out, err = run.communicate(timeout=HANG_S)
     assert run.returncode == 0, err
     assert "stopped at" in out and "File too large" in out
     assert "final mode   Passive" in out and "safe stop    sent" in out  # stopped as ever
@@ -329,7 +330,7 @@ def test_signalled_fast_runs_leave_compressed_records_that_verify(
         while run.poll() is None and (not record.exists() or record.stat().st_size < 20000):
             time.sleep(0.01)  # until the run is well into its record
         run.send_signal(signum)
-        out, err = run.communicate(timeout=120)
+        out, err = run.communicate(timeout=HANG_S)
         assert run.returncode == 130, err
         assert "final mode   Passive" in out and "safe stop    sent" in out
         text = gzip.decompress(record.read_bytes()).decode("utf-8")  # CRC check failed, before

@@ -13,6 +13,7 @@ from typing import Any
 
 import py_trees
 import pytest
+from waits import HANG_S, joined, waited  # tests/waits.py: a hang's bound, no fixed bet
 
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
@@ -97,7 +98,7 @@ def test_terminal_display_draws_the_tree_with_statuses(run_mission: RunMission) 
     out = _Terminal()
     display = TerminalDisplay(out)
     display.render(run.runner)
-    assert display.writer.wait_written(5.0)  # written off the tick loop, by its own thread
+    assert display.writer.wait_written(HANG_S)  # written off the tick loop, by its own thread
     text = out.getvalue()
     assert text.startswith("\x1b[H\x1b[J")
     assert "sequence" in text and "drive" in text
@@ -114,7 +115,7 @@ def test_the_live_tree_and_the_log_lines_say_the_run_s_label(
     out = _Terminal()
     display = TerminalDisplay(out, label="robot 3")
     display.render(run.runner)
-    assert display.writer.wait_written(5.0)
+    assert display.writer.wait_written(HANG_S)
     assert out.getvalue().startswith("\x1b[H\x1b[Jrobot 3\n")
     record = logging.LogRecord("roomba_bt.run", logging.INFO, "", 0, "drive -> RUNNING", (), None)
     use_mission_clock(run.runner, label="robot 3")
@@ -153,7 +154,7 @@ def test_the_live_tree_fits_the_terminal_and_keeps_the_running_path(
         out.seek(0)
         out.truncate()
         display.render(runner)
-        assert display.writer.wait_written(5.0)
+        assert display.writer.wait_written(HANG_S)
         screens.append(out.getvalue())
 
     run_mission(LONG, observer=observe)
@@ -190,7 +191,7 @@ class _StalledTerminal(io.StringIO):
 
     def write(self, text: str) -> int:
         self.entered.set()
-        self.go.wait(10.0)
+        self.go.wait(HANG_S)  # a test that failed before it let go leaves no thread for ever
         return super().write(text)
 
 
@@ -198,12 +199,12 @@ def test_a_stalled_terminal_holds_up_nothing_and_sees_the_newest_screen() -> Non
     terminal = _StalledTerminal()
     writer = OffTickWriter(terminal)
     writer.post("first screen", latest_only=True)
-    assert terminal.entered.wait(5.0)  # the writer's thread is stuck in the write
+    waited(terminal.entered, "the writer's first write")  # its thread is stuck in the write
     for i in range(100):  # the tick loop goes on: each post returns at once
         writer.post(f"screen {i}", latest_only=True)
     assert len(writer._lines.items) == 1  # only the newest waits
     terminal.go.set()
-    assert writer.wait_written(5.0)
+    assert writer.wait_written(HANG_S)
     assert terminal.getvalue() == "first screen" + "screen 99"
 
 
@@ -211,12 +212,12 @@ def test_log_lines_wait_up_to_a_limit_then_the_oldest_are_dropped_and_counted() 
     terminal = _StalledTerminal()
     writer = OffTickWriter(terminal, limit=10)
     writer.post("line 0\n")
-    assert terminal.entered.wait(5.0)
+    waited(terminal.entered, "the writer's first write")
     for i in range(1, 31):
         writer.post(f"line {i}\n")
     assert writer.dropped == 20
     terminal.go.set()
-    writer.close(5.0)
+    writer.close(HANG_S)
     assert terminal.getvalue().splitlines() == ["line 0", *(f"line {i}" for i in range(21, 31))]
 
 
@@ -229,13 +230,12 @@ def test_a_display_dropped_without_close_ends_its_thread_once_its_screen_is_writ
     display = TerminalDisplay(terminal)
     thread = display.writer._thread
     display.writer.post("first screen", latest_only=True)
-    assert terminal.entered.wait(5.0)  # the thread is in the write
+    waited(terminal.entered, "the display's first write")  # the thread is in the write
     display.writer.post("last screen", latest_only=True)
     del display
     gc.collect()
     terminal.go.set()
-    thread.join(10.0)
-    assert not thread.is_alive()
+    joined(thread, "the dropped display's writer thread")
     assert terminal.getvalue() == "first screen" + "last screen"
 
 
@@ -246,7 +246,7 @@ def test_a_terminal_that_fails_ends_the_writing_not_the_caller() -> None:
 
     writer = OffTickWriter(Gone())
     writer.post("screen", latest_only=True)
-    assert writer.wait_written(5.0) and writer.gone
+    assert writer.wait_written(HANG_S) and writer.gone
     writer.post("more")  # nothing raised, nothing kept
     assert not writer._lines.items
 
@@ -281,7 +281,7 @@ def test_log_lines_the_terminal_did_not_take_are_counted_after_the_run(
             off.writer.limit = 5
             for i in range(20):
                 root.warning("line %d", i)
-            assert terminal.entered.wait(5.0)
+            waited(terminal.entered, "the log handler's first write")
             terminal.go.set()  # the lines past the limit are dropped already
     finally:
         root.removeHandler(handler)
@@ -324,7 +324,7 @@ def test_the_live_tree_into_a_pipe_prints_each_screen_without_cursor_codes(
     display = TerminalDisplay(out)
     for _ in range(2):
         display.render(run.runner)
-        assert display.writer.wait_written(5.0)
+        assert display.writer.wait_written(HANG_S)
     text = out.getvalue()
     assert "\x1b" not in text
     assert text.count("{-} sequence [✓]") == 2  # two screens, one under the other
@@ -376,12 +376,11 @@ def test_a_blocking_writer_waits_for_room_and_drops_no_line() -> None:
     terminal = _StalledTerminal()
     writer = OffTickWriter(terminal, limit=10, blocks=True)
     writer.post("line 0\n")
-    assert terminal.entered.wait(5.0)
+    waited(terminal.entered, "the writer's first write")
     poster = threading.Thread(target=lambda: [writer.post(f"line {i}\n") for i in range(1, 31)])
     poster.start()
     terminal.go.set()
-    poster.join(30.0)
-    assert not poster.is_alive()
+    joined(poster, "a post to a blocking writer")
     writer.close(None)
     assert writer.dropped == 0
     assert terminal.getvalue().splitlines() == [f"line {i}" for i in range(31)]
@@ -428,7 +427,7 @@ def test_a_dumb_terminal_gets_no_cursor_movement(
     out = _Terminal()
     display = TerminalDisplay(out)
     display.render(run.runner)
-    assert display.writer.wait_written(5.0)
+    assert display.writer.wait_written(HANG_S)
     assert "\x1b" not in out.getvalue() and "sequence [✓]" in out.getvalue()
     monkeypatch.setenv("TERM", "xterm")
     assert isinstance(observer_for("auto", _Terminal()), TerminalDisplay)
@@ -465,7 +464,7 @@ def test_the_sensor_line_wraps_on_a_narrow_terminal(run_mission: RunMission) -> 
     out = _Terminal()
     display = TerminalDisplay(out, size=lambda: (40, 24))
     display.render(run.runner)
-    assert display.writer.wait_written(5.0)
+    assert display.writer.wait_written(HANG_S)
     screen = out.getvalue().removeprefix("\x1b[H\x1b[J")
     lines = screen.split("\n")
     assert all(len(line) <= 40 for line in lines), lines
@@ -482,7 +481,7 @@ def test_an_ascii_terminal_gets_ascii_marks(run_mission: RunMission) -> None:
     out = io.TextIOWrapper(io.BytesIO(), encoding="ascii")
     display = TerminalDisplay(out)
     display.render(run.runner)
-    assert display.writer.wait_written(5.0) and not display.writer.gone
+    assert display.writer.wait_written(HANG_S) and not display.writer.gone
     out.flush()
     assert b"sequence [ok]" in out.buffer.getvalue()  # type: ignore[attr-defined]
 

@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "runtime.md"
 SECTION = "## From Python: a tree built by hand"
@@ -157,7 +158,7 @@ def _host_the_recipe(kind: str) -> subprocess.Popen[str]:
 
 
 def test_the_asyncio_recipe_runs() -> None:
-    out, err = _host_the_recipe("virtual").communicate(timeout=120)
+    out, err = _host_the_recipe("virtual").communicate(timeout=HANG_S)
     assert "outcome      SUCCESS" in out, err
     assert json.loads(out.splitlines()[-1])["ended"] == "returned"
 
@@ -171,7 +172,7 @@ def test_the_asyncio_recipe_stops_the_robot_on_ctrl_c() -> None:
     try:
         assert host.stdout.readline() == "driving\n"
         host.send_signal(signal.SIGINT)
-        out, err = host.communicate(timeout=120)
+        out, err = host.communicate(timeout=HANG_S)
     finally:
         host.kill()
     assert json.loads(out.splitlines()[-1]) == {

@@ -10,6 +10,7 @@ import threading
 
 import py_trees
 import pytest
+from waits import waited  # tests/waits.py: a hang's bound, no fixed bet
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.oi.modes import OIMode
@@ -97,7 +98,7 @@ def test_a_run_in_a_worker_thread_warns_and_close_from_the_main_thread_stops_it(
     )
     worker, result = run_in_a_worker(stack)
     try:
-        assert driving.wait(20.0)
+        waited(driving, "the run's 20th tick")
         assert simulator.requested_left > 0  # the robot drives
     finally:
         stack.close()  # from the main thread, while the worker runs: the run ends first

@@ -17,6 +17,7 @@ from pathlib import Path
 import py_trees
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.mission import load_mission
@@ -111,7 +112,7 @@ def test_a_kill_ends_a_program_that_runs_two_missions(tmp_path: Path) -> None:
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
     done = subprocess.run(
         [sys.executable, "-c", SCRIPT, str(path)],
-        capture_output=True, text=True, timeout=120, env=env,
+        capture_output=True, text=True, timeout=HANG_S, env=env,
     )  # fmt: skip
     assert done.stdout.split("\n")[:2] == ["mission 1", ""], done.stdout + done.stderr
     assert done.returncode != 0

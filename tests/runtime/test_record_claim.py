@@ -11,6 +11,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import RecordingTransport, load_record
@@ -68,7 +69,7 @@ def held(path: Path, content: str) -> Iterator[Path]:
         assert holder.stdout is not None and holder.stdout.readline() == "held\n"
         yield path
     finally:
-        holder.communicate("", timeout=30)
+        holder.communicate("", timeout=HANG_S)
 
 
 def test_a_record_another_run_writes_is_refused_before_the_robot_is_opened(

@@ -16,6 +16,7 @@ from typing import Any
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
@@ -786,7 +787,7 @@ def test_a_record_cut_short_by_a_file_size_limit_says_so_not_killed(
     mission = str(MISSIONS / "bump-and-turn.yaml")
     run = child([sys.executable, "-c", script, "run", mission, "--fast", "--display", "none",
                  "-p", "duration=6s", "--record", str(record)])  # fmt: skip
-    out, err = run.communicate(timeout=120)
+    out, err = run.communicate(timeout=HANG_S)
     assert run.returncode == 0, err
     assert "stopped at" in out and "File too large" in out
     assert record.stat().st_size <= limit

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import py_trees
 import pytest
+from waits import joined  # tests/waits.py: a hang's bound
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.behaviours.blackboard import (
@@ -141,7 +142,7 @@ def in_two_threads(specs: list[EpisodeSpec]) -> list[EpisodeResult]:
     for thread in threads:
         thread.start()
     for thread in threads:
-        thread.join()
+        joined(thread, "an episode in a thread of its own")
     return [results[0], results[1]]
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
@@ -72,8 +73,8 @@ class RebootAndWait(SendsOnce):
 '''
 
 #: how long the run may take in wall-clock seconds before the test calls it a hang: the run
-#: itself is a few hundred simulated frames, milliseconds
-DEADLINE_S = 20.0
+#: itself is a few hundred simulated frames, milliseconds (the suite's hang bound)
+DEADLINE_S = HANG_S
 
 
 def _run_with_deadline(run_mission: RunMission, tmp_path: Path, leaf: str) -> Run:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import threading
 
 import py_trees
+from waits import joined, waited  # tests/waits.py: a hang's bound, no fixed bet
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.oi import commands as oi
@@ -29,7 +30,7 @@ def test_a_run_in_a_worker_thread_is_stopped_by_the_main_thread() -> None:
     def observer(runner: MissionRunner) -> None:
         if runner.snapshot.tick == 40:  # driving: the main thread stops it now
             driving.set()
-            assert stopped.wait(10.0)
+            waited(stopped, "the main thread's stop")
 
     root = py_trees.composites.Sequence("w", memory=True, children=[
         Mode("safe", {"to": "safe"}), Drive("forward", {"velocity": "100 mm/s"}),
@@ -37,12 +38,11 @@ def test_a_run_in_a_worker_thread_is_stopped_by_the_main_thread() -> None:
     link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0))
     stack = RunStack(TreeMission(root, "worker"), link, profile=CREATE2, observer=observer)
     worker, result = run_in_a_worker(stack)
-    assert driving.wait(10.0)
+    waited(driving, "the run's 40th tick")
     assert link.simulator.requested_left > 0  # the robot drives
     stack.stop("the operator pressed Ctrl-C")  # what the main thread's handler does
     stopped.set()
-    worker.join(10.0)
-    assert not worker.is_alive()
+    joined(worker, "the run's worker thread, stopped")
     stack.close()
     [summary] = result
     assert isinstance(summary, RunSummary), summary

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import threading
 
+from waits import joined  # tests/waits.py: a hang's bound
+
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.sim import Faults, Simulator, load_world
 from roomba_bt.sim.server import Endpoint, serve
@@ -33,5 +35,5 @@ class Served:
 
     def close(self) -> None:
         self._stop.set()
-        self._thread.join(timeout=5)
+        joined(self._thread, "the served simulator's thread, told to stop")
         self.endpoint.close()

@@ -11,6 +11,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.oi import commands as C
@@ -22,8 +23,8 @@ from .served import Served
 BUMP = str(Path(__file__).resolve().parents[2] / "missions" / "bump-and-turn.yaml")
 #: what the turned-away client is told
 TURNED_AWAY = "the far end closed the connection at once, before sending a byte: another client"
-#: a bound on each wait for the server, never a timing the test checks
-WAIT_S = 10.0
+#: a bound on each wait for the server, never a timing the test checks: a hang's
+WAIT_S = HANG_S
 
 
 @pytest.fixture

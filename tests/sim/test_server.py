@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 import serial
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.profiles import ROOMBA500
@@ -49,7 +50,7 @@ def test_pycreate2_reads_sensors_that_make_sense_drives_and_the_encoders_move(
     assert before.cliff_left_signal > 1000 and not before.cliff_front_left  # on the floor
     assert not before.bumps_wheeldrops.bump_left and not before.bumps_wheeldrops.bump_right
     bot.drive_direct(150, 150)
-    deadline = time.monotonic() + 30.0  # a cap on waiting for the wheels, never a timing
+    deadline = time.monotonic() + HANG_S  # a cap on waiting for the wheels, never a timing
     moved = 0
     while moved < 300 and time.monotonic() < deadline:
         after = bot.get_sensors()
@@ -102,7 +103,7 @@ def test_tcp_serves_a_stream_to_pyserial_and_exits_cleanly_on_sigint(
         port.write(C.start().data + C.stream([7, 35, 43]).data)
         parser = StreamParser([7, 35, 43], ROOMBA500)  # its checksum leaves the header out
         frames = []
-        deadline = time.monotonic() + 30.0  # a cap on waiting for frames, never a timing
+        deadline = time.monotonic() + HANG_S  # a cap on waiting for frames, never a timing
         while len(frames) <= 5 and time.monotonic() < deadline:
             frames += parser.feed(port.read(256))
         assert len(frames) > 5
@@ -120,7 +121,7 @@ def test_disconnect_fault_hangs_up_the_line(served_sim: Callable[..., Any]) -> N
     try:
         port.write(C.start().data + C.stream([35]).data)
         with pytest.raises(serial.SerialException):
-            deadline = time.monotonic() + 5.0
+            deadline = time.monotonic() + HANG_S
             while time.monotonic() < deadline:
                 port.read(64)
     finally:
@@ -132,7 +133,7 @@ def test_disconnect_fault_hangs_up_the_line(served_sim: Callable[..., Any]) -> N
 def test_duration_stops_the_server_by_itself() -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "roomba_bt.cli", "sim", "--pty", "--duration", "0.2"],
-        capture_output=True, text=True, timeout=20, check=False,
+        capture_output=True, text=True, timeout=HANG_S, check=False,
     )  # fmt: skip
     assert proc.returncode == 0 and proc.stdout.startswith("/dev/")
 
@@ -142,7 +143,7 @@ def test_an_invalid_world_exits_2_with_the_position(tmp_path: Path) -> None:
     bad.write_text("rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\ndock: {at: [1, 0], facing: up}\n")
     proc = subprocess.run(
         [sys.executable, "-m", "roomba_bt.cli", "sim", "--pty", "--world", str(bad)],
-        capture_output=True, text=True, timeout=20, check=False,
+        capture_output=True, text=True, timeout=HANG_S, check=False,
     )  # fmt: skip
     assert proc.returncode == 2 and proc.stdout == ""
     assert f"{bad}:2:28: dock.facing: found 'up'" in proc.stderr
@@ -155,7 +156,7 @@ def test_an_invalid_world_exits_2_with_the_position(tmp_path: Path) -> None:
 def test_bad_options_exit_2(args: list[str]) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "roomba_bt.cli", "sim", *args],
-        capture_output=True, text=True, timeout=20, check=False,
+        capture_output=True, text=True, timeout=HANG_S, check=False,
     )  # fmt: skip
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
 
@@ -170,7 +171,7 @@ def test_pyroombaadapter_streams_queries_and_drives(pty_server: Any) -> None:
         left0, right0 = adapter.request_encoder_counts()
         adapter.data_stream_start(["OI Mode", "Voltage"])
         readings = []
-        deadline = time.monotonic() + 5.0
+        deadline = time.monotonic() + HANG_S
         while len(readings) < 10 and time.monotonic() < deadline:
             values = adapter.data_stream_read()  # checks the checksum itself
             if values:
@@ -181,7 +182,7 @@ def test_pyroombaadapter_streams_queries_and_drives(pty_server: Any) -> None:
         time.sleep(0.1)
         adapter.serial_con.reset_input_buffer()
         adapter.send_drive_direct(100, 100)
-        deadline = time.monotonic() + 30.0  # a cap on waiting for the wheels
+        deadline = time.monotonic() + HANG_S  # a cap on waiting for the wheels
         left1, right1 = left0, right0
         while (left1 <= left0 or right1 <= right0) and time.monotonic() < deadline:
             left1, right1 = adapter.request_encoder_counts()
@@ -200,7 +201,7 @@ def test_plot_on_exit(tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "roomba_bt.cli", "sim", "--pty", "--duration", "0.2",
          "--world", "corridor", "--plot", str(out)],
-        capture_output=True, text=True, timeout=60, check=False,
+        capture_output=True, text=True, timeout=HANG_S, check=False,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     assert out.read_bytes()[:4] == b"\x89PNG"
@@ -213,7 +214,7 @@ def test_a_port_in_use_exits_3() -> None:
         port = taken.getsockname()[1]
         proc = subprocess.run(
             [sys.executable, "-m", "roomba_bt.cli", "sim", "--tcp", f"127.0.0.1:{port}"],
-            capture_output=True, text=True, timeout=20, check=False,
+            capture_output=True, text=True, timeout=HANG_S, check=False,
         )  # fmt: skip
     assert proc.returncode == 3 and "cannot serve" in proc.stderr
     assert "Traceback" not in proc.stderr

@@ -9,6 +9,7 @@ from collections.abc import Callable, Iterator
 
 import pytest
 import serial
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.modes import OIMode
@@ -40,8 +41,9 @@ def _rfc(made: list[Served], baud: int, asleep: bool = False) -> Served:
 
 
 #: How long an answer the robot's thread gives is waited for: the read ends at its byte, so
-#: this bounds only one that never comes (the port's own 0.3 s is the quiet that shows none)
-ANSWER_S = 10.0
+#: this bounds only one that never comes (the port's own 0.3 s is the quiet that shows none):
+#: the suite's hang bound (10 s before, which a robot's thread kept from the cores may need)
+ANSWER_S = HANG_S
 
 
 def _mode_reply(port: serial.Serial, wait: float = 0.0) -> bytes:

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 from serial import rfc2217
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.transport import SerialTransport, TransportError
 from roomba_bt.transport import open_failure as failures
@@ -86,7 +87,7 @@ def test_a_user_who_may_not_open_the_port_is_told_why(tmp_path: Path) -> None:
     done = subprocess.run(
         ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
          sys.executable, "-m", "roomba_bt.cli", "run", "dock", "--port", device],
-        capture_output=True, text=True, timeout=60, cwd=tmp_path,
+        capture_output=True, text=True, timeout=HANG_S, cwd=tmp_path,
     )  # fmt: skip
     assert done.returncode == 3, done.stderr
     assert f"{device}: could not open the port: permission denied: " in done.stderr

@@ -10,11 +10,13 @@ from __future__ import annotations
 import contextlib
 import socket
 import threading
+import time
 from collections.abc import Callable, Iterator
 
 import pytest
 from serial import rfc2217, serialutil
 from sim.served import Served  # tests/sim: the simulator served in a thread
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.sim.server import Rfc2217Endpoint
 from roomba_bt.transport import SerialTransport, TransportError
@@ -32,13 +34,15 @@ def served() -> Iterator[Served]:
 
 
 def _until(check: Callable[[], bool]) -> bool:
-    """Whether ``check()`` comes true within 5 s (the server's thread applies the lines)."""
-    waiter = threading.Event()
-    for _ in range(500):
-        if check():
-            return True
-        waiter.wait(0.01)
-    return False
+    """Whether ``check()`` comes true within :data:`~waits.HANG_S` (the server's thread
+    applies the lines; 5 s before, which a thread kept from a loaded machine's cores may
+    need), looking every 10 ms."""
+    deadline = time.monotonic() + HANG_S
+    while not check():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
 
 
 def test_set_wake_line_does_not_wait_for_the_servers_answer(

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.transport import (
     SerialTransport,
@@ -29,7 +30,7 @@ from roomba_bt.transport import (
 
 #: The most a wait here for another thread's or the kernel's event lasts: a hang's bound,
 #: never a timing (ends as soon as the event comes)
-WAIT_S = 60.0
+WAIT_S = HANG_S
 
 
 @dataclass
@@ -72,7 +73,7 @@ def tcp_far_end() -> Iterator[FarEnd]:
 
     def accept() -> socket.socket:
         if not accepted:
-            listener.settimeout(5)
+            listener.settimeout(HANG_S)
             accepted.append(listener.accept()[0])
         return accepted[0]
 
@@ -220,7 +221,7 @@ def test_a_device_is_opened_for_one_program_at_a_time() -> None:
             with pytest.raises(TransportError) as refused:
                 SerialTransport.open(end.url)
         finally:
-            holder.communicate("", timeout=30)
+            holder.communicate("", timeout=HANG_S)
         assert refused.value.cause == IN_USE
         assert str(refused.value).startswith(f"{end.url}: could not open the port: another ")
         SerialTransport.open(end.url).close()
@@ -496,10 +497,10 @@ def _until_the_file_clock_passes(made_ns: int, probe: Path) -> None:
     nodes from a coarse clock (a tick of 1 to 10 ms), so a pty made again within the same
     tick has the same time as the first. A file touched here is stamped by the same clock;
     the wait ends on its first tick past, not after a fixed guess (it was 50 ms)."""
-    deadline = time.monotonic() + 10.0  # a clock that never moves: fail, do not hang
+    deadline = time.monotonic() + HANG_S  # a clock that never moves: fail, do not hang
     probe.touch()
     while os.stat(probe).st_ctime_ns <= made_ns:
-        assert time.monotonic() < deadline, "the file clock did not move in 10 s"
+        assert time.monotonic() < deadline, f"the file clock did not move in {HANG_S:g} s"
         time.sleep(0.001)
         os.utime(probe)
 
@@ -635,7 +636,7 @@ def _open_reset_as_it_reads(
         turned, _ = listener.accept()
         turned.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
         turned.close()  # RST
-        select.select([port._socket], [], [], 2.0)
+        select.select([port._socket], [], [], HANG_S)  # the reset, on its way
         read_as_pyserial(port)  # raises: the connection was reset
 
     monkeypatch.setattr(handler, "reset_input_buffer", reset_as_it_reads)
