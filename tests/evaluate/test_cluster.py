@@ -23,6 +23,7 @@ from typing import Any
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.evaluate import EpisodeResult, cluster, episode_specs, run_episodes
 from roomba_bt.evaluate.cluster import dask_client, dask_logs_as_detail, run_on_client
@@ -99,14 +100,14 @@ def scheduler(tmp_path: Path) -> Iterator[Callable[[int], Separate]]:
         for p in processes:
             p.kill()
         for p in processes:
-            p.wait(timeout=30)
+            p.wait(timeout=HANG_S)
         log.close()
 
 
 @contextlib.contextmanager
 def _connected_when_ready(address: str) -> Iterator[Any]:
     """A client of the scheduler at ``address`` once it takes one (it is starting)."""
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + HANG_S
     with contextlib.ExitStack() as stack:
         while True:
             try:
@@ -127,7 +128,7 @@ def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_
     """Two workers: one killed after the first episode, the other runs what it held."""
     address, workers, _ = scheduler(2)
     with _connected_when_ready(address) as client:
-        client.wait_for_workers(2, timeout=60)
+        client.wait_for_workers(2, timeout=HANG_S)
     (done,) = evaluate([SPECS], Engine("dask", scheduler=address))
     assert _episodes(done.results) == one_job
     assert done.retried == 0
@@ -141,7 +142,7 @@ def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_
 
     with dask_client(address) as client:
         results, retried, interrupted = run_on_client(client, SPECS, kill_a_worker_after_the_first)
-    assert workers[0].wait(timeout=30) != 0, "the worker was killed"
+    assert workers[0].wait(timeout=HANG_S) != 0, "the worker was killed"
     assert not interrupted
     assert sorted(reported) == [s.seed for s in SPECS], "every episode reported once"
     assert all(r is not None for r in results)
@@ -189,13 +190,13 @@ def _evaluation_under_way(
     ``address`` once its ``workers`` have joined, writing ``out``, once its first episode is
     in the partial file (another process's file: polled)."""
     with _connected_when_ready(address) as client:
-        client.wait_for_workers(workers, timeout=60)
+        client.wait_for_workers(workers, timeout=HANG_S)
     evaluation = child(
         [*roomba_bt, "eval", str(MISSIONS / "dock.yaml"), "--runs", "400", "--within", "1.5",
          "--no-progress", "--scheduler", address, "--out", str(out), *options]
     )  # fmt: skip
     partial = Path(f"{out}.partial.jsonl")
-    deadline = time.monotonic() + 120
+    deadline = time.monotonic() + HANG_S
     while not (partial.exists() and partial.read_text().strip()):
         assert evaluation.poll() is None and time.monotonic() < deadline
         time.sleep(0.05)  # another process's file: no event to wait on
@@ -218,7 +219,7 @@ def test_a_cluster_whose_workers_are_gone_for_good_stops_after_worker_wait_with_
     evaluation = _evaluation_under_way(child, address, out, "--worker-wait", "2s")
     for worker in workers:
         worker.kill()
-    stdout, stderr = evaluation.communicate(timeout=120)
+    stdout, stderr = evaluation.communicate(timeout=HANG_S)
     assert evaluation.returncode == 3, stderr
     assert f"the Dask cluster at {address} has had no worker for " in stderr
     records = read_results(out)
@@ -253,7 +254,7 @@ def test_a_scheduler_lost_mid_evaluation_stops_it_with_exit_3_and_what_finished(
         child, address, out, "--json", roomba_bt=ROOMBA_BT_RECONNECTING_5_S
     )
     scheduler_process.kill()
-    stdout, stderr = evaluation.communicate(timeout=120)
+    stdout, stderr = evaluation.communicate(timeout=HANG_S)
     assert evaluation.returncode == 3, stderr
     report = json.loads(stdout)
     lost = f"the connection to the Dask scheduler at {address} was lost"
@@ -287,7 +288,7 @@ def test_a_client_that_closed_ends_the_gathering() -> None:
 
     client = type("ClosedClient", (), {"status": "closed"})()
     with WorkerWatch(client, None) as watch:
-        watch._thread.join(timeout=30)  # it ends once it has seen the client closed
+        watch._thread.join(timeout=HANG_S)  # it ends once it has seen the client closed
         assert watch.closed
         late = Completing()
         watch.gathering(late)
@@ -330,7 +331,7 @@ def test_a_client_whose_scheduler_was_lost_ends_its_io_loop(
     loops = _io_loops()
     with _connected_when_ready(address) as client:
         scheduler_process.kill()
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + HANG_S
         while client.status != "closed" and time.monotonic() < deadline:
             time.sleep(0.1)  # Dask's own thread closes it: no event to wait on
         assert client.status == "closed"
@@ -407,7 +408,7 @@ def test_a_scheduler_without_workers_is_said_to_have_none(
         say_when_no_worker(client, "tcp://example:8786", after_s=0.2)
         assert "the cluster at tcp://example:8786 has 0 workers; waiting" in capsys.readouterr().err
         cluster.scale(1)
-        client.wait_for_workers(1, timeout=120)
+        client.wait_for_workers(1, timeout=HANG_S)
         say_when_no_worker(client, "tcp://example:8786", after_s=5.0)
         assert "0 workers" not in capsys.readouterr().err
 
@@ -500,7 +501,7 @@ class TestOnOneLocalCluster:
             does it a moment later: the race ``make bench`` lost now and then)."""
             held = list(futures)
             rerun = release(client, futures, ask)
-            deadline = time.monotonic() + 10
+            deadline = time.monotonic() + HANG_S
             while any(f.status != "cancelled" for f in held) and time.monotonic() < deadline:
                 time.sleep(0.005)
             return rerun
@@ -527,7 +528,8 @@ class TestOnOneLocalCluster:
         def at_the_last(done: int, total: int, result: EpisodeResult) -> None:
             if done < total:
                 return
-            for _ in range(3000):  # release is asynchronous: until the scheduler forgot them
+            deadline = time.monotonic() + HANG_S
+            while time.monotonic() < deadline:  # release is asynchronous: until it forgot them
                 held.append(local_client.run_on_scheduler(episodes_held))
                 if held[-1] == 0:
                     return

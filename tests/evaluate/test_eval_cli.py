@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.evaluate.stats import tidy
@@ -605,7 +606,7 @@ def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path, engine: list[
     out = tmp_path / "partial.jsonl"
     proc = _eval_past_its_first_episode(out, *engine)
     os.killpg(proc.pid, signal.SIGINT)
-    stdout, stderr = proc.communicate(timeout=120)
+    stdout, stderr = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130, stderr
     finished = len(out.read_text(encoding="utf-8").splitlines())
     assert 1 <= finished < 200
@@ -629,7 +630,7 @@ def test_a_sigterm_says_so_in_the_json_summary(tmp_path: Path, engine: list[str]
     out = tmp_path / "partial.jsonl"
     proc = _eval_past_its_first_episode(out, "--json", *engine)
     proc.send_signal(signal.SIGTERM)
-    stdout, stderr = proc.communicate(timeout=120)
+    stdout, stderr = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130, stderr
     report = json.loads(stdout)
     finished = len(out.read_text(encoding="utf-8").splitlines())
@@ -959,12 +960,12 @@ def test_a_killed_evaluation_leaves_the_records_it_finished(tmp_path: Path) -> N
         stdout=subprocess.PIPE, stderr=subprocess.PIPE,
     )  # fmt: skip
     partial = tmp_path / "sweep.csv.partial.jsonl"
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + HANG_S
     while not (partial.exists() and partial.read_text().count("\n") >= 2):
         assert proc.poll() is None and time.monotonic() < deadline, "no records as it ran"
         time.sleep(0.01)  # a poll for a file another process writes: no event to wait on
     proc.send_signal(signal.SIGKILL)
-    proc.communicate(timeout=60)
+    proc.communicate(timeout=HANG_S)
     assert not out.exists()
     kept = read_results(partial)
     assert len(kept) >= 2 and [r.seed for r in kept[:2]] == [0, 1]

@@ -9,6 +9,7 @@ import threading
 from pathlib import Path
 
 import pytest
+from waits import joined  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.evaluate import EpisodeResult, EpisodeSpec, episode_specs, parallel
@@ -103,7 +104,7 @@ def test_on_a_dask_worker_the_limit_raises_in_the_episode_s_thread(tmp_path: Pat
     out: list[EpisodeResult] = []
     thread = threading.Thread(target=lambda: out.append(within_wall_limit(_stuck(tmp_path), 1.0)))
     thread.start()
-    thread.join(30.0)
+    joined(thread, "an episode past its 1 s wall limit")
     (hung,) = out
     assert (hung.outcome, hung.stage) == (HUNG, "stuck")
     assert "ran out in behaviour sequence / stuck (at " in hung.reason

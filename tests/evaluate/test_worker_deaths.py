@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 
@@ -181,7 +182,7 @@ def test_ctrl_c_while_a_dask_worker_restarts_prints_no_traceback(tmp_path: Path)
     try:
         seen: set[int] = set()
         replacement = None
-        deadline = time.monotonic() + 120
+        deadline = time.monotonic() + HANG_S
         while replacement is None:
             assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
             if not died.exists() or not died.read_text():
@@ -190,7 +191,7 @@ def test_ctrl_c_while_a_dask_worker_restarts_prints_no_traceback(tmp_path: Path)
                 continue
             replacement = _replacement_importing(proc.pid, int(died.read_text()), seen)
         os.killpg(proc.pid, signal.SIGINT)
-        _, stderr = proc.communicate(timeout=120)
+        _, stderr = proc.communicate(timeout=HANG_S)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
