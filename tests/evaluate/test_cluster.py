@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import socket
 import subprocess
 import sys
@@ -171,12 +172,14 @@ def test_the_seeds_run_again_are_named_from_their_keys(capsys: pytest.CaptureFix
 #: ``roomba-bt`` whose Dask client gives a lost scheduler 5 s to come back, not the user's
 #: 10 s (``SCHEDULER_CONNECT_TIMEOUT_S``, also its connect's bound: still generous for a
 #: scheduler the test has just reached itself): what a test of a lost scheduler checks comes
-#: after the client gave up, and the other 5 s were the suite's longest idle wait.
-#: ``test_an_unreachable_scheduler_exits_3`` sets the same constant in process.
+#: after the client gave up, and the other 5 s were the suite's longest idle wait. Given to
+#: ``scheduler_client`` itself (as :func:`_connecting_within` does): the constant is its argument's
+#: default, read once as the module is made, so setting the constant afterwards (as this did
+#: until session 41, and ``test_an_unreachable_scheduler_exits_3``) changed nothing.
 ROOMBA_BT_RECONNECTING_5_S = [
     sys.executable, "-c",
-    "import sys; from roomba_bt.evaluate import cluster; "
-    "cluster.SCHEDULER_CONNECT_TIMEOUT_S = 5.0; "
+    "import functools, sys; from roomba_bt.evaluate import cluster; "
+    "cluster.scheduler_client = functools.partial(cluster.scheduler_client, timeout=5.0); "
     "from roomba_bt.cli import main; sys.exit(main())",
 ]  # fmt: skip
 
@@ -300,6 +303,14 @@ def test_a_client_that_closed_ends_the_gathering() -> None:
     assert not completing.cleared.is_set() and not watch.closed
 
 
+def _connecting_within(seconds: float) -> Callable[..., Any]:
+    """:func:`cluster.scheduler_client` giving up after ``seconds``, for ``dask_client``
+    (which calls it by the module's name): its ``timeout`` defaults to
+    ``SCHEDULER_CONNECT_TIMEOUT_S`` as it was when the module was made, so a test that set
+    the constant waited the user's 10 s all the same."""
+    return functools.partial(cluster.scheduler_client, timeout=seconds)
+
+
 def test_an_unreachable_scheduler_exits_3(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -311,7 +322,7 @@ def test_an_unreachable_scheduler_exits_3(
     from roomba_bt.cli import main
     from roomba_bt.evaluate import cluster
 
-    monkeypatch.setattr(cluster, "SCHEDULER_CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(cluster, "scheduler_client", _connecting_within(1.0))
     port = _free_port()  # nothing listens there
     loops = _io_loops()
     code = main(["eval", str(MISSIONS / "dock.yaml"), "--runs", "1", "--no-progress",
