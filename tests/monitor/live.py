@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import py_trees
+from waits import HANG_S, joined  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
@@ -52,11 +53,10 @@ class LiveRun:
     def url(self) -> str:
         return self.server.url
 
-    def finish(self, timeout: float = 10.0) -> RunSummary:
+    def finish(self, timeout: float = HANG_S) -> RunSummary:
         if self.thread.is_alive():
             self.session.request("stop")
-        self.thread.join(timeout)
-        assert not self.thread.is_alive(), "the run did not end after stop"
+        joined(self.thread, "the live run, told to stop", timeout)
         self.server.close()
         return self.result[0]
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi import commands as oi
@@ -27,7 +28,10 @@ from .live import MISSIONS as MISSIONS_DIR
 from .live import LiveRun, replayed_record, start_live_run
 
 HERE = Path(__file__).resolve().parent
-WAIT_MS = 15_000
+#: the most a page is waited for to show what a test waits for: the suite's hang bound
+#: (tests/waits.py), in Playwright's milliseconds; 15 s before, which a page and a run
+#: sharing 2 loaded cores with the rest of the suite may need
+WAIT_MS = round(HANG_S * 1000)
 #: the ``child`` fixture (tests/conftest.py)
 Child = Callable[[Sequence[str]], "subprocess.Popen[str]"]
 
@@ -138,7 +142,7 @@ def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, child: Child)
     page.goto(_url_from(proc))
     page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
     page.click("#stop")
-    out, err = proc.communicate(timeout=30)
+    out, err = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130, err
     assert "outcome      INTERRUPTED (stopped by the operator)" in out
     # a robot still driving got drive 0 and motors off before the tree's stop (the wall clock)
@@ -149,7 +153,7 @@ def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, child: Child)
 
 def _url_from(proc: subprocess.Popen[str]) -> str:
     assert proc.stdout is not None
-    deadline = time.monotonic() + 30
+    deadline = time.monotonic() + HANG_S
     while time.monotonic() < deadline:
         line = proc.stdout.readline()
         if not line:
@@ -214,7 +218,7 @@ def test_watch_reloads_a_valid_change_and_refuses_an_invalid_one(
     )  # the run goes on
     assert page.query_selector('.node[data-name="out and home"]') is not None
     page.click("#stop")
-    out, err = proc.communicate(timeout=30)
+    out, err = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130
     assert re.search(rf"reload refused: {re.escape(str(mission))}:\d+:\d+", err), err
     assert "new tree starts at the next safe point" in out
@@ -420,7 +424,7 @@ def test_after_the_run_the_robot_panel_shows_it_stopped_in_passive(page: Any, ch
     page.wait_for_selector('#motors:has-text("main brush ON")', timeout=WAIT_MS)
     _wait_for_wheels_turning(page)
     page.click("#stop")
-    _, err = proc.communicate(timeout=30)
+    _, err = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130, err
     page.wait_for_selector('#link:text("ended")', timeout=WAIT_MS)
     assert page.inner_text("#mode") == "Passive"
@@ -445,7 +449,7 @@ def test_an_ended_run_s_timeline_says_it_reads_no_more_and_a_drag_does_not_stay(
     page.goto(_url_from(proc))
     _wait_for_wheels_turning(page)
     page.click("#stop")
-    _, err = proc.communicate(timeout=30)
+    _, err = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130, err
     page.wait_for_selector('#link:text("ended")', timeout=WAIT_MS)
     page.wait_for_selector("#timeline:disabled", timeout=WAIT_MS)
@@ -546,7 +550,7 @@ def test_a_page_left_open_does_not_take_the_next_run_served_on_its_port(page: An
         first.finish()
     second = start_live_run(SHUTTLE, port=port, robot="/dev/ttyUSB1")
     try:
-        banner = page.wait_for_selector('#banner:has-text("a different run")', timeout=30_000)
+        banner = page.wait_for_selector('#banner:has-text("a different run")', timeout=WAIT_MS)
         assert banner is not None
         assert re.search(
             r"a different run is now served here \(shuttle on /dev/ttyUSB1, started "

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 from runtime.test_terminate_never_returns import HANG_ON_STOP, MISSION, WAIT_LINE
+from waits import HANG_S, joined  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.runtime import ending
@@ -60,7 +61,7 @@ def served_record(child: Callable[[Sequence[str]], subprocess.Popen[str]]) -> Se
             if line.startswith(until):
                 break
         proc.send_signal(signal.SIGTERM)
-        out, err = proc.communicate(timeout=30)
+        out, err = proc.communicate(timeout=HANG_S)
         assert proc.returncode == 0, err
         return "".join(lines) + out, err
 
@@ -338,7 +339,7 @@ class WatchedRun:
         seen: list[str] = []
         while True:
             try:
-                line = self.lines.get(timeout=30)
+                line = self.lines.get(timeout=HANG_S)
             except queue.Empty:
                 raise AssertionError(f"never saw {text!r}; saw {seen}") from None
             seen.append(line)
@@ -347,12 +348,12 @@ class WatchedRun:
 
     def interrupt(self) -> int:
         self.proc.send_signal(signal.SIGINT)
-        return self.proc.wait(timeout=30)
+        return self.proc.wait(timeout=HANG_S)
 
     def said(self) -> str:
         """What the process wrote that :meth:`expect` has not read, once it has ended."""
         for reader in self.readers:
-            reader.join(30)
+            joined(reader, "reading what the ended monitor wrote")
         left: list[str] = []
         while not self.lines.empty():
             left.append(self.lines.get())
@@ -363,7 +364,7 @@ class WatchedRun:
             self.proc.kill()
             self.proc.wait()
         for reader in self.readers:
-            reader.join(10)
+            reader.join(HANG_S)  # killed: its pipes end at once
         for stream in (self.proc.stdout, self.proc.stderr):
             if stream is not None:
                 stream.close()
@@ -896,7 +897,7 @@ def _status(request: Any) -> int:
     import urllib.request
 
     try:
-        with urllib.request.urlopen(request, timeout=10) as response:
+        with urllib.request.urlopen(request, timeout=HANG_S) as response:
             return int(response.status)
     except urllib.error.HTTPError as exc:
         exc.close()

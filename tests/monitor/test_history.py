@@ -10,6 +10,7 @@ import urllib.request
 from pathlib import Path
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
@@ -81,7 +82,7 @@ def test_the_record_view_answers_a_seek_to_the_middle_of_the_run(
     server = MonitorServer(replayed, None, port=0)
     url = server.start()
     try:
-        with urllib.request.urlopen(f"{url}api/state?tick={tick}", timeout=10) as reply:
+        with urllib.request.urlopen(f"{url}api/state?tick={tick}", timeout=HANG_S) as reply:
             body = json.load(reply)
     finally:
         server.close()

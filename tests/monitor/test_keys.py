@@ -18,6 +18,7 @@ from pathlib import Path
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 
@@ -81,7 +82,7 @@ class Terminal:
                 return False
         return True
 
-    def until(self, text: str, timeout: float = 30.0) -> None:
+    def until(self, text: str, timeout: float = HANG_S) -> None:
         deadline = time.monotonic() + timeout
         while text not in self.screen:
             assert time.monotonic() < deadline, f"never saw {text!r} in {self.screen!r}"
@@ -96,7 +97,7 @@ class Terminal:
         return os.waitstatus_to_exitcode(status)
 
 
-def _until_in(log: Path, text: str, timeout: float = 30.0) -> None:
+def _until_in(log: Path, text: str, timeout: float = HANG_S) -> None:
     """Wait until ``text`` is in the file ``log`` (a run's stderr)."""
     deadline = time.monotonic() + timeout
     while text not in log.read_text(errors="replace"):
@@ -120,7 +121,7 @@ def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(
     run.until("keys: p pause, r resume, n step, q stop")
     run.until("drive(velocity=100 mm/s, distance=3 cm) -> RUNNING")
     run.type("p")
-    deadline = time.monotonic() + 30
+    deadline = time.monotonic() + HANG_S
     while not record.exists() or "pause" not in _acts(record):  # noted as it is done
         assert time.monotonic() < deadline, "p did not pause"
         run.read(0.05)
@@ -185,7 +186,7 @@ def test_a_read_only_page_leaves_the_keys_to_the_operator(tmp_path: Path) -> Non
         headers={"Content-Type": "application/json"}, method="POST",
     )  # fmt: skip
     with pytest.raises(urllib.error.HTTPError) as refused:
-        urllib.request.urlopen(request, timeout=10)
+        urllib.request.urlopen(request, timeout=HANG_S)
     refused.value.close()
     assert refused.value.code == 403
     run.until("drive(velocity=100 mm/s, distance=3 cm) -> RUNNING")
@@ -212,7 +213,7 @@ def test_a_terminal_that_hangs_up_turns_the_keys_off_once(tmp_path: Path) -> Non
     assert port, run.screen
     # the keys are read once a key typed is said (typed before their thread set the
     # terminal up, it is flushed: typed again until then)
-    deadline = time.monotonic() + 30
+    deadline = time.monotonic() + HANG_S
     while "key 'x' does nothing" not in log.read_text(errors="replace"):
         assert time.monotonic() < deadline, log.read_text(errors="replace")[-2000:]
         run.type("x")
@@ -227,13 +228,13 @@ def test_a_terminal_that_hangs_up_turns_the_keys_off_once(tmp_path: Path) -> Non
     assert "Traceback" not in said and "Exception in thread" not in said
     assert_quoted("docs/monitor.md", "monitor: keys: off", said)
     base = f"http://127.0.0.1:{port.group(1)}"
-    with urllib.request.urlopen(f"{base}/api/state", timeout=10) as answer:
+    with urllib.request.urlopen(f"{base}/api/state", timeout=HANG_S) as answer:
         run_id = json.load(answer)["header"]["run"]["id"]
     stop = urllib.request.Request(
         f"{base}/api/control", data=json.dumps({"action": "stop", "run": run_id}).encode(),
         headers={"Content-Type": "application/json"}, method="POST",
     )  # fmt: skip
-    with urllib.request.urlopen(stop, timeout=10) as answer:
+    with urllib.request.urlopen(stop, timeout=HANG_S) as answer:
         assert answer.status == 202
     assert run.wait() == 130
     said = log.read_text(errors="replace")

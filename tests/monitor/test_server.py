@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from waits import HANG_S, joined, waited  # tests/waits.py: a hang's bound
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor import server as monitor_server
@@ -53,7 +54,7 @@ def _call(
 ) -> tuple[int, Any]:
     request = urllib.request.Request(url, data=body, headers=headers or {})
     try:
-        with urllib.request.urlopen(request, timeout=10) as reply:
+        with urllib.request.urlopen(request, timeout=HANG_S) as reply:
             raw = reply.read()
             status = reply.status
     except urllib.error.HTTPError as exc:
@@ -217,11 +218,11 @@ def test_a_page_hears_from_the_run_every_second_when_nothing_changes() -> None:
     messages: list[list[dict[str, Any]]] = []
     # the page's event loop in a thread of its own: the browser tests' driver may own this one
     watcher = threading.Thread(
-        target=lambda: messages.append(asyncio.run(asyncio.wait_for(listen(), 30)))
+        target=lambda: messages.append(asyncio.run(asyncio.wait_for(listen(), HANG_S)))
     )
     try:
         watcher.start()
-        watcher.join(60)
+        watcher.join()  # the wait_for's bound at the latest
     finally:
         served.close()
     assert messages, "the page heard nothing after the run's first update"
@@ -284,7 +285,7 @@ def _ws_status(port: int, origin: str | None, host: str | None = None) -> int:
 def _raw_status(port: int, head: str) -> int:
     """The status of a request sent by hand with ``head`` (the request line and headers, no
     blank line): what no browser or HTTP library sends."""
-    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+    with socket.create_connection(("127.0.0.1", port), timeout=HANG_S) as sock:
         sock.sendall(f"{head}\r\n\r\n".encode())
         return int(sock.recv(200).split()[1])
 
@@ -443,7 +444,7 @@ def test_a_stalled_page_loses_updates_never_a_tick() -> None:
             finished.set()
 
         threading.Thread(target=run, daemon=True).start()
-        assert finished.wait(120), "the run was held up"
+        waited(finished, "the run beside a stalled page (held up?)")
         summary = result[0]
         assert summary.reason.startswith("the run's 2 min of mission time ran out")
         assert len(feed.since(0)[0]) == summary.ticks  # every tick recorded
@@ -488,7 +489,7 @@ def test_several_pages_watch_one_run() -> None:
     async def two_pages() -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
         first: list[dict[str, Any]] = []
         second: list[dict[str, Any]] = []
-        await asyncio.wait_for(asyncio.gather(page(first, 0), page(second, 1)), 60)
+        await asyncio.wait_for(asyncio.gather(page(first, 0), page(second, 1)), HANG_S)
         return first, second
 
     thread = threading.Thread(target=runner.run, daemon=True)
@@ -499,14 +500,15 @@ def test_several_pages_watch_one_run() -> None:
         # both pages connected (their hello received) before the run starts: on the virtual
         # clock the whole run may otherwise end before a page has seen one of its ticks
         watcher.start()
-        assert all(event.wait(30) for event in connected), "a page never connected"
+        for which, event in enumerate(connected):
+            waited(event, f"page {which}'s connecting")
         thread.start()
-        watcher.join(90)
+        watcher.join()  # the wait_for's bound at the latest
         first, second = pages[0]
     finally:
         session.request("stop")
         if thread.ident is not None:  # started
-            thread.join(30)
+            joined(thread, "the run, told to stop")
         server.close()
     for received in (first, second):
         assert received[0]["type"] == "hello"
@@ -559,7 +561,7 @@ def test_a_body_refused_as_too_large_leaves_no_task_pending_at_the_end(
     is pending!" followed the run's summary, as if the run had failed."""
     server = _serve()
     size = 5_000_000
-    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as client:
+    with socket.create_connection(("127.0.0.1", server.port), timeout=HANG_S) as client:
         client.sendall(
             f"POST /api/control HTTP/1.1\r\nHost: 127.0.0.1:{server.port}\r\n"
             f"Content-Type: application/json\r\nContent-Length: {size}\r\n\r\n".encode()
@@ -567,7 +569,7 @@ def test_a_body_refused_as_too_large_leaves_no_task_pending_at_the_end(
         sender = threading.Thread(target=client.sendall, args=(b"a" * size,), daemon=True)
         sender.start()  # the whole body, as curl sends it, while the 413 is read
         assert client.recv(64).startswith(b"HTTP/1.1 413"), "the body is refused"
-        sender.join(10)
+        sender.join(HANG_S)  # its body taken whole (the 413 read) before the server closes
         server.close()
         del server  # its loop, and any task left on it, are destroyed with it
         gc.collect()  # a pending task is said when it is destroyed
@@ -604,12 +606,12 @@ def test_a_killed_run_s_record_tells_the_page_its_last_tick_has_no_end(
 
     messages: list[list[dict[str, Any]]] = []
     watcher = threading.Thread(
-        target=lambda: messages.append(asyncio.run(asyncio.wait_for(listen(), 30)))
+        target=lambda: messages.append(asyncio.run(asyncio.wait_for(listen(), HANG_S)))
     )
     try:
         status, state = _call(f"http://127.0.0.1:{server.port}/api/state")
         watcher.start()
-        watcher.join(60)
+        watcher.join()  # the wait_for's bound at the latest
     finally:
         server.close()
     expected = NO_END if killed else None
@@ -660,7 +662,7 @@ def test_a_page_that_stopped_reading_is_sent_the_newest_state_not_a_backlog() ->
     # a thread of its own, as the other pages here: the browser tests' sync Playwright
     # leaves this thread's event loop running, and asyncio.run() refuses to start under it
     reader = threading.Thread(
-        target=lambda: read.append(asyncio.run(asyncio.wait_for(page(), 120)))
+        target=lambda: read.append(asyncio.run(asyncio.wait_for(page(), HANG_S)))
     )
     try:
         reader.start()

@@ -30,6 +30,7 @@ from runtime.test_terminate_never_returns import (  # a plugin whose terminate()
     outbound,
     release_all,
 )
+from waits import HANG_S, joined, waited  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.cli.run_cmd import _stop_said
@@ -57,7 +58,7 @@ WAIT_THEN_DRIVE = HERE / "missions" / "wait-then-drive.yaml"
 Noted = TypeVar("Noted")
 #: The most a run is waited for to end once its operator is done (:meth:`Rig.run_with`): the
 #: wait ends with the run, so this bounds only one that never ends.
-RUN_END_S = 120.0
+RUN_END_S = HANG_S
 
 
 class PacedGate:
@@ -154,7 +155,7 @@ class Rig:
             self.gate.paced = False  # the operator is done: no thread waits for a turn
             if not self.ended.wait(RUN_END_S):
                 self.session.request("stop")
-            thread.join(30)
+            joined(thread, "the run's thread")
         self.connection.close()
         return result[0]
 
@@ -328,7 +329,7 @@ def test_a_forced_condition_decides_the_branch_and_is_marked_in_the_events_and_t
     def operator(rig: Rig) -> None:
         until(lambda: rig.ticks(ticked=True) > 50)
         rig.session.request("force", no_bump, "failure")
-        rig.ended.wait(30)
+        waited(rig.ended, "the run's end")
 
     summary = rig.run_with(operator)
     assert summary.outcome is Outcome.FAILURE
@@ -1007,7 +1008,7 @@ def test_the_operator_s_acts_are_on_the_page_at_the_tick_the_log_and_the_record_
         until(lambda: rig.session.state.paused)
         rig.session.request("force", no_bump, "failure")
         rig.session.request("resume")
-        rig.ended.wait(30)
+        waited(rig.ended, "the run's end")
 
     rig.run_with(operator)
     notes = [note for _, note in load_record(record_path).notes]
@@ -1120,7 +1121,7 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
     def operator(rig: Rig) -> None:
         until(lambda: rig.ticks(ticked=True) > 50)
         rig.session.request("pause")
-        rig.ended.wait(30)
+        waited(rig.ended, "the run's end")
 
     summary = rig.run_with(operator)
     assert rig.sim.asleep
@@ -1244,7 +1245,7 @@ def test_the_record_of_a_link_lost_while_paused_replays_to_its_loss_not_a_differ
     def operator(rig: Rig) -> None:
         until(lambda: rig.ticks(ticked=True) > 50)
         rig.session.request("pause")
-        rig.ended.wait(30)
+        waited(rig.ended, "the run's end")
 
     summary = rig.run_with(operator, ended=True)
     rig.stack.close()

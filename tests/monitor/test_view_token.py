@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.monitor.access import SAME_TOKEN
 from roomba_bt.monitor.server import MonitorServer
@@ -42,7 +43,7 @@ def _hello(server: MonitorServer, at: str = "/", **headers: str) -> dict[str, An
             aiohttp.ClientSession() as client,
             client.ws_connect(f"ws://127.0.0.1:{server.port}{at}ws", headers=headers) as ws,
         ):
-            message = await asyncio.wait_for(ws.receive(), 30)
+            message = await asyncio.wait_for(ws.receive(), HANG_S)
             hello = json.loads(message.data)
             assert hello["type"] == "hello"
             return dict(hello["header"])
@@ -51,7 +52,7 @@ def _hello(server: MonitorServer, at: str = "/", **headers: str) -> dict[str, An
     # an event loop of its own: the browser tests' driver may own this thread's
     reader = threading.Thread(target=lambda: got.append(asyncio.run(first())))
     reader.start()
-    reader.join(60)
+    reader.join()  # the wait_for's bound at the latest
     assert got, "no hello"
     return got[0]
 
@@ -68,7 +69,7 @@ def _page_answer(server: MonitorServer, at: str, token: str) -> tuple[int, dict[
     and where it sends the browser ("" for nowhere)."""
     url = f"http://127.0.0.1:{server.port}{at}?token={token}"
     try:
-        reply = urllib.request.build_opener(NoRedirect).open(url, timeout=10)
+        reply = urllib.request.build_opener(NoRedirect).open(url, timeout=HANG_S)
     except urllib.error.HTTPError as exc:
         reply = exc
     with reply:
