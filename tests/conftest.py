@@ -35,7 +35,8 @@ from typing import Any
 
 import py_trees
 import pytest
-from waits import HANG_S  # tests/waits.py: the suite's one bound on a hang
+import waits  # tests/waits.py: the suite's one bound on a hang, and its waits
+from waits import HANG_S
 
 
 def _answer_the_signals_the_tests_send() -> None:
@@ -367,11 +368,7 @@ def until() -> Callable[[Callable[[], bool]], None]:
     after :data:`UNTIL_SECONDS` (the traceback's line names the condition)."""
 
     def wait(condition: Callable[[], bool]) -> None:
-        deadline = time.monotonic() + UNTIL_SECONDS
-        while not condition():
-            if time.monotonic() > deadline:
-                raise AssertionError(f"the condition never held within {UNTIL_SECONDS:g} s")
-            time.sleep(0.001)
+        waits.until(condition, "the condition never held", UNTIL_SECONDS)
 
     return wait
 

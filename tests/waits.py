@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import subprocess
 import threading
+import time
+from collections.abc import Callable
 
 #: The most a test waits for something that only a hang would keep from happening: generous
 #: for a loaded 2-core machine (six busy loops on its 2 cores kept a monitor run from its
@@ -28,6 +30,17 @@ def waited(event: threading.Event, what: str, within: float = HANG_S) -> None:
     within ``within`` seconds."""
     if not event.wait(within):
         raise AssertionError(f"{what}: not within {within:g} s (hung?)")
+
+
+def until(condition: Callable[[], bool], what: str, within: float = HANG_S) -> None:
+    """Return once ``condition()`` holds, looking every millisecond: for a state another
+    thread or the kernel changes with no event to wait on. Fail, saying ``what`` never
+    came, if it does not within ``within`` seconds."""
+    deadline = time.monotonic() + within
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what}: not within {within:g} s (hung?)")
+        time.sleep(0.001)
 
 
 def joined(thread: threading.Thread, what: str, within: float = HANG_S) -> None:

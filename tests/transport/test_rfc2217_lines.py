@@ -10,13 +10,12 @@ from __future__ import annotations
 import contextlib
 import socket
 import threading
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 
 import pytest
 from serial import rfc2217, serialutil
 from sim.served import Served  # tests/sim: the simulator served in a thread
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import until  # tests/waits.py: a hang's bound
 
 from roomba_bt.sim.server import Rfc2217Endpoint
 from roomba_bt.transport import SerialTransport, TransportError
@@ -31,18 +30,6 @@ def served() -> Iterator[Served]:
     one = Served(Rfc2217Endpoint("127.0.0.1", 0, 115200))
     yield one
     one.close()
-
-
-def _until(check: Callable[[], bool]) -> bool:
-    """Whether ``check()`` comes true within :data:`~waits.HANG_S` (the server's thread
-    applies the lines; 5 s before, which a thread kept from a loaded machine's cores may
-    need), looking every 10 ms."""
-    deadline = time.monotonic() + HANG_S
-    while not check():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.01)
-    return True
 
 
 def test_set_wake_line_does_not_wait_for_the_servers_answer(
@@ -61,13 +48,13 @@ def test_set_wake_line_does_not_wait_for_the_servers_answer(
         monkeypatch.setattr(rfc2217.TelnetSubnegotiation, "wait", wait)
         transport.set_wake_line(True)
         assert waited == [], "the tick thread waited for the server's acknowledgement"
-        assert _until(lambda: endpoint.wake_line() is True), "BRC never went low"
+        until(lambda: endpoint.wake_line() is True, "BRC going low")
         transport.set_wake_line(False)
         assert waited == []
-        assert _until(lambda: endpoint.wake_line() is False), "BRC never went high"
-        assert _until(lambda: simulator.brc_pulses == 1)
+        until(lambda: endpoint.wake_line() is False, "BRC going high")
+        until(lambda: simulator.brc_pulses == 1, "the robot's seeing one BRC pulse")
         transport.write(b"\x80")  # the port still carries bytes after the lines
-        assert _until(lambda: simulator.mode.name == "PASSIVE")
+        until(lambda: simulator.mode.name == "PASSIVE", "Passive, after Start")
     finally:
         transport.close()
 
@@ -83,7 +70,7 @@ def test_a_read_takes_everything_queued_not_one_byte(
     try:
         transport.write(bytes([128, 148, 1, 7]))  # Start, stream packet 7 (5-byte frames)
         port = transport.port
-        assert _until(lambda: port.in_waiting >= 20), "no stream"
+        until(lambda: port.in_waiting >= 20, "the stream's first 20 bytes")
         queued = port.in_waiting
         assert len(transport.read(0.0)) >= queued
         transport.write(bytes([150, 0]))
