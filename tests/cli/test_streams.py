@@ -184,7 +184,7 @@ def test_a_full_disk_on_stdout_is_one_line_and_the_outcomes_exit_code(tmp_path: 
     with open("/dev/full", "w") as full:
         done = subprocess.run(
             [*CLI, "missions"], stdout=full, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
-            text=True, cwd=tmp_path, env=_env(), timeout=120,
+            text=True, cwd=tmp_path, env=_env(), timeout=HANG_S,
         )  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert_quoted("docs/runtime.md", "roomba-bt: cannot write to stdout", done.stderr)

@@ -304,7 +304,7 @@ def _loop_recorded(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, halted: bool
             if halted and tick.number == 40:
                 wait_for_the_guard(stack)
             elif not halted and tick.number == 1:  # Safe sent, nothing moving yet
-                seen.wait(10.0)
+                waited(seen, "the tick guard's look at the loop's blocked body")
                 link.advance(1.5)
             if tick.number == 60:
                 break
