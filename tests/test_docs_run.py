@@ -876,8 +876,12 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
         "tests/runtime/test_tick_guard.py::test_a_tick_that_blocks_with_the_motors_on_gets_"
         "them_off_and_back_after"
     ),
-    ("docs/runtime.md", "replay: the end note counts"): (
+    ("docs/runtime.md", "replay: the end note counts 38 bytes"): (
         "tests/runtime/test_cli_pty.py::_an_older_records_count_is_said_as_its_miscount"
+    ),
+    ("docs/runtime.md", "replay: the end note counts no bytes"): (
+        "tests/runtime/test_replay_of_old_stall_records.py::test_an_old_ctrl_c_in_a_stall_noted_"
+        "without_a_count_replays_to_its_stop"
     ),
     ("docs/plugins.md", "replay: plugin roomba-bt-dirt 0.1.0's code"): (
         "tests/runtime/test_recording.py::test_a_record_names_its_plugins_and_a_replay_that_"

@@ -785,7 +785,9 @@ def _an_older_records_count_is_said_as_its_miscount(
         "known miscount of records made before roomba-bt 0.2.0"
     ) in replay.stdout, replay.stdout
     assert "not a difference in behaviour" in replay.stdout
-    assert_quoted("docs/runtime.md", "replay: the end note counts", replay.stdout, numbers=True)
+    assert_quoted(
+        "docs/runtime.md", "replay: the end note counts 38 bytes", replay.stdout, numbers=True
+    )
 
 
 @pytest.mark.parametrize("stop", ["confirmed", "asked after"])

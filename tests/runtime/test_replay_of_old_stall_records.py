@@ -22,6 +22,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
 from roomba_bt.cli import main
 from roomba_bt.oi import commands as oi
@@ -79,3 +80,4 @@ def test_an_old_ctrl_c_in_a_stall_noted_without_a_count_replays_to_its_stop(
         capsys,
     )
     assert "replayed to the stop at byte 33" in out, out
+    assert_quoted("docs/runtime.md", "replay: the end note counts no bytes", out)
