@@ -818,10 +818,10 @@ WRITTEN = "written"
 #: Drive (137) 89 00 00 00 00, sent nothing", exit 1, of a faithful record
 MISCOUNT = (
     "the end note counts {noted} bytes written when the recorded run was stopped, {more} more "
-    "than the {before} it wrote before its stop: a known miscount of records made before "
-    "roomba-bt 0.2.0 (its development builds up to session 39 counted the Query List that "
-    "asks after the stop), not a difference in behaviour; replayed to the stop at byte "
-    "{before}"
+    "than the {before} it wrote before its stop: a known miscount of records made by a "
+    "roomba-bt 0.2.0 development build before its stall-stop fix (the count took in the "
+    "Query List that asks after the stop), not a difference in behaviour; replayed to the "
+    "stop at byte {before}"
 )
 #: What ``replay`` says of a record whose end note of a Ctrl-C or signal that came in a stall
 #: the watchdog rode (after the last frame's tick, the watchdog's drive 0 written since)
@@ -831,9 +831,9 @@ MISCOUNT = (
 #: expected Drive (137) 89 00 00 00 00, sent Motors (138) 8a 00", exit 1
 UNCOUNTED = (
     "the end note counts no bytes written when the recorded run was interrupted in a stall "
-    "its watchdog rode: a known miscount of records made before roomba-bt 0.2.0 (its "
-    "development builds up to session 39 noted no count for a Ctrl-C or signal there), not "
-    "a difference in behaviour; replayed to the stop at byte {before}"
+    "its watchdog rode: a known miscount of records made before roomba-bt 0.2.0 (they "
+    "noted no count for a Ctrl-C or signal there), not a difference in behaviour; replayed "
+    "to the stop at byte {before}"
 )
 
 
@@ -915,8 +915,9 @@ def _up_to_damage(
         log.warning(
             "%s: damaged after line %d: its gzip trailer (the CRC-32 and length of the text) "
             "does not match the text (%s); the %d lines were read, each checked, and are "
-            "replayed, but gzip -t refuses the file (zcat reads it). A run ended by a signal "
-            "inside a write of its record could leave it so (until session 35's fix)",
+            "replayed, but gzip -t refuses the file (zcat reads it). A run of a 0.2.0 "
+            "development build ended by a signal inside a write of its record could leave it "
+            "so",
             path, exc.after, exc.reason, exc.after,
         )  # fmt: skip
 

@@ -782,7 +782,8 @@ def _an_older_records_count_is_said_as_its_miscount(
     assert (
         f"replay: the end note counts {old_count} bytes written when the recorded run was "
         f"stopped, {old_count - written} more than the {written} it wrote before its stop: a "
-        "known miscount of records made before roomba-bt 0.2.0"
+        "known miscount of records made by a roomba-bt 0.2.0 development build before its "
+        "stall-stop fix"
     ) in replay.stdout, replay.stdout
     assert "not a difference in behaviour" in replay.stdout
     assert_quoted(

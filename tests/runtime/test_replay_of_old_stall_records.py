@@ -58,8 +58,8 @@ def test_an_old_ctrl_c_before_a_tick_whose_stop_was_asked_after_replays_to_its_s
     _replays_to_its_stop(
         "ctrl_c_before_a_tick_asked_after.jsonl",
         "the end note counts 33 bytes written when the recorded run was stopped, 5 more than "
-        "the 28 it wrote before its stop: a known miscount of records made before roomba-bt "
-        "0.2.0",
+        "the 28 it wrote before its stop: a known miscount of records made by a roomba-bt "
+        "0.2.0 development build before its stall-stop fix",
         capsys,
     )
 
