@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 from py_trees.common import Status
-from runtime.simrun import finished  # tests/runtime: a child run to its end, no fixed wait
+from waits import finished  # tests/waits.py: a child run to its end, no fixed wait
 
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
