@@ -104,6 +104,10 @@ START_WITHIN_S = 60.0
 #: with the thread still serving on a loaded machine, its port bound: a server started
 #: again there was refused (address in use)
 CLOSE_WITHIN_S = 60.0
+#: how long the close lets a request still being handled end by itself before it is
+#: cancelled (:func:`_end_leftover_tasks`): aiohttp's 60 s, and its 10 s of lingering on a
+#: refused body's connection, held a run's end 10.5 s after anyone POSTed an oversized body
+SHUTDOWN_S = 1.0
 
 
 class _StartupFreeze:
@@ -303,7 +307,9 @@ class MonitorServer:
         self._stopped = asyncio.Event()
         runner: web.AppRunner | None = None
         try:  # the app made in here too: a failure is start()'s error, not a thread's traceback
-            runner = web.AppRunner(self.app(), handle_signals=False, access_log=None)
+            runner = web.AppRunner(
+                self.app(), handle_signals=False, access_log=None, shutdown_timeout=SHUTDOWN_S
+            )
             loop.run_until_complete(runner.setup())
             site = web.TCPSite(runner, self.host, self.port)
             loop.run_until_complete(site.start())
