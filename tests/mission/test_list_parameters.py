@@ -152,24 +152,6 @@ def test_a_list_that_does_not_fit_is_said_at_the_use(errors_of: Errors) -> None:
     ]
 
 
-@pytest.mark.parametrize(
-    ("given", "said"),
-    [
-        ("[1m, 5]", "item 2 of 2: expected a distance with a unit such as 300 mm, 30cm or 1.5 m, "
-         "got 5 (write the unit: 5mm)"),
-        ("1m", "expected a list of distance (mm) written in brackets, [a, b], got '1m'"),
-        ("[1m, [2m]", "'[1m, [2m]' is no list YAML reads (expected ',' or ']', but got "
-         "'<stream end>'): write [a, b]"),
-    ],
-)  # fmt: skip
-def test_a_bad_list_given_with_p_is_said_with_what_to_write(
-    errors_of: Errors, given: str, said: str
-) -> None:
-    [error] = errors_of(ROUTE, {"back": given})
-    assert error.startswith(f"3:3: parameter back={given} (")
-    assert error.endswith(f"): {said}")
-
-
 def test_a_text_parameter_in_a_list_slot_says_how_to_declare_a_list(errors_of: Errors) -> None:
     """The report's ``legs: {type: str, default: "[1m, 2m]"}``: a text is never read as a
     list, and the error says what to declare (for a record key, the list of records: until
@@ -278,23 +260,38 @@ def test_each_bad_record_in_a_default_is_said_at_its_place(
     assert errors_of(text) == said
 
 
-@pytest.mark.parametrize(
-    ("given", "said"),
-    [
-        ("[{distance: 1m}]", "missing field 'turn'; fields: distance, turn"),
-        ("[{distance: 1m, turn: 1deg, speed: 1m/s}]",
-         "unknown field 'speed'; fields: distance, turn"),
-        ("[{distance: 1m, turn: 1deg}, {distance: 1m, turn: 4m}]",
-         "item 2 of 2: field turn: unknown angle unit 'm' in '4m'; use one of: deg, °, rad, "
-         "turn, turns"),
-        ("[1m]", "expected a mapping with distance, turn"),
-    ],
-)  # fmt: skip
-def test_a_bad_record_given_with_p_is_said_with_its_item_and_field(
-    errors_of: Errors, given: str, said: str
+#: (the mission, its list parameter and where it is declared, what ``-p`` gives, what is said)
+BAD_GIVEN = [
+    pytest.param(ROUTE, "back", "3:3", "[1m, 5]",
+                 "item 2 of 2: expected a distance with a unit such as 300 mm, 30cm or 1.5 m, "
+                 "got 5 (write the unit: 5mm)", id="list: an item without its unit"),
+    pytest.param(ROUTE, "back", "3:3", "1m",
+                 "expected a list of distance (mm) written in brackets, [a, b], got '1m'",
+                 id="list: one value, no brackets"),
+    pytest.param(ROUTE, "back", "3:3", "[1m, [2m]",
+                 "'[1m, [2m]' is no list YAML reads (expected ',' or ']', but got "
+                 "'<stream end>'): write [a, b]", id="list: a bracket left open"),
+    pytest.param(WAYPOINTS, "route", "2:3", "[{distance: 1m}]",
+                 "missing field 'turn'; fields: distance, turn", id="records: a field missing"),
+    pytest.param(WAYPOINTS, "route", "2:3", "[{distance: 1m, turn: 1deg, speed: 1m/s}]",
+                 "unknown field 'speed'; fields: distance, turn", id="records: an unknown field"),
+    pytest.param(WAYPOINTS, "route", "2:3",
+                 "[{distance: 1m, turn: 1deg}, {distance: 1m, turn: 4m}]",
+                 "item 2 of 2: field turn: unknown angle unit 'm' in '4m'; use one of: deg, °, "
+                 "rad, turn, turns", id="records: a field's bad unit in the second item"),
+    pytest.param(WAYPOINTS, "route", "2:3", "[1m]",
+                 "expected a mapping with distance, turn", id="records: an item not a record"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("text", "name", "where", "given", "said"), BAD_GIVEN)
+def test_a_bad_list_given_with_p_is_said_with_its_item_and_what_to_write(
+    errors_of: Errors, text: str, name: str, where: str, given: str, said: str
 ) -> None:
-    [error] = errors_of(WAYPOINTS, {"route": given})
-    assert error.startswith(f"2:3: parameter route={given} (")
+    """A list (or a list of records) given with ``-p`` is said at the parameter's
+    declaration, with the value as given and what is wrong: the item, the field."""
+    [error] = errors_of(text, {name: given})
+    assert error.startswith(f"{where}: parameter {name}={given} (")
     assert error.endswith(f"): {said}")
 
 
