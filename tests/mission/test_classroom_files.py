@@ -61,57 +61,39 @@ def test_a_no_break_space_after_a_top_level_colon_is_named_at_its_place(
 
 #: what every indentation hint ends with
 LINE_UP = "the entries of one list or mapping start in the same column)"
-#: (file as written, the line and column of the error and where its structure began, the
-#: message)
+#: (file as written, the line and column of the error and where its structure began, or
+#: None, the message)
 STRUCTURE_ERRORS = [
     pytest.param(
         "mission: half\nparameters:\n  speed: {type: speed, default: 200 mm/s\ntree:\n"
         "  sequence:\n    - mode: safe\n",
         (4, 5, (3, 10)),
-        "did not find expected ',' or '}' (in the { opened at 3:10: is its } missing?)",
+        "YAML syntax error: did not find expected ',' or '}' (in the { opened at 3:10: is its } "
+        "missing?)",
         id="an unclosed brace",
     ),
     pytest.param(
         "mission: mix\ntree:\n  sequence:\n    - mode: safe\n  - stop\n",
         (5, 3, (3, 3)),
-        "did not find expected key (in the mapping that starts at 3:3; line 5 is indented 2 "
-        f"spaces, the list item on line 4 above it 4: {LINE_UP}",
+        "YAML syntax error: did not find expected key (in the mapping that starts at 3:3; line "
+        f"5 is indented 2 spaces, the list item on line 4 above it 4: {LINE_UP}",
         id="a list item one level out",
     ),
     pytest.param(
         "mission: mix\ntree:\n  sequence:\n    - mode: safe\n     - stop\n",
         (5, 6, (4, 5)),
-        "did not find expected '-' indicator (in the list that starts at 4:5; line 5 is "
-        f"indented 5 spaces, the list item on line 4 above it 4: {LINE_UP}",
+        "YAML syntax error: did not find expected '-' indicator (in the list that starts at "
+        f"4:5; line 5 is indented 5 spaces, the list item on line 4 above it 4: {LINE_UP}",
         id="a list item a space in",
     ),
 ]
 
 
-@pytest.mark.parametrize(("text", "where", "problem"), STRUCTURE_ERRORS)
-def test_a_structure_error_says_where_the_structure_began(
-    text: str,
-    where: tuple[int, int, tuple[int, int]],
-    problem: str,
-    tmp_path: Path,
-    capsys: Capsys,
-) -> None:
-    """PyYAML's context ("while parsing a flow mapping ... line 3, column 10") was dropped: the
-    line given (``tree:`` after a ``{`` left open) looked fine. Both places are said, in the
-    message and, the structure's start, in ``--format json``'s ``began_at``."""
-    line, column, began = where
-    assert _problems(tmp_path, text.encode()) == [f"{line}:{column}: YAML syntax error: {problem}"]
-    assert main(["validate", "--format", "json", str(tmp_path / "m.yaml")]) == 2
-    [diagnostic] = json.loads(capsys.readouterr().out)["diagnostics"]
-    assert (diagnostic["line"], diagnostic["column"]) == (line, column)
-    assert diagnostic["began_at"] == {"line": began[0], "column": began[1]}
-
-
-#: a node's option or modifier out of line (session 38): (the tree's lines under ``tree:``,
-#: the diagnostic's line and column, where YAML's broken structure began or None, the message)
+#: a node's option or modifier out of line (session 38), as STRUCTURE_ERRORS
 MISPLACED = [
     pytest.param(
-        "  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n        until: bump\n",
+        "mission: m\ntree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n"
+        "        until: bump\n",
         (6, 9, (5, 7)),
         "until: in column 9 is in no node's mapping (YAML: did not find expected key): until "
         "is a modifier, written beside its node's word in the same column: the node above, "
@@ -119,7 +101,8 @@ MISPLACED = [
         id="until under a word's value",
     ),
     pytest.param(
-        "  sequence:\n    - mode: safe\n    - drive:\n        velocity: 100 mm/s\n   until: bump\n",
+        "mission: m\ntree:\n  sequence:\n    - mode: safe\n    - drive:\n"
+        "        velocity: 100 mm/s\n   until: bump\n",
         (7, 4, (3, 3)),
         "until: in column 4 is in no node's mapping (YAML: did not find expected key): until "
         "is a modifier, written beside its node's word in the same column: the node above, "
@@ -127,7 +110,7 @@ MISPLACED = [
         id="until out of its node",
     ),
     pytest.param(
-        "  sequence:\n    - mode: safe\n        while: bump\n",
+        "mission: m\ntree:\n  sequence:\n    - mode: safe\n        while: bump\n",
         (5, 9, None),
         "while: in column 9 is in no node's mapping (YAML: mapping values are not allowed in "
         "this context): while is a modifier, written beside its node's word in the same "
@@ -136,8 +119,8 @@ MISPLACED = [
         id="while under a word's text",
     ),
     pytest.param(
-        "  sequence:\n    - fallback:\n        - bump: any\n        - cliff: any\n"
-        "       until: {bump: any}\n",
+        "mission: m\ntree:\n  sequence:\n    - fallback:\n        - bump: any\n"
+        "        - cliff: any\n       until: {bump: any}\n",
         (7, 8, (4, 7)),
         "until: in column 8 is in no node's mapping (YAML: did not find expected key): until "
         "is a modifier, written beside its node's word in the same column: cliff's (line 6) "
@@ -146,7 +129,8 @@ MISPLACED = [
         id="until between two nodes",
     ),
     pytest.param(
-        "  sequence:\n    - turn:\n        angle: 90deg\n       speed: 100 mm/s\n",
+        "mission: m\ntree:\n  sequence:\n    - turn:\n        angle: 90deg\n"
+        "       speed: 100 mm/s\n",
         (6, 8, (4, 7)),
         "speed: in column 8 is in no node's mapping (YAML: did not find expected key): the "
         "node above, turn (line 4), has its options in column 9 (angle, line 5) and its "
@@ -157,19 +141,21 @@ MISPLACED = [
 ]
 
 
-@pytest.mark.parametrize(("tree", "where", "problem"), MISPLACED)
-def test_a_modifier_or_option_out_of_line_is_said_in_the_language_s_words(
-    tree: str,
+@pytest.mark.parametrize(("text", "where", "problem"), [*STRUCTURE_ERRORS, *MISPLACED])
+def test_a_structure_error_says_where_the_structure_began(
+    text: str,
     where: tuple[int, int, tuple[int, int] | None],
     problem: str,
     tmp_path: Path,
     capsys: Capsys,
 ) -> None:
-    """An ``until:`` indented under no node got YAML's words alone ("did not find expected
-    key"): now what was found (the key and its column), what is allowed (its node's word's
-    column, or its options') and the fix, at the key's place; ``began_at`` as before."""
+    """PyYAML's context ("while parsing a flow mapping ... line 3, column 10") was dropped: the
+    line given (``tree:`` after a ``{`` left open) looked fine. Both places are said, in the
+    message and, the structure's start, in ``--format json``'s ``began_at``. An ``until:``
+    indented under no node (MISPLACED) got YAML's words alone ("did not find expected key"):
+    now what was found (the key and its column), what is allowed (its node's word's column,
+    or its options') and the fix, at the key's place; ``began_at`` as before."""
     line, column, began = where
-    text = f"mission: m\ntree:\n{tree}"
     assert _problems(tmp_path, text.encode()) == [f"{line}:{column}: {problem}"]
     assert main(["validate", "--format", "json", str(tmp_path / "m.yaml")]) == 2
     [diagnostic] = json.loads(capsys.readouterr().out)["diagnostics"]
