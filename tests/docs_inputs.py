@@ -8,15 +8,17 @@ files). The quotes of 10,000 errors or warnings, and of a project file's grant, 
 the tests that already make them (tests/mission/test_hostile_files.py,
 tests/mission/test_include_path.py).
 
-Two texts are the tests' own: NUDGE is tests/mission/test_subtree_uses.py's with its use
-added, OWN_KEY the mission tests/mission/test_own_keys_passed.py reads (an edit of either
-moves the page's quote: this test then says so). ROUTE is written apart: the page's patrol
-turns 9000 deg, test_list_parameters.py's waypoints do not."""
+Three texts are the tests' own: NUDGE is tests/mission/test_subtree_uses.py's with its use
+added, OWN_KEY the mission tests/mission/test_own_keys_passed.py reads, EDGE the world
+tests/cli/test_validate_world.py warns of (an edit of any moves the page's quote: this test
+then says so). ROUTE is written apart: the page's patrol turns 9000 deg,
+test_list_parameters.py's waypoints do not."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from cli.test_validate_world import world_starting_at  # its room with stairs
 from mission.team_repo import ESCAPES, SAFE_DRIVE, TO_KITCHEN  # docs/ci.md's repository
 from mission.test_subtree_uses import NUDGE as SUBTREE_NUDGE  # its nudge, not yet used
 
@@ -226,15 +228,7 @@ MISSIONS_MD: list[tuple[str, str, int, Files]] = [
 #: my-flat.yaml), a start whose body reaches over the stairs (tests/cli/
 #: test_validate_world.py's), a list of more obstacles than a world may hold
 EMPTY_WORLD: Files = (("my-flat.yaml", "# my flat, to be drawn\n"),)
-EDGE = """\
-name: edge
-rooms:
-  - {rect: [0, 0, 5, 4]}
-drops:
-  - {name: stairs, rect: [3, 0, 5, 4]}
-robot:
-  start: {at: [2.9, 2], heading: 0}
-"""
+EDGE = world_starting_at(2.9)  # the test's warning, which the page quotes
 #: the list is refused by its count before an item is read: empty items cost least to parse
 #: (12,000 rectangles took 4 s of CPU)
 CROWDED = "name: w\nrooms: [{rect: [0, 0, 50, 50]}]\nobstacles:\n" + "  - {}\n" * 12_000

@@ -138,8 +138,9 @@ def test_an_empty_world_is_said_at_its_place_by_run_and_sim(
     ), lines
 
 
-def _world_starting_at(x: float) -> str:
-    """A room 5 x 4 m with stairs down from x = 3 m, the robot given a start at ``x``."""
+def world_starting_at(x: float) -> str:
+    """A room 5 x 4 m with stairs down from x = 3 m, the robot given a start at ``x``
+    (tests/docs_inputs.py's EDGE, at 2.9 m: docs/simulator.md quotes its warning)."""
     return (
         "name: edge\n"
         "rooms:\n"
@@ -155,7 +156,7 @@ def test_a_given_start_whose_body_is_over_a_drop_is_warned_of(worlds: Path, caps
     """The centre 0.1 m from the stairs' edge: the body (0.17 m) reaches 0.07 m over them.
     A drawn start keeps it 20 mm off; a given one loads (a test may put a robot at an edge
     on purpose) with a warning at robot.start's place, by how much; --strict fails it."""
-    (worlds / "worlds" / "edge.yaml").write_text(_world_starting_at(2.9))
+    (worlds / "worlds" / "edge.yaml").write_text(world_starting_at(2.9))
     assert main(["validate", "worlds/edge.yaml"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert out[0] == (
@@ -183,7 +184,7 @@ def test_a_given_start_whose_body_is_over_a_drop_is_warned_of(worlds: Path, caps
 def test_a_start_clear_of_the_drop_or_over_it_is_no_warning(
     x: float, said: str | None, worlds: Path, capsys: Capsys
 ) -> None:
-    (worlds / "worlds" / "edge.yaml").write_text(_world_starting_at(x))
+    (worlds / "worlds" / "edge.yaml").write_text(world_starting_at(x))
     assert main(["validate", "worlds/edge.yaml"]) == (0 if said is None else 2)
     out = capsys.readouterr().out
     assert "warning" not in out
@@ -193,7 +194,7 @@ def test_a_start_clear_of_the_drop_or_over_it_is_no_warning(
 def test_eval_says_a_given_start_s_warning_once(worlds: Path, capsys: Capsys) -> None:
     """eval in a world whose given start reaches over a drop said nothing, where run and
     validate warn: once on stderr for all its episodes, which all start there."""
-    (worlds / "worlds" / "edge.yaml").write_text(_world_starting_at(2.9))
+    (worlds / "worlds" / "edge.yaml").write_text(world_starting_at(2.9))
     argv = ["eval", "dock", "--runs", "2", "--jobs", "1", "--timeout", "1"]
     main([*argv, "--world", "worlds/edge.yaml"])
     err = capsys.readouterr().err.splitlines()
