@@ -994,12 +994,10 @@ def test_the_old_docs_cliff_watcher_is_accepted_and_drives_its_distance_once(
 # ------------------------------------------------------------------ songs
 
 
-def test_a_play_of_a_slot_no_song_defines_is_a_warning_at_its_number(
-    compile_text: Callable[..., CompiledMission],
-) -> None:
-    """``play: 3`` where only slot 0 is written validated silently (a typo; the robot may
-    hold a song from earlier, or none)."""
-    mission = compile_text(
+#: a song slot played that no song defines, or defined that no play plays (checks.song_slots):
+#: (the mission, the warning's line and column, how it begins, the fix it names)
+SLOT_WARNINGS = [
+    pytest.param(
         """
 mission: typo
 tree:
@@ -1008,20 +1006,13 @@ tree:
     - mode: safe
     - play: 3
     - play: 0
-"""
-    )
-    assert [(w.line, w.column) for w in mission.warnings] == [(6, 13)]
-    said = mission.warnings[0].message
-    assert said.startswith("play: song 3 is not defined by this mission (its song slots: 0)")
-    assert "kept until it is switched off" in said
-
-
-def test_a_song_no_play_plays_is_a_warning_at_its_number(
-    compile_text: Callable[..., CompiledMission],
-) -> None:
-    """A stranger's mission (session 41) stored a tune with ``song`` and never played it:
-    ``validate`` said ok, and the run succeeded in silence."""
-    mission = compile_text(
+""",
+        (6, 13),
+        "play: song 3 is not defined by this mission (its song slots: 0)",
+        "kept until it is switched off",
+        id="a play of a slot no song defines",
+    ),
+    pytest.param(
         """
 mission: silent tune
 tree:
@@ -1030,12 +1021,32 @@ tree:
     - song: {number: 1, notes: [C4 125ms, E4 125ms]}
     - song: {number: 2, notes: [G4 250ms]}
     - play: 2
-"""
-    )
-    assert [(w.line, w.column) for w in mission.warnings] == [(5, 22)]
+""",
+        (5, 22),
+        "song: song 1 is stored but no `play` of this mission plays it",
+        "add `play: 1` where it should sound",
+        id="a song no play plays",
+    ),
+]
+
+
+@pytest.mark.parametrize(("text", "where", "begins", "fix"), SLOT_WARNINGS)
+def test_a_song_slot_played_and_not_defined_or_defined_and_not_played_is_a_warning(
+    compile_text: Callable[..., CompiledMission],
+    text: str,
+    where: tuple[int, int],
+    begins: str,
+    fix: str,
+) -> None:
+    """``play: 3`` where only slot 0 is written validated silently (a typo; the robot may
+    hold a song from earlier, or none); a stranger's mission (session 41) stored a tune with
+    ``song`` and never played it: ``validate`` said ok, and the run succeeded in silence.
+    Each is a warning at the slot's number."""
+    mission = compile_text(text)
+    assert [(w.line, w.column) for w in mission.warnings] == [where]
     said = mission.warnings[0].message
-    assert said.startswith("song: song 1 is stored but no `play` of this mission plays it")
-    assert "add `play: 1` where it should sound" in said
+    assert said.startswith(begins)
+    assert fix in said
 
 
 def test_a_song_of_the_default_slot_is_warned_at_the_song(
