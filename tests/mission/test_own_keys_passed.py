@@ -127,10 +127,10 @@ def test_the_key_type_is_the_callers(errors_of: Errors) -> None:
 
 
 def test_read_before_written_through_the_use(errors_of: Errors) -> None:
-    text = OWN_KEY  # docs/missions.md quotes what it says
     """Said at the use that passes the key (leg's line, the body to fix), naming the read
     in the nested body: said at that read (5:25), in ``measure``, which has no key ``n``,
     it did not say which use passed it."""
+    text = OWN_KEY  # docs/missions.md quotes what it says
     assert errors_of(text) == [
         "9:19: subtree measure(out=n) reads blackboard key 'n' (subtree leg's own) before "
         "anything writes it on some path (passed down to check(key=n, value=1) at 5:25): "
