@@ -238,6 +238,11 @@ class SlowTickWatch:
         if (ticks - before) * SLOT_SECONDS >= now - then:
             return False
         self._seen, self._last, self._gap = ticks, now, now - self._began_after
+        # The thread's times from here are the window the tick under way is judged by when
+        # it ends (:meth:`_ticks_ended`); with none, it was judged at the next such look by
+        # the few ms after it (an episode's last ticks, waiting for a CPU: "the host was
+        # busy", and a plugin's 2 s sleep went unnamed in 2 episodes of 3)
+        self._window = (now, self.times())
         return True
 
     def look(self, ticks: int, where_now: Callable[[], str]) -> None:

@@ -445,3 +445,30 @@ def test_a_dormant_watch_wakes_into_a_long_tick_and_still_judges_it_whole() -> N
     watch.close()
     assert watch.longest_s == pytest.approx(0.6)
     assert watch.culprit() == where
+
+
+def test_a_tick_a_dormant_watch_woke_into_is_judged_by_its_own_window() -> None:
+    """``eval`` of a plugin that slept 2 s in one tick named it in 1 of 3 episodes: the
+    watch woke inside the tick, no look had read the thread's times before it, so the tick
+    was judged at the run's end by the 3 ms after it (the episode's last ticks, the thread
+    waiting for a CPU there: "the host was busy (0.34 ms of CPU in 2.94 ms, ...)"), and its
+    behaviour went unnamed. The times read at the wake are the window's start: the 2 s tick
+    was a sleep, not a busy host."""
+    thread = FakeThread()
+    watch = _dormant(thread)
+    where = "blocker (Blocker.update at blocker.py:23)"
+    watch.wakes(0)
+    thread.run(0.5, 1.0, 0.0)
+    assert not watch.wakes(68)  # 68 ticks in a few ms, then the blocked one (from t=0.01)
+    thread.run(0.5, 0.0, 0.0)
+    assert watch.wakes(68)
+    for _ in range(40):
+        thread.run(0.025, 0.0, 0.0)
+        watch.look(68, lambda: where)
+    thread.run(0.02, 0.0, 0.0)
+    watch.summary.max_tick_s = 2.0  # the loop's measure, once it ended
+    watch.look(69, lambda: where)
+    thread.run(0.003, 0.1, 0.9)  # the last ticks: the thread waits for a CPU, the run ends
+    watch.close()
+    assert watch.host_kept_it() == ""
+    assert watch.culprit() == where
