@@ -107,6 +107,14 @@ NOT_RUN: dict[str, str] = {
     "plugins/roomba-bt-dirt/tests",
     "pytest plugins/roomba-bt-dirt": "the suite collects plugins/ itself (testpaths), "
     "so those tests run beside this one",
+    "pip install ./roomba-bt-near-wall": "docs/plugins.md §5: an install into the reader's "
+    "venv, never this one; tests/behaviours/test_docs_plugins.py reads the page's toml with "
+    "setuptools and serves its entry point to the two commands after it",
+    "roomba-bt behaviours near_wall": "docs/plugins.md §5, with its package installed: "
+    "tests/behaviours/test_docs_plugins.py runs it and compares the page's output",
+    "roomba-bt run custom_condition.yaml --world corridor --fast": "docs/plugins.md §5, the "
+    "mission without its plugins: line, its package installed: tests/behaviours/"
+    "test_docs_plugins.py runs it",
     "pip install 'roomba-bt[monitor]'": "an install from the package index; `make test` "
     "installs the monitor extra into the venv these tests run in",
     "roomba-bt run dock --world apartment --monitor": "serves the page until "

@@ -4,6 +4,7 @@ the plugin file allowed), and an action that waits for Safe/Full and fails once 
 
 from __future__ import annotations
 
+import os
 import re
 import sys
 from pathlib import Path
@@ -11,6 +12,7 @@ from typing import Any
 
 import pytest
 from py_trees.common import Status
+from setuptools.config.pyprojecttoml import read_configuration
 from waits import finished  # tests/waits.py: a child run to its end, no fixed wait
 
 from roomba_bt.oi.modes import OIMode
@@ -20,10 +22,14 @@ ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "plugins.md"
 
 
-def _blocks(section: str, lang: str = "python") -> list[str]:
+def _section(section: str) -> str:
     text = DOC.read_text(encoding="utf-8")
     assert section in text, f"docs/plugins.md lost its section {section!r}"
-    body = text.split(section, 1)[1].split("\n## ", 1)[0]
+    return text.split(section, 1)[1].split("\n## ", 1)[0]
+
+
+def _blocks(section: str, lang: str = "python") -> list[str]:
+    body = _section(section)
     return [str(b) for b in re.findall(rf"```{lang}\n(.*?)```", body, flags=re.DOTALL)]
 
 
@@ -219,3 +225,53 @@ def test_the_behaviour_in_your_own_program_example_compiles_its_mission(
     monkeypatch.chdir(tmp_path)
     mission = _run(example, "own_program")["mission"]
     assert any(node.name.startswith("far_enough") for node in mission.root.iterate())
+
+
+def test_the_package_of_section_5_builds_and_serves_near_wall(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """§5's ``pyproject.toml`` builds as written, and its entry point gives ``near_wall`` to
+    a mission with no ``plugins:``, as the page's ``roomba-bt behaviours near_wall`` shows.
+    The page's toml was the example package's, cut: no ``[build-system]`` and no
+    ``version``, so a reader who wrote it as shown met setuptools' ``project must contain
+    ['version'] properties`` at ``pip install`` (a stranger's session, from the wheel). The
+    package's metadata is made by setuptools' own build hook (no network, no install into
+    this venv), and a child process finds it on its path as pip's install would leave it."""
+    section = "## 5. Package it"
+    [toml] = _blocks(section, "toml")
+    first, _, _ = toml.partition("\n")
+    assert first == "# roomba-bt-near-wall/pyproject.toml", first
+    _section_2_files(tmp_path)
+    package = tmp_path / "roomba-bt-near-wall"
+    (package / "roomba_bt_near_wall").mkdir(parents=True)
+    (tmp_path / "plugins" / "near_wall.py").rename(package / "roomba_bt_near_wall" / "__init__.py")
+    (package / "pyproject.toml").write_text(toml, encoding="utf-8")
+    project = read_configuration(package / "pyproject.toml")["project"]  # as pip's build
+    name, version = project["name"], project["version"]
+    meta = tmp_path / "site"  # the dist-info pip's install would leave, made from it
+    info = meta / f"{name.replace('-', '_')}-{version}.dist-info"
+    info.mkdir(parents=True)
+    metadata = f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\n"
+    (info / "METADATA").write_text(metadata, encoding="utf-8")
+    points = "".join(
+        f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in entries.items())
+        for group, entries in project["entry-points"].items()
+    )
+    (info / "entry_points.txt").write_text(points, encoding="utf-8")
+    mission = tmp_path / "custom_condition.yaml"
+    text = mission.read_text(encoding="utf-8")
+    mission.write_text(text.replace("plugins: [./plugins/near_wall.py]\n", ""), encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(package), str(meta), str(ROOT)]))
+    fenced = re.findall(r"^```(\w*)\n(.*?)^```$", _section(section), flags=re.DOTALL | re.M)
+    [said] = [b for lang, b in fenced if not lang and "$ roomba-bt behaviours near_wall\n" in b]
+    shown = said.split("$ roomba-bt behaviours near_wall\n", 1)[1].split("\n$ ", 1)[0]
+    listed = finished([sys.executable, "-m", "roomba_bt", "behaviours", "near_wall"])
+    assert listed.returncode == 0, listed.stderr
+    assert listed.stdout.strip() == shown.strip()
+    ran = finished(
+        [sys.executable, "-m", "roomba_bt", "run", "custom_condition.yaml", "--world",
+         "corridor", "--fast"]
+    )  # fmt: skip
+    assert ran.returncode == 0, ran.stdout[-2000:] + ran.stderr[-2000:]
+    assert "outcome      SUCCESS" in ran.stdout
