@@ -732,6 +732,22 @@ def key_roles(
     return tuple(keys), ()
 
 
+def _type_hint(given: object) -> str:
+    """What to write instead of a parameter type that is no :class:`ValueType`, where the
+    mistake says it: the type's name as a text (``"speed"``), Python's own type (``int``), a
+    tuple of words meant as a choice. A stranger's plugin wrote ``Param("velocity",
+    "speed")`` and was told only the list of types."""
+    name = given.__name__ if isinstance(given, type) else given
+    if isinstance(name, str) and name.strip().lower() in VALUE_TYPES:
+        word = name.strip().upper()
+        what = f"Python's {name}" if isinstance(given, type) else f"the text {given!r}"
+        return f": {what} is not one; write {word} (from roomba_bt.behaviours import {word})"
+    if isinstance(given, (tuple, list)) and given and all(isinstance(w, str) for w in given):
+        words = ", ".join(repr(w) for w in given)
+        return f": a choice of words is enum({words}) (from roomba_bt.behaviours import enum)"
+    return ""
+
+
 def _param_problem(p: object) -> str | None:
     """What is wrong with one declared parameter, or None: its name, type, bounds (plain
     numbers in the type's unit, the lower first), and its default (of the type, within the
@@ -743,7 +759,7 @@ def _param_problem(p: object) -> str | None:
         known = ", ".join(t.name.upper() for t in VALUE_TYPES.values())
         return (
             f"parameter {p.name!r}: type must be a ValueType of roomba_bt.behaviours.units "
-            f"({known}), got {p.type!r}"
+            f"({known}), got {p.type!r}{_type_hint(p.type)}"
         )
     if not (isinstance(p.name, str) and _NAME.match(p.name)):
         return f"parameter name {p.name!r} is not snake_case ([a-z][a-z0-9_]*)"

@@ -153,6 +153,22 @@ def test_a_plugin_that_declares_itself_wrongly_is_named() -> None:
         ),
         ("odd_param", {"params": (Param("Level-X", INT),)}, "parameter name 'Level-X'"),
         ("python_type", {"params": (Param("n", int),)}, r"type must be a ValueType .*SPEED"),  # type: ignore[arg-type]
+        # a stranger's typos: the mistake said with what to write, not the list alone
+        (
+            "python_int",
+            {"params": (Param("n", int),)},  # type: ignore[arg-type]
+            r"got <class 'int'>: Python's int is not one; write INT \(from roomba_bt\.beh",
+        ),
+        (
+            "text_type",
+            {"params": (Param("v", "speed"),)},  # type: ignore[arg-type]
+            r"got 'speed': the text 'speed' is not one; write SPEED \(from roomba_bt\.behav",
+        ),
+        (
+            "tuple_type",
+            {"params": (Param("side", ("left", "right")),)},  # type: ignore[arg-type]
+            r"a choice of words is enum\('left', 'right'\) \(from roomba_bt\.behaviours imp",
+        ),
         ("sends_drive", {"sends": (137,)}, "a condition only reads"),
     ],
 )
