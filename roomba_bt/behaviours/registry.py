@@ -83,7 +83,7 @@ class NameClash(DeclarationError):
         names each (``spelled``: this class's ``package:name``, ``other``: the first's; None
         for a plugin file, which has no package; ``file``: the plugin file this class is
         in, where nothing is installed to uninstall, and the first may be in it too)."""
-        holder = f"{_where(self.existing.cls)}"
+        holder = f"{class_where(self.existing.cls)}"
         if self.existing.origin == "builtin":
             reach = f"a mission reaches this one as {spelled!r}" if spelled else "this one is not"
             return (
@@ -125,7 +125,7 @@ def _language_word_refused(cls: type, name: str, spelled: str | None) -> str:
         else "this behaviour cannot be used"
     )
     return (
-        f"{_where(cls)} declares the name {name!r}, which is a word of the mission language: "
+        f"{class_where(cls)} declares the name {name!r}, which is a word of the mission language: "
         f"{name!r} in a mission always means the language's own, so {reach}; rename it in its "
         "@declare"
     )
@@ -371,7 +371,8 @@ class Registry:
             except NameClash as exc:  # it declared nothing wrongly: two classes want a name
                 spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
                 file = origin if entry is None else None  # a plugin file's: none installed
-                clash = f"{_where(cls)} {exc.clash(spelled, self.spelled(exc.existing), file=file)}"
+                told = exc.clash(spelled, self.spelled(exc.existing), file=file)
+                clash = f"{class_where(cls)} {told}"
                 self._errors.append(PluginError(said, clash, names=names, loses_behaviours=False))
             except _LanguageWord as exc:  # the word is the language's; the class may be reached
                 spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
@@ -379,13 +380,13 @@ class Registry:
                 self._errors.append(PluginError(said, word, names=names, loses_behaviours=False))
             except _NotABehaviour as exc:
                 refused = repr(names[0]) if isinstance(declared, Declaration) else ""
-                wrong = f"{_where(cls)}: {exc}"
+                wrong = f"{class_where(cls)}: {exc}"
                 self._errors.append(PluginError(said, wrong, names=names, refused=refused))
             except DeclarationError as exc:
                 # a class of a list with no declaration of its own is refused alone too
-                alone = _where(cls) if len(classes) > 1 else ""
+                alone = class_where(cls) if len(classes) > 1 else ""
                 refused = repr(names[0]) if isinstance(declared, Declaration) else alone
-                wrong = f"{_where(cls)} declares itself wrongly: {exc}"
+                wrong = f"{class_where(cls)} declares itself wrongly: {exc}"
                 self._errors.append(PluginError(said, wrong, names=names, refused=refused))
         return registered
 
@@ -502,13 +503,13 @@ class Registry:
                 holder = clash.existing
                 whose = "the built-in" if holder.origin == "builtin" else f"{holder.origin}'s"
                 raise NameClash(clash.name, holder, (
-                    f"behaviours=[{cls.__qualname__}]: {_where(cls)} declares {clash.name!r}, "
+                    f"behaviours=[{cls.__qualname__}]: {class_where(cls)} declares {clash.name!r}, "
                     f"the name of {whose} {_qualname(holder.cls)}; a program's behaviour does "
                     f"not replace it: declare another name, @declare('my_{clash.name}', ...)"
                 )) from None  # fmt: skip
             except DeclarationError as wrong:
                 raise DeclarationError(
-                    f"behaviours=[{cls.__qualname__}]: {_where(cls)} declares itself wrongly: "
+                    f"behaviours=[{cls.__qualname__}]: {class_where(cls)} declares itself wrongly: "
                     f"{wrong}"
                 ) from None
         return copy
@@ -714,7 +715,7 @@ def _origin(ep: EntryPoint, *, named: bool = True) -> str:
     return f"{ep.name!r} ({ep.value}{source})"
 
 
-def _where(cls: type) -> str:
+def class_where(cls: type) -> str:
     """``Level (badmod/__init__.py:12)``: a class and where it is defined, when known."""
     try:
         file = inspect.getsourcefile(cls)
@@ -912,8 +913,8 @@ def _unfit_items(items: list[object] | tuple[object, ...]) -> tuple[list[type], 
             said, wrong = (
                 f"class {item.__qualname__}",
                 (
-                    f"class {_where(item)}, derives from neither roomba_bt.behaviours.Action nor "
-                    "Condition"
+                    f"class {class_where(item)}, derives from neither "
+                    "roomba_bt.behaviours.Action nor Condition"
                 ),
             )
         else:

@@ -937,6 +937,8 @@ def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSum
     if summary.refused_commands > SHOWN_REFUSALS:  # the count is all of them: say the rest
         more = summary.refused_commands - SHOWN_REFUSALS
         print(f"refused: ... and {more} more (the summary counts them)", file=sys.stderr)
+    for hint in stack.runner.refusals.hints():
+        print(f"refused: {hint}", file=sys.stderr)
 
 
 def _render_tree(mission: Any, status: bool = False, as_ticked: Any = None) -> str:

@@ -8,6 +8,8 @@ monitor shows the last), and keeps the first in the summary for its warning and
 
 from __future__ import annotations
 
+from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.registry import class_where
 from roomba_bt.oi.encode import Command
 from roomba_bt.robot.errors import ModeError
 from roomba_bt.runtime.summary import RunSummary
@@ -23,6 +25,9 @@ class Refusals(list[str]):
     def __init__(self, summary: RunSummary) -> None:
         super().__init__()
         self.summary = summary
+        #: the actions of the user's own code (a plugin's, a program's) whose commands were
+        #: refused, by name, in the order met: :meth:`hints`
+        self.authors: dict[str, type] = {}
 
     def note(
         self, command: Command, exc: ModeError, sender: object, when: float | None, arrival: float
@@ -35,6 +40,21 @@ class Refusals(list[str]):
             self.append(refusal(command, exc, sender, when, arrival))
         if not summary.first_refusal:
             summary.first_refusal = self[0]
+        if isinstance(sender, Action) and not type(sender).__module__.startswith("roomba_bt."):
+            self.authors.setdefault(sender.name, type(sender))
+
+    def hints(self) -> list[str]:
+        """What the author of each action of theirs that was refused does about it: the
+        built-in driving actions check the mode first, and a plugin's that sent its drive on
+        every tick after a cliff had dropped the robot to Passive (3543 refusals, a stranger's
+        first plugin) was told only ``drive needs Safe or Full``, the fix being on a page."""
+        return [
+            f"{name} ({class_where(cls)}) is your code: an action that drives checks "
+            "self.snapshot.mode each tick and, out of Safe/Full, returns "
+            "self.wait_for_driving_mode() (docs/plugins.md, When the robot leaves Safe/Full "
+            "under your action)"
+            for name, cls in self.authors.items()
+        ]
 
 
 def refusal(

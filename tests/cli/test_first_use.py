@@ -401,6 +401,23 @@ def test_five_refusals_or_fewer_say_no_more(
     assert len(re.findall(r"^refused: t=", err, re.M)) == 1 and "more" not in err, err
 
 
+def test_a_plugin_s_refused_action_is_told_what_to_do_once(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A stranger's first plugin sent its drive on every tick after a cliff had dropped the
+    robot to Passive: 3543 refusals, each ``drive needs Safe or Full``, and what to do about
+    it only on docs/plugins.md. The refused action of the user's own code is named once,
+    with its class and line, and the fix."""
+    always = ROGUE.replace("return Status.SUCCESS", "return Status.RUNNING")
+    _, err = run_rogue(tmp_path, capsys, "[rogue]", "--timeout", "0.3s", plugin=always)
+    said = re.findall(r"^refused: rogue \(Rogue \((.*):(\d+)\)\) is your code: (.*)$", err, re.M)
+    assert len(said) == 1, err
+    [(file, line, fix)] = said
+    assert (file, line) == (str(tmp_path / "rogue.py"), "8")  # its @declare, the class's first line
+    assert "checks self.snapshot.mode each tick" in fix
+    assert "returns self.wait_for_driving_mode() (docs/plugins.md, When the robot" in fix
+
+
 def test_a_subcommand_module_missing_is_a_broken_installation_not_a_silent_skip(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
