@@ -175,10 +175,14 @@ def dask_client(
 
 
 @contextlib.contextmanager
-def scheduler_client(scheduler: str, timeout: float = SCHEDULER_CONNECT_TIMEOUT_S) -> Iterator[Any]:
+def scheduler_client(scheduler: str, timeout: float | None = None) -> Iterator[Any]:
     """A client of the scheduler at ``scheduler`` (closed on exit, its IO loop thread
     ended: :func:`_end_loop`); :class:`SchedulerUnreachableError` if it cannot connect
-    within ``timeout`` s."""
+    within ``timeout`` s, by default :data:`SCHEDULER_CONNECT_TIMEOUT_S` as it is at the
+    call (a default of the constant itself was bound at import: a program or a test that
+    set the constant later waited the 10 s all the same)."""
+    if timeout is None:
+        timeout = SCHEDULER_CONNECT_TIMEOUT_S
     distributed = _import_distributed()
     client = distributed.Client.__new__(distributed.Client)  # kept if __init__ fails
     try:

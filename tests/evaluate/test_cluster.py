@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import functools
 import socket
 import subprocess
 import sys
@@ -172,14 +171,13 @@ def test_the_seeds_run_again_are_named_from_their_keys(capsys: pytest.CaptureFix
 #: ``roomba-bt`` whose Dask client gives a lost scheduler 5 s to come back, not the user's
 #: 10 s (``SCHEDULER_CONNECT_TIMEOUT_S``, also its connect's bound: still generous for a
 #: scheduler the test has just reached itself): what a test of a lost scheduler checks comes
-#: after the client gave up, and the other 5 s were the suite's longest idle wait. Given to
-#: ``scheduler_client`` itself (as :func:`_connecting_within` does): the constant is its argument's
-#: default, read once as the module is made, so setting the constant afterwards (as this did
-#: until session 41, and ``test_an_unreachable_scheduler_exits_3``) changed nothing.
+#: after the client gave up, and the other 5 s were the suite's longest idle wait. The
+#: constant is read when ``scheduler_client`` is called, so setting it before is enough
+#: (:func:`test_the_connect_timeout_is_read_when_a_client_is_made`).
 ROOMBA_BT_RECONNECTING_5_S = [
     sys.executable, "-c",
-    "import functools, sys; from roomba_bt.evaluate import cluster; "
-    "cluster.scheduler_client = functools.partial(cluster.scheduler_client, timeout=5.0); "
+    "import sys; from roomba_bt.evaluate import cluster; "
+    "cluster.SCHEDULER_CONNECT_TIMEOUT_S = 5.0; "
     "from roomba_bt.cli import main; sys.exit(main())",
 ]  # fmt: skip
 
@@ -303,12 +301,29 @@ def test_a_client_that_closed_ends_the_gathering() -> None:
     assert not completing.cleared.is_set() and not watch.closed
 
 
-def _connecting_within(seconds: float) -> Callable[..., Any]:
-    """:func:`cluster.scheduler_client` giving up after ``seconds``, for ``dask_client``
-    (which calls it by the module's name): its ``timeout`` defaults to
-    ``SCHEDULER_CONNECT_TIMEOUT_S`` as it was when the module was made, so a test that set
-    the constant waited the user's 10 s all the same."""
-    return functools.partial(cluster.scheduler_client, timeout=seconds)
+def test_the_connect_timeout_is_read_when_a_client_is_made(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``scheduler_client`` without a ``timeout`` gives Dask's client
+    ``SCHEDULER_CONNECT_TIMEOUT_S`` as it is at the call: its default was the constant
+    itself, bound as the module was made, so a program or a test that set the constant
+    afterwards waited the user's 10 s all the same. Dask is not imported: a client that
+    cannot connect stands in for it."""
+    given: list[float] = []
+
+    class Unreachable:
+        def __init__(self, address: str, timeout: float) -> None:
+            given.append(timeout)
+            raise OSError("nothing listens")
+
+    fake = type("Distributed", (), {"Client": Unreachable})
+    monkeypatch.setattr(cluster, "_import_distributed", lambda: fake)
+    monkeypatch.setattr(cluster, "SCHEDULER_CONNECT_TIMEOUT_S", 0.25)
+    for timeout in (None, 3.0):
+        client = cluster.scheduler_client("tcp://127.0.0.1:1", timeout=timeout)
+        with pytest.raises(cluster.SchedulerUnreachableError, match="cannot connect"), client:
+            pass
+    assert given == [0.25, 3.0]
 
 
 def test_an_unreachable_scheduler_exits_3(
@@ -322,7 +337,7 @@ def test_an_unreachable_scheduler_exits_3(
     from roomba_bt.cli import main
     from roomba_bt.evaluate import cluster
 
-    monkeypatch.setattr(cluster, "scheduler_client", _connecting_within(1.0))
+    monkeypatch.setattr(cluster, "SCHEDULER_CONNECT_TIMEOUT_S", 1.0)
     port = _free_port()  # nothing listens there
     loops = _io_loops()
     code = main(["eval", str(MISSIONS / "dock.yaml"), "--runs", "1", "--no-progress",
