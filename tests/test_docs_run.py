@@ -587,6 +587,8 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     ("docs/runtime.md", "m.yaml:1:1: cannot read mission file"): "tests/mission/"
     "test_hostile_files.py::test_a_mission_file_that_cannot_be_read_is_named_with_what_is_"
     "wanted",
+    ("docs/simulator.md", "roomba-bt run: w.yaml: world: cannot be read"): "tests/cli/"
+    "test_world_files.py::test_a_world_file_that_cannot_be_read_says_what_is_wanted",
     # session 41: the quotes held by the tests that make them
     ("docs/runtime.md", "outcome CONNECTION LOST (the recorded run's"): (
         "tests/runtime/test_replay_of_link_faults.py::test_the_replay_of_a_run_whose_link_"

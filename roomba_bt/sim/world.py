@@ -1450,10 +1450,7 @@ def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
     try:
         is_file = path.is_file()
     except OSError as exc:  # a folder on the way the user cannot enter: stat() itself fails
-        raise WorldError(
-            [WorldProblem(str(path), 0, 0, "world", f"an unreadable file ({exc.strerror or exc})",
-                          "a UTF-8 YAML file")]
-        ) from None  # fmt: skip
+        raise _unreadable(path, exc) from None
     if not is_file:
         named = named_world(path_or_name) if isinstance(path_or_name, str) else None
         if named is None:
@@ -1470,18 +1467,27 @@ def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
         byte = bytes(exc.object)[exc.start]
         # UTF-16 text (Notepad's "Unicode"), a Word file: said as a mission's is ("byte 0xff")
         whole = exc.reason in yamlsource.WHOLE_REASONS
-        found = (
-            exc.reason.removeprefix("this is ") if whole else f"byte 0x{byte:02x}, not UTF-8 text"
+        found = (  # the legacy encoding it reads as, if any, as a mission's says it
+            exc.reason.removeprefix("this is ")
+            if whole
+            else f"byte 0x{byte:02x}, not UTF-8 text ({exc.reason})"
         )
         raise WorldError(
             [WorldProblem(str(path), line, col, "world", found, "a UTF-8 YAML file")]
         ) from None
     except OSError as exc:
-        raise WorldError(
-            [
-                WorldProblem(
-                    str(path), 0, 0, "world", f"an unreadable file ({exc})", "a UTF-8 YAML file"
-                )
-            ]
-        ) from None
+        raise _unreadable(path, exc) from None
     return text, str(path)
+
+
+#: what a world file that is there and cannot be read is said to want, after what the system
+#: said of it, as a mission file (``MISSION_WANTED``) or a plugin file says it: it was
+#: "found an unreadable file ([Errno 13] Permission denied: 'w.yaml')", Python's words
+WORLD_FILE_WANTED = "wanted: a world file (YAML text) this user may read"
+
+
+def _unreadable(path: pathlib.Path, exc: OSError) -> WorldError:
+    """The world file ``path`` the system would not read (``chmod 000``, a folder on the way
+    the user cannot enter, a read that fails): what the system said, and what is wanted."""
+    said = f"cannot be read: {exc.strerror or exc}; {WORLD_FILE_WANTED}"
+    return WorldError([WorldProblem(str(path), 0, 0, "world", said, "")])

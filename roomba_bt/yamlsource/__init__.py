@@ -243,6 +243,8 @@ def read_text(path: Path) -> str:
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
+        if b"\0" in data:  # a program, an image, an archive: no text holds a NUL
+            raise UnicodeDecodeError(exc.encoding, data, 0, 1, BINARY) from None  # the whole
         raise UnicodeDecodeError(
             exc.encoding, data, exc.start, exc.end, f"{exc.reason}{legacy_encoding(data, exc)}"
         ) from None
@@ -265,8 +267,12 @@ DOCUMENT_SIGNATURES: tuple[tuple[bytes, str], ...] = (
     (b"%PDF-", "this is a PDF document: a mission is a plain text file, UTF-8"),
     (b"\x89PNG", "this is a PNG image: a mission is a plain text file, UTF-8"),
 )  # fmt: skip
+#: and for a file that is not UTF-8 and holds a NUL byte, which no text does (UTF-16's aside,
+#: told apart before): a program or an image given as a world was "byte 0xd0, not UTF-8
+#: text", and as a mission "it reads as 'Ð' in Windows-1252 ...: save the file as UTF-8"
+BINARY = "this is a binary file (it holds NUL bytes), not text: YAML is plain text, UTF-8"
 #: the reasons that say the whole of what is wrong (no byte of a text to show)
-WHOLE_REASONS = frozenset({UTF16, UTF32, *(what for _, what in DOCUMENT_SIGNATURES)})
+WHOLE_REASONS = frozenset({UTF16, UTF32, BINARY, *(what for _, what in DOCUMENT_SIGNATURES)})
 
 
 def legacy_encoding(data: bytes, exc: UnicodeDecodeError) -> str:

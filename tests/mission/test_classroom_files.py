@@ -226,6 +226,13 @@ WORD_PROCESSORS = [
         "file as UTF-8)",
         id="Latin-1",
     ),
+    pytest.param(  # a program's start (ELF): it was "byte 0xd0 at offset 24 ... it reads
+        # as 'Ð' in Windows-1252 or Latin-1, an older encoding: save the file as UTF-8"
+        b"\x7fELF\x02\x01\x01\x00" + bytes(16) + b"\xd0\x00",
+        "1:1: mission file is not UTF-8 text: this is a binary file (it holds NUL bytes), not "
+        "text: YAML is plain text, UTF-8",
+        id="binary",
+    ),
     pytest.param(
         b"mission: midbom\n\xef\xbb\xbftree:\n  sequence:\n    - stop\n",
         "2:1: '\\ufeff' (U+FEFF ZERO WIDTH NO-BREAK SPACE), a byte-order mark, is allowed only "

@@ -360,7 +360,9 @@ def test_a_tab_and_a_byte_that_is_not_utf8_in_a_world_are_placed(tmp_path: pathl
     with pytest.raises(WorldError) as info:
         load_world(str(latin))
     assert [str(p) for p in info.value.problems] == [
-        f"{latin}:1:10: world: found byte 0xe9, not UTF-8 text; allowed: a UTF-8 YAML file"
+        f"{latin}:1:10: world: found byte 0xe9, not UTF-8 text (invalid continuation byte; it "
+        "reads as '\xe9' in Windows-1252 or Latin-1, an older encoding: save the file as UTF-8); "
+        "allowed: a UTF-8 YAML file"
     ]
 
 
@@ -639,7 +641,10 @@ def test_a_world_in_a_folder_the_user_cannot_enter_is_a_world_error(
     with pytest.raises(WorldError) as info:
         world_module.world_text(tmp_path / "np" / "w.yaml")
     (problem,) = info.value.problems
-    assert "an unreadable file (Permission denied)" in str(problem)
+    assert str(problem) == (
+        f"{tmp_path / 'np' / 'w.yaml'}: world: cannot be read: Permission denied; wanted: a "
+        "world file (YAML text) this user may read"
+    )
 
 
 def test_a_nel_or_line_separator_in_a_world_is_refused_at_its_place() -> None:
