@@ -589,6 +589,9 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     "wanted",
     ("docs/simulator.md", "roomba-bt run: w.yaml: world: cannot be read"): "tests/cli/"
     "test_world_files.py::test_a_world_file_that_cannot_be_read_says_what_is_wanted",
+    ("docs/evaluation.md", "roomba-bt eval: warning: slowest tick"): "tests/runtime/test_"
+    "tick_watch.py::test_eval_reproducible_says_the_slow_tick_on_stderr_its_report_the_same_"
+    "bytes",
     # session 41: the quotes held by the tests that make them
     ("docs/runtime.md", "outcome CONNECTION LOST (the recorded run's"): (
         "tests/runtime/test_replay_of_link_faults.py::test_the_replay_of_a_run_whose_link_"

@@ -157,10 +157,15 @@ def print_report(
 ) -> None:
     """The summaries, coverage and comparisons on stdout: as JSON with ``--json`` (its
     ``conditions``: how the episodes were made, None when the records read do not say them
-    all, ``eval --from``), else text."""
+    all, ``eval --from``), else text. ``--reproducible``: the slow ticks' warning, measured
+    on the host and so left out of the report, on stderr."""
     from roomba_bt.evaluate.coverage import summarize_coverage
     from roomba_bt.evaluate.keys import summarize_keys
 
+    if args.reproducible:  # measured on the host: not in the report, still said
+        for summary in evaluated.summaries:
+            for said in summary.slow_said():
+                print(escaped(f"roomba-bt eval: warning: {said}", ANY_CONTROL), file=sys.stderr)
     if args.json:
         _json_report(args, engine, evaluated, conditions)
         return

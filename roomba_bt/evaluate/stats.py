@@ -125,7 +125,10 @@ class Summary:
     #: and counted with the cliffs it read as a hazard met in every episode
     episodes_with_hazard_falls: int = 0
     #: whether the wall-clock and CPU times are said (:meth:`lines`, :meth:`to_dict`): other
-    #: on every run of the same episodes; ``eval --reproducible`` leaves them out
+    #: on every run of the same episodes; ``eval --reproducible`` leaves them out, and the
+    #: slow ticks' warning (:meth:`slow_said`) with them: both whether a tick is found slow
+    #: and its milliseconds are the host's, not the virtual clock's (the caller says it on
+    #: stderr instead)
     timings: bool = True
     #: each key a behaviour wrote that the mission does not declare, who wrote it first and
     #: where, and the episodes it was written in (:attr:`EpisodeResult.undeclared`): said
@@ -186,7 +189,8 @@ class Summary:
                 else ""
             ),
         ]
-        out += [f"warning      {said}" for said in (*self.undeclared_said(), *self.slow_said())]
+        slow = self.slow_said() if self.timings else []  # measured on the host: see timings
+        out += [f"warning      {said}" for said in (*self.undeclared_said(), *slow)]
         if self.endings:
             out.append("successes    by what the mission said last")
             out += [
@@ -335,7 +339,9 @@ class Summary:
             "slow_ticks": [
                 {"in": where, "slowest_tick": slowest, "episodes": episodes}
                 for where, slowest, episodes in self.slow_ticks
-            ],
+            ]
+            if self.timings
+            else None,
         }
 
 

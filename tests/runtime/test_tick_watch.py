@@ -66,35 +66,60 @@ def mission(tmp_path: Path) -> Path:
     )
 
 
+class HeldPipe:
+    """The pipe the plugin of :func:`watched_mission` blocks reading: its other end is
+    closed (the read returns) right after the look at which the watch has seen it inside
+    for 0.5 s, or after a minute if no look ever does (the test fails, it does not hang).
+    :meth:`again` holds the next run's read as this one's, at the same descriptor (the
+    plugin's text, and so the mission's files, unchanged)."""
+
+    def __init__(self) -> None:
+        self.read_end, write_end = os.pipe()
+        self._open = [write_end]
+        self._lock = threading.Lock()
+        self._last_resort = threading.Timer(60.0, self.release)
+        self._last_resort.start()
+
+    def release(self) -> None:
+        with self._lock:
+            if self._open:
+                os.close(self._open.pop())
+
+    def again(self) -> None:
+        self.release()
+        fresh, write_end = os.pipe()
+        os.dup2(fresh, self.read_end)
+        os.close(fresh)
+        with self._lock:
+            self._open.append(write_end)
+
+    def close(self) -> None:
+        self._last_resort.cancel()
+        self.release()
+        os.close(self.read_end)
+
+
 @pytest.fixture
-def watched_mission(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
-    """The mission whose plugin blocks reading a pipe; the pipe's other end is closed (the
-    read returns) right after the look at which the watch has seen it inside for 0.5 s, or
-    after a minute if no look ever does (the test fails, it does not hang)."""
-    read_end, write_end = os.pipe()
-    still_open = [write_end]
-    lock = threading.Lock()
-
-    def release() -> None:
-        with lock:
-            if still_open:
-                os.close(still_open.pop())
-
+def held_pipe(monkeypatch: pytest.MonkeyPatch) -> Iterator[HeldPipe]:
+    """A :class:`HeldPipe`, let go by the watch's look that has seen a tick 0.5 s long."""
+    pipe = HeldPipe()
     look = SlowTickWatch.look
 
     def look_then_release(watch: SlowTickWatch, ticks: int, where_now: Callable[[], str]) -> None:
         look(watch, ticks, where_now)
         if watch.longest_s >= 0.5:
-            release()
+            pipe.release()
 
     monkeypatch.setattr(SlowTickWatch, "look", look_then_release)
-    last_resort = threading.Timer(60.0, release)
-    last_resort.start()
-    plugin = PLUGIN.format(blocks=f"os.read({read_end}, 1)")
-    yield write_mission(tmp_path, MISSION, "m.yaml", {"sleepy.py": plugin})
-    last_resort.cancel()
-    release()
-    os.close(read_end)
+    yield pipe
+    pipe.close()
+
+
+@pytest.fixture
+def watched_mission(tmp_path: Path, held_pipe: HeldPipe) -> Path:
+    """The mission whose plugin blocks reading :func:`held_pipe`'s pipe."""
+    plugin = PLUGIN.format(blocks=f"os.read({held_pipe.read_end}, 1)")
+    return write_mission(tmp_path, MISSION, "m.yaml", {"sleepy.py": plugin})
 
 
 def test_run_fast_names_the_behaviour_of_its_slowest_tick(
@@ -395,6 +420,35 @@ def test_eval_names_the_behaviour_that_held_its_episode_s_ticks(
         assert len(warnings) == 1, out
         assert warnings[0].startswith("warning      slowest tick "), out
         assert said in warnings[0], out
+
+
+@pytest.mark.parametrize("report", ["text", "json"])
+def test_eval_reproducible_says_the_slow_tick_on_stderr_its_report_the_same_bytes(
+    watched_mission: Path, held_pipe: HeldPipe, report: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--reproducible``'s report is byte-stable across runs (docs/evaluation.md): its
+    ``slowest tick 2000.16 ms in sleepy ...`` warning was the host's milliseconds (the next
+    run said 2000.15), and whether a tick is found slow at all is the host's too (the watch
+    looks on the wall clock). The report leaves it out (``--json``'s ``slow_ticks`` null, as
+    its ``wall_time``); stderr says it, as the report does without the option."""
+    argv = ["eval", str(watched_mission), "--runs", "1", "--allow-plugin-files",
+            "--no-progress", "--wall-limit", "none", "--reproducible",
+            *(["--json"] if report == "json" else [])]  # fmt: skip
+    outs = []
+    for again in (False, True):
+        if again:
+            held_pipe.again()
+        assert main(argv) == ExitCode.OK
+        out, err = capsys.readouterr()
+        outs.append(out)
+        slow = [line for line in err.splitlines() if "slowest tick" in line]
+        assert len(slow) == 1 and slow[0].startswith("roomba-bt eval: warning: slowest tick "), err
+        assert " ms in sleepy (Sleepy.update at " in slow[0], err
+        assert_quoted("docs/evaluation.md", "roomba-bt eval: warning: slowest tick", err, True)
+    assert outs[0] == outs[1]
+    assert "slowest" not in outs[0] and "Sleepy.update" not in outs[0], outs[0]
+    if report == "json":
+        assert '"slow_ticks": null' in outs[0], outs[0]
 
 
 def _dormant(thread: FakeThread) -> SlowTickWatch:
