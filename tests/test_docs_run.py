@@ -592,6 +592,9 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     ("docs/evaluation.md", "roomba-bt eval: warning: slowest tick"): "tests/runtime/test_"
     "tick_watch.py::test_eval_reproducible_says_the_slow_tick_on_stderr_its_report_the_same_"
     "bytes",
+    ("docs/runtime.md", "replay: the recorded run wrote Stop (173)"): "tests/runtime/test_"
+    "replay_of_old_end_in_records.py::test_an_old_record_whose_stop_is_not_its_last_bytes_"
+    "says_what_differs",
     # session 41: the quotes held by the tests that make them
     ("docs/runtime.md", "outcome CONNECTION LOST (the recorded run's"): (
         "tests/runtime/test_replay_of_link_faults.py::test_the_replay_of_a_run_whose_link_"

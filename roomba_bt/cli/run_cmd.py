@@ -1268,7 +1268,7 @@ def _replay_verdict(
     (``lost``: :func:`~roomba_bt.runtime.stack.past_the_link_loss`'s sentences; 0), or the
     first difference, with what changed since the record was made (1)."""
     from roomba_bt.runtime.provenance import changed_plugins, changed_sources, drift_line
-    from roomba_bt.runtime.recording import miscount_said
+    from roomba_bt.runtime.recording import END_IN_UNSAID, end_in_unsaid, miscount_said
 
     record, mission = recorded.record, recorded.mission
     difference = transport.first_difference()
@@ -1297,6 +1297,9 @@ def _replay_verdict(
     )
     for changed in (*sources, *plugins):
         print(f"replay: {changed}")
+    stop_for_start = expected.startswith("Stop (173)") and sent.startswith("Start (128)")
+    if stop_for_start and end_in_unsaid(record.header):  # its last bytes no stop's either
+        print(f"replay: {END_IN_UNSAID}")
     unplayed = operator_acts(record)
     if unplayed:
         print(

@@ -123,6 +123,7 @@ from typing import IO, Any, Literal, Protocol, TypeVar
 
 from roomba_bt import __version__
 from roomba_bt.errors import RoombaBtError
+from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_CODES, command_size, decode_command
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
@@ -175,12 +176,43 @@ RUN_OPTIONS = "options"
 END_IN = "end_in"
 
 
-def recorded_end_in(header: Mapping[str, Any]) -> Literal["passive", "stop"]:
+#: the last bytes a safe stop that ends in Off writes, from any mode: pause the stream
+#: ``[150][0]``, then Stop ``[173]`` (``robot.ending.stop_sequence``; one ending in Passive
+#: writes Start ``[128]`` last)
+STOP_ENDING = oi.pause_stream().data + oi.stop().data
+
+
+def recorded_end_in(header: Mapping[str, Any], ended: bytes = b"") -> Literal["passive", "stop"]:
     """How the recorded run's stop ended: :data:`END_IN`, or in a record made before it the
-    run's ``options`` (``run --end-in``, :data:`RUN_OPTIONS`); Start (``"passive"``) else."""
+    run's ``options`` (``run --end-in``, :data:`RUN_OPTIONS`); where neither says (a record
+    of 0.1.0's, or a Python program's ``end_in="stop"`` made before the header said it),
+    ``"stop"`` if the recorded bytes ``ended`` (:attr:`Record.out_tail`) end as such a stop
+    writes (:data:`STOP_ENDING`); Start (``"passive"``) else. The bytes are safe to go by:
+    a safe stop that ends in Passive never writes Stop last, and a tree that wrote Stop
+    itself turned the OI off, so its run's stop sends nothing, however it would end."""
     options = header.get(RUN_OPTIONS)
     given = header.get(END_IN, options.get("end_in") if isinstance(options, dict) else None)
+    if given is None and ended.endswith(STOP_ENDING):
+        return "stop"
     return "stop" if given == "stop" else "passive"
+
+
+#: what ``replay`` says where the recorded run's stop ended with Stop and the replay's with
+#: Start, the record saying nothing of it and its last bytes no stop's: the difference said,
+#: not left a riddle at the record's end
+END_IN_UNSAID = (
+    "the recorded run wrote Stop (173) where the replay's stop wrote Start (128): the record "
+    'does not say its run ended in Off (end_in="stop", run --end-in stop; a record made by '
+    "0.1.0 says nothing of it), and its last bytes are not the stop's, by which a replay "
+    "otherwise tells; the tree's own bytes are compared up to there"
+)
+
+
+def end_in_unsaid(header: Mapping[str, Any]) -> bool:
+    """Whether the record's header says nothing of how its stop ended: neither :data:`END_IN`
+    nor its ``options`` (:func:`recorded_end_in` then goes by its last bytes)."""
+    options = header.get(RUN_OPTIONS)
+    return END_IN not in header and not (isinstance(options, dict) and "end_in" in options)
 
 
 #: header key, true where the recorded run's stop was listened after and asked after (the
@@ -946,6 +978,9 @@ class Record:
     size: int = 0
     #: how many bytes the host wrote in the recorded run (its "out" chunks' total)
     out_bytes: int = 0
+    #: the last of those bytes (up to :data:`OUT_TAIL`): how its stop ended, where its header
+    #: does not say (:func:`recorded_end_in`)
+    out_tail: bytes = b""
     #: no end line, and a run holds the record's lock when it is read (``run --record``'s
     #: :class:`~roomba_bt.runtime.claimed.ClaimedFile`), or, where no lock can be asked for,
     #: the file changed in the last :data:`STILL_WRITTEN_S` seconds: a run writes it still
@@ -1139,9 +1174,14 @@ def load_record(path: str | Path) -> Record:
         last = record.last_t = record.last_chunk_t = t
         if item[1] == "out":
             record.out_bytes += len(item[2])
+            record.out_tail = (record.out_tail + item[2])[-OUT_TAIL:]
     if not record.ended:
         record.being_written = _being_written(path)
     return record
+
+
+#: how many of a record's last "out" bytes :func:`load_record` keeps (:attr:`Record.out_tail`)
+OUT_TAIL = 16
 
 
 def _being_written(path: Path) -> bool:

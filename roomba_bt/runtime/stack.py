@@ -871,7 +871,7 @@ def replay_record(
         packets=packets,
         watchdog=float(header.get("watchdog", DEFAULT_WATCHDOG)),  # as the recorded run's
         grace=float(header.get("grace", DEFAULT_GRACE)),
-        end_in=recorded_end_in(header),
+        end_in=recorded_end_in(header, record.out_tail),
         keep_awake=False,  # no robot to keep awake (it said a robot "sleeps after 5 minutes")
         observer=observer,
         input_ended=replay_input_ended(transport, record, until, ends),
