@@ -54,6 +54,7 @@ from roomba_bt.runtime.loop import (
 from roomba_bt.runtime.recording import (
     END_IN,
     ENDED_FROM_OUTSIDE,
+    MADE_BY,
     MISSION_AT,
     PLUGINS,
     RELATIVE_TO,
@@ -77,6 +78,7 @@ from roomba_bt.runtime.tick_guard import (
     TickGuard,
     TickGuardLike,
     recorded_tick_guard,
+    tree_notes_of,
 )
 from roomba_bt.transport.base import Transport
 from roomba_bt.transport.serial_port import DEFAULT_BAUD
@@ -875,7 +877,7 @@ def replay_record(
         keep_awake=False,  # no robot to keep awake (it said a robot "sleeps after 5 minutes")
         observer=observer,
         input_ended=replay_input_ended(transport, record, until, ends),
-        replayed_notes=[note for _, note in record.notes],  # the tick guard's acts
+        replayed_notes=_guard_notes(record),  # the tick guard's acts
     )
     follow_the_recorded_link(stack, record)
     _watch_the_recorded_loop(stack.runner, observer)
@@ -894,6 +896,15 @@ def replay_record(
     if end is not None and end.miscount is not None:  # said by replay, the stop the same
         record.miscounted = end.miscount
     return summary, transport
+
+
+def _guard_notes(record: Record) -> list[dict[str, Any]]:
+    """The record's notes as its replay's tick guard reads them: a ``run --record``'s (its
+    header's options) or 0.1.0's (no release named) held no loop over ``stack.ticks()``,
+    so each of its guard's notes is the tree's (:func:`tree_notes_of`)."""
+    header = record.header
+    program = RUN_OPTIONS not in header and MADE_BY in header
+    return tree_notes_of((note for _, note in record.notes), program_since_ticks=program)
 
 
 def _watch_the_recorded_loop(runner: MissionRunner, observer: TickObserver | None) -> None:

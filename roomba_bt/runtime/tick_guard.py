@@ -88,24 +88,50 @@ CYCLE_NOTE = "tick_cycle"
 #: where the halt before the tree's stop is noted as done (the record's ``where``)
 AT_THE_END = "the run's end, before the tree's stop"
 
-#: the record's key of a note made while the guard watched work done between two ticks (a
-#: program's loop over ``stack.ticks()``: :func:`~roomba_bt.runtime.loop.
-#: guarded_between_ticks`), not the tree's tick: its replay does the act there, after the
-#: tick's flush, and counts it as the loop's (``loop_slow``, ``loop_halts``) as the run did
+#: the record's key of every note the guard makes of a pass it watched: true where that was
+#: work done between two ticks (a program's loop over ``stack.ticks()``:
+#: :func:`~roomba_bt.runtime.loop.guarded_between_ticks`), false where it was the tree's
+#: tick: the replay does a loop's act there, after the tick's flush, and counts it as the
+#: loop's (``loop_slow``, ``loop_halts``) as the run did. A note without it is a record's
+#: made before (:func:`loop_noted`)
 LOOP_NOTE = "loop"
 
 
 def loop_noted(note: Mapping[str, Any]) -> bool:
     """Whether the guard's ``note`` was made between two ticks (:data:`LOOP_NOTE`). A record
-    made before that key (session 41) says it only by its ``where``: the ticking thread's
-    innermost line, no behaviour on its stack, in Python's ``threading.py`` (the worker of a
-    ``stack.ticks()`` loop waiting for the loop to ask for the next tick); a tree's tick is
-    always inside a behaviour's method, named there. Its replay counted such a note as the
-    tree's slow tick, and did its act inside the tick, before its flush: a tick early."""
+    made before that key was written (a 0.2.0 development build's) says it only by its
+    ``where``: the ticking thread's innermost line, no behaviour on its stack, in Python's
+    ``threading.py`` (the worker of a ``stack.ticks()`` loop waiting for the loop to ask for
+    the next tick). Its replay counted such a note as the tree's slow tick, and did its act
+    inside the tick, before its flush: a tick early. A tree's tick can be there too, in no
+    behaviour's method: a py_trees visitor's ``initialise()`` or ``finalise()`` waiting on a
+    lock, an event, a full queue (all in ``threading.py``); the key, written on every note
+    since, tells them apart, and so do the records that could hold no loop's note
+    (:func:`tree_notes_of`). Only an older program's own record with both is read by this
+    guess."""
     if LOOP_NOTE in note:
         return note[LOOP_NOTE] is True
     where = str(note.get("where", ""))
     return where.startswith("at ") and PurePath(where[3:].rsplit(":", 1)[0]).name == "threading.py"
+
+
+def tree_notes_of(
+    notes: Iterable[dict[str, Any]], program_since_ticks: bool
+) -> list[dict[str, Any]]:
+    """``notes`` as a replay reads them: where the record could hold no note of a program's
+    loop (``program_since_ticks`` False: a ``run --record``'s, whose header has its options,
+    or 0.1.0's, which names no release: neither ran a loop over ``stack.ticks()``), each of
+    the guard's notes without :data:`LOOP_NOTE` is the tree's, said so (a copy), whatever
+    its ``where`` names (:func:`loop_noted`'s guess is for the others)."""
+    if program_since_ticks:
+        return list(notes)
+    guarded = ("tick_guard", STILL_NOTE, CYCLE_NOTE)
+    return [
+        {**note, LOOP_NOTE: False}
+        if LOOP_NOTE not in note and any(key in note for key in guarded)
+        else note
+        for note in notes
+    ]
 
 
 def wheels_moving(connection: Connection) -> bool:
@@ -347,11 +373,10 @@ class TickGuard:
 
     def _write_note(self, said: dict[str, Any]) -> None:
         """``said`` in the record, when the run makes one (a transport with ``note``), with
-        :data:`LOOP_NOTE` where the pass was a program's loop body's, not the tree's."""
+        :data:`LOOP_NOTE`: whether the pass was a program's loop body's or the tree's."""
         note = getattr(self.connection.transport, "note", None)
         if callable(note):
-            if self._between:
-                said[LOOP_NOTE] = True
+            said[LOOP_NOTE] = bool(self._between)  # on every note: its where cannot tell
             note(said)
 
     def _moving(self) -> bool:

@@ -8,11 +8,13 @@ repr)."""
 from __future__ import annotations
 
 import inspect
+import json
 import os
 import signal
 import subprocess
 import sys
 import textwrap
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -342,6 +344,67 @@ def test_a_record_of_a_loops_slow_pass_replays_it_as_the_loops(
     assert transport.first_difference() is None and transport.written == record.out_bytes
     counted = (summary.loop_slow, summary.loop_halts, summary.tick_halts, summary.tick_stills)
     assert counted == (1, int(halted), 0, 0), summary.tick_guard_text()
+
+
+class WaitsInFinalise(py_trees.visitors.VisitorBase):
+    """A py_trees visitor whose ``finalise()`` at the 40th tick (the robot driving) waits in
+    Python's ``threading.py`` (an event's wait, as a put to a full queue or a lock's
+    condition waits) until the tick guard has looked: that tick blocks past the guard's
+    limit in no behaviour's method, so the guard's note names ``threading.py``, as a
+    program's loop over ``stack.ticks()`` waiting for its next tick did."""
+
+    def __init__(self, seen: threading.Event) -> None:
+        super().__init__(full=False)
+        self.seen, self.ticks = seen, 0
+
+    def finalise(self) -> None:
+        self.ticks += 1
+        if self.ticks == 40:
+            waited(self.seen, "the tick guard's look at the visitor's wait")
+
+
+@pytest.mark.parametrize("made", ["now", "by run", "by 0.1.0"])
+def test_a_trees_slow_tick_noted_in_threading_py_replays_as_the_trees(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, made: str
+) -> None:
+    """A record's note of a tree's tick that blocked in ``threading.py`` (a visitor's
+    ``finalise()`` waiting) was read as a program's loop's, by its ``where`` alone: its
+    replay did the drive 0 after the tick's flush and counted the pass as the loop's, a
+    difference ("first difference ... expected Drive (137) 89 00 c8 80 00, sent nothing").
+    Every note says whose it is now (``"loop":
+    false``), and a record that could hold no loop's note is read so without it: ``made="by
+    run"`` (a ``run --record``'s header, its options) and ``"by 0.1.0"`` (no release named),
+    the key taken out."""
+    seen = guard_looks(monkeypatch)
+    source, path = tmp_path / "lab.yaml", tmp_path / "visited.jsonl"
+    source.write_text(TO_THE_WALL)
+    mission = roomba_bt.load_mission(str(source), profile=CREATE2)
+    stack = RunStack(mission, SimLink(_simulator()), profile=CREATE2, timeout_s=30.0,
+                     tick_limit=0.02, visitors=[WaitsInFinalise(seen)],
+                     record=Recording(path, str(source)))  # fmt: skip
+    with stack:
+        stack.run()
+    assert (stack.summary.tick_halts, stack.summary.loop_slow) == (1, 0), stack.summary
+    notes = [note for _, note in load_record(path).notes if "tick_guard" in note]
+    [note] = [n for n in notes if n.get("at") != "end"]
+    assert note["loop"] is False and Path(note["where"].rsplit(":", 1)[0]).name == "threading.py"
+    if made != "now":
+        header, *lines = path.read_text().splitlines(keepends=True)
+        head = json.loads(header)
+        if made == "by run":
+            head["options"] = {"timeout": "30s", "end_in": "passive"}
+        else:
+            del head["roomba_bt_version"]
+        body = "".join(lines).replace(', "loop": false', "")
+        path.write_text(json.dumps(head) + "\n" + body)
+    record = load_record(path)
+    summary, transport = replay_record(
+        record, roomba_bt.load_mission(str(source), profile=CREATE2), profile=CREATE2,
+        packets=record.header["packets"], baud=record.header["baud"], name="visited.jsonl",
+    )  # fmt: skip
+    assert transport.first_difference() is None and transport.written == record.out_bytes
+    counted = (summary.tick_halts, summary.loop_slow, summary.loop_halts)
+    assert counted == (1, 0, 0), summary.tick_guard_text()
 
 
 # ------------------------------------------------------------------ 3. a mission from a string
