@@ -775,7 +775,7 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
         "tests/runtime/test_recording.py::test_a_record_of_a_shipped_mission_made_before_"
         "replays_it_where_its_path_is_gone"
     ),
-    ("docs/runtime.md", "replay: recorded with roomba-bt 0.1.0 (this is"): (
+    ("docs/runtime.md", "replay: recorded with roomba-bt 0.2.0 (this is"): (
         "tests/runtime/test_recording.py::test_a_replay_says_in_one_line_that_it_ran_on_other_"
         "files_than_the_record_was_made_with"
     ),

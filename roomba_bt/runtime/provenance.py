@@ -340,7 +340,7 @@ def drift_line(
     header: Mapping[str, Any], sources: list[str], plugins: list[str], *, same_bytes: bool
 ) -> str | None:
     """One line saying that the replay ran on other code than the record was made with
-    (``recorded with roomba-bt 0.1.0 (this is 0.2.0); 1 of its 3 source files and 1 plugin
+    (``recorded with roomba-bt 0.2.0 (this is 0.3.0); 1 of its 3 source files and 1 plugin
     differ now``), or None when nothing differs; ``sources`` and ``plugins``: what
     :func:`changed_sources` and :func:`changed_plugins` said. ``same_bytes``: the replay
     wrote the recorded bytes, and a release alone is not said then (the bytes are the news:

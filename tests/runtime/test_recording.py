@@ -1192,7 +1192,7 @@ def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
 
 
 def test_a_replay_says_in_one_line_that_it_ran_on_other_files_than_the_record_was_made_with(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """The files changed since were named only when the replay differed: one whose bytes
     were the same said nothing of running on other files (a shipped library changed in an
@@ -1217,7 +1217,9 @@ def test_a_replay_says_in_one_line_that_it_ran_on_other_files_than_the_record_wa
     assert "changed since" not in out  # the names are for a difference
     lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
     header = json.loads(lines[0])
-    header["roomba_bt_version"] = "0.1.0"
+    # a later release replays a 0.2.0 record (0.1.0 wrote no release: said otherwise)
+    monkeypatch.setattr("roomba_bt.runtime.provenance.__version__", "0.3.0")
+    header["roomba_bt_version"] = "0.2.0"
     header["sources"][mission.name] = hashlib.sha256(mission.read_bytes()).hexdigest()
     older = tmp_path / "older.jsonl"
     older.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
@@ -1232,8 +1234,8 @@ def test_a_replay_says_in_one_line_that_it_ran_on_other_files_than_the_record_wa
     older.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
     assert main(["replay", str(older)]) == 1
     out = capsys.readouterr().out
-    assert f"replay: recorded with roomba-bt 0.1.0 (this is {__version__})\n" in out
-    assert_quoted("docs/runtime.md", "replay: recorded with roomba-bt 0.1.0 (this is", out)
+    assert "replay: recorded with roomba-bt 0.2.0 (this is 0.3.0)\n" in out
+    assert_quoted("docs/runtime.md", "replay: recorded with roomba-bt 0.2.0 (this is", out)
     assert "changed since" not in out
 
 
