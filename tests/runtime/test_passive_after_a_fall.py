@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
+import roomba_bt
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import motor_bits
 from roomba_bt.oi.modes import OIMode
@@ -217,3 +218,27 @@ tree:
         summary.lines()
     )
     assert_quoted("docs/simulator.md", "falls the robot fell", "\n".join(summary.lines()))
+
+
+@pytest.mark.parametrize(
+    ("mission", "running"),
+    [
+        ("bump-and-turn", "bump and turn for a while"),
+        ("wall-follow", "follow the wall for a while"),
+    ],
+)
+def test_a_shipped_mission_picked_up_says_wheel_drop_not_a_cliff(
+    run_mission: RunMission, tmp_path: Path, mission: str, running: str
+) -> None:
+    """A robot lifted off the floor reads its wheel drops and every cliff sensor in the same
+    frame. The shipped missions' guards named the first cliff they checked: picked up, the
+    owner read ``stopped: cliff on the left``, of a robot in their hands. The wheel drop is
+    checked first now, and the robot is left stopped in Passive as before."""
+    (tmp_path / "lifted.yaml").write_text(LIFTED)
+    text = (Path(roomba_bt.__file__).parent / "missions" / f"{mission}.yaml").read_text()
+    run = run_mission(text, world=str(tmp_path / "lifted.yaml"), timeout=30.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.FAILURE, summary.reason
+    assert summary.reason.startswith(f"stopped: wheel drop, while '{running}' ran"), summary.reason
+    sim = run.simulator
+    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
