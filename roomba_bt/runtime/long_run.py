@@ -38,7 +38,7 @@ from roomba_bt.oi.frames import BATTERY_PACKETS, CHARGING_SOURCES_PACKETS, Frame
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT, encoder_delta
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.interface import Odometer, Odometry, Snapshot
+from roomba_bt.robot.interface import UNKNOWN_CAUSE, ModeChange, Odometer, Odometry, Snapshot
 from roomba_bt.robot.weak import weakly
 from roomba_bt.runtime.motion_watch import MotionWatch
 from roomba_bt.runtime.summary import Outcome, RunSummary
@@ -192,6 +192,12 @@ class RobotCycleWatch:
         #: the robot is in a Passive the run's commands or its own fall put it in (the run
         #: starts there), until a Safe, Full or Stop of the run's is written
         self._in_passive = True
+        #: the last fall to Passive by itself the watch was told of (the connection's
+        #: ``last_fallback``, by its tick and link time: the runtime replaces the object
+        #: with a copy that has its mission time), and the fall of unknown cause that began
+        #: the Passive the robot is in now (None: the run's command, or a fall with a cause)
+        self._fall_seen: tuple[int, float] | None = None
+        self._unknown_fall: tuple[int, float] | None = None
         #: the encoder counts (left, right) and the mission time of the last look
         self._counts: tuple[int, int] | None = None
         self._looked_at = 0.0
@@ -206,6 +212,13 @@ class RobotCycleWatch:
         path it drives there is measured from here."""
         self._in_passive = True
         self.odometer.entered_passive()
+        change = self.connection.last_fallback
+        if change is None:
+            return
+        key = (change.tick, change.time)
+        fresh = key != self._fall_seen
+        self._fall_seen = key
+        self._unknown_fall = key if fresh and change.cause == UNKNOWN_CAUSE else None
 
     def look(self, odometry: Odometry, mission_time: float) -> bool:
         """Whether the robot, as ``odometry`` has it at ``mission_time``, has driven in
@@ -324,7 +337,10 @@ class RobotCycleWatch:
         driven = self.odometer.driven_in_passive()
         if looks >= CYCLE_LOOKS:
             self._said(driven, ended=ended)
-        elif looks and driven > ROBOT_CYCLE_MM:
+        elif (looks or self._unknown_fall is not None) and driven > ROBOT_CYCLE_MM:
+            # a Passive begun by a fall of no cause (a cycle command made of a lost byte
+            # does it) needs no look: the run had ended a second after such a Clean, before
+            # the looks saw the robot drive, and its Start left the cycle cleaning
             self._said(driven, told_apart=False, ended=ended)
 
     def _said(
@@ -343,11 +359,14 @@ class RobotCycleWatch:
         connection = self.connection
         writer = connection.writer
         driven = f"{driven_mm / 1000:.2f} m"
+        fell = self._fall_of_no_cause()
         if button is not None:
             said = (
                 f"the robot started a cycle by itself: its {button.capitalize()} button was "
                 "pressed in Passive (packet 18), where it starts the robot's own cycle"
             )
+        elif fell is not None:
+            said = self._cycle_from_the_line(fell, driven, told_apart=told_apart, ended=ended)
         elif told_apart:
             said = (
                 "the robot started a cycle by itself (its Clean, Spot or Dock button, or its "
@@ -373,6 +392,48 @@ class RobotCycleWatch:
         self.summary.robot_cycle = f"{said}; {said_end}"
         log.warning("%s: %s", connection.name, self.summary.robot_cycle)
         return said
+
+    def _fall_of_no_cause(self) -> ModeChange | None:
+        """The fall of unknown cause from Safe or Full that began the robot's Passive now,
+        as the connection has it (with its mission time, once the run placed it); None
+        when a command of the run's or a fall with a cause began it."""
+        change = self.connection.last_fallback
+        if change is None or self._unknown_fall != (change.tick, change.time):
+            return None
+        return change
+
+    def _cycle_from_the_line(
+        self, fell: ModeChange, driven: str, *, told_apart: bool, ended: str
+    ) -> str:
+        """The words for a robot driving in a Passive it fell to by itself from Safe or Full
+        with no cause in its frame (no cliff, wheel drop or charger). Safe and Full ignore
+        the buttons (both specs: "does not respond to button presses"), so no button started
+        it: a cycle command the robot heard, which the run never wrote (its tree's Drive
+        Direct at 135 mm/s, ``91 00 87 00 a5``, its opcode lost on the line: 135 is Clean).
+        A wall-follow on a line losing 2 bytes in 10 000 was said "its Clean, Spot or Dock
+        button, or its schedule", and its owner sent to the buttons, not the cable."""
+        from roomba_bt.transport.link_kind import link_of
+
+        at = "" if fell.mission_time is None else f" at t={fell.mission_time:.3f}"
+        how = (
+            f"it left {fell.previous.label} by itself{at} with no cliff, wheel drop or charger "
+            f"in its frame, and {fell.previous.label} ignores the buttons"
+        )
+        line = (
+            "a Clean (135), Spot (134), Max (136) or Seek Dock (143) made of a byte lost or "
+            "changed on the line, most likely (a data byte read as an opcode: check "
+            f"{link_of(self.connection.name).byte_check}: roomba-bt doctor)"
+        )
+        if told_apart:
+            return (
+                f"the robot started a cycle the run did not send: {how}, then drove {driven} "
+                f"in Passive with no command of the run's: {line}"
+            )
+        return (
+            "the robot was moving in Passive with no command of the run's as the "
+            f"{'run left Passive' if ended else 'run ended'} ({driven} since {how}): {line}, "
+            "or a hand"
+        )
 
 
 def say_waits_past_sleep(mission: object, connection: Connection) -> None:
