@@ -242,3 +242,24 @@ def test_a_shipped_mission_picked_up_says_wheel_drop_not_a_cliff(
     assert summary.reason.startswith(f"stopped: wheel drop, while '{running}' ran"), summary.reason
     sim = run.simulator
     assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
+
+
+def test_patrol_picked_up_ends_naming_the_wheel_drop(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """patrol's header says a failure names a wheel drop; it had no check of one. Lifted, it
+    took the drop for a cliff: it wrote Safe and a back-off each second into the robot in
+    its owner's hands (the firmware dropping it to Passive each time) and, put down, drove
+    its laps on from there, SUCCESS. It ends at the lift now, naming it, stopped in Passive."""
+    (tmp_path / "lifted.yaml").write_text(LIFTED.replace("duration: 0.5", "duration: 3"))
+    text = (Path(roomba_bt.__file__).parent / "missions" / "patrol.yaml").read_text()
+    run = run_mission(text, world=str(tmp_path / "lifted.yaml"), timeout=300.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.FAILURE, summary.reason
+    assert summary.reason.startswith(
+        "stopped: a wheel has dropped, as when the robot is lifted or a wheel goes over an "
+        "edge, while 'patrol' ran"
+    ), summary.reason
+    assert summary.mission_time_s < 1.5  # at the lift (1 s), not after laps
+    sim = run.simulator
+    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
