@@ -439,7 +439,7 @@ def _decorator_options(
             raise Bad(
                 where.at(
                     f"{word}.{param.name} must be at least {_amount(param, param.minimum)}, "
-                    f"got {_amount(param, value)}"
+                    f"got {_amount_written(param, value, written, env)}"
                     + (said_origin(written, env) or said_defaults([written], env, where))
                 )
             )
@@ -449,6 +449,20 @@ def _decorator_options(
 def _amount(param: Param, value: float) -> str:
     """``0.015 s``, ``1``: a value with the unit of the option's type, if it has one."""
     return f"{value:g} {param.type.unit}" if param.type.unit else f"{value:g}"
+
+
+def _amount_written(
+    param: Param, value: float, written: yaml.Node, env: Mapping[str, Bound]
+) -> str:
+    """The value found, as the file writes it and then in the option's unit where the two
+    differ (``10ms (0.01 s)``), as a leaf's parameter is said (``Param.check_range``):
+    ``timeout: {after: 10ms}`` said only ``got 0.01 s``, a text the file did not hold."""
+    shown = _amount(param, value)
+    if not isinstance(written, yaml.ScalarNode):
+        return shown
+    text = written_text(written, env).strip()
+    same = text.replace(" ", "") == shown.replace(" ", "")
+    return shown if not text or same else f"{text} ({shown})"
 
 
 def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fields,

@@ -343,7 +343,15 @@ def test_held_in_a_fallback_does_not_count_an_old_hold(compile_text: Compile) ->
 @pytest.mark.parametrize(
     ("node", "said"),
     [
-        ("held: {for: 5ms, do: wall}", "3:17: held.for must be at least 0.015 s, got 0.005 s"),
+        # the value as written, then in the option's unit, as a leaf's parameter is said
+        (
+            "held: {for: 5ms, do: wall}",
+            "3:17: held.for must be at least 0.015 s, got 5ms (0.005 s)",
+        ),
+        (
+            "held: {for: 0.0001 min, do: wall}",
+            "3:17: held.for must be at least 0.015 s, got 0.0001 min (0.006 s)",
+        ),
         ("held: {for: 0s, do: wall}", "3:17: held.for must be at least 0.015 s, got 0 s"),
         ("held: {for: -2s, do: wall}", "3:17: held.for must be at least 0.015 s, got -2 s"),
         ("held: {for: 3 m, do: wall}", "3:17: held.for: unknown duration unit 'm'"),
