@@ -220,11 +220,12 @@ def _common(parser: argparse.ArgumentParser) -> None:
     add_permission_options(parser)
 
 
-def _params(items: list[str]) -> dict[str, str] | None:
-    """The ``-p`` values, or None after printing what is wrong with one."""
+def _params(items: list[str], command: str) -> dict[str, str] | None:
+    """The ``-p`` values, or None after printing what is wrong with one, the command named
+    as ``run`` and ``eval`` name theirs (it said ``roomba-bt: -p 'laps': ...``)."""
     params = parse_params(items)
     if isinstance(params, str):
-        print(f"roomba-bt: {params}", file=sys.stderr)
+        print(f"roomba-bt {command}: {params}", file=sys.stderr)
         return None
     return params
 
@@ -233,7 +234,7 @@ def validate_command(args: argparse.Namespace) -> int:
     """Each file checked, then said in ``--format`` (``cli/validate_report.py``)."""
     from roomba_bt.cli import validate_report as report
 
-    params = _params(args.param)
+    params = _params(args.param, "validate")
     if params is None:
         return ExitCode.INVALID
     named = None if args.profile is not None else environment_profile()
@@ -359,7 +360,7 @@ def show_command(args: argparse.Namespace) -> int:
 
     from roomba_bt.mission import compile_mission, reported
 
-    params = _params(args.param)
+    params = _params(args.param, "show")
     if params is None:
         return ExitCode.INVALID
     found = mission_file(args.file)
