@@ -379,6 +379,11 @@ def _key_kind(key_node: yaml.Node) -> str:
     if key_node.tag == _CORE + "bool" and written.lower() not in ("true", "false"):
         read = str(yamlsource.scalar(key_node)).lower()
         return f"'{written}', read as the boolean {read} (YAML 1.1): quote it, '{written}'"
+    if key_node.tag == _CORE + "merge":  # said "merge <<": what to write instead, too
+        return (
+            f"'{written}', a YAML merge key: a mission file copies no mapping into another "
+            "(aliases, *name, are refused too); write the keys out"
+        )
     return kind_of(key_node)
 
 

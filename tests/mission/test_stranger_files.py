@@ -171,6 +171,23 @@ def test_a_utf32_file_is_named_as_such(tmp_path: Path, encoding: str) -> None:
     ]
 
 
+def test_a_merge_key_says_to_write_the_keys_out(tmp_path: Path) -> None:
+    """A YAML merge key was ``keys of drive must be names, got merge <<``: neither what
+    ``<<`` is to the reader nor what to write (session 42, a stranger's finding)."""
+    path = _mission(
+        tmp_path,
+        "mission: m\n"
+        "tree:\n"
+        "  sequence:\n"
+        "    - mode: safe\n"
+        "    - drive: {<<: {velocity: 100 mm/s}, distance: 10cm}\n",
+    )
+    assert _problems(path) == [
+        "5:15: keys of drive must be names, got '<<', a YAML merge key: a mission file copies "
+        "no mapping into another (aliases, *name, are refused too); write the keys out"
+    ]
+
+
 def test_a_second_document_is_named_where_it_starts(tmp_path: Path) -> None:
     """It was PyYAML's fragment "but found another document"."""
     path = _mission(tmp_path, "mission: m\ntree: {log: x}\n---\nmission: n\n")
