@@ -1468,6 +1468,12 @@ def twice(exc: DuplicateKey) -> str:
     return f"the key {json.dumps(exc.args[0])} twice in one object; expected each key once"
 
 
+#: what a record is, said where a file given as one is not
+_RECORD_WANTED = (
+    f"a file written by run --record (its first line a JSON header, format {RECORD_FORMAT!r})"
+)
+
+
 def _header(path: Path, line: str) -> dict[str, Any]:
     """The record's first line: its header, every field checked (:func:`header_problem`)."""
     try:  # a byte-order mark an editor wrote before it: read past, as a mission's is
@@ -1475,13 +1481,25 @@ def _header(path: Path, line: str) -> dict[str, Any]:
     except DuplicateKey as exc:
         raise RecordError(f"{path}:1: header holds {twice(exc)}") from None
     except json.JSONDecodeError as exc:
-        raise RecordError(f"{path}:1:{exc.colno}: header is not JSON: {exc.msg}") from None
+        raise RecordError(  # a mission given for its record said only "Expecting value"
+            f"{path}:1:{exc.colno}: not a record: its first line is not JSON ({exc.msg}); "
+            f"expected {_RECORD_WANTED}"
+        ) from None
     except RecursionError:  # json's decoder recurses: a line nested thousands deep
         raise RecordError(f"{path}:1: header nested too deeply to be a record's") from None
     except ValueError as exc:  # a number too long to read: it was an internal error, exit 70
         raise RecordError(f"{path}:1: header holds {long_number(exc)}") from None
     if not isinstance(header, dict) or header.get("format") != RECORD_FORMAT:
-        raise RecordError(f"{path}:1: not a {RECORD_FORMAT} file (header format field)")
+        found = (
+            f"its header's format is {shortened(repr(header['format']))}"
+            if isinstance(header, dict) and "format" in header
+            else "its first line has no format field"
+            if isinstance(header, dict)
+            else "its first line is no JSON object"
+        )
+        raise RecordError(
+            f"{path}:1: not a {RECORD_FORMAT} file: {found}; expected {_RECORD_WANTED}"
+        )
     if type(header.get("version")) is not int or header["version"] not in READ_VERSIONS:
         raise RecordError(
             f"{path}:1: record version {header.get('version')!r}; this roomba-bt reads "

@@ -388,6 +388,28 @@ def test_a_header_an_editor_began_with_a_bom_is_read_and_a_boolean_version_is_no
         load_record(record)
 
 
+def test_a_file_that_is_no_record_says_what_a_record_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``replay m.yaml`` (the mission given for its record) said ``header is not JSON:
+    Expecting value``, and a JSON file of another kind ``not a roomba-bt-record file (header
+    format field)``: neither what was found nor what a record is (session 42, a stranger's
+    finding)."""
+    mission = tmp_path / "m.yaml"
+    mission.write_text("mission: m\ntree: {wait: 1s}\n")
+    other = tmp_path / "other.jsonl"
+    other.write_text('{"format": "something-else", "version": 1}\n')
+    wanted = "expected a file written by run --record (its first line a JSON header"
+    assert main(["replay", str(mission)]) == 2
+    err = capsys.readouterr().err
+    assert f"{mission}:1:1: not a record: its first line is not JSON (Expecting value); " in err
+    assert wanted in err and "Traceback" not in err
+    assert main(["replay", str(other)]) == 2
+    err = capsys.readouterr().err
+    assert "not a roomba-bt-record file: its header's format is 'something-else'; " in err
+    assert wanted in err
+
+
 def test_a_record_is_read_a_line_at_a_time_and_a_device_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
