@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -177,13 +178,14 @@ def resume(
             for line, row, result in _rows(path, cut):
                 where = f"{path}:{line}"
                 index = variant_of.get((result.mission, tuple(sorted(result.params))))
+                named = _named(result.mission, result.params)
                 if index is None:
-                    raise ResumeError(f"{where}: {_named(result)} is no variant of this "
+                    raise ResumeError(f"{where}: {named} is no variant of this "
                                       "evaluation (its missions, -p, --sweep or --variant "
-                                      "differ)")  # fmt: skip
+                                      f"differ){_runs_instead(result, chosen)}")  # fmt: skip
                 spec_at = places[index].get(result.seed)
                 if spec_at is None:
-                    raise ResumeError(f"{where}: seed {result.seed} of {_named(result)} is not "
+                    raise ResumeError(f"{where}: seed {result.seed} of {named} is not "
                                       "among this evaluation's seeds (--seed, --runs or "
                                       "--seeds differ)")  # fmt: skip
                 spec = batches[index][spec_at]
@@ -232,9 +234,35 @@ def _rows(path: Path, cut: list[CutShort]) -> list[tuple[int, dict[str, Any], Ep
         raise ResumeError(f"{exc}; --resume reads it back (--force: write over it)") from None
 
 
-def _named(result: EpisodeResult) -> str:
-    params = " ".join(f"-p {name}={value}" for name, value in result.params)
-    return f"{result.mission} {params}".strip()
+#: how many of this evaluation's variants a refused record's line names
+_VARIANTS_SAID = 3
+
+
+def _runs_instead(result: EpisodeResult, chosen: list[Any]) -> str:
+    """What this evaluation runs, said after a record of no variant of it; and, where a
+    mission of it has the record's file name under another path, why: a path is matched as
+    given (``../m.yaml`` from one folder, ``proj/m.yaml`` from another, the same file),
+    where the refusal named only the record's and a stranger saw the same mission twice."""
+    names = [_named(v.mission, v.params) for v in chosen[:_VARIANTS_SAID]]
+    more = len(chosen) - _VARIANTS_SAID
+    said = f"; this evaluation runs {', '.join(names)}" + (f" and {more} more" if more > 0 else "")
+    base = Path(result.mission).name
+    moved = [
+        v.mission
+        for v in chosen
+        if v.mission != result.mission and ":" not in v.mission and Path(v.mission).name == base
+    ]
+    if moved and ":" not in result.mission:
+        said += (
+            f" ({moved[0]} and {result.mission} name a file {base}: a mission is matched by "
+            "its path as given, so give it as the first run did, from the folder it ran in)"
+        )
+    return said
+
+
+def _named(mission: str, params: Iterable[tuple[str, str]]) -> str:
+    """A variant as a command line gives it: ``dock.yaml -p speed=250mm/s``."""
+    return " ".join([mission, *(f"-p {name}={value}" for name, value in params)])
 
 
 def _check_alike(

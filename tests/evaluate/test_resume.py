@@ -433,3 +433,27 @@ def test_a_resume_names_each_file_it_read_episodes_from(
     said = f"8 episode(s) read back from {out} and {out}.partial.jsonl, 0 to run"
     assert said in capsys.readouterr().err
     assert out.read_text() == uninterrupted[".jsonl"]
+
+
+def test_a_resume_from_another_folder_says_the_path_is_matched_as_given(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The same file, named ``sub/m.yaml`` by the first run and ``m.yaml`` by a resume from
+    ``sub/``, was refused naming only the record's mission: the stranger saw no difference
+    (session 42, a stranger's finding). The refusal stays; it names what this evaluation
+    runs and why the two differ."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "m.yaml").write_text("mission: m\ntree: {wait: 30ms}\n")
+    argv = ["eval", "--no-progress", "--reproducible", "--runs"]
+    monkeypatch.chdir(tmp_path)
+    assert main([*argv, "1", "sub/m.yaml", "--out", "r.jsonl"]) == 0
+    monkeypatch.chdir(tmp_path / "sub")
+    capsys.readouterr()
+    assert main([*argv, "2", "m.yaml", "--out", "../r.jsonl", "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        "--resume: ../r.jsonl:1: sub/m.yaml is no variant of this evaluation (its missions, -p, "
+        "--sweep or --variant differ); this evaluation runs m.yaml (m.yaml and sub/m.yaml name "
+        "a file m.yaml: a mission is matched by its path as given, so give it as the first run "
+        "did, from the folder it ran in)"
+    ) in err, err
