@@ -529,8 +529,17 @@ class Context:
         if unseen:
             return f"unknown blackboard key {key!r}{unseen}"
         # a use's own keys (``go#1/here``) are no name a file writes: not offered
-        known = self.keys if keys is None else keys
-        return unknown("blackboard key", key, [k for k in known if not is_own_key(k)])
+        known = [k for k in (self.keys if keys is None else keys) if not is_own_key(k)]
+        # none at all: what is allowed is a key declared, said (it was "known: none" alone)
+        hint = (
+            None
+            if known
+            else (
+                f" (declare it with its type under blackboard:, {{{key}: TYPE}}, a type such as "
+                "distance, int or mark)"
+            )
+        )
+        return unknown("blackboard key", key, known, hint=hint)
 
     def unread_include_note(self, at: Loc) -> str | None:
         """What an unknown name at ``at`` follows from when an include was not read, instead
