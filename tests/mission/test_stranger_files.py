@@ -174,16 +174,10 @@ def test_a_utf32_file_is_named_as_such(tmp_path: Path, encoding: str) -> None:
 def test_a_merge_key_says_to_write_the_keys_out(tmp_path: Path) -> None:
     """A YAML merge key was ``keys of drive must be names, got merge <<``: neither what
     ``<<`` is to the reader nor what to write (session 42, a stranger's finding)."""
-    path = _mission(
-        tmp_path,
-        "mission: m\n"
-        "tree:\n"
-        "  sequence:\n"
-        "    - mode: safe\n"
-        "    - drive: {<<: {velocity: 100 mm/s}, distance: 10cm}\n",
-    )
+    text = "tree: {sequence: [mode: safe, drive: {<<: {velocity: 100 mm/s}, distance: 1m}]}\n"
+    path = _mission(tmp_path, text)
     assert _problems(path) == [
-        "5:15: keys of drive must be names, got '<<', a YAML merge key: a mission file copies "
+        "1:39: keys of drive must be names, got '<<', a YAML merge key: a mission file copies "
         "no mapping into another (aliases, *name, are refused too); write the keys out"
     ]
 
