@@ -1213,11 +1213,16 @@ def _a_library(resolved: Path, path: Path) -> str:
     """What ``show`` or ``run`` says of a library file (``subtrees:``, no ``tree:``), such
     as the shipped ``roomba-bt:lib/docking.yaml``: "a mission needs a tree" read as if the
     file were broken, when it is whole and only meant to be included."""
-    name = shipped_name(resolved) or str(path)
+    shipped = shipped_name(resolved)
+    # a file's path as given is the current folder's, where an include is its mission's:
+    # include: [common/lib/legs.yaml] in missions/x.yaml was "not found"
+    where = ""
+    if not shipped:
+        where = " from a mission in the current folder; an include is relative to its file"
     return (
         "this file is a library of subtrees (subtrees:, no tree:), to be included, not run: "
-        f"include it in a mission (include: [{name}]) and use them there with subtree: NAME "
-        "(validate checks a library on its own)"
+        f"include it in a mission (include: [{shipped or path}]{where}) and use them there "
+        "with subtree: NAME (validate checks a library on its own)"
     )
 
 

@@ -476,6 +476,26 @@ def test_show_a_library_lists_its_subtrees(
     assert main(["validate", str(library)]) == 0
 
 
+def test_running_a_library_says_its_include_path_is_the_current_folders(
+    tmp_path: Path, capsys: Capsys, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``run common/lib/legs.yaml`` said ``include: [common/lib/legs.yaml]``, which a
+    mission in ``missions/`` then wrote and was refused, "not found": an include is relative
+    to its file (session 42, a stranger's finding). The shipped library's name is the same
+    from everywhere, and said alone."""
+    (tmp_path / "lib").mkdir()
+    (tmp_path / "lib" / "legs.yaml").write_text("subtrees:\n  pause: {tree: {wait: 1s}}\n")
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "lib/legs.yaml", "--fast"]) == 2
+    said = "include it in a mission (include: [lib/legs.yaml] from a mission in the current "
+    assert said + "folder; an include is relative to its file) and use them there" in (
+        capsys.readouterr().err
+    )
+    assert main(["run", "roomba-bt:lib/docking.yaml", "--fast"]) == 2
+    err = capsys.readouterr().err
+    assert "(include: [roomba-bt:lib/docking.yaml]) and use them there" in err, err
+
+
 def test_a_plugin_that_did_not_load_is_said_by_behaviours_name_and_by_schema(
     capsys: Capsys, monkeypatch: pytest.MonkeyPatch
 ) -> None:
