@@ -423,10 +423,12 @@ def _stopped(
     print(f"roomba-bt eval: {said}; {finished_said(done, evaluated)}, summarised above",
           file=sys.stderr)  # fmt: skip
     if args.out and not bug:  # the way on, where a thousand-episode sweep's user looks
-        left = evaluated.runs * len(evaluated.chosen) - count_episodes(done)
+        finished = count_episodes(done)
+        left = evaluated.runs * len(evaluated.chosen) - finished
         again = "again" if args.resume else "with --resume"
+        held = "those finished" if finished else "none: no episode finished"  # not "those"
         print(f"roomba-bt eval: the same command {again} runs the {left} episode(s) left "
-              f"(--out {args.out} holds those finished)", file=sys.stderr)  # fmt: skip
+              f"(--out {args.out} holds {held})", file=sys.stderr)  # fmt: skip
     if args.plot:
         then = " (--resume with --plot draws every episode once the rest have run)"
         print(f"roomba-bt eval: --plot {args.plot} not drawn: the evaluation stopped before its "

@@ -457,3 +457,24 @@ def test_a_resume_from_another_folder_says_the_path_is_matched_as_given(
         "a file m.yaml: a mission is matched by its path as given, so give it as the first run "
         "did, from the folder it ran in)"
     ) in err, err
+
+
+def test_an_evaluation_interrupted_before_its_first_episode_says_out_holds_none(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A Ctrl-C before any episode finished said ``(--out r.jsonl holds those finished)``
+    of an empty file (session 42, a stranger's finding): it says it holds none."""
+    import roomba_bt.evaluate.parallel as parallel
+
+    def ctrl_c(_: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(parallel, "run_episode", ctrl_c)
+    out = tmp_path / "r.jsonl"
+    argv = ["eval", BUMP, "--runs", "3", "--jobs", "1", "--wall-limit", "none", "--out", str(out)]
+    assert main([*argv, "--no-progress"]) == 130
+    err = capsys.readouterr().err
+    assert (
+        f"the same command with --resume runs the 3 episode(s) left (--out {out} holds none: "
+        "no episode finished)\n"
+    ) in err, err
