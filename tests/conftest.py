@@ -21,7 +21,6 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import os
-import select
 import signal
 import socket
 import subprocess
@@ -228,9 +227,8 @@ class ServedSim:
             text=True,
         )
         assert self.proc.stdout is not None
-        ready, _, _ = select.select([self.proc.stdout], [], [], SIM_WAIT_S)
-        assert ready, "the simulator printed no address"
-        self.address = self.proc.stdout.readline().strip()
+        # a whole line, bounded: a select alone let a part of one through to a readline
+        self.address = waits.line(self.proc.stdout, "the simulator's address", SIM_WAIT_S).strip()
 
     def stop(self, sig: int = signal.SIGTERM) -> tuple[int, str]:
         """``sig`` to it if it still runs; its exit code and what it wrote on stderr (the
@@ -277,7 +275,7 @@ def child() -> Iterator[Callable[[Sequence[str]], subprocess.Popen[str]]]:
     for proc in started:
         if proc.poll() is None:
             proc.kill()
-        proc.communicate()
+        proc.communicate(timeout=HANG_S)  # a grandchild may hold its pipes: not for ever
 
 
 #: ``roomba-bt ARGS`` started as a shell script's ``roomba-bt ARGS &`` starts it: a shell
@@ -323,7 +321,9 @@ def record_held(
 
     def hold(path: Path) -> subprocess.Popen[str]:
         proc = child([sys.executable, "-c", _HOLD, str(path)])
-        assert proc.stdout is not None and proc.stdout.readline() == "held\n"
+        assert proc.stdout is not None
+        said = waits.line(proc.stdout, f"a child holding {path.name}")
+        assert said == "held\n", said
         return proc
 
     return hold
@@ -409,7 +409,7 @@ def _read_beside_a_writer(fifo: Path, read: Callable[[], object]) -> tuple[objec
         # a reader held until the writer is done: its open() ends whenever it comes
         reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
         try:
-            writer.join()
+            waits.joined(writer, "the pipe's writer")
         finally:
             os.close(reader)
     return given, was_opened

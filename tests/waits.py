@@ -14,10 +14,13 @@ is not one of these: it stays the test's own number.
 
 from __future__ import annotations
 
+import os
+import select
 import subprocess
 import threading
 import time
 from collections.abc import Callable
+from typing import IO
 
 #: The most a test waits for something that only a hang would keep from happening: generous
 #: for a loaded 2-core machine (six busy loops on its 2 cores kept a monitor run from its
@@ -41,6 +44,42 @@ def until(condition: Callable[[], bool], what: str, within: float = HANG_S) -> N
         if time.monotonic() > deadline:
             raise AssertionError(f"{what}: not within {within:g} s (hung?)")
         time.sleep(0.001)
+
+
+def lines(
+    stream: IO[str], ends: Callable[[str], bool], what: str, within: float = HANG_S
+) -> list[str]:
+    """The lines a child writes on ``stream`` (its text pipe), up to and including the first
+    that ``ends`` holds for, or up to the pipe's end (the last then has no newline: ``""``
+    where nothing came after the last line). Fail, saying ``what`` never came and what was
+    written meanwhile, if neither comes within ``within`` seconds: a ``readline()`` waits
+    for ever on a child that hangs before its line (session 42 found a dozen).
+
+    Read a byte at a time from the pipe's descriptor, as the child writes it: the stream's
+    buffer is never filled past the line, so what follows it is still the pipe's for the
+    ``communicate()`` after (the lines before it are a few short ones)."""
+    deadline = time.monotonic() + within
+    fd = stream.fileno()
+    got: list[str] = []
+    pending = bytearray()
+    while True:
+        left = deadline - time.monotonic()
+        ready, _, _ = select.select([fd], [], [], max(left, 0.0))
+        if not ready or left < 0:  # a child that writes on and on, never the line, too
+            said = "".join(got) + pending.decode(errors="replace")
+            raise AssertionError(f"{what}: not within {within:g} s (hung?); it wrote {said!r}")
+        byte = os.read(fd, 1)
+        pending += byte
+        if byte in (b"\n", b""):
+            got.append(pending.decode(stream.encoding or "utf-8", errors="replace"))
+            pending.clear()
+            if not byte or ends(got[-1]):
+                return got
+
+
+def line(stream: IO[str], what: str, within: float = HANG_S) -> str:
+    """The next line a child writes on ``stream`` (:func:`lines`), ``""`` at the pipe's end."""
+    return lines(stream, lambda _: True, what, within)[-1]
 
 
 def joined(thread: threading.Thread, what: str, within: float = HANG_S) -> None:

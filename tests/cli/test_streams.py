@@ -21,7 +21,7 @@ from typing import Any
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quoted lines
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, line  # tests/waits.py: a hang's bound, a line within it
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
@@ -264,7 +264,7 @@ def test_a_report_blocked_on_a_pipe_nobody_reads_can_be_ended(tmp_path: Path) ->
     finally:
         if proc.poll() is None:
             proc.kill()
-            proc.wait()
+            proc.wait(timeout=HANG_S)
         os.close(read_end)
     # ended by the thread the signal set going (robot/safety.py, LAST_WORDS_S) with 128 +
     # the signal: the report cut short (the run's own answer, its timeout's exit 1, in
@@ -325,8 +325,8 @@ def test_a_signal_before_the_run_took_it_is_exit_130(
     else:
         proc = child([*CLI, *args])
     assert proc.stderr is not None
-    line = proc.stderr.readline()
-    assert "plugin importing" in line, line
+    said = line(proc.stderr, "the plugin's import under way")
+    assert "plugin importing" in said, said
     proc.send_signal(signum)
     _, err = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130, err

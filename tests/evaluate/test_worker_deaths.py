@@ -184,7 +184,10 @@ def test_ctrl_c_while_a_dask_worker_restarts_prints_no_traceback(tmp_path: Path)
         replacement = None
         deadline = time.monotonic() + HANG_S
         while replacement is None:
-            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+            # ended: what it said (its workers may hold its pipes: bounded); still running
+            # past the bound: said so, not a communicate() that waits for its end for ever
+            assert proc.poll() is None, proc.communicate(timeout=HANG_S)
+            assert time.monotonic() < deadline, f"no worker started again in {HANG_S:g} s (hung?)"
             if not died.exists() or not died.read_text():
                 seen.update(c.pid for c in psutil.Process(proc.pid).children())
                 time.sleep(0.01)  # another process's file: no event to wait on
@@ -195,7 +198,7 @@ def test_ctrl_c_while_a_dask_worker_restarts_prints_no_traceback(tmp_path: Path)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+            proc.wait(timeout=HANG_S)
     assert proc.returncode == 130, stderr
     assert b"Traceback" not in stderr and b"KeyboardInterrupt" not in stderr, stderr.decode()
 

@@ -54,8 +54,8 @@ def repo(tmp_path: Path) -> Path:
     root.mkdir()
     team_repo(root)
     (root / "missions/common/lib/escapes.yaml").write_text(ESCAPES.replace("parsecs", "cm"))
-    subprocess.run(["git", "init", "-q"], cwd=root, check=True)
-    subprocess.run(["git", "add", "."], cwd=root, check=True)
+    subprocess.run(["git", "init", "-q"], cwd=root, check=True, timeout=HANG_S)
+    subprocess.run(["git", "add", "."], cwd=root, check=True, timeout=HANG_S)
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
     shim = bin_dir / "roomba-bt"
@@ -76,7 +76,9 @@ def break_the_library(repo: Path) -> None:
     ``safe_drive.yaml`` and ``square.yaml`` still use the old name."""
     library = repo / "missions/common/lib/escapes.yaml"
     library.write_text(library.read_text().replace("escape_bump:", "escape_on_bump:"))
-    subprocess.run(["git", "add", "missions/common/lib/escapes.yaml"], cwd=repo, check=True)
+    subprocess.run(
+        ["git", "add", "missions/common/lib/escapes.yaml"], cwd=repo, check=True, timeout=HANG_S
+    )
 
 
 def test_the_hook_validates_every_mission_and_names_those_a_library_change_breaks(
@@ -170,7 +172,7 @@ def test_the_actions_step_checks_a_name_with_spaces_and_accents_as_one_file(
     files (split at the spaces, the letters octal-escaped), and ``xargs`` would give 123 for
     an error and a warning alike: the step as written checks the file, exit 2 or 7."""
     (repo / STUDENT).write_text(text, encoding="utf-8")
-    subprocess.run(["git", "add", "."], cwd=repo, check=True)
+    subprocess.run(["git", "add", "."], cwd=repo, check=True, timeout=HANG_S)
     done = run_in(repo, ["bash", "-e", "-c", validate_step()])
     assert done.returncode == code, done.stdout + done.stderr
     assert "no such mission file" not in done.stdout + done.stderr

@@ -11,13 +11,12 @@ import json
 import re
 import subprocess
 import sys
-import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import pytest
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, lines  # tests/waits.py: a hang's bound, lines within it
 
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi import commands as oi
@@ -153,14 +152,9 @@ def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, child: Child)
 
 def _url_from(proc: subprocess.Popen[str]) -> str:
     assert proc.stdout is not None
-    deadline = time.monotonic() + HANG_S
-    while time.monotonic() < deadline:
-        line = proc.stdout.readline()
-        if not line:
-            break
-        if line.startswith("monitor: "):
-            return line.split()[1]
-    raise AssertionError("no 'monitor: URL' line from roomba-bt run")
+    said = lines(proc.stdout, lambda line: line.startswith("monitor: "), "the monitor's URL")
+    assert said[-1].startswith("monitor: "), f"no 'monitor: URL' line from roomba-bt run: {said}"
+    return said[-1].split()[1]
 
 
 def test_a_recorded_run_on_the_timeline_shows_that_ticks_statuses(

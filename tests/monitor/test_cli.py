@@ -356,13 +356,13 @@ class WatchedRun:
             joined(reader, "reading what the ended monitor wrote")
         left: list[str] = []
         while not self.lines.empty():
-            left.append(self.lines.get())
+            left.append(self.lines.get_nowait())  # the readers ended: all there is
         return "".join(left)
 
     def close(self) -> None:
         if self.proc.poll() is None:
             self.proc.kill()
-            self.proc.wait()
+            self.proc.wait(timeout=HANG_S)
         for reader in self.readers:
             reader.join(HANG_S)  # killed: its pipes end at once
         for stream in (self.proc.stdout, self.proc.stderr):

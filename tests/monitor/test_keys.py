@@ -60,7 +60,7 @@ class Terminal:
 
     def close(self) -> None:
         """The run ended (killed if a failed test left it running) and its pty closed."""
-        with contextlib.suppress(ChildProcessError):  # reaped already by :meth:`wait`
+        with contextlib.suppress(ChildProcessError):  # reaped already by :meth:`exited`
             if os.waitpid(self.pid, os.WNOHANG) == (0, 0):
                 os.kill(self.pid, signal.SIGKILL)
                 os.waitpid(self.pid, 0)
@@ -92,9 +92,20 @@ class Terminal:
     def type(self, key: str) -> None:
         os.write(self.fd, key.encode())
 
-    def wait(self) -> int:
-        _, status = os.waitpid(self.pid, 0)
-        return os.waitstatus_to_exitcode(status)
+    def exited(self, within: float = HANG_S) -> int:
+        """The run's exit code once it has ended, what it still writes read onto
+        :attr:`screen` meanwhile (a full pty would hold it). Still running after ``within``
+        s: the test fails, saying so and what the terminal showed (a bare ``waitpid`` held
+        a hung run's test, and CI, for ever); :meth:`close` then kills it."""
+        deadline = time.monotonic() + within
+        while (ended := os.waitpid(self.pid, os.WNOHANG)) == (0, 0):
+            assert time.monotonic() < deadline, (
+                f"the run still ran {within:g} s after it was told to stop; "
+                f"the terminal showed {self.screen[-2000:]!r}"
+            )
+            if self.hung_up or not self.read(0.05):  # no terminal, or its side closed
+                time.sleep(0.01)
+        return os.waitstatus_to_exitcode(ended[1])
 
 
 def _until_in(log: Path, text: str, timeout: float = HANG_S) -> None:
@@ -130,7 +141,7 @@ def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(
     run.until("monitor: resume (resumed by the operator)")
     run.type("q")
     run.until("outcome      INTERRUPTED (stopped by the operator)")
-    assert run.wait() == 130
+    assert run.exited() == 130
     settings = termios.tcgetattr(run.fd)[3]  # the terminal as the run found it: cooked
     assert settings & termios.ICANON and settings & termios.ECHO
     # the operator's acts; the tick guard's drive 0 before the tree's stop, if the wheels
@@ -161,7 +172,7 @@ def test_a_key_that_does_nothing_says_why(tmp_path: Path) -> None:
     run.until("monitor: key 'x' does nothing (keys: p pause, r resume, n step, q stop)")
     run.type("q")
     run.until("outcome      INTERRUPTED (stopped by the operator)")
-    assert run.wait() == 130
+    assert run.exited() == 130
     assert_quoted("docs/monitor.md", "monitor: key r (resume) refused", run.screen)
     assert_quoted("docs/monitor.md", "monitor: key 'x' does nothing", run.screen)
 
@@ -194,7 +205,7 @@ def test_a_read_only_page_leaves_the_keys_to_the_operator(tmp_path: Path) -> Non
     run.until("monitor: pause (paused by the operator)")
     run.type("q")
     run.until("outcome      INTERRUPTED (stopped by the operator)")
-    assert run.wait() == 130
+    assert run.exited() == 130
 
 
 def test_a_terminal_that_hangs_up_turns_the_keys_off_once(tmp_path: Path) -> None:
@@ -236,6 +247,6 @@ def test_a_terminal_that_hangs_up_turns_the_keys_off_once(tmp_path: Path) -> Non
     )  # fmt: skip
     with urllib.request.urlopen(stop, timeout=HANG_S) as answer:
         assert answer.status == 202
-    assert run.wait() == 130
+    assert run.exited() == 130
     said = log.read_text(errors="replace")
     assert "Traceback" not in said and "Exception in thread" not in said, said[-3000:]

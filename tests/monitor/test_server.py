@@ -222,7 +222,7 @@ def test_a_page_hears_from_the_run_every_second_when_nothing_changes() -> None:
     )
     try:
         watcher.start()
-        watcher.join()  # the wait_for's bound at the latest
+        joined(watcher, "the page's reader")  # the wait_for's bound at the latest
     finally:
         served.close()
     assert messages, "the page heard nothing after the run's first update"
@@ -503,7 +503,7 @@ def test_several_pages_watch_one_run() -> None:
         for which, event in enumerate(connected):
             waited(event, f"page {which}'s connecting")
         thread.start()
-        watcher.join()  # the wait_for's bound at the latest
+        joined(watcher, "the page's reader")  # the wait_for's bound at the latest
         first, second = pages[0]
     finally:
         session.request("stop")
@@ -615,7 +615,7 @@ def test_a_killed_run_s_record_tells_the_page_its_last_tick_has_no_end(
     try:
         status, state = _call(f"http://127.0.0.1:{server.port}/api/state")
         watcher.start()
-        watcher.join()  # the wait_for's bound at the latest
+        joined(watcher, "the page's reader")  # the wait_for's bound at the latest
     finally:
         server.close()
     expected = NO_END if killed else None
@@ -670,7 +670,7 @@ def test_a_page_that_stopped_reading_is_sent_the_newest_state_not_a_backlog() ->
     )
     try:
         reader.start()
-        reader.join()
+        joined(reader, "the page's reader")  # the wait_for's bound at the latest
     finally:
         live.finish()
     assert read, "the page's reader ended without an answer (its error is printed above)"

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, joined  # tests/waits.py: a hang's bound
 
 from roomba_bt.monitor.access import SAME_TOKEN
 from roomba_bt.monitor.server import MonitorServer
@@ -52,7 +52,7 @@ def _hello(server: MonitorServer, at: str = "/", **headers: str) -> dict[str, An
     # an event loop of its own: the browser tests' driver may own this thread's
     reader = threading.Thread(target=lambda: got.append(asyncio.run(first())))
     reader.start()
-    reader.join()  # the wait_for's bound at the latest
+    joined(reader, "the page's reader")  # the wait_for's bound at the latest
     assert got, "no hello"
     return got[0]
 

@@ -19,7 +19,7 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, line  # tests/waits.py: a hang's bound, a line within it
 
 from roomba_bt.oi.encode import decode_command
 from roomba_bt.oi.modes import OIMode
@@ -115,7 +115,7 @@ def sim_pty_server(profile: RobotProfile, *options: str) -> Iterator[str]:
     )
     try:
         assert child.stdout is not None
-        address = child.stdout.readline().strip()
+        address = line(child.stdout, "roomba-bt sim --pty's address").strip()
         if not address:
             _, err = child.communicate(timeout=HANG_S)
             pytest.fail(f"roomba-bt sim --pty printed no address: {err}")
@@ -127,4 +127,4 @@ def sim_pty_server(profile: RobotProfile, *options: str) -> Iterator[str]:
                 child.communicate(timeout=HANG_S)
             except subprocess.TimeoutExpired:
                 child.kill()
-                child.communicate()
+                child.communicate(timeout=HANG_S)

@@ -12,7 +12,7 @@ import time
 from collections.abc import Callable, Sequence
 
 import pytest
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, joined, line  # tests/waits.py: a hang's bound, waits within it
 
 from roomba_bt.robot.safety import (
     InterruptGuard,
@@ -47,7 +47,7 @@ def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(
     with FakeRobot(endpoint) as robot:
         connection = child([sys.executable, str(CHILD), endpoint.address])
         assert connection.stdout is not None
-        assert connection.stdout.readline().strip() == "ready", connection.stderr
+        assert line(connection.stdout, "the child's ready").strip() == "ready"
         driving = bytes([137, 0, 120, 0x80, 0x00])
         assert robot.wait_until(lambda r: r.received.count(driving) >= 3)
         connection.send_signal(signum)
@@ -181,7 +181,7 @@ def test_an_interrupt_raised_in_another_thread_is_never_a_signal_s() -> None:
     seen: list[bool] = []
     worker = threading.Thread(target=lambda: seen.append(signal_delivered(KeyboardInterrupt())))
     worker.start()
-    worker.join()
+    joined(worker, "a thread's signal_delivered()")
     assert seen == [False]
 
     class Limit(RunAborted):

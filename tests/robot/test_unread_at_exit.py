@@ -11,8 +11,9 @@ import signal
 import subprocess
 import sys
 import textwrap
-import time
 from collections.abc import Callable, Sequence
+
+from waits import HANG_S, line, until  # tests/waits.py: waits within a hang's bound
 
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.oi.stream import StreamParser
@@ -38,25 +39,16 @@ SCRIPT = textwrap.dedent("""
 Child = Callable[[Sequence[str]], "subprocess.Popen[str]"]
 
 
-def _wait_for(predicate: Callable[[], bool], timeout: float = 10.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.01)
-    return True
-
-
 def test_ctrl_c_in_a_sleeping_script_stops_the_robot_and_says_so_truly(child: Child) -> None:
     endpoint = PtyEndpoint()
     with FakeRobot(endpoint) as robot:
         script = child([sys.executable, "-c", SCRIPT, endpoint.address])
         assert script.stdout is not None
-        assert script.stdout.readline().strip() == "ready", script.stderr
+        assert line(script.stdout, "the script's ready").strip() == "ready"
         sent = robot.frames_sent
-        assert _wait_for(lambda: robot.frames_sent >= sent + 30)  # unread, in the pty
+        until(lambda: robot.frames_sent >= sent + 30, "30 frames sent to the sleeping script")
         script.send_signal(signal.SIGINT)
-        _, err = script.communicate(timeout=20)
+        _, err = script.communicate(timeout=HANG_S)
         # the stop is the last bytes but for the Query List that asks after it when the
         # robot's thread was held before it (a loaded machine): asked after, answered in
         # Passive, it is confirmed all the same (``RobotDouble.ended_with``)

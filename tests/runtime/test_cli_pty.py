@@ -18,7 +18,7 @@ from typing import Any
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
-from waits import HANG_S, ended, finished  # tests/waits.py: waits that end as it does
+from waits import HANG_S, ended, finished, line  # tests/waits.py: waits that end as it does
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
@@ -92,7 +92,7 @@ def _wait_for_driving(record: Path, proc: subprocess.Popen[str] | None = None) -
         if _frames_after_the_first_drive(record) >= FRAMES_DRIVING:
             return
         if proc is not None and proc.poll() is not None:
-            out, err = proc.communicate()
+            out, err = proc.communicate(timeout=HANG_S)  # a child of its may hold its pipes
             raise AssertionError(f"the run ended (exit {proc.returncode}) before it drove: "
                                  f"{out}{err}")  # fmt: skip
         time.sleep(0.05)
@@ -312,7 +312,7 @@ def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undeliv
     sim = served_sim("--pty")
     proc, record = _driving(sim.address, tmp_path)
     sim.proc.kill()
-    sim.proc.communicate()  # its pipes closed
+    sim.proc.communicate(timeout=HANG_S)  # its pipes closed
     out, err = ended(proc)
     assert proc.returncode == 8, err
     assert "the port is gone" in err
@@ -372,7 +372,7 @@ def test_a_port_that_comes_back_within_the_grace_gets_the_stop_not_the_mission(
     port.symlink_to(first.address)
     proc, _ = _driving(str(port), tmp_path)
     first.proc.kill()
-    first.proc.communicate()
+    first.proc.communicate(timeout=HANG_S)
     back = tmp_path / "robot.back"
     back.symlink_to(second.address)
     back.replace(port)  # the adapter back, at the same path
@@ -595,7 +595,7 @@ def test_a_terminal_that_stops_reading_does_not_hold_up_the_run(
         )
     finally:
         proc.kill()
-        proc.wait()
+        proc.wait(timeout=HANG_S)
         os.close(write_end)
         os.close(read_end)
 
@@ -643,7 +643,7 @@ def test_ctrl_c_on_a_noisy_line_leaves_the_robot_stopped_in_passive(tmp_path: Pa
         )  # fmt: skip
     try:
         assert sim.stdout is not None
-        port = sim.stdout.readline().strip()
+        port = line(sim.stdout, "the simulator's pty").strip()
         record = tmp_path / "run.jsonl"
         with run_log.open("w") as run_err:
             proc = subprocess.Popen(

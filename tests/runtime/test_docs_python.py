@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, line  # tests/waits.py: a hang's bound, a line within it
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "runtime.md"
 SECTION = "## From Python: a tree built by hand"
@@ -170,7 +170,8 @@ def test_the_asyncio_recipe_stops_the_robot_on_ctrl_c() -> None:
     host = _host_the_recipe("wall")
     assert host.stdout is not None
     try:
-        assert host.stdout.readline() == "driving\n"
+        said = line(host.stdout, "the recipe's robot driving")
+        assert said == "driving\n", said
         host.send_signal(signal.SIGINT)
         out, err = host.communicate(timeout=HANG_S)
     finally:

@@ -10,7 +10,7 @@ import threading
 
 import py_trees
 import pytest
-from waits import waited  # tests/waits.py: a hang's bound, no fixed bet
+from waits import joined, waited  # tests/waits.py: a hang's bound, no fixed bet
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.oi.modes import OIMode
@@ -103,7 +103,7 @@ def test_a_run_in_a_worker_thread_warns_and_close_from_the_main_thread_stops_it(
     finally:
         stack.close()  # from the main thread, while the worker runs: the run ends first
     assert not worker.is_alive()  # close() returned after the run's end
-    worker.join()
+    joined(worker, "the run's worker")
     [summary] = result
     assert isinstance(summary, RunSummary), summary
     assert summary.outcome is Outcome.INTERRUPTED

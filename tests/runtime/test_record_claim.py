@@ -11,7 +11,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, line  # tests/waits.py: a hang's bound, a line within it
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import RecordingTransport, load_record
@@ -66,7 +66,9 @@ def held(path: Path, content: str) -> Iterator[Path]:
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
     )  # fmt: skip
     try:
-        assert holder.stdout is not None and holder.stdout.readline() == "held\n"
+        assert holder.stdout is not None
+        said = line(holder.stdout, f"a process holding {path.name}")
+        assert said == "held\n", said
         yield path
     finally:
         holder.communicate("", timeout=HANG_S)

@@ -747,7 +747,7 @@ def test_a_record_a_run_is_still_writing_is_said_to_be_so_not_killed(
     )
     assert "killed" not in out
     run.kill()  # kill -9
-    run.wait()
+    run.wait(timeout=HANG_S)
     os.utime(live)  # changed a moment ago: read 2 s after the kill
     assert not load_record(live).being_written
     assert main(["replay", str(live)]) == 0

@@ -21,7 +21,7 @@ from typing import Any
 
 import pytest
 from transport.test_serial_transport import in_exclusive_mode  # tests/transport: TIOCGEXCL
-from waits import ended  # tests/waits.py: a child's end, no fixed bet
+from waits import HANG_S, ended  # tests/waits.py: a child's end, no fixed bet
 
 from roomba_bt.robot.safety import CLOSING_UNDER_WAY
 from roomba_bt.runtime.recording import load_record
@@ -77,7 +77,7 @@ def test_a_second_ctrl_c_while_the_run_closes_leaves_the_port_free_and_the_recor
     finally:
         if proc.poll() is None:  # _wait_for_driving failed
             proc.kill()
-            proc.communicate()
+            proc.communicate(timeout=HANG_S)
     assert "hook: SIGINT" in err  # the second one was sent, where it was meant to be
     assert proc.returncode == 130, out + err
     assert "outcome      INTERRUPTED (Ctrl-C or kill -INT (SIGINT))" in out  # the summary

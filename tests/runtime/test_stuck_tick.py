@@ -12,7 +12,7 @@ import time
 import py_trees
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, joined  # tests/waits.py: a hang's bound
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.oi.frames import SLOT_SECONDS
@@ -101,7 +101,7 @@ def test_an_interrupt_in_a_stuck_tick_names_the_leaf_and_its_line(signum: int, s
     sender.start()
     with stack:
         summary = stack.run(raise_interrupts=False)
-    sender.join()
+    joined(sender, "the interrupt's sender")  # its wait's own bound at the latest
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
     assert summary.reason.startswith(f"{said} in a tick that had run "), summary.reason
     assert stuck.named(summary.reason, " s, in behaviour root / stuck"), summary.reason

@@ -19,6 +19,7 @@ from types import ModuleType
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+from waits import lines  # tests/waits.py: a child's lines, within the hang bound
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.runtime import ending
@@ -246,10 +247,8 @@ def test_ctrl_c_while_the_run_waits_for_a_terminate_that_never_returns_is_exit_1
         "--record", str(record), "--display", "none",
     ])  # fmt: skip
     assert proc.stderr is not None
-    said = []
-    while (line := proc.stderr.readline()) and "terminate entered" not in line:
-        said.append(line)
-    assert line, "".join(said)
+    said = lines(proc.stderr, lambda line: "terminate entered" in line, "terminate() entered")
+    assert "terminate entered" in said[-1], "".join(said)  # not the run's end before it
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=GIVE_UP_S)
     assert proc.returncode == 130, out + err

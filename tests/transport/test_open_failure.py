@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 from serial import rfc2217
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, joined  # tests/waits.py: a hang's bound
 
 from roomba_bt.transport import SerialTransport, TransportError
 from roomba_bt.transport import open_failure as failures
@@ -153,7 +153,7 @@ def test_an_rfc2217_server_that_closes_at_once_is_said_as_a_network_s(
             SerialTransport.open(url)
     finally:
         listener.shutdown(socket.SHUT_RDWR)  # ends the accept, which a close left waiting
-        closer.join()
+        joined(closer, "the listener's accept")
         listener.close()
     # the write that meets the close fails (EPIPE), or, on a loaded host, pyserial's wait for
     # the negotiation runs out first ("Remote does not seem to support RFC2217", said raw

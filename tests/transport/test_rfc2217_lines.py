@@ -15,7 +15,7 @@ from collections.abc import Iterator
 import pytest
 from serial import rfc2217, serialutil
 from sim.served import Served  # tests/sim: the simulator served in a thread
-from waits import until  # tests/waits.py: a hang's bound
+from waits import joined, until  # tests/waits.py: a hang's bound
 
 from roomba_bt.sim.server import Rfc2217Endpoint
 from roomba_bt.transport import SerialTransport, TransportError
@@ -137,12 +137,12 @@ class _SwallowingProxy:
         """Its sockets shut, which ends the accept and the reads its threads wait in (a
         close alone leaves them waiting, each thread left running), then closed."""
         self.listener.shutdown(socket.SHUT_RDWR)
-        self._threads[0].join()  # the accept's: no connection comes after it
+        joined(self._threads[0], "the bridge's accept")  # no connection comes after it
         for sock in self._sockets[1:]:
             with contextlib.suppress(OSError):  # one the far end closed first
                 sock.shutdown(socket.SHUT_RDWR)
         for thread in self._threads[1:]:
-            thread.join()
+            joined(thread, "a bridge's pipe")
         for sock in self._sockets:
             sock.close()
 

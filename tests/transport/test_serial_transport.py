@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, line  # tests/waits.py: a hang's bound, a line within it
 
 from roomba_bt.transport import (
     SerialTransport,
@@ -217,7 +217,9 @@ def test_a_device_is_opened_for_one_program_at_a_time() -> None:
             stdin=subprocess.PIPE, text=True,
         )  # fmt: skip
         try:
-            assert holder.stdout is not None and holder.stdout.readline() == "held\n"
+            assert holder.stdout is not None
+            said = line(holder.stdout, "a process holding the port's lock")
+            assert said == "held\n", said
             with pytest.raises(TransportError) as refused:
                 SerialTransport.open(end.url)
         finally:
