@@ -46,7 +46,10 @@ The docs give some commands more than once (the same ``eval`` in three tables of
 docs/routines.md, ``doctor --port /dev/ttyUSB0`` in README.md and docs/doctor.md): a command
 line whose rewritten argv was already run in this session, in the same kind of directory
 (and, where it names a file of its page's, with the same files), is not run again: its exit
-code, output and errors are the first run's (:data:`RAN`), and its own case checks them.
+code, output and errors are the first run's (:data:`RAN`), and its own case checks them. An
+``eval`` episode the session already ran (the same spec: mission and world texts, seed,
+options, wall-clock limit) is not simulated again either: the command line runs as written
+and gets that episode's result as its pool would (:data:`EPISODES`).
 
 docs/doctor.md's transcripts (a ``text`` block that starts ``$ roomba-bt doctor``) are run
 against the simulator their paragraph names and compared with what doctor prints, line for
@@ -1289,6 +1292,68 @@ NOT_SAID = {"my-flat.yaml": "fell to Passive by itself"}
 RAN: dict[tuple[object, ...], tuple[int, str, str]] = {}
 
 
+#: Each episode a docs ``eval`` ran in this session, by its spec made self-contained (the
+#: mission's and its files' texts, the world's) and the wall-clock limit it ran under: the
+#: docs run the same episode from several command lines (docs/routines.md's seed 0 in the
+#: living room from four tables, again with ``--out``; evaluation.md's dock on seeds 1 and 2
+#: beside ``dock-builtin``), each of which cost a 21-minute clean again, up to 10 s of CPU.
+#: "Same spec, same result" (:class:`~roomba_bt.evaluate.EpisodeSpec`): a command line that
+#: meets one again gets its result as its pool would have given it; the rest of the command
+#: (its arguments, the sweep, the summary, ``--out``) runs as written.
+EPISODES: dict[tuple[object, float | None], Any] = {}
+
+
+def _each_episode_once(original: Callable[..., list[Any]]) -> Callable[..., list[Any]]:
+    """``parallel.run_episodes`` that runs only the specs not in :data:`EPISODES` (through
+    ``original``, its pool, its wall-clock limit) and keeps what they gave; a stuck or dead
+    worker's result (HUNG, DIED: the machine's, not the spec's) is not kept."""
+    from roomba_bt.evaluate.episode import DIED, HUNG, self_contained
+    from roomba_bt.evaluate.parallel import LocalRun
+
+    def run_episodes(
+        specs: list[Any],
+        jobs: int = 1,
+        progress: Callable[[int, int, Any], None] | None = None,
+        run: LocalRun | None = None,
+        wall_limit_s: float | None = None,
+    ) -> list[Any]:
+        run = run if run is not None else LocalRun()
+        keys = [(self_contained(spec), wall_limit_s) for spec in specs]
+        new = [i for i, key in enumerate(keys) if key not in EPISODES]
+        for i, key in enumerate(keys):
+            if i not in new:
+                run.results[i] = EPISODES[key]
+                if progress is not None:
+                    progress(len(run.results), len(specs), run.results[i])
+        seen = len(run.results)
+
+        def said(done: int, total: int, result: Any) -> None:
+            if progress is not None:
+                progress(seen + done, len(specs), result)
+
+        ran = LocalRun()
+        try:
+            if new:
+                original([specs[i] for i in new], jobs, said, ran, wall_limit_s)
+        finally:  # what finished before a Ctrl-C is the caller's too, as the pool's
+            run.retried += ran.retried
+            for j, result in ran.results.items():
+                run.results[new[j]] = result
+                if result.outcome not in (HUNG, DIED):
+                    EPISODES[keys[new[j]]] = result
+        return run.in_order()
+
+    return run_episodes
+
+
+@pytest.fixture
+def episodes_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """:func:`_each_episode_once` in place of the local pool's ``run_episodes``."""
+    from roomba_bt.evaluate import parallel
+
+    monkeypatch.setattr(parallel, "run_episodes", _each_episode_once(parallel.run_episodes))
+
+
 def test_the_wheel_s_user_has_no_checkout(scratch: Callable[..., Path]) -> None:
     """The folder a wheel's user runs a page's commands in holds what the page writes and no
     more: a command naming ``missions/dock.yaml`` fails there, as it does for such a user."""
@@ -1307,6 +1372,7 @@ def test_every_command_in_the_docs_runs(
     scratch: Callable[..., Path],
     capsys: pytest.CaptureFixture[str],
     served_sim: Callable[..., Any],
+    episodes_once: None,
 ) -> None:
     checkout = command in CHECKOUT
     workdir = scratch(doc_of(where), checkout=checkout)
