@@ -373,15 +373,6 @@ def until() -> Callable[[Callable[[], bool]], None]:
     return wait
 
 
-@pytest.fixture(scope="session")
-def mypy_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """One mypy cache for the suite's ``mypy --strict`` runs of a user's program: each
-    checks roomba_bt itself first (about 20 s of CPU); with one cache the second run reads
-    roomba_bt's analysis from the first. The cache holds only what mypy derived from the
-    same files with the same options, so what each run reports is unchanged."""
-    return tmp_path_factory.mktemp("mypy-cache")
-
-
 #: What :func:`pipe_read` gives: the reader's result (or what it raised) and whether it
 #: opened the pipe.
 PipeRead = Callable[[Path, Callable[[], object]], tuple[object, bool]]

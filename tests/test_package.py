@@ -81,25 +81,82 @@ def test_the_packages_example_runs_as_help_shows_it() -> None:
     assert f"```pycon\n{textwrap.dedent(session)}\n```" in docs  # the docs show the same
 
 
-def test_the_packages_example_type_checks_as_a_user_copies_it(
-    tmp_path: Path, mypy_cache: Path
-) -> None:
-    """The example called ``.label`` on ``summary.final_mode``, which is None when no robot
-    answered: a user who copied it into a program got ``mypy --strict``'s union-attr error
-    (the package ships ``py.typed``). Its lines, as a file, pass ``mypy --strict``."""
+#: An embedder's program, as mypy --strict found it: ``interrupt.summary`` is a RunSummary (a
+#: bare KeyboardInterrupt has none), a name the package does not have is an error, not Any (the
+#: package's ``__getattr__`` made every name Any to a type checker), ``stack.ticks()`` is a
+#: generator a program may close, ``RobotHandle`` and ``NoAnswer`` are the package's. Two
+#: mistakes planted (in tests/runtime/test_library_api.py until session 42).
+TYPED = """\
+import roomba_bt
+
+def run(stack: roomba_bt.RunStack) -> roomba_bt.RunSummary:
+    try:
+        return stack.run()
+    except roomba_bt.Interrupted as interrupt:
+        print(interrupt.summary.outcome)
+        planted: int = interrupt.summary
+        raise
+
+def step(stack: roomba_bt.RunStack, robot: roomba_bt.RobotHandle) -> float:
+    steps = stack.ticks()
+    time = next(steps).time + robot.snapshot.time
+    steps.close()  # a generator to mypy (typed Iterator, it had no close())
+    return time
+
+try:
+    roomba_bt.Connection.open("/dev/ttyUSB0").start()
+except roomba_bt.NoAnswer as silent:
+    print(silent.likely_causes)
+
+roomba_bt.RunStak
+"""
+
+
+@pytest.fixture(scope="module")
+def strict_mypy(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
+    """``mypy --strict`` over the programs of this module's tests, in one process: what it
+    said of each (its lines naming that file), and its last line. Each run checks roomba_bt
+    itself first, about 11 s of CPU where the suite runs without PYTHONPATH (as ``make test``
+    does): two runs in two test files (two workers, two caches) cost it twice."""
     pytest.importorskip("mypy", reason="the test extra: pip install 'roomba-bt[test]'")
     assert roomba_bt.__doc__ is not None
     example = doctest.DocTestParser().get_doctest(roomba_bt.__doc__, {}, "roomba_bt", str(INIT), 0)
-    program = tmp_path / "user.py"
-    program.write_text("".join(step.source for step in example.examples))
+    folder = tmp_path_factory.mktemp("typed")
+    programs = {"user.py": "".join(step.source for step in example.examples), "typed.py": TYPED}
+    for name, text in programs.items():
+        (folder / name).write_text(text)
     checkout = INIT.parents[1]  # this roomba_bt, not another one installed in the venv
     env = {"MYPYPATH": str(checkout)} if (checkout / "pyproject.toml").is_file() else {}
     done = subprocess.run(
-        [sys.executable, "-m", "mypy", "--strict", "--cache-dir", str(mypy_cache),
-         program.name],
-        capture_output=True, text=True, timeout=300, cwd=tmp_path, env={**os.environ, **env},
+        [sys.executable, "-m", "mypy", "--strict", "--cache-dir", str(folder / "cache"), *programs],
+        capture_output=True, text=True, timeout=300, cwd=folder, env={**os.environ, **env},
     )  # fmt: skip
-    assert done.returncode == 0, done.stdout + done.stderr
+    lines = done.stdout.splitlines()
+    said = {name: "\n".join(x for x in lines if x.startswith(f"{name}:")) for name in programs}
+    return {**said, "end": (lines or [""])[-1], "all": done.stdout + done.stderr}
+
+
+def test_the_packages_example_type_checks_as_a_user_copies_it(strict_mypy: dict[str, str]) -> None:
+    """The example called ``.label`` on ``summary.final_mode``, which is None when no robot
+    answered: a user who copied it into a program got ``mypy --strict``'s union-attr error
+    (the package ships ``py.typed``). Its lines, as a file, pass ``mypy --strict``: nothing
+    said of it, in a run that checked it (two files: :data:`TYPED` beside it)."""
+    assert strict_mypy["user.py"] == "", strict_mypy["all"]
+    assert strict_mypy["end"].endswith("(checked 2 source files)"), strict_mypy["all"]
+
+
+def test_the_typed_interrupt_pattern_passes_mypy_strict(strict_mypy: dict[str, str]) -> None:
+    """:data:`TYPED`: the two planted mistakes are mypy's only findings (an embedder's mypy
+    --strict findings, each mended, would be a third). roomba_bt's own modules are checked by
+    ``make typecheck`` with every extra installed (from an sdist without them, mypy finds no
+    matplotlib for the modules that import it, and says so there)."""
+    said = strict_mypy["typed.py"].splitlines()
+    errors = [line.split(": error: ", 1)[1] for line in said if ": error: " in line]
+    assert errors == [  # the two planted mistakes, and nothing else
+        'Incompatible types in assignment (expression has type "RunSummary", variable has type '
+        '"int")  [assignment]',
+        'Module has no attribute "RunStak"; maybe "RunStack"?  [attr-defined]',
+    ], strict_mypy["all"]
 
 
 def test_an_unknown_name_is_an_attribute_error() -> None:

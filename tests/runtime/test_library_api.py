@@ -13,7 +13,6 @@ import os
 import signal
 import subprocess
 import sys
-import textwrap
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -789,60 +788,3 @@ def test_signatures_show_a_shipped_profile_by_its_name() -> None:
 
     custom = dataclasses.replace(CREATE2, max_velocity_mm_s=300)
     assert repr(custom).startswith("RobotProfile(name='create2', ") and "300" in repr(custom)
-
-
-def test_the_typed_interrupt_pattern_passes_mypy_strict(tmp_path: Path, mypy_cache: Path) -> None:
-    """``interrupt.summary`` is a RunSummary to mypy (a bare KeyboardInterrupt has none), and
-    a name the package does not have is an error, not Any (the package's ``__getattr__``
-    made every name Any to a type checker); ``stack.ticks()`` is a generator a program may
-    close, and ``RobotHandle`` and ``NoAnswer`` are the package's (an embedder's mypy
-    --strict findings)."""
-    program = tmp_path / "typed.py"
-    program.write_text(
-        textwrap.dedent("""\
-        import roomba_bt
-
-        def run(stack: roomba_bt.RunStack) -> roomba_bt.RunSummary:
-            try:
-                return stack.run()
-            except roomba_bt.Interrupted as interrupt:
-                print(interrupt.summary.outcome)
-                planted: int = interrupt.summary
-                raise
-
-        def step(stack: roomba_bt.RunStack, robot: roomba_bt.RobotHandle) -> float:
-            steps = stack.ticks()
-            time = next(steps).time + robot.snapshot.time
-            steps.close()  # a generator to mypy (typed Iterator, it had no close())
-            return time
-
-        try:
-            roomba_bt.Connection.open("/dev/ttyUSB0").start()
-        except roomba_bt.NoAnswer as silent:
-            print(silent.likely_causes)
-
-        roomba_bt.RunStak
-    """)
-    )
-    mypy = Path(sys.executable).parent / "mypy"
-    if not mypy.exists():
-        pytest.skip("mypy is not installed beside this Python")
-    done = subprocess.run(
-        [str(mypy), "--strict", "--cache-dir", str(mypy_cache), str(program)], capture_output=True,
-        text=True,
-        timeout=300, cwd=tmp_path,
-        env={**os.environ, "MYPYPATH": str(Path(__file__).resolve().parents[2])},
-    )  # fmt: skip
-    # the program's errors: roomba_bt's own modules are checked by `make typecheck` with every
-    # extra installed (from an sdist without them, mypy finds no matplotlib for the modules
-    # that import it, and says so there)
-    errors = [
-        line.split(": error: ", 1)[1]
-        for line in done.stdout.splitlines()
-        if line.startswith("typed.py:") and ": error: " in line
-    ]
-    assert errors == [  # the two planted mistakes, and nothing else
-        'Incompatible types in assignment (expression has type "RunSummary", variable has type '
-        '"int")  [assignment]',
-        'Module has no attribute "RunStak"; maybe "RunStack"?  [attr-defined]',
-    ], done.stdout + done.stderr
