@@ -100,15 +100,17 @@ def test_a_roomba500_asleep_is_not_told_to_read_its_version_by_reset(tmp_path: P
 
 
 def _patrol(keep_awake: bool | None) -> tuple[RunSummary, Simulator]:
-    """The shipped patrol in the corridor from 19.5 % of charge: about 20 min of laps in
-    Safe, then the dock below 15 %, then 10 min on the charger in Passive: 30 min in all."""
+    """The shipped patrol in the corridor from 16 % of charge: about 4 min of laps in Safe,
+    then the dock below 15 %, then 10 min on the charger in Passive: 15 min in all (from
+    19.5 % until session 42: 20 min of laps before the same charge, 6 s of CPU a run, not 2;
+    the laps are the way onto the charger, what the tests look at is the charge after)."""
     from dataclasses import replace
 
     from roomba_bt.mission.shipped import shipped_missions
 
     params = {"laps": "1000", "charge_for": "10min"}
     mission = load_mission(shipped_missions()["patrol"], params)
-    world = replace(load_world("corridor"), battery=0.195)
+    world = replace(load_world("corridor"), battery=0.16)
     simulator = Simulator(world, CREATE2, 0)
     stack = RunStack(mission, SimLink(simulator), profile=CREATE2, timeout_s=3600.0,
                      keep_awake=keep_awake)  # fmt: skip
@@ -120,7 +122,7 @@ def _patrol(keep_awake: bool | None) -> tuple[RunSummary, Simulator]:
 def test_the_shipped_patrol_with_a_ten_minute_charge_wait_never_sleeps() -> None:
     summary, simulator = _patrol(None)
     assert summary.outcome is Outcome.SUCCESS, summary.reason
-    assert simulator.time >= 28 * 60, "half an hour, the last ten minutes on the charger"
+    assert simulator.time >= 14 * 60, "a quarter of an hour, the last ten minutes on the charger"
     assert simulator.charging
     assert [e for e in simulator.events if e.kind == "sleep"] == []
     assert simulator.brc_pulses >= 9, "a pulse a minute while it charged in Passive"
