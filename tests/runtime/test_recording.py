@@ -881,7 +881,7 @@ def test_a_record_names_the_roomba_bt_that_made_it_and_each_file_its_mission_cam
 
 
 def test_a_replay_that_differs_names_the_files_changed_since_the_record_was_made(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """An old record of a mission including the shipped undock library differed on replay
     once the library changed (``expected Drive ... sent Drive 0``), and nothing said why:
@@ -892,15 +892,15 @@ def test_a_replay_that_differs_names_the_files_changed_since_the_record_was_made
     argv = ["run", str(mission), "--fast", "--display", "none", "--record", str(record)]
     assert main(argv) == 0
     capsys.readouterr()
-    # the record as a previous release would have made it: another undock library
+    # the record as a previous release would have made it (0.2.0, replayed by a later one:
+    # 0.1.0 named no files) with another undock library
+    monkeypatch.setattr("roomba_bt.runtime.provenance.__version__", "0.3.0")
     lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
     header = json.loads(lines[0])
-    header["roomba_bt_version"] = "0.1.0"
+    header["roomba_bt_version"] = "0.2.0"
     header["sources"]["roomba-bt:lib/undock.yaml"] = "0" * 64
     record.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
     _mission_with_a_library(tmp_path, "150 mm/s")  # and the owner's library changed since
-    from roomba_bt import __version__
-
     assert main(["replay", str(record)]) == 1
     out = capsys.readouterr().out
     assert "replay: first difference at" in out
@@ -909,8 +909,8 @@ def test_a_replay_that_differs_names_the_files_changed_since_the_record_was_made
         f"replay: {moves} changed since this record was made: a difference may come from it" in out
     )
     assert (
-        f"replay: roomba-bt:lib/undock.yaml changed since this record was made (roomba-bt "
-        f"0.1.0 -> {__version__}): a difference may come from it" in out
+        "replay: roomba-bt:lib/undock.yaml changed since this record was made (roomba-bt "
+        "0.2.0 -> 0.3.0): a difference may come from it" in out
     )
     assert_quoted("docs/runtime.md", "replay: roomba-bt:lib/undock.yaml changed", out)
     assert str(mission.resolve()) not in out  # the mission file itself is as it was
