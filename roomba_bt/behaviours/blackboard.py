@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import py_trees
 
-from roomba_bt.behaviours.units import MARK, UnitError, ValueType, held
+from roomba_bt.behaviours.units import MARK, UnitError, ValueType, closest, held
 from roomba_bt.errors import RoombaBtError
 from roomba_bt.robot.interface import Odometry
 from roomba_bt.yamlsource import quoted
@@ -149,6 +149,7 @@ class RunBoard:
     __slots__ = (
         "__weakref__",
         "client",
+        "hints",
         "mission",
         "prefix",
         "running",
@@ -166,6 +167,9 @@ class RunBoard:
         #: the keys written this run that the mission does not declare, each warned of once,
         #: with who wrote it first and where (``" by 'writer' at plugin.py:12"``)
         self.said: dict[str, str] = {}
+        #: of those keys, the declared key each may be a misspelling of (`` (did you mean
+        #: 'dirt_level'?)``), "" for none: ``dirt_levl`` ran silently beside ``dirt_level``
+        self.hints: dict[str, str] = {}
         #: claimed and not yet ended (:meth:`ended`): its names are not another run's to take
         self.running = False
         #: the runtime's py_trees client, the snapshot's writer (:meth:`write_snapshot`),
@@ -339,6 +343,7 @@ class RunBoard:
         for name in self.names():
             storage.pop(name, None)
         self.said.clear()
+        self.hints.clear()
         self.written.clear()
 
 
@@ -508,6 +513,7 @@ def declare_keys(types: Mapping[str, ValueType]) -> None:
     board = _RUNNING.board
     py_trees.blackboard.Blackboard.storage[board.types_key] = dict(types)  # {}: still said
     board.said.clear()
+    board.hints.clear()
     board.written.clear()
     board.replace_client(types)
 
@@ -544,26 +550,35 @@ def undeclared_writes(board: RunBoard | None = None) -> tuple[tuple[str, str], .
     return tuple((board or _RUNNING.board).said.items())
 
 
+def undeclared_hinted(board: RunBoard) -> tuple[tuple[str, str, str], ...]:
+    """:func:`undeclared_writes` of ``board``'s run, each with the declared key it may be a
+    misspelling of (`` (did you mean 'dirt_level'?)``, "" for none): what ``run``'s summary
+    says and ``--strict`` counts."""
+    return tuple((key, where, board.hints.get(key, "")) for key, where in board.said.items())
+
+
 def _said_undeclared(
     board: RunBoard, key: str, writer: str, declared: Mapping[str, ValueType]
 ) -> None:
     """A warning, once a key a run, that ``writer`` wrote ``key``, which the mission's
-    ``blackboard:`` does not declare, and where (the line that called :func:`write_key`).
-    Written all the same, as a tree built in Python writes any key: nothing drives on it,
-    where an undeclared command (``UndeclaredCommand``) escapes the mode check and is
-    refused; but no ``check`` or ``@key`` of the mission can read it, no type holds it, and
-    the validator never saw it (a key a parameter names it checks: ``writes_keys``). A
-    misspelt key ran silently."""
+    ``blackboard:`` does not declare, and where (the line that called :func:`write_key`),
+    with the declared key it may be a misspelling of. Written all the same, as a tree built
+    in Python writes any key: nothing drives on it, where an undeclared command
+    (``UndeclaredCommand``) escapes the mode check and is refused; but no ``check`` or
+    ``@key`` of the mission can read it, no type holds it, and the validator never saw it
+    (a key a parameter names it checks: ``writes_keys``). A misspelt key ran silently."""
     caller = sys._getframe(2)  # write_key's caller: the plugin's line
     where = f" at {caller.f_code.co_filename}:{caller.f_lineno}"
     by = "" if writer == _MISSION_WRITER_NAME else f" by {writer!r}"
     board.said[key] = by + where
-    keys = ", ".join(sorted(declared)) or "none"
+    names = sorted(declared)
+    hint = board.hints[key] = closest(key, names)
+    keys = ", ".join(names) or "none"
     _log.warning(
-        "write_key(%r)%s%s: blackboard key %r is not declared by the mission (it declares: "
+        "write_key(%r)%s%s: blackboard key %r is not declared by the mission%s (it declares: "
         "%s), so no check or @%s of the mission reads it; declare it under blackboard: "
         "(%s: {type: ...}), or name a declared key in a parameter listed in writes_keys",
-        key, by, where, key, keys, key, key,
+        key, by, where, key, hint, keys, key, key,
     )  # fmt: skip
 
 

@@ -213,7 +213,8 @@ def _add_strict_option(run: argparse.ArgumentParser) -> None:
         run,
         "(nor reloaded by --watch); one that succeeded exits 7 if the mode guard refused any "
         "command, a command was dropped while the tree was stopped, or the robot fell out of "
-        "Safe/Full by itself (a cliff, a wheel drop; not onto a charger): the summary's strict "
+        "Safe/Full by itself (a cliff, a wheel drop; not onto a charger), or a behaviour wrote "
+        "a blackboard key the mission does not declare: the summary's strict "
         "line names each count and its first instance",
     )
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from roomba_bt.evaluate.episode import TRAPPED_RADIUS_MM, EpisodeResult
 from roomba_bt.printable import ANY_CONTROL, escaped
-from roomba_bt.runtime.summary import falls_in_order, falls_said, hazard_falls
+from roomba_bt.runtime.summary import falls_in_order, falls_said, hazard_falls, undeclared_said
 
 Z95 = 1.959963984540054
 #: How each figure of a summary and a comparison is computed, at what level: ``eval --json``
@@ -233,9 +233,7 @@ class Summary:
         episodes: ``write_key('secret') by 'probe' at lab.py:10: blackboard key 'secret' is
         not declared by the mission, in 3 of 20 episodes; ...``."""
         return [
-            f"write_key({key!r}){where}: blackboard key {key!r} is not declared by the mission, "
-            f"in {episodes} of {self.runs} episodes; declare it under blackboard: ({key}: "
-            "{type: ...}), or name a declared key in a parameter listed in writes_keys"
+            undeclared_said(key, where, episodes=f", in {episodes} of {self.runs} episodes")
             for key, where, episodes in self.undeclared
         ]
 

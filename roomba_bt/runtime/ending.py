@@ -26,7 +26,7 @@ from types import FrameType
 import py_trees
 
 from roomba_bt.behaviours.actions import last_said
-from roomba_bt.behaviours.blackboard import run_board, running_on
+from roomba_bt.behaviours.blackboard import run_board, running_on, undeclared_hinted
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.printable import duration_said
@@ -265,8 +265,10 @@ class RunEnding:
         """The summary's last figures, once the robot is stopped: the run's wall time, the
         last snapshot's (None: none came), the mode the robot was left in (and whether the
         stream showed it: packet 35), whether it ever answered, the hazard onsets never
-        confirmed, the parser's counters and the falls."""
+        confirmed, the parser's counters, the falls and the undeclared keys written (the
+        tree's ``terminate()`` calls too: this is after its stop)."""
         summary, connection = self.summary, self.connection
+        summary.undeclared_keys = undeclared_hinted(run_board())
         summary.wall_time_s = wall_time_s
         summary.take_last(last)
         summary.final_mode = mode_of(connection)

@@ -232,6 +232,18 @@ def times_said(count: int, what: str) -> str:
     return f"{count} {what}" if count == 1 else f"{count} {what}s"
 
 
+def undeclared_said(key: str, where: str, hint: str = "", episodes: str = "") -> str:
+    """The words of a write to an undeclared key, as ``run``'s summary and ``eval``'s say
+    it: ``write_key('dirt_levl') by 'probe' at lab.py:10: blackboard key 'dirt_levl' is not
+    declared by the mission (did you mean 'dirt_level'?); declare it ...``; ``episodes``:
+    eval's ``, in 3 of 20 episodes``. One text, so the two commands say it alike."""
+    return (
+        f"write_key({key!r}){where}: blackboard key {key!r} is not declared by the mission"
+        f"{hint}{episodes}; declare it under blackboard: ({key}: {{type: ...}}), or name a "
+        "declared key in a parameter listed in writes_keys"
+    )
+
+
 def first_said(instance: str) -> str:
     """`` (the first: t=3.330 blind_drive: ...)`` after a count; "" when the first is not
     known (a summary a program made itself)."""
@@ -350,6 +362,12 @@ class RunSummary:
     #: ``run --strict`` (``RunStack(..., strict=True)``): a run whose tree succeeded exits
     #: :attr:`ExitCode.STRICT` when :meth:`strict_findings` found anything
     strict: bool = False
+    #: each blackboard key a behaviour wrote that the mission does not declare, who wrote it
+    #: first and where, and the declared key it may be a misspelling of
+    #: (``("dirt_levl", " by 'probe' at lab.py:10", " (did you mean 'dirt_level'?)")``):
+    #: warned of during the run, said again by the summary (a log line scrolled away, and the
+    #: run succeeded), counted by :meth:`strict_findings`
+    undeclared_keys: tuple[tuple[str, str, str], ...] = ()
     distance_mm: float = 0.0
     #: a cycle the robot started by itself (a button, its schedule): it drove in Passive
     #: with no command of the run's, and how the stop ended it (runtime/ending.py
@@ -490,7 +508,9 @@ class RunSummary:
         """What ``--strict`` fails a successful run for, each with its count and its first
         instance: commands the mode guard refused, commands dropped while the tree was
         stopped, the robot's falls out of Safe/Full by itself (other than onto a
-        charger: :data:`EXPECTED_FALLS`). Empty for a clean run. A poor link (lost frames, checksum
+        charger: :data:`EXPECTED_FALLS`), blackboard keys written that the mission does not
+        declare (a plugin's misspelt key: the mission's own fault, as a refused command is,
+        which the run only warned of). Empty for a clean run. A poor link (lost frames, checksum
         failures, stalls ridden through) is left out on purpose: it is the cable's, not the
         mission's, and the summary's ``link`` and ``stalls`` lines say it."""
         found = []
@@ -505,6 +525,13 @@ class RunSummary:
         falls = hazard_falls(self.falls)
         if falls:
             found.append(f"{falls_said(falls)}{first_said(self.first_fall)}")
+        if self.undeclared_keys:
+            key, where, hint = self.undeclared_keys[0]
+            keys = times_said(len(self.undeclared_keys), "blackboard key")
+            found.append(
+                f"{keys} written that the mission does not declare (the first: "
+                f"write_key({key!r}){where}{hint})"
+            )
         return found
 
     def raise_for_outcome(self) -> RunSummary:
@@ -623,6 +650,7 @@ class RunSummary:
             f"battery      {self.battery_text()}",
             f"safe stop    {self.safe_stop}",
             *([f"record       {self.record_stopped}"] if self.record_stopped else []),
+            *[f"warning      {undeclared_said(*written)}" for written in self.undeclared_keys],
             *self.verdict_lines(),
         ]
         return [escaped(line, ANY_CONTROL) for line in lines]
@@ -638,7 +666,7 @@ class RunSummary:
                 docked = " but onto the charger" if self.falls else ""  # the others would fail
                 return [
                     "strict       passed: no command refused or dropped, no fall to Passive "
-                    f"by itself{docked}"
+                    f"by itself{docked}, no undeclared blackboard key written"
                 ]
             if self.outcome is Outcome.SUCCESS:
                 return [f"strict       FAILED (exit {int(ExitCode.STRICT)}): {'; '.join(findings)}"]

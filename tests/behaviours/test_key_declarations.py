@@ -265,21 +265,68 @@ class UndeclaredWriter(Action):
 '''
 
 
+def _writer_run(tmp_path: Path, plugin: str, keys: str) -> list[str]:
+    """``run``'s words for her ``m_w2.yaml``: ``plugin`` as ``bad.py``, the mission declaring
+    ``keys`` (YAML under ``blackboard:``) and running its writer after a log."""
+    (tmp_path / "bad.py").write_text(plugin)
+    mission = tmp_path / "m_w2.yaml"
+    mission.write_text(
+        f"mission: w2\nplugins: [./bad.py]\nblackboard:\n  {keys}\n"
+        "tree:\n  sequence:\n    - log: hi\n    - undeclared_writer\n"
+    )
+    return ["run", str(mission), "--fast", "--allow-plugin-files", "--display", "none"]
+
+
 def test_a_run_says_the_undeclared_write_and_still_succeeds(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     """Her ``m_w2.yaml``: SUCCESS with not a word. Warned, not refused: nothing drives on
     it (an undeclared command escapes the mode check, and is refused), but no reader in the
     mission can see it."""
-    (tmp_path / "bad.py").write_text(UNDECLARED_WRITER)
-    mission = tmp_path / "m_w2.yaml"
-    mission.write_text(
-        "mission: w2\nplugins: [./bad.py]\nblackboard:\n  x: int\n  y: int\n"
-        "tree:\n  sequence:\n    - log: hi\n    - undeclared_writer\n"
-    )
-    argv = ["run", str(mission), "--fast", "--allow-plugin-files", "--display", "none"]
+    argv = _writer_run(tmp_path, UNDECLARED_WRITER, "x: int\n  y: int")
     with caplog.at_level(logging.WARNING, logger="roomba_bt.mission"):
         assert main(argv) == ExitCode.OK
     [said] = _warnings(caplog)
     assert f"by 'undeclared_writer' at {tmp_path / 'bad.py'}:12: " in said
     assert "blackboard key 'secret' is not declared by the mission (it declares: x, y)" in said
+
+
+MISSPELT_WRITER = UNDECLARED_WRITER.replace('"secret"', '"dirt_levl"')
+
+
+def test_a_run_s_summary_says_the_undeclared_write_with_a_did_you_mean_and_strict_fails_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A plugin's misspelt key (``dirt_levl``, the mission declaring ``dirt_level``) was one
+    log line among the run's, the summary silent and ``--strict`` passing it: the summary
+    now says it as eval's does, with the key it may be, and ``--strict`` fails the run (the
+    mission's own fault, as a refused command is)."""
+    argv = _writer_run(tmp_path, MISSPELT_WRITER, "dirt_level: int\n  y: int")
+    with caplog.at_level(logging.WARNING, logger="roomba_bt.mission"):
+        assert main(argv) == ExitCode.OK
+    [logged] = _warnings(caplog)
+    assert "not declared by the mission (did you mean 'dirt_level'?) (it declares:" in logged
+    out = capsys.readouterr().out
+    where = f"by 'undeclared_writer' at {tmp_path / 'bad.py'}:12"
+    assert (
+        f"warning      write_key('dirt_levl') {where}: blackboard key 'dirt_levl' is not "
+        "declared by the mission (did you mean 'dirt_level'?); declare it under blackboard: "
+        "(dirt_levl: {type: ...}), or name a declared key in a parameter listed in writes_keys\n"
+    ) in out
+    assert main([*argv, "--strict"]) == ExitCode.STRICT
+    out, err = capsys.readouterr()
+    found = (
+        "1 blackboard key written that the mission does not declare (the first: "
+        f"write_key('dirt_levl') {where} (did you mean 'dirt_level'?))"
+    )
+    assert f"strict       FAILED (exit 7): {found}\n" in out
+    assert f"roomba-bt: --strict: {found}" in err
+
+
+def test_a_run_s_summary_gives_no_did_you_mean_for_a_key_like_none_declared(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = _writer_run(tmp_path, UNDECLARED_WRITER, "x: int")
+    assert main(argv) == ExitCode.OK
+    out = capsys.readouterr().out
+    assert "blackboard key 'secret' is not declared by the mission; declare it" in out

@@ -130,7 +130,8 @@ def test_a_clean_mission_passes_strict(tmp_path: Path, capsys: pytest.CaptureFix
                  "--strict"]) == 0  # fmt: skip
     out = capsys.readouterr().out
     assert (
-        "strict       passed: no command refused or dropped, no fall to Passive by itself\n"
+        "strict       passed: no command refused or dropped, no fall to Passive by itself, "
+        "no undeclared blackboard key written\n"
     ) in out
     assert main(["run", "dock", "--fast", "--display", "none", "--strict"]) == 0
     out = capsys.readouterr().out
@@ -138,7 +139,7 @@ def test_a_clean_mission_passes_strict(tmp_path: Path, capsys: pytest.CaptureFix
     assert "falls  " not in out  # a docking is not a fall to list (the soak: ten read as faults)
     assert (
         "strict       passed: no command refused or dropped, no fall to Passive by itself "
-        "but onto the charger\n" in out
+        "but onto the charger, no undeclared blackboard key written\n" in out
     )
 
 
