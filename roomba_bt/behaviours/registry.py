@@ -577,6 +577,16 @@ class Registry:
         declaration, entry = held
         return replace(declaration, name=f"{package}:{name}", origin=_origin(entry))
 
+    def served_by_package(self, name: str) -> str | None:
+        """The installed plugin that serves the behaviour ``name`` (``'nw' (roomba_bt_nw,
+        from roomba-bt-nw)``), None when none does (a built-in's name, a plugin file's, or
+        no behaviour at all): a mission's ``plugins:`` entry the package took over can go."""
+        self._ensure_loaded()
+        for held in self._packages.values():
+            if name in held:
+                return _origin(held[name][1])
+        return None
+
     def qualified(self) -> list[tuple[str, Declaration]]:
         """Every ``package:name`` a mission may write, the built-ins' (``roomba-bt:drive``)
         and each installed plugin's, with its declaration (:meth:`get`'s): what the JSON
@@ -713,6 +723,33 @@ def _origin(ep: EntryPoint, *, named: bool = True) -> str:
     when it has none, or ``named`` is False (:meth:`Registry._load_entry_point`)."""
     source = f", from {ep.dist.name}" if named and ep.dist else ""
     return f"{ep.name!r} ({ep.value}{source})"
+
+
+def names_declared_in(path: Path) -> list[str]:
+    """The behaviour names a plugin file declares as written in its source
+    (``@declare("near_wall", ...)``, ``declare_like(Parent, "name")``), read without
+    importing it: a file the caller did not allow to run may still be looked at, to say
+    that an installed package serves what it would have. Empty when it cannot be read or
+    parsed, or names none as a literal."""
+    import ast
+
+    try:
+        tree = ast.parse(path.read_bytes())
+    except (OSError, SyntaxError, ValueError):
+        return []
+    names = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Call):
+            continue
+        func = node.func
+        called = func.id if isinstance(func, ast.Name) else getattr(func, "attr", "")
+        args = node.args[1:] if called == "declare_like" else node.args
+        if called not in ("declare", "declare_like") or not args:
+            continue
+        first = args[0]
+        if isinstance(first, ast.Constant) and isinstance(first.value, str):
+            names.append(first.value)
+    return names
 
 
 def class_where(cls: type) -> str:

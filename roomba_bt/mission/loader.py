@@ -50,6 +50,7 @@ from typing import Any, Protocol
 import yaml
 
 from roomba_bt.behaviours.language import WORDS
+from roomba_bt.behaviours.registry import Registry, names_declared_in
 from roomba_bt.behaviours.units import (
     ANY,
     STR,
@@ -480,7 +481,7 @@ class Loader:
         if allowed and any(target.is_relative_to(root) for root in roots):
             return False
         said = _outside_message(what, text, target, roots, wording) if allowed else None
-        self.ctx.error(iloc.at(said or _not_allowed(text, wording, target)))
+        self.ctx.error(iloc.at(said or _not_allowed(text, wording, target, self.ctx.registry)))
         return True
 
     def _again(self, target: Path, text: str, iloc: Loc) -> bool:
@@ -947,14 +948,27 @@ def record_declared(node: yaml.Node, _key_loc: Loc, loc: Loc) -> ValueType:
     )  # fmt: skip
 
 
-def _not_allowed(text: str, wording: Wording, target: Path) -> str:
+def _not_allowed(text: str, wording: Wording, target: Path, registry: Registry) -> str:
     """Why a plugin file is not imported without the caller's permission, and how to give it;
     for a module's name, which no permission would import, that it is none
-    (:func:`_module_named`)."""
-    return _module_named(text, target) or (
-        f"plugin file {path_written(text)} not loaded: a mission file cannot run code on its "
-        f"own; allow its plugin files with {wording.allow_plugin_files} (or install the plugin "
-        "as a package)"
+    (:func:`_module_named`). Where installed packages serve every behaviour the file declares
+    (read from its source, not run), that the entry can go: "or install the plugin as a
+    package" told a user who had installed it to do so."""
+    named = _module_named(text, target)
+    if named:
+        return named
+    said = f"plugin file {path_written(text)} not loaded: a mission file cannot run code on its own"
+    names = names_declared_in(target)
+    served = {name: registry.served_by_package(name) for name in names}
+    if names and all(served.values()):
+        packages = "; ".join(f"{name} by {origin}" for name, origin in served.items())
+        return (
+            f"{said}, and need not: installed plugins serve what it declares ({packages}); "
+            f"take {path_written(text)} out of the mission's plugins:"
+        )
+    return (
+        f"{said}; allow its plugin files with {wording.allow_plugin_files} (or install the "
+        "plugin as a package)"
     )
 
 

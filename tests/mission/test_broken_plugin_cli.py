@@ -347,3 +347,32 @@ def test_validate_s_json_and_github_formats_say_a_plugin_that_did_not_load(
         "; a mission cannot use the behaviours of plugin 's29_broken' "
         "(s29_broken, from bt-s29-broken)"
     ), annotation
+
+
+def test_a_plugin_file_an_installed_package_serves_is_told_it_can_go(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """A mission that kept its ``plugins:`` line after the plugin was installed as a package
+    was told "(or install the plugin as a package)": it is installed. Now the entry is told
+    it can go (the file read, not run); a file declaring a name no package serves is told
+    as before."""
+    _installed(tmp_path, monkeypatch, ("bt-s29-sound", "s29_sound", WORKING), compiler_too=True)
+    (tmp_path / "sound.py").write_text(WORKING)
+    (tmp_path / "other.py").write_text(WORKING.replace('"s29_sound"', '"s29_other"'))
+    mission = tmp_path / "m.yaml"
+    mission.write_text("mission: m\nplugins: [./sound.py, ./other.py]\ntree: s29_sound\n")
+    for command in (["validate"], ["run", "--fast", "--display", "none"]):
+        assert main([*command, str(mission)]) == 2
+        out, err = capsys.readouterr()
+        said = out + err
+        assert (
+            "m.yaml:2:11: plugin file './sound.py' not loaded: a mission file cannot run code "
+            "on its own, and need not: installed plugins serve what it declares (s29_sound by "
+            "'s29_sound' (s29_sound, from bt-s29-sound)); take './sound.py' out of the "
+            "mission's plugins:"
+        ) in said, said
+        assert (
+            "m.yaml:2:23: plugin file './other.py' not loaded: a mission file cannot run code "
+            "on its own; allow its plugin files with --allow-plugin-files (or install the "
+            "plugin as a package)"
+        ) in said, said
