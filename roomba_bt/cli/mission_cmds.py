@@ -49,7 +49,7 @@ from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.behaviours.declare import Declaration, Param
-    from roomba_bt.behaviours.registry import Registry
+    from roomba_bt.behaviours.registry import PluginError, Registry
     from roomba_bt.mission.compiler import MissionText
     from roomba_bt.mission.diagnostics import Diagnostic
 
@@ -747,12 +747,31 @@ def _unknown_behaviour(name: str, registry: Registry) -> str:
     plugins = escaped(", ".join(error.plugin for error in likely[:3]), ANY_CONTROL)
     if len(likely) > 3:
         plugins += f" and {len(likely) - 3} more"
+    if declares and all(error.refused for error in likely):
+        return f"{said}: {_half_loaded(likely, registry)}"
     if declares:
         return f"{said}: it is declared by plugin {plugins}, which did not load (below)"
     hint = closest(name, registry.names())
     if likely:
         return f"{said}{hint}; perhaps of a plugin that did not load (below): {plugins}"
     return f"{said}{hint}; a plugin file's are listed with --plugin-file FILE"
+
+
+def _half_loaded(declaring: list[PluginError], registry: Registry) -> str:
+    """Of the plugins whose refused class declares the name, each loaded in part (its other
+    classes registered): what loaded and what was refused, ``it is declared by plugin 'x'
+    (...), which loaded in part: loaded fine_a, fine_b; refused 'typo_str' (below)``. It said
+    the plugin "did not load", and the user found its other behaviours listed."""
+    said = []
+    for plugin in dict.fromkeys(error.plugin for error in declaring):
+        loaded = [d.name for d in registry if d.origin == plugin]
+        refused = [e.refused for e in registry.errors if e.plugin == plugin and e.refused]
+        said.append(
+            f"it is declared by plugin {escaped(plugin, ANY_CONTROL)}, which loaded in part: "
+            f"loaded {', '.join(loaded) or 'none'}; refused "
+            f"{escaped(', '.join(refused), ANY_CONTROL)} (below)"
+        )
+    return "; ".join(said)
 
 
 def _print_behaviour(entry: dict[str, Any]) -> None:

@@ -299,9 +299,11 @@ def test_behaviours_of_a_name_a_plugin_that_did_not_load_declares_says_so_as_err
     assert main(["behaviours", "s36_bad"]) == 2
     err = capsys.readouterr().err
     lines = err.splitlines()
+    # half loaded: what loaded said beside what was refused (it said "did not load")
     assert lines[0] == (
         f"roomba-bt behaviours: unknown behaviour 's36_bad': it is declared by plugin {LST}, "
-        "which did not load (below)"
+        "which loaded in part: loaded s36_ok; refused 'not a class', class Helper, 's36_bad' "
+        "(below)"
     ), err
     said = f"roomba-bt behaviours: error: plugin {LST}: "
     assert [line[len(said) :][:6] for line in lines[1:4]] == ["item 2", "item 4", "Bad (/"], err
