@@ -275,3 +275,20 @@ def test_the_package_of_section_5_builds_and_serves_near_wall(
     )  # fmt: skip
     assert ran.returncode == 0, ran.stdout[-2000:] + ran.stderr[-2000:]
     assert "outcome      SUCCESS" in ran.stdout
+
+
+def test_the_page_lists_every_parameter_type_a_declaration_takes() -> None:
+    """The page's list of parameter types is the one table's (``VALUE_TYPES``, which the
+    declaration error lists): it left out ``RADIUS`` and ``MARK``, and neither could be
+    imported from ``roomba_bt.behaviours``, the place the page and the error's "write
+    RADIUS (from roomba_bt.behaviours import RADIUS)" send the reader."""
+    import roomba_bt.behaviours as behaviours
+    from roomba_bt.behaviours.units import VALUE_TYPES
+
+    text = DOC.read_text(encoding="utf-8")
+    listing = text.split("Parameter types (all in `roomba_bt.behaviours`): ", 1)[1]
+    listing = listing.split('and `enum("a", "b")`', 1)[0]
+    listed = re.findall(r"`([A-Z]+)`", re.sub(r"\([^()]*\)", "", listing))
+    assert listed == [vtype.name.upper() for vtype in VALUE_TYPES.values()]
+    for name in listed:
+        assert getattr(behaviours, name) is VALUE_TYPES[name.lower()], name
