@@ -61,11 +61,15 @@ class StreamClock:
         gap = schedule.gap(arrival, self.tick)
         ride = self._ride
         restart = gap >= UNREAD_GAP_SECONDS or ride.gap_explained
-        if gap >= UNREAD_GAP_SECONDS and not ride.gap_explained:
-            unread_gap(self._summary, self._connection.name, gap, ride.blocked)
-        ride.gap_explained = False
-        ride.blocked = None
+        unread = gap >= UNREAD_GAP_SECONDS and not ride.gap_explained
+        blocked, ride.gap_explained, ride.blocked = ride.blocked, False, None
         slots = schedule.late_batch(count, arrival, self.tick, restart)
+        if unread:
+            # stamped with the batch's time, the gap's end, when it is said: the run's clock
+            # (mission_time_now) still read the tick before it, and a blocked tick's gap came
+            # out before the tick guard's line from inside that tick (t=1.140, then t=0.900)
+            at = (self.tick + slots - self.held_slots) * SLOT_SECONDS
+            unread_gap(self._summary, self._connection.name, gap, blocked, at)
         if slots > count:
             self._summary.frames_lost += slots - count
         return slots
@@ -76,6 +80,7 @@ def unread_gap(
     link: str,
     gap: float,
     blocked: tuple[float, str, bool, str] | None = None,
+    at: float | None = None,
 ) -> None:
     """No frame was read for ``gap`` seconds and the watchdog did not trip: the process did
     not run (a laptop suspended, SIGSTOP, a host starved of CPU), or the watchdog is off and
@@ -91,27 +96,30 @@ def unread_gap(
     that tick's, where it said the process was suspended or starved of CPU. Said as such,
     and not counted as unread (the summary's tick guard line counts a halt): it said the
     process was suspended or starved and the robot went on with its last command, whenever
-    the block came out a second or more."""
+    the block came out a second or more.
+
+    ``at``: the mission time the gap ended, the line's stamp (None: the run's clock now)."""
+    stamp = None if at is None else {"mission_time": at}
     if blocked is not None:
         if blocked[3]:
             log.warning(
                 "%s: no frame was read for %.2f s: a tick blocked (%s) while %s could drive "
                 "it: the cycle went on driving, unwatched, until the tick returned (the tick "
                 "guard does not end a built-in cycle)",
-                link, gap, blocked[1], blocked[3],
+                link, gap, blocked[1], blocked[3], extra=stamp,
             )  # fmt: skip
             return
         if not blocked[2]:
             log.warning(
                 "%s: no frame was read for %.2f s: a tick blocked (%s) with nothing moving: "
                 "the robot stood still until it returned (the tick guard had nothing to stop)",
-                link, gap, blocked[1],
+                link, gap, blocked[1], extra=stamp,
             )  # fmt: skip
             return
         log.warning(
             "%s: no frame was read for %.2f s: a tick blocked (%s); the tick guard had sent "
             "drive 0 once it had run %.2f s, and the wheels stood still until it returned",
-            link, gap, blocked[1], blocked[0],
+            link, gap, blocked[1], blocked[0], extra=stamp,
         )  # fmt: skip
         return
     summary.unread_gaps += 1
@@ -119,7 +127,7 @@ def unread_gap(
     log.warning(
         "%s: no frame was read for %.2f s (the process suspended or starved of CPU, or the "
         "robot silent with the watchdog off); the robot went on with its last command "
-        "meanwhile", link, gap,
+        "meanwhile", link, gap, extra=stamp,
     )  # fmt: skip
 
 

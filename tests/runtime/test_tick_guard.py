@@ -399,6 +399,12 @@ def test_the_gap_a_blocked_tick_leaves_is_said_as_the_guards(
     assert "a tick blocked (stuck (Stuck.update at " in said[0]
     assert "the tick guard had sent drive 0" in said[0]
     assert "suspended" not in said[0] and "went on with its last command" not in said[0]
+    # stamped when it is said, at the gap's end (the next tick's time, 2 s on), not with the
+    # blocked tick's own time: it came out after the guard's line from inside that tick with
+    # an earlier stamp (t=1.140 "a tick ran over", then t=0.900 "no frame was read")
+    [gap] = [r for r in caplog.records if "no frame was read" in r.getMessage()]
+    stamp = getattr(gap, "mission_time", None)
+    assert stamp is not None and 2.0 <= stamp <= summary.mission_time_s, (stamp, str(summary))
 
 
 #: a leaf that blocks its first tick with nothing moving (Safe, no drive yet) until the test's
