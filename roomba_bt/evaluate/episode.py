@@ -256,6 +256,10 @@ class EpisodeResult:
     #: and where (:func:`~roomba_bt.behaviours.blackboard.undeclared_writes`): the warning a
     #: run says, which an episode's silenced log does not; the summary says it once
     undeclared: tuple[tuple[str, str], ...] = ()
+    #: each action of the user's own code whose commands the mode guard refused, with its
+    #: class and where (:attr:`~roomba_bt.runtime.summary.RunSummary.refused_actions`): what
+    #: ``run`` tells its author on stderr, which the summary says once for the episodes
+    refused_actions: tuple[tuple[str, str], ...] = ()
     #: the mission's last words (the run summary's ``mission said`` line, "" for none): which
     #: way it ended, so a patrol's "laps done" and its "docked on a low battery", both a
     #: SUCCESS, are told apart in a sweep's records and report
@@ -662,6 +666,14 @@ def _named_as_given(spec: EpisodeSpec, said: str) -> str:
     return said.replace(f"{copy}{os.sep}", "" if given == "." else f"{given}{os.sep}")
 
 
+def _pairs_as_given(
+    spec: EpisodeSpec, pairs: Iterable[tuple[str, str]]
+) -> tuple[tuple[str, str], ...]:
+    """Each ``(name, where)`` with its file named as the evaluation was given it
+    (:func:`_named_as_given`): an undeclared key's writer, a refused action's class."""
+    return tuple((name, _named_as_given(spec, where)) for name, where in pairs)
+
+
 def _measured(
     spec: EpisodeSpec,
     world: World,
@@ -714,9 +726,8 @@ def _measured(
         worker=f"{socket.gethostname()}:{os.getpid()}",
         coverage=_coverage(simulator, spec.start_area or ""),
         keys=final_values(spec.keys, board),
-        undeclared=tuple(
-            (key, _named_as_given(spec, where)) for key, where in undeclared_writes(board)
-        ),
+        undeclared=_pairs_as_given(spec, undeclared_writes(board)),
+        refused_actions=_pairs_as_given(spec, summary.refused_actions),
         said=summary.said,
         profile=spec.profile,
         slowest_in=_named_as_given(spec, summary.slowest_in),

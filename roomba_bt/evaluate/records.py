@@ -38,7 +38,11 @@ text in CSV; empty or absent: none, or a file written before it was recorded): t
 sleepy.py:11)``, as the report's ``slowest tick ... in ...`` warning and ``--json``'s
 ``slow_ticks`` name it) and ``slowest_tick`` that tick's host seconds; empty (null) for an
 episode no behaviour held, in files written before they were recorded, and under
-``--reproducible`` (measured on the host, as ``wall_time`` is).
+``--reproducible`` (measured on the host, as ``wall_time`` is). ``refused_actions`` holds each
+action of the user's own code (a plugin's) whose commands the mode guard refused, with its
+class and where it is defined (``{"passive_drive": "PassiveDrive (lab.py:7)"}``; its JSON text
+in CSV; empty or absent: none, or a file written before it was recorded): what ``run`` tells
+its author on stderr, which the summary says again.
 
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
@@ -134,6 +138,7 @@ COLUMNS: dict[str, tuple[str, str, Allowed]] = {
     "undeclared_keys": ("undeclared", "undeclared", None),
     "slowest_tick": ("slowest_tick_s", "float?", AT_LEAST_0),
     "slowest_tick_in": ("slowest_in", "str?", None),
+    "refused_actions": ("refused_actions", "refused", None),
 }
 
 #: the coverage columns (empty when the episode did not clean): name -> (Coverage field,
@@ -200,7 +205,7 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
             value = dict(value)
         elif kind == "hazard falls":
             value = sum(hazard_falls(dict(value)).values())
-        elif kind == "undeclared":
+        elif kind in ("undeclared", "refused"):
             value = dict(value)
         out[column] = value
     if not result.slowest_in:  # no behaviour held its ticks: no such tick, not one of 0 s
@@ -370,6 +375,7 @@ _EXPECTED = {
     "falls total": "a whole number or null", "hazard falls": "a whole number or null",
     "falls by cause": "an object of cause: count, or null",
     "undeclared": "an object of key: writer, or null",
+    "refused": "an object of action: its class and where, or null",
     "coverage": "a finite number or null", "coverage text": "a string or null",
     "coverage by area": "an object of area: fraction, or null",
     "coverage curve": "a list of [t, fraction], or null",
@@ -388,6 +394,7 @@ _JSON_TYPES: dict[str, frozenset[type]] = {
     "bool": frozenset({bool}), "outcome": frozenset({str}), "params": frozenset({dict}),
     "falls total": frozenset({int, _NONE}), "hazard falls": frozenset({int, _NONE}),
     "falls by cause": frozenset({dict, _NONE}), "undeclared": frozenset({dict, _NONE}),
+    "refused": frozenset({dict, _NONE}),
     "coverage": _NUMBER | {_NONE}, "coverage text": frozenset({str, _NONE}),
     "coverage by area": frozenset({dict, _NONE}), "coverage curve": frozenset({list, _NONE}),
     "provenance text": frozenset({str, _NONE}), "provenance map": frozenset({dict, _NONE}),
@@ -542,8 +549,8 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
             except (TypeError, ValueError):  # "-1 is not a count of falls" named no column
                 _bad(column, kind, record.get(column))
             continue
-        if kind == "undeclared":
-            values[name] = _undeclared(record.get(column))
+        if kind in ("undeclared", "refused"):
+            values[name] = _undeclared(record.get(column), column, _EXPECTED[kind])
             continue
         raw = record[column]
         try:
@@ -622,17 +629,20 @@ def _falls_add_up(record: dict[str, Any], causes: dict[str, int]) -> None:
                              f"{total}")  # fmt: skip
 
 
-def _undeclared(raw: Any) -> tuple[tuple[str, str], ...]:
-    """``undeclared_keys`` as :attr:`EpisodeResult.undeclared`: an object in JSON Lines, its
-    JSON text in a CSV cell (who wrote a key, ``by 'probe' at lab.py:17``, may hold any
-    separator); none when the column is empty or absent (a file written before it was
-    recorded: its summary then has no warning the episodes would have said)."""
+def _undeclared(
+    raw: Any, column: str = "undeclared_keys", expected: str = "an object of key: writer"
+) -> tuple[tuple[str, str], ...]:
+    """``undeclared_keys`` as :attr:`EpisodeResult.undeclared` (and ``refused_actions`` as
+    :attr:`EpisodeResult.refused_actions`): an object in JSON Lines, its JSON text in a CSV
+    cell (who wrote a key, ``by 'probe' at lab.py:17``, may hold any separator); none when
+    the column is empty or absent (a file written before it was recorded: its summary then
+    has no warning the episodes would have said)."""
     if raw is None or raw == "":
         return ()
     if isinstance(raw, str):
         raw = json.loads(raw)
     if not isinstance(raw, dict):
-        raise ValueError(f"undeclared_keys {raw!r}: expected an object of key: writer")
+        raise ValueError(f"{column} {raw!r}: expected {expected.removesuffix(', or null')}")
     return tuple((str(key), str(where)) for key, where in raw.items())
 
 
@@ -740,11 +750,12 @@ class PartialResults:
 
 def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
     """The record's structured values as CSV cells (``None`` is an empty cell already)."""
-    undeclared = record["undeclared_keys"]
+    undeclared, refused = record["undeclared_keys"], record["refused_actions"]
     cells = {
         "params": ";".join(f"{k}={v}" for k, v in record["params"].items()),
         "falls_by_cause": ";".join(f"{c}={n}" for c, n in record["falls_by_cause"].items()),
         "undeclared_keys": json.dumps(undeclared) if undeclared else "",  # a writer's ; and =
+        "refused_actions": json.dumps(refused) if refused else "",
     }
     if record.get("sources") is not None:
         cells["sources"] = ";".join(f"{n}={d}" for n, d in record["sources"].items())

@@ -13,12 +13,18 @@ from __future__ import annotations
 import math
 import re
 from collections import Counter
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.evaluate.episode import TRAPPED_RADIUS_MM, EpisodeResult
 from roomba_bt.printable import ANY_CONTROL, escaped
-from roomba_bt.runtime.summary import falls_in_order, falls_said, hazard_falls, undeclared_said
+from roomba_bt.runtime.summary import (
+    YOUR_ACTION_FIX,
+    falls_in_order,
+    falls_said,
+    hazard_falls,
+    undeclared_said,
+)
 
 Z95 = 1.959963984540054
 #: How each figure of a summary and a comparison is computed, at what level: ``eval --json``
@@ -134,6 +140,10 @@ class Summary:
     #: where, and the episodes it was written in (:attr:`EpisodeResult.undeclared`): said
     #: once, where each episode's run would have warned of it
     undeclared: tuple[tuple[str, str, int], ...] = ()
+    #: each action of the user's own code whose commands the mode guard refused, its class
+    #: and where, and the episodes (:attr:`EpisodeResult.refused_actions`): said once, with
+    #: the fix ``run`` tells on stderr
+    refused_actions: tuple[tuple[str, str, int], ...] = ()
     #: each behaviour an episode's slowest tick was in where behaviours held the ticks on the
     #: wall clock (:attr:`EpisodeResult.slowest_in`), the slowest of those ticks (host
     #: seconds) and the episodes: said once, as ``run`` names its slowest tick's behaviour
@@ -190,7 +200,8 @@ class Summary:
             ),
         ]
         slow = self.slow_said() if self.timings else []  # measured on the host: see timings
-        out += [f"warning      {said}" for said in (*self.undeclared_said(), *slow)]
+        said = (*self.undeclared_said(), *self.refused_said(), *slow)
+        out += [f"warning      {line}" for line in said]
         if self.endings:
             out.append("successes    by what the mission said last")
             out += [
@@ -235,6 +246,17 @@ class Summary:
         return [
             undeclared_said(key, where, episodes=f", in {episodes} of {self.runs} episodes")
             for key, where, episodes in self.undeclared
+        ]
+
+    def refused_said(self) -> list[str]:
+        """Each action of the user's own code whose commands the mode guard refused, in how
+        many of the episodes, and what its author does about it: ``the mode guard refused
+        commands of passive_drive (PassiveDrive (lab.py:7)), your code, in 3 of 20 episodes:
+        an action that drives checks self.snapshot.mode ...`` (``run``'s stderr says it)."""
+        return [
+            f"the mode guard refused commands of {name} ({where}), your code, in {episodes} of "
+            f"{self.runs} episodes: {YOUR_ACTION_FIX}"
+            for name, where, episodes in self.refused_actions
         ]
 
     def slow_said(self) -> list[str]:
@@ -334,6 +356,10 @@ class Summary:
                 {"key": key, "written": where.strip(), "episodes": episodes}
                 for key, where, episodes in self.undeclared
             ],
+            "refused_actions": [
+                {"action": name, "where": where, "episodes": episodes}
+                for name, where, episodes in self.refused_actions
+            ],
             "slow_ticks": [
                 {"in": where, "slowest_tick": slowest, "episodes": episodes}
                 for where, slowest, episodes in self.slow_ticks
@@ -356,6 +382,20 @@ def tidy(value: object, digits: int = 10) -> object:
     return value
 
 
+def _with_episodes(
+    per_episode: Iterable[tuple[tuple[str, str], ...]],
+) -> tuple[tuple[str, str, int], ...]:
+    """Each name of the episodes' ``(name, where)`` pairs (an undeclared key and its writer,
+    a refused action and its class), once, in the order first met: where the first episode
+    that had it says, and the episodes it is in."""
+    found: dict[str, tuple[str, int]] = {}
+    for pairs in per_episode:
+        for name, where in pairs:
+            first, episodes = found.get(name, (where, 0))
+            found[name] = (first, episodes + 1)
+    return tuple((name, where, n) for name, (where, n) in found.items())
+
+
 def summarize(
     mission: str, world: str, results: Sequence[EpisodeResult], profile: str = ""
 ) -> Summary:
@@ -371,11 +411,6 @@ def summarize(
         falls.update(dict(r.falls))
         episodes_by_cause.update(cause for cause, _ in r.falls)
     in_order = falls_in_order(falls)
-    undeclared: dict[str, tuple[str, int]] = {}  # the first episode's writer, the episodes
-    for r in results:
-        for key, where in r.undeclared:
-            first, episodes = undeclared.get(key, (where, 0))
-            undeclared[key] = (first, episodes + 1)
     slow: dict[str, tuple[float, int]] = {}  # the slowest tick in it, the episodes
     for r in results:
         if r.slowest_in:
@@ -403,7 +438,8 @@ def summarize(
         episodes_with_falls=sum(1 for r in results if r.falls),
         episodes_with_falls_by_cause=tuple((c, episodes_by_cause[c]) for c, _ in in_order),
         episodes_with_hazard_falls=sum(1 for r in results if hazard_falls(dict(r.falls))),
-        undeclared=tuple((key, where, n) for key, (where, n) in undeclared.items()),
+        undeclared=_with_episodes(r.undeclared for r in results),
+        refused_actions=_with_episodes(r.refused_actions for r in results),
         slow_ticks=tuple((where, slowest, n) for where, (slowest, n) in slow.items()),
         longest_trapped_s=max((r.longest_trapped_s for r in results), default=0.0),
         trapped=sum(1 for r in results if r.longest_trapped_s >= TRAPPED_S),

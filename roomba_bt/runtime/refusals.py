@@ -12,7 +12,7 @@ from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.registry import class_where
 from roomba_bt.oi.encode import Command
 from roomba_bt.robot.errors import ModeError
-from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.runtime.summary import YOUR_ACTION_FIX, RunSummary
 
 #: the refusals a run says (every one is counted)
 MAX_SAID = 100
@@ -40,8 +40,13 @@ class Refusals(list[str]):
             self.append(refusal(command, exc, sender, when, arrival))
         if not summary.first_refusal:
             summary.first_refusal = self[0]
-        if isinstance(sender, Action) and not type(sender).__module__.startswith("roomba_bt."):
-            self.authors.setdefault(sender.name, type(sender))
+        if (
+            isinstance(sender, Action)
+            and not type(sender).__module__.startswith("roomba_bt.")
+            and sender.name not in self.authors
+        ):
+            self.authors[sender.name] = cls = type(sender)
+            summary.refused_actions += ((sender.name, class_where(cls)),)
 
     def hints(self) -> list[str]:
         """What the author of each action of theirs that was refused does about it: the
@@ -49,11 +54,8 @@ class Refusals(list[str]):
         every tick after a cliff had dropped the robot to Passive (3543 refusals, a stranger's
         first plugin) was told only ``drive needs Safe or Full``, the fix being on a page."""
         return [
-            f"{name} ({class_where(cls)}) is your code: an action that drives checks "
-            "self.snapshot.mode each tick and, out of Safe/Full, returns "
-            "self.wait_for_driving_mode() (docs/plugins.md, When the robot leaves Safe/Full "
-            "under your action)"
-            for name, cls in self.authors.items()
+            f"{name} ({where}) is your code: {YOUR_ACTION_FIX}"
+            for name, where in self.summary.refused_actions
         ]
 
 

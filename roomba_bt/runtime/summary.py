@@ -232,6 +232,15 @@ def times_said(count: int, what: str) -> str:
     return f"{count} {what}" if count == 1 else f"{count} {what}s"
 
 
+#: what the author of an action of their own whose commands were refused does about it
+#: (``run``'s stderr and ``eval``'s summary say it)
+YOUR_ACTION_FIX = (
+    "an action that drives checks self.snapshot.mode each tick and, out of Safe/Full, returns "
+    "self.wait_for_driving_mode() (docs/plugins.md, When the robot leaves Safe/Full under your "
+    "action)"
+)
+
+
 def undeclared_said(key: str, where: str, hint: str = "", episodes: str = "") -> str:
     """The words of a write to an undeclared key, as ``run``'s summary and ``eval``'s say
     it: ``write_key('dirt_levl') by 'probe' at lab.py:10: blackboard key 'dirt_levl' is not
@@ -368,6 +377,11 @@ class RunSummary:
     #: warned of during the run, said again by the summary (a log line scrolled away, and the
     #: run succeeded), counted by :meth:`strict_findings`
     undeclared_keys: tuple[tuple[str, str, str], ...] = ()
+    #: the actions of the user's own code (a plugin's, a program's) whose commands the mode
+    #: guard refused, each once, with its class and where it is defined
+    #: (``("passive_drive", "PassiveDrive (lab.py:7)")``): told the fix
+    #: (``runtime/refusals.py``: ``run``'s stderr, ``eval``'s summary)
+    refused_actions: tuple[tuple[str, str], ...] = ()
     distance_mm: float = 0.0
     #: a cycle the robot started by itself (a button, its schedule): it drove in Passive
     #: with no command of the run's, and how the stop ended it (runtime/ending.py

@@ -1043,3 +1043,53 @@ def test_an_undeclared_key_written_is_said_once_with_its_episodes(
     assert variant["undeclared_keys"] == [
         {"key": "secret", "written": f"by 'sometimes_writer' at {plugin}:17", "episodes": 2}
     ]
+
+
+_ROGUE = '''\
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+
+
+@declare("rogue", kind="action")
+class Rogue(Action):
+    """Queues Drive straight into the outbox, the robot in Passive: refused."""
+
+    def update(self):
+        self.robot.outbox.send(commands.drive(100, 0), self)
+        return Status.SUCCESS
+'''
+
+
+def test_a_plugin_s_refused_action_is_told_once_with_its_episodes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``run``'s stderr names an action of the user's own code whose commands the mode
+    guard refused, and the fix; ``eval``'s summary said nothing of it. Said once per
+    variant, with its episodes, in the summary, ``--json`` and the results file, which
+    ``--from`` reads back and says again."""
+    plugin = tmp_path / "rogue.py"
+    plugin.write_text(_ROGUE)
+    mission = tmp_path / "rogue.yaml"
+    mission.write_text("plugins: [./rogue.py]\ntree:\n  sequence: [rogue]\n")
+    results = tmp_path / "out.jsonl"
+    words = ["eval", str(mission), "--runs", "2", "--allow-plugin-files", "--no-progress"]
+    assert main([*words, "--out", str(results)]) == 0
+    out = capsys.readouterr().out
+    said = (
+        f"warning      the mode guard refused commands of rogue (Rogue ({plugin}:7)), your "
+        "code, in 2 of 2 episodes: an action that drives checks self.snapshot.mode each tick "
+        "and, out of Safe/Full, returns self.wait_for_driving_mode() (docs/plugins.md, When "
+        "the robot leaves Safe/Full under your action)\n"
+    )
+    assert out.count("refused commands of") == 1 and said in out, out
+    assert main([*words, "--json"]) == 0
+    (variant,) = json.loads(capsys.readouterr().out)["variants"]
+    assert variant["refused_actions"] == [
+        {"action": "rogue", "where": f"Rogue ({plugin}:7)", "episodes": 2}
+    ]
+    rows = [json.loads(line) for line in results.read_text().splitlines()]
+    assert [row["refused_actions"] for row in rows] == [{"rogue": f"Rogue ({plugin}:7)"}] * 2
+    assert main(["eval", "--from", str(results), "--no-progress"]) == 0
+    assert said in capsys.readouterr().out
