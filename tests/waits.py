@@ -19,8 +19,8 @@ import select
 import subprocess
 import threading
 import time
-from collections.abc import Callable
-from typing import IO
+from collections.abc import Callable, Coroutine
+from typing import IO, Any, TypeVar
 
 #: The most a test waits for something that only a hang would keep from happening: generous
 #: for a loaded 2-core machine (six busy loops on its 2 cores kept a monitor run from its
@@ -88,6 +88,36 @@ def joined(thread: threading.Thread, what: str, within: float = HANG_S) -> None:
     thread.join(within)
     if thread.is_alive():
         raise AssertionError(f"{what}: {thread.name!r} still ran after {within:g} s (hung?)")
+
+
+_Result = TypeVar("_Result")
+
+
+def awaited(
+    coroutine: Callable[[], Coroutine[Any, Any, _Result]], what: str, within: float = HANG_S
+) -> _Result:
+    """What ``coroutine()`` returns, run to its end on an event loop of its own in a thread of
+    its own (a page's reader: the browser tests' sync Playwright leaves this thread's loop
+    running, and ``asyncio.run`` refuses to start under it); fail, saying ``what`` hung, if
+    it runs on after ``within`` seconds. What it raised is raised here (in the thread it was
+    printed, and the test failed on an empty answer)."""
+    import asyncio
+
+    answers: list[_Result] = []
+    raised: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            answers.append(asyncio.run(asyncio.wait_for(coroutine(), within)))
+        except BaseException as error:  # handed to the test's thread
+            raised.append(error)
+
+    thread = threading.Thread(target=run, name=what, daemon=True)
+    thread.start()
+    joined(thread, what, within + 5)  # the wait_for's bound, then its cancellation
+    if raised:
+        raise raised[0]
+    return answers[0]
 
 
 def ended(proc: subprocess.Popen[str], ceiling: float = HANG_S) -> tuple[str, str]:

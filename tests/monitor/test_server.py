@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from waits import HANG_S, joined, waited  # tests/waits.py: a hang's bound
+from waits import HANG_S, awaited, joined, waited  # tests/waits.py: a hang's bound
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor import server as monitor_server
@@ -197,7 +197,6 @@ def test_a_page_hears_from_the_run_every_second_when_nothing_changes() -> None:
     only if the run speaks when nothing changes: a recorded run's page, with nothing new
     after its hello, was sent nothing more. Each message carries ``sent``, the server's
     clock, which the page echoes as a control's ``seen``."""
-    import asyncio
 
     import aiohttp
 
@@ -215,18 +214,10 @@ def test_a_page_hears_from_the_run_every_second_when_nothing_changes() -> None:
                     return received
         return received
 
-    messages: list[list[dict[str, Any]]] = []
-    # the page's event loop in a thread of its own: the browser tests' driver may own this one
-    watcher = threading.Thread(
-        target=lambda: messages.append(asyncio.run(asyncio.wait_for(listen(), HANG_S)))
-    )
     try:
-        watcher.start()
-        joined(watcher, "the page's reader")  # the wait_for's bound at the latest
+        received = awaited(listen, "the page's reader")
     finally:
         served.close()
-    assert messages, "the page heard nothing after the run's first update"
-    received = messages[0]
     assert [m["type"] for m in received] == ["hello", "update", "update", "update"]
     sent = [m["sent"] for m in received]
     assert sent == sorted(sent) and sent[1] < sent[2] < sent[3]
@@ -589,7 +580,6 @@ def test_a_killed_run_s_record_tells_the_page_its_last_tick_has_no_end(
     its record does not hold (the banner said so): the header and the updates carry
     ``no_end``, which the robot panel's title says (``Robot: its last recorded tick (no end
     recorded: ...)``); a whole record's is null (its panel shows the end)."""
-    import asyncio
 
     import aiohttp
 
@@ -608,19 +598,13 @@ def test_a_killed_run_s_record_tells_the_page_its_last_tick_has_no_end(
         ):
             return [json.loads((await ws.receive()).data) for _ in range(2)]
 
-    messages: list[list[dict[str, Any]]] = []
-    watcher = threading.Thread(
-        target=lambda: messages.append(asyncio.run(asyncio.wait_for(listen(), HANG_S)))
-    )
     try:
         status, state = _call(f"http://127.0.0.1:{server.port}/api/state")
-        watcher.start()
-        joined(watcher, "the page's reader")  # the wait_for's bound at the latest
+        hello, update = awaited(listen, "the page's reader")
     finally:
         server.close()
     expected = NO_END if killed else None
     assert status == 200 and state["header"]["no_end"] == expected, state["header"]
-    hello, update = messages[0]
     assert hello["header"]["no_end"] == expected
     assert update["type"] == "update" and update["no_end"] == expected
     assert ("without the run's end" in update["finished"]) is killed, update["finished"]
@@ -662,19 +646,10 @@ def test_a_page_that_stopped_reading_is_sent_the_newest_state_not_a_backlog() ->
                     return stale, woke_at - stalled_at
                 stale += 1
 
-    read: list[tuple[int, int]] = []
-    # a thread of its own, as the other pages here: the browser tests' sync Playwright
-    # leaves this thread's event loop running, and asyncio.run() refuses to start under it
-    reader = threading.Thread(
-        target=lambda: read.append(asyncio.run(asyncio.wait_for(page(), HANG_S)))
-    )
     try:
-        reader.start()
-        joined(reader, "the page's reader")  # the wait_for's bound at the latest
+        stale, behind = awaited(page, "the page's reader")
     finally:
         live.finish()
-    assert read, "the page's reader ended without an answer (its error is printed above)"
-    stale, behind = read[0]
     # 6 s of updates at 20 a second is 120: one second or so of them, at most 2 s
     assert stale <= 2 * round(1 / UPDATE_PERIOD_S) + 4, (stale, behind)
 
