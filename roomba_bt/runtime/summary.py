@@ -236,8 +236,8 @@ def times_said(count: int, what: str) -> str:
 #: (``run``'s stderr and ``eval``'s summary say it)
 YOUR_ACTION_FIX = (
     "an action that drives checks self.snapshot.mode each tick and, out of Safe/Full, returns "
-    "self.wait_for_driving_mode() (docs/plugins.md, When the robot leaves Safe/Full under your "
-    "action)"
+    "self.wait_for_driving_mode() (roomba-bt docs plugins, When the robot leaves Safe/Full "
+    "under your action)"
 )
 
 

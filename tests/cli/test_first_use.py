@@ -415,7 +415,7 @@ def test_a_plugin_s_refused_action_is_told_what_to_do_once(
     [(file, line, fix)] = said
     assert (file, line) == (str(tmp_path / "rogue.py"), "8")  # its @declare, the class's first line
     assert "checks self.snapshot.mode each tick" in fix
-    assert "returns self.wait_for_driving_mode() (docs/plugins.md, When the robot" in fix
+    assert "returns self.wait_for_driving_mode() (roomba-bt docs plugins, When the robot" in fix
 
 
 def test_a_subcommand_module_missing_is_a_broken_installation_not_a_silent_skip(

@@ -1080,8 +1080,8 @@ def test_a_plugin_s_refused_action_is_told_once_with_its_episodes(
     said = (
         f"warning      the mode guard refused commands of rogue (Rogue ({plugin}:7)), your "
         "code, in 2 of 2 episodes: an action that drives checks self.snapshot.mode each tick "
-        "and, out of Safe/Full, returns self.wait_for_driving_mode() (docs/plugins.md, When "
-        "the robot leaves Safe/Full under your action)\n"
+        "and, out of Safe/Full, returns self.wait_for_driving_mode() (roomba-bt docs plugins, "
+        "When the robot leaves Safe/Full under your action)\n"
     )
     assert out.count("refused commands of") == 1 and said in out, out
     assert main([*words, "--json"]) == 0
