@@ -29,15 +29,19 @@ _DECIMALS = 4
 def board_text(value: Any) -> str:
     """``value`` as the blackboard panel shows it, cut to :data:`TEXT_LIMIT` characters."""
     try:
-        text = _readable(value)
-    except Exception as exc:  # a plugin's repr, a list holding itself: never the tick's end
+        text = _readable(value, ())
+    except Exception as exc:  # a plugin's repr: never the tick's end
         text = f"<{type(value).__name__}: its text failed: {exc!r}>"
     return text if len(text) <= TEXT_LIMIT else text[: TEXT_LIMIT - 3] + "..."
 
 
-def _readable(value: Any) -> str:
+def _readable(value: Any, within: tuple[int, ...]) -> str:
     """JSON's words for what JSON has (``true``, ``null``, ``"text"``, ``[...]``, ``{...}``),
-    floats rounded to :data:`_DECIMALS`; anything else its own repr."""
+    floats rounded to :data:`_DECIMALS`; anything else its own repr. ``within``: the ids of
+    the lists and records ``value`` is inside. One holding itself reads as Python's repr says
+    it (``[[...]]``), and nesting deeper than the text is shown stops there: walked to the
+    recursion limit, the ``RecursionError`` came out of whatever the interpreter ran at that
+    depth too (a garbage collection's finalizers failed, unraisable)."""
     if value is None:
         return "null"
     if isinstance(value, bool):
@@ -49,11 +53,20 @@ def _readable(value: Any) -> str:
     if isinstance(value, int):
         return repr(value)  # an IntEnum's too: <Side.LEFT: 1>
     fields = _record_fields(value)
+    listed = type(value) is list or type(value) is tuple  # a subclass may say how it reads
+    if fields is None and not listed:
+        return repr(value)
+    brackets = "[]" if fields is None else "{}"
+    if id(value) in within:
+        return f"{brackets[0]}...{brackets[1]}"
+    if len(within) >= TEXT_LIMIT:  # each level writes a bracket: past what is shown
+        return "..."
+    inner = (*within, id(value))
     if fields is not None:
-        return _joined((f"{encode_basestring(str(k))}: {_readable(v)}" for k, v in fields), "{}")
-    if type(value) is list or type(value) is tuple:  # a subclass may say how it reads
-        return _joined((_readable(item) for item in value), "[]")
-    return repr(value)
+        return _joined(
+            (f"{encode_basestring(str(k))}: {_readable(v, inner)}" for k, v in fields), "{}"
+        )
+    return _joined((_readable(item, inner) for item in value), "[]")
 
 
 def _joined(parts: Iterator[str], brackets: str) -> str:
