@@ -25,9 +25,10 @@ class Refusals(list[str]):
     def __init__(self, summary: RunSummary) -> None:
         super().__init__()
         self.summary = summary
-        #: the actions of the user's own code (a plugin's, a program's) whose commands were
-        #: refused, by name, in the order met: :meth:`hints`
-        self.authors: dict[str, type] = {}
+        #: the names of the actions of the user's own code (a plugin's, a program's) whose
+        #: commands were refused: each said once (the summary's ``refused_actions``, in the
+        #: order met: :meth:`hints`)
+        self.authors: set[str] = set()
 
     def note(
         self, command: Command, exc: ModeError, sender: object, when: float | None, arrival: float
@@ -45,8 +46,8 @@ class Refusals(list[str]):
             and not type(sender).__module__.startswith("roomba_bt.")
             and sender.name not in self.authors
         ):
-            self.authors[sender.name] = cls = type(sender)
-            summary.refused_actions += ((sender.name, class_where(cls)),)
+            self.authors.add(sender.name)
+            summary.refused_actions += ((sender.name, class_where(type(sender))),)
 
     def hints(self) -> list[str]:
         """What the author of each action of theirs that was refused does about it: the
