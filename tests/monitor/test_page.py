@@ -13,12 +13,14 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from waits import joined  # tests/waits.py: a hang's bound
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.recorded import NO_END
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.summary import Outcome
 
 from .conftest import SHUTTLE, on_screen
 from .live import LiveRun, replayed_record, start_live_run
@@ -393,3 +395,35 @@ def test_the_event_log_scrolled_up_stays_where_the_reader_left_it(live: LiveRun,
     page.wait_for_function(
         f"{box}.scrollHeight - {box}.scrollTop - {box}.clientHeight < 2", timeout=WAIT_MS
     )
+
+
+def test_a_browser_s_shortcut_is_no_control_and_q_stops_the_run(live: LiveRun, page: Any) -> None:
+    """The page took a key by its letter alone: Ctrl+R or Cmd+R, the browser's reload, read
+    "r" and resumed a paused robot (Alt+R too), Ctrl+N stepped it. A shortcut now sends
+    nothing; the four letters alone are the terminal's keys, q (Stop's title says "key q")
+    too, which did nothing."""
+    sent: list[str] = []
+    page.on(
+        "request",
+        lambda request: (
+            sent.append(json.loads(request.post_data or "{}").get("action", ""))
+            if request.url.endswith("/api/control")
+            else None
+        ),
+    )
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    page.click("#pause")
+    page.wait_for_selector("#step:enabled", timeout=WAIT_MS)
+    for shortcut in ("Control+r", "Meta+r", "Alt+r", "Control+n", "Control+p", "Control+q"):
+        page.keyboard.press(shortcut)
+    page.wait_for_selector("#step:enabled", timeout=WAIT_MS)  # a reload, if there was one
+    page.keyboard.press("n")  # a key's request leaves at its press: after any of those
+    page.wait_for_selector('#events:has-text("pause (stepped one tick)")', timeout=WAIT_MS)
+    assert sent == ["pause", "step"], sent
+    assert live.session.state.paused
+    assert live.runner.summary.steps == 1
+    page.keyboard.press("q")
+    joined(live.thread, "the run, stopped by the page's q")  # not told to stop by the test
+    assert live.result[0].outcome is Outcome.INTERRUPTED, live.result[0].outcome
+    assert sent == ["pause", "step", "stop"], sent

@@ -60,6 +60,9 @@ const GOING_AWAY = 1001;  // the server's close when the run ended (or the monit
 const SILENT_MS = 2000;  // the run speaks every second at least: silent longer, the link is
 const CONTROL_TIMEOUT_MS = 5000;  // a control unanswered this long is said not confirmed
 const MOTION = new Set(["resume", "step", "force"]);  // what sets the robot going
+// the page's keys, the terminal's four (each button's title names its key; q was not one,
+// though Stop's title said "key q")
+const PAGE_KEYS = { p: "pause", r: "resume", n: "step", q: "stop" };
 
 // whole seconds the open socket has brought nothing, when over SILENT_MS; 0 otherwise
 function silentSeconds() {
@@ -910,7 +913,10 @@ function startPlay() {
 function stopPlay() { if (view.playing) clearInterval(view.playing); view.playing = null; $("play").textContent = "▶"; }
 document.addEventListener("keydown", (ev) => {
   if (ev.target.tagName === "INPUT" || ev.target.tagName === "SELECT" || !(view.header && view.header.controls)) return;
-  const key = { p: "pause", r: "resume", n: "step" }[ev.key];
+  // a browser's own shortcut is no control: Ctrl+R or Cmd+R (reload) read "r" too, and
+  // resumed a paused robot; Ctrl+N (a new window) stepped it, Ctrl+P (print) paused it
+  if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
+  const key = PAGE_KEYS[ev.key];
   if (!key || pending.has(key)) return;  // on its way already: its button says so
   // a stale page asks nothing: the HTTP side may still reach the run while the socket is down,
   // and a resume from a page that no longer shows the run would set the robot going unseen
