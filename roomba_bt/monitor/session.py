@@ -111,6 +111,10 @@ class SessionState:
     breakpoints: dict[int, str] = field(default_factory=dict)
     forced: dict[int, str] = field(default_factory=dict)
     watching: str | None = None  # the mission file under --watch
+    #: the mission's outcome (``SUCCESS``) while the run is held at its end (a breakpoint or
+    #: a step on its last tick), "" otherwise: the resume then ends the run, where the
+    #: page's banner said "resume goes back to the mission's mode"
+    held_end: str = ""
 
 
 def pause_sequence(connection: Any) -> list[Command]:
@@ -170,8 +174,6 @@ class MonitorSession:
         self._cycle_before_pause: Command | None = None
         self._steps_left: int | None = None  # ticks left before a step pauses again
         self._skip_tick = False
-        #: the tree's root ended while the operator held the run: the resume ends the run
-        self._held_end: str | None = None
         self._stop: str | None = None
         self._pending_mission: Any = None
         #: a pause's countdown to the robot's sleep in Passive, where it sleeps (no keep-awake)
@@ -300,9 +302,9 @@ class MonitorSession:
         if self.state.forced and runner.mission.root.status is Status.SUCCESS:
             self._forces.said_in_a_success(runner)
         held = self.state.paused or self._steps_left == 0
-        if held and self._held_end is None:
+        if held and not self.state.held_end:
             ended = runner.mission.root.status.value
-            self._held_end = ended
+            self.state.held_end = ended
             self._said(
                 runner, "control", f"the mission ended: {ended}; held until resumed or stopped"
             )
@@ -413,11 +415,11 @@ class MonitorSession:
         self._paused_before_s = runner.summary.paused_s
         self.state.paused_tick = None
         self._sleep.end()  # awake again: no sleep to count to
-        if self._held_end is not None:  # nothing to go on with: no mode, no wheels again
+        if self.state.held_end:  # nothing to go on with: no mode, no wheels again
             self.state.paused, self.state.pause_reason = False, ""
             self._steps_left = None
             self._said(runner, "control", f"resume ({why}): the mission ended "
-                       f"({self._held_end}); the run ends")  # fmt: skip
+                       f"({self.state.held_end}); the run ends")  # fmt: skip
             return
         mode = self._mode_before_pause
         again: list[Command] = []
@@ -497,7 +499,7 @@ class MonitorSession:
         setup_tree(mission.root, lambda: mission.setup(runner))  # what shutdown_nodes closes
         self._forces.release_all(runner)  # the nodes are gone: released with them
         self.state.breakpoints.clear()
-        self._held_end = None
+        self.state.held_end = ""
         self.feed.set_tree(mission.root)
         self._said(runner, "reload", f"reloaded {mission.name}: the new tree starts from its root")
         self.state.paused = was_paused

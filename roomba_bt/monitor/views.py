@@ -333,13 +333,14 @@ def session_view(session: MonitorSession | None) -> dict[str, Any]:
     recorded run's: none of them."""
     if session is None:
         return {"paused": False, "pause_reason": "", "paused_tick": None, "sleep_note": "",
-                "breakpoints": {}, "forced": {}}  # fmt: skip
+                "held_end": "", "breakpoints": {}, "forced": {}}  # fmt: skip
     state = session.state
     return {
         "paused": state.paused,
         "pause_reason": state.pause_reason,
         "paused_tick": state.paused_tick,
         "sleep_note": state.sleep_note,
+        "held_end": state.held_end,
         "breakpoints": {str(k): v for k, v in state.breakpoints.items()},
         "forced": {str(k): v for k, v in state.forced.items()},
     }

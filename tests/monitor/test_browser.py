@@ -16,11 +16,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from waits import HANG_S, lines  # tests/waits.py: a hang's bound, lines within it
+from waits import HANG_S, joined, lines  # tests/waits.py: a hang's bound, lines within it
 
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.runtime.summary import Outcome
 
 from .conftest import SHUTTLE
 from .live import MISSIONS as MISSIONS_DIR
@@ -572,3 +573,26 @@ def test_a_page_left_open_does_not_take_the_next_run_served_on_its_port(page: An
         assert second.session.state.paused
     finally:
         second.finish()
+
+
+def test_a_run_held_at_its_mission_s_end_says_its_resume_ends_the_run(page: Any) -> None:
+    """A breakpoint on the tick the whole mission ends holds the run there, paused; the
+    banner said "resume goes back to the mission's mode", where the resume ends the run with
+    the mission's outcome (the event log said so, the banner not)."""
+    run = start_live_run(HERE / "missions" / "wait-then-drive.yaml")
+    try:
+        run.session.request("break", 0, "end")  # the root: held when the mission ends
+        page.goto(run.url)
+        page.wait_for_selector('#banner:has-text("the mission ended")', timeout=WAIT_MS)
+        banner = page.inner_text("#banner")
+        assert "breakpoint: sequence ends" in banner, banner
+        assert "the mission ended: SUCCESS; resume or step ends the run with it" in banner
+        assert "goes back to the mission's mode" not in banner, banner
+        page.click("#resume")
+        joined(run.thread, "the run held at its end, resumed")
+        assert run.result[0].outcome is Outcome.SUCCESS
+    finally:
+        if run.thread.is_alive():
+            run.finish()
+        else:
+            run.server.close()

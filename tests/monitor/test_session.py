@@ -39,6 +39,7 @@ from roomba_bt.monitor import session as session_module
 from roomba_bt.monitor.feed import EventLogHandler, Ring, RunFeed
 from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
+from roomba_bt.monitor.views import session_view
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
@@ -545,11 +546,13 @@ def test_a_breakpoint_on_the_last_tick_holds_the_ended_mission_until_the_resume(
         seen["ended"] = rig.ended.is_set()
         seen["robot"] = (rig.sim.mode, rig.sim.left_speed, rig.sim.right_speed)
         seen["written"] = rig.runner.summary.commands_written
+        seen["held_end"] = session_view(rig.session)["held_end"]  # the page's banner says it
         rig.session.request("resume")
 
     summary = rig.run_with(operator)
     assert seen["ended"] is False
     assert seen["robot"] == (OIMode.PASSIVE, 0.0, 0.0)
+    assert seen["held_end"] == "SUCCESS"
     assert summary.outcome is Outcome.SUCCESS
     assert summary.commands_written == seen["written"]  # nothing sent again at the resume
     controls = [e.text for e in rig.feed.events if e.kind == "control"]

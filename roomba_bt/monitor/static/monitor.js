@@ -601,7 +601,11 @@ function updateControls() {
     const since = s.paused_tick !== undefined && s.paused_tick !== null
       ? ` for ${duration((view.window[1] - s.paused_tick) * SLOT)}` : "";
     const sleeps = s.sleep_note ? ` (${s.sleep_note})` : "";
-    showBanner(`PAUSED${since}${sleeps} — ` + (s.pause_reason || "") + " (robot stopped, in Passive; resume goes back to the mission's mode)", false);
+    // held at the mission's end (a breakpoint or a step on its last tick): nothing to go
+    // back to, and a resume ends the run (the banner said it went back to the mission's mode)
+    const next = s.held_end ? `the mission ended: ${s.held_end}; resume or step ends the run with it, stop as on Ctrl-C`
+      : "resume goes back to the mission's mode";
+    showBanner(`PAUSED${since}${sleeps} — ` + (s.pause_reason || "") + ` (robot stopped, in Passive; ${next})`, false);
   }
   else showBanner("");
   robotTitle();
