@@ -745,8 +745,23 @@ class RunFeed:
         if oldest.tick > tick:
             return oldest, []
         ring = self.ring
-        lo, hi = oldest.seq, newest.seq
-        while lo < hi:  # the last sequence number whose record's tick <= tick
+        lo = self._last_at_or_before(tick, oldest.seq, newest.seq)
+        found = ring.get(lo) or newest
+        # a second of the stream before it, by tick: a pause keeps a frame a second, so the
+        # record 67 back was a minute back in a long pause, or before it, and the page's
+        # "commands / refused per s" said the driving's rate for as long as the pause lasted
+        second = round(1.0 / SLOT_SECONDS)
+        start = max(lo - second, oldest.seq)  # ticks rise by 1 at least: it is past here
+        back = ring.get(start) or found
+        if back.tick < found.tick - second:  # a gap (a pause's frames thinned): look for it
+            back = ring.get(self._last_at_or_before(found.tick - second, start, lo)) or found
+        return found, [back, ring.get(max(lo - 1, oldest.seq)) or found]
+
+    def _last_at_or_before(self, tick: int, lo: int, hi: int) -> int:
+        """The last sequence number in ``lo..hi`` whose record's tick is at most ``tick``
+        (``lo`` when none is)."""
+        ring = self.ring
+        while lo < hi:
             mid = (lo + hi + 1) // 2
             record = ring.get(mid)
             # None: reused by the writer meanwhile, so it was older still
@@ -754,9 +769,7 @@ class RunFeed:
                 lo = mid
             else:
                 hi = mid - 1
-        found = ring.get(lo) or newest
-        back = ring.get(max(lo - round(1.0 / SLOT_SECONDS), oldest.seq)) or found
-        return found, [back, ring.get(max(lo - 1, oldest.seq)) or found]
+        return lo
 
     def path(self, upto_seq: int, limit: int = 1500) -> list[TickRecord]:
         """Records up to ``upto_seq``, thinned to at most ``limit``, for drawing the path."""

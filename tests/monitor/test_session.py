@@ -39,7 +39,7 @@ from roomba_bt.monitor import session as session_module
 from roomba_bt.monitor.feed import EventLogHandler, Ring, RunFeed
 from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
-from roomba_bt.monitor.views import session_view
+from roomba_bt.monitor.views import session_view, state_view
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
@@ -260,6 +260,39 @@ def test_mission_time_stands_still_while_paused_so_a_wait_does_not_count_the_pau
     assert len({r.time for r in paused}) <= 2  # held; then the frame skipped after resume
     assert len({r.tick for r in paused}) == len(paused)  # the stream's ticks went on
     assert summary.mission_time_s < (len(records) - 200) * 0.015  # the pause left out
+
+
+def test_the_command_rate_of_a_long_pause_is_its_own_not_the_driving_s_before_it(
+    until: Callable[..., None],
+) -> None:
+    """The robot panel's "commands / refused per s" compared a tick with the record 67
+    records back, a second of frames while driving; a pause keeps a frame a second, so 67
+    back was a minute back in a long pause, or before it: 33.1 a second was shown a second
+    into a pause of a robot written nothing since, and a decaying share of the driving's
+    rate as long as it lasted. Now it is a second of the stream before the tick shown."""
+    rig = Rig(thin_pauses=True)  # a live page's feed: a frame a second kept in a pause
+    seen: dict[str, object] = {}
+
+    def operator(rig: Rig) -> None:
+        paused_after(rig, until, 200)
+        written = rig.runner.summary.commands_written
+        until(lambda: rig.runner.summary.paused_s > 3.0)
+        newest = rig.feed.latest()
+        assert newest is not None
+        record, earlier = rig.feed.at(newest.tick)
+        seen["robot"] = state_view(rig.feed, record, earlier)["robot"]
+        seen["written"] = rig.runner.summary.commands_written - written
+        seen["back"] = record.tick - earlier[0].tick
+        rig.session.request("stop")
+
+    rig.run_with(operator)
+    assert seen["written"] == 0  # nothing written in the pause: the rate is 0
+    assert 67 <= seen["back"] < 2 * 67, seen["back"]  # a second of the stream back, a frame kept
+    robot = seen["robot"]
+    assert isinstance(robot, dict)
+    assert (robot["commands_per_s"], robot["refused_per_s"]) == (0.0, 0.0), robot
+    record, earlier = rig.feed.at(150)  # driving: every frame kept, 67 records a second
+    assert record.tick - earlier[0].tick == 67
 
 
 def test_a_live_page_keeps_a_paused_frame_a_second_so_a_long_pause_keeps_the_run(
