@@ -76,7 +76,7 @@ def replay_into_feed(
         label=record.label,
     )  # fmt: skip
     feed.set_tree(mission.root)
-    with MissionWordsOnThePage(feed):  # the page says them; stderr is for trouble
+    with MissionWordsOnThePage(feed), ActsOnThePage():  # the page says them; stderr: trouble
         summary, transport, lost = replay_judged(
             record, mission, profile=profile, packets=packets, baud=baud, name=name,
             gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
@@ -210,6 +210,20 @@ class MissionWordsOnThePage(_OnLogger):
         if record.levelno >= logging.WARNING:
             self.feed.event("warning", record.getMessage())
         return _said_at_v()
+
+
+class ActsOnThePage(_OnLogger):
+    """The replayed operator acts' log lines (``monitor: pause (paused by the operator):
+    safe stop replayed drive, ...``) kept off stderr while ``monitor RECORD`` replays a
+    record: the page's event log has each at its tick, and stderr is for what went wrong (a
+    record with a pause and three steps printed nine INFO lines before the page's URL). A
+    warning is said as before, and every line at ``-v``. ``replay`` says them: it has no
+    page."""
+
+    LOGGER = "roomba_bt.monitor.session"
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return record.levelno >= logging.WARNING or _said_at_v()
 
 
 class ReplayStopReports(_OnLogger):

@@ -1059,10 +1059,11 @@ def test_the_operator_s_acts_are_on_the_page_at_the_tick_the_log_and_the_record_
 
 
 def test_a_replayed_pause_says_its_safe_stop_was_replayed_not_sent(
-    until: Callable[..., None], tmp_path: Path
+    until: Callable[..., None], tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     """``roomba-bt monitor RECORD`` said "safe stop sent drive, motors, start" though it
-    sends nothing to any robot."""
+    sends nothing to any robot; and it printed each replayed act on stderr too (INFO
+    lines before the page's URL), which the page's event log has: at ``-v`` only now."""
     record_path = tmp_path / "paused.jsonl"
     rig = Rig(record=record_path)
 
@@ -1075,10 +1076,21 @@ def test_a_replayed_pause_says_its_safe_stop_was_replayed_not_sent(
     rig.run_with(operator)
     live = [e.text for e in rig.feed.events if e.kind == "control"]
     assert any(t.startswith("pause (paused by the operator): safe stop sent drive") for t in live)
+    caplog.set_level(logging.INFO)
+    caplog.clear()
     replayed, _ = replay_into_feed(
         load_record(record_path), load_mission(SHUTTLE, {}, profile=CREATE2), CREATE2,
         rig.packets, 115200, "x",
     )  # fmt: skip
+    said = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.monitor.session"]
+    assert said == [], said
+    caplog.set_level(logging.DEBUG)  # -v: said on stderr too
+    replay_into_feed(
+        load_record(record_path), load_mission(SHUTTLE, {}, profile=CREATE2), CREATE2,
+        rig.packets, 115200, "x",
+    )  # fmt: skip
+    said = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.monitor.session"]
+    assert any(m.startswith("monitor: pause (paused by the operator)") for m in said), said
     texts = [e.text for e in replayed.events if e.kind == "control"]
     pause = next(t for t in texts if t.startswith("pause"))
     resume = next(t for t in texts if t.startswith("resume"))
