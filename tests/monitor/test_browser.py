@@ -137,6 +137,35 @@ def test_a_breakpoint_pauses_the_run_where_the_node_starts_and_step_ticks_once(
     assert live.session.state.paused
 
 
+def test_a_node_s_menu_opens_from_the_keyboard_and_sets_a_breakpoint(
+    live: LiveRun, page: Any
+) -> None:
+    """A node's menu (breakpoints, forces) opened on a click only: the tree's names took no
+    focus, so a keyboard could not reach it. A name is reached by Tab, Enter or Space opens
+    its menu with the focus in it, Escape closes it, and the focus goes back to the name."""
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    name = '.node[data-name="there and back"] .name'
+    focused = "document.activeElement"
+    page.focus(name)
+    assert page.evaluate(f"{focused}.textContent") == "there and back"
+    page.keyboard.press("Enter")
+    assert page.is_visible("#node-menu")
+    assert page.inner_text("#node-menu-title") == "there and back"
+    assert page.evaluate(f"document.getElementById('node-menu').contains({focused})")
+    page.keyboard.press("Escape")
+    assert page.is_hidden("#node-menu")
+    assert page.evaluate(f"{focused}.textContent") == "there and back"
+    page.keyboard.press(" ")  # Space too; the focus on the menu's first button: starts
+    assert page.evaluate(f"{focused}.dataset.break") == "start"
+    page.keyboard.press("Enter")
+    page.wait_for_selector('#banner:has-text("breakpoint: there and back starts")',
+                           timeout=WAIT_MS)  # fmt: skip
+    assert page.is_hidden("#node-menu")
+    assert page.evaluate(f"{focused}.textContent") == "there and back"
+    assert live.session.state.paused
+
+
 def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, child: Child) -> None:
     proc = child(monitored_run(SHUTTLE))
     page.goto(_url_from(proc))

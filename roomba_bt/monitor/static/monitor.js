@@ -39,7 +39,7 @@ const view = {
   events: [], path: { odometry: [], truth: [] }, pathLive: { odometry: [], truth: [] },
   // the state the panels show (the packets panel, opened, shows it at once)
   shownState: null,
-  world: null, fontSize: 13, follow: true, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
+  world: null, fontSize: 13, follow: true, shownTick: 0, window: [0, 0], playing: null, menuNode: null, menuFrom: null,
   finished: null, ended: false,
   // why a record's view has no end to show (header.no_end: a killed run's record), or null
   noEnd: null,
@@ -152,6 +152,12 @@ function buildTree(nodes) {
     toggle.addEventListener("click", (ev) => { ev.stopPropagation(); toggleNode(n.i); });
     const kind = document.createElement("span"); kind.className = "kind"; kind.textContent = SYMBOL[n.kind] || "-->";
     const name = document.createElement("span"); name.className = "name"; name.textContent = n.name;
+    // reached by Tab, its menu opened by Enter or Space: the breakpoints and forces were a
+    // mouse's or a finger's only
+    name.tabIndex = 0; name.setAttribute("role", "button"); name.setAttribute("aria-haspopup", "true");
+    name.addEventListener("keydown", (ev) => {
+      if (ev.key === "Enter" || ev.key === " ") { ev.preventDefault(); openMenu(n.i, ev, name); }
+    });
     const st = document.createElement("span"); st.className = "st st-I"; st.textContent = "[-]";
     const marks = document.createElement("span"); marks.className = "marks";
     const reason = document.createElement("span"); reason.className = "reason";
@@ -263,9 +269,11 @@ function renderStatuses(state) {
 }
 
 // ------------------------------------------------------------------ menu (breakpoints, force)
-function openMenu(i, ev) {
+// ``from``: the node's name it was opened from with a key (Enter, Space): the menu is put
+// under it and takes the focus, which goes back to the name when the menu closes
+function openMenu(i, ev, from) {
   const menu = $("node-menu"), n = view.tree[i];
-  view.menuNode = i;
+  view.menuNode = i; view.menuFrom = from || null;
   $("node-menu-title").textContent = n.name + (n.condition ? " (condition)" : "");
   const reason = (view.liveState && view.liveState.reasons || {})[String(i)];
   $("node-menu-reason").textContent = reason ? "failed: " + reason : "";
@@ -273,8 +281,11 @@ function openMenu(i, ev) {
     && !view.otherRun);
   $("force-row").hidden = !(n.condition && view.header && view.header.can_force);
   menu.hidden = false;
-  menu.style.left = Math.min(ev.clientX, window.innerWidth - 360) + "px";
-  menu.style.top = Math.min(ev.clientY + 8, window.innerHeight - 120) + "px";
+  const box = from ? from.getBoundingClientRect() : null;
+  const x = box ? box.left : ev.clientX, y = box ? box.bottom : ev.clientY;
+  menu.style.left = Math.min(x, window.innerWidth - 360) + "px";
+  menu.style.top = Math.min(y + 8, window.innerHeight - 120) + "px";
+  if (from) (menu.querySelector("button:not([disabled])") || menu).focus();
   ev.stopPropagation();
 }
 // the node menu's buttons on (``on``), its force off while the run is silent (it sets the
@@ -283,7 +294,11 @@ function menuButtons(on) {
   const silent = silentSeconds() > 0;
   for (const b of $("node-menu").querySelectorAll("button")) b.disabled = !on || (silent && "force" in b.dataset);
 }
-function closeMenu() { $("node-menu").hidden = true; view.menuNode = null; }
+function closeMenu() {
+  const menu = $("node-menu"), back = view.menuFrom, inside = menu.contains(document.activeElement);
+  menu.hidden = true; view.menuNode = null; view.menuFrom = null;
+  if (back && inside) back.focus();  // a keyboard's reader goes on from the node
+}
 // the menu's node, then the menu closed; nothing when it names no node (closed since)
 function menuControl(action, value) {
   const node = view.menuNode;
@@ -916,6 +931,7 @@ function startPlay() {
 }
 function stopPlay() { if (view.playing) clearInterval(view.playing); view.playing = null; $("play").textContent = "▶"; }
 document.addEventListener("keydown", (ev) => {
+  if (ev.key === "Escape" && !$("node-menu").hidden) { closeMenu(); return; }
   if (ev.target.tagName === "INPUT" || ev.target.tagName === "SELECT" || !(view.header && view.header.controls)) return;
   // a browser's own shortcut is no control: Ctrl+R or Cmd+R (reload) read "r" too, and
   // resumed a paused robot; Ctrl+N (a new window) stepped it, Ctrl+P (print) paused it
