@@ -233,6 +233,9 @@ class Ending(NamedTuple):
     safe_stop: str
     #: how the run ended (``interrupted: stopped by the operator``)
     outcome: str
+    #: a stop not known to have arrived, as the final mode says it (``the stop was not
+    #: delivered``, ``the stop unconfirmed``: :meth:`RunSummary.stop_said`)
+    stop_said: str = "the stop was not delivered"
 
     @classmethod
     def of(cls, summary: RunSummary) -> Ending:
@@ -242,6 +245,7 @@ class Ending(NamedTuple):
             stopped=summary.left_stopped,
             safe_stop=summary.safe_stop,
             outcome=f"{summary.outcome.value}{reason}",
+            stop_said=summary.stop_said(),
         )
 
     def as_json(self) -> dict[str, Any]:

@@ -288,7 +288,9 @@ def after_the_end(robot: dict[str, Any], ending: Ending) -> None:
             robot["motors"][name] = _motor(0, None)
         robot.pop("brush_currents_ma", None)  # the last frame's, drawn before the stop
         return
-    unknown = "last seen before the end; the stop was not delivered"
+    # the final mode's words: a stop written to a robot asleep is "unconfirmed", not "not
+    # delivered", which the panel said of it beside the banner's "unconfirmed"
+    unknown = f"last seen before the end; {ending.stop_said}"
     if "wheels" in robot:
         robot["wheels"]["source"] += f"; {unknown}"
     if "motors" in robot:

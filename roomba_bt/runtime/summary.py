@@ -602,6 +602,15 @@ class RunSummary:
             and not self.safe_stop.startswith(unfinished)
         )
 
+    def stop_said(self) -> str:
+        """A stop not known to have arrived, as the final mode says it: "the stop
+        unconfirmed" where it was written to a robot seen still that the run had set nothing
+        going, or asleep; "the stop was not delivered" otherwise (the monitor's robot panel
+        said that of every one, of a stop written to a robot asleep too)."""
+        if self.set_nothing_going or self.asleep_stopped:
+            return "the stop unconfirmed"
+        return "the stop was not delivered"
+
     def final_mode_text(self) -> str:
         """The summary's ``final mode``: the mode after the safe stop, or why it is unknown;
         one the stream never showed (no packet 35) said as the run's own model's."""
@@ -611,9 +620,9 @@ class RunSummary:
         if not self.robot_answered:
             return "unknown: no robot answered"
         if not self.stop_delivered and self.set_nothing_going:
-            return f"unknown: last seen in {mode}, the run set nothing going, the stop unconfirmed"
+            return f"unknown: last seen in {mode}, the run set nothing going, {self.stop_said()}"
         if not self.stop_delivered and self.asleep_stopped:
-            return f"unknown: asleep, last seen stopped in {mode}; the stop unconfirmed"
+            return f"unknown: asleep, last seen stopped in {mode}; {self.stop_said()}"
         if not self.stop_delivered and self.seen_stopped:
             return f"unknown: last seen stopped in {mode}, the stop was not delivered"
         if not self.stop_delivered:

@@ -36,10 +36,10 @@ from roomba_bt.cli import main
 from roomba_bt.cli.run_cmd import _stop_said
 from roomba_bt.mission import Permissions, load_mission
 from roomba_bt.monitor import session as session_module
-from roomba_bt.monitor.feed import EventLogHandler, Ring, RunFeed
+from roomba_bt.monitor.feed import Ending, EventLogHandler, Ring, RunFeed
 from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
-from roomba_bt.monitor.views import session_view, state_view
+from roomba_bt.monitor.views import after_the_end, session_view, state_view
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
@@ -1190,6 +1190,15 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
     # "safe stop NOT DELIVERED: ..." of the robot the summary said asleep and stopped)
     rig.stack.close()
     assert _stop_said(rig.stack) == f"safe stop {summary.safe_stop}"
+    # the page's robot panel in the same words: its wheels and motors said "the stop was
+    # not delivered" beside the banner's "the stop unconfirmed"
+    newest = rig.feed.latest()
+    assert newest is not None
+    robot = state_view(rig.feed, *rig.feed.at(newest.tick))["robot"]
+    after_the_end(robot, Ending.of(summary))
+    assert robot["mode"] == summary.final_mode_text()
+    said = (robot["wheels"]["source"], robot["motors"]["note"])
+    assert all(t.endswith("last seen before the end; the stop unconfirmed") for t in said), said
 
 
 def test_a_stall_ridden_through_during_a_pause_says_the_run_stays_paused(
