@@ -362,6 +362,7 @@ class Connection:
         frame = self._query_raw(packet_ids, timeout)
         if frame is not None:
             self.ending.answered = True
+            self.writer.reply, self.writer.reply_index = frame, self.link.index
             change = self.modes.reconcile(frame, self.link.index, self.link.transport.now())
             if change is not None:
                 self._report_change(change)

@@ -28,6 +28,7 @@ from collections.abc import Callable, Iterable
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_RATES, Command
 from roomba_bt.oi.errors import UnsupportedCommandError
+from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import RobotProfile
@@ -70,6 +71,7 @@ class CommandWriter:
     cycle may be driving, when the last command went, and the counts sent and refused.
     """
 
+    # long on purpose: the state the written commands leave, one attribute with its why each
     def __init__(
         self, link: StreamLink, modes: ModeModel, profile: RobotProfile, baud: int
     ) -> None:
@@ -100,6 +102,11 @@ class CommandWriter:
         self.last_motors: Command | None = None
         #: a Clean/Spot/Max/Seek Dock cycle may be driving
         self.builtin_may_run = False
+        #: the last reply to a program's Query List (``Connection.query``: pycreate2's way
+        #: to read the sensors, with no stream) and the stream frame count when it came:
+        #: the robot as last seen, until a stream frame comes after it (:attr:`seen_frame`)
+        self.reply: SensorFrame | None = None
+        self.reply_index = -1
         #: a cycle the robot runs that this session did not write (a Clean, Spot or Dock
         #: button pressed, its schedule): what its caller saw of it (the runtime: the robot
         #: drove in Passive by itself), until a command that ends cycles (Safe, Full, Off);
@@ -282,6 +289,18 @@ class CommandWriter:
         return None
 
     @property
+    def seen_frame(self) -> SensorFrame | None:
+        """The newest frame the robot sent: the stream's last, or a Query List reply asked
+        since (:attr:`reply`). A program that docks as pycreate2 does (Seek Dock, then Query
+        Lists until the home base shows) streams nothing: its ending, judged by the stream
+        alone, took the docked cycle for one that may still drive and sent Safe first, which
+        ends the charge the program had just reached."""
+        reply = self.reply
+        if reply is not None and self.reply_index == self.link.index:
+            return reply
+        return self.link.frame
+
+    @property
     def cycle_may_drive(self) -> bool:
         """Whether a built-in cycle may be driving the robot as the stream last showed it:
         :attr:`builtin_may_run`, unless it was Seek Dock and the last frame shows the home
@@ -290,7 +309,7 @@ class CommandWriter:
         unless the last frame shows the home base (which of its cycles it ran is not known:
         one on its dock has docked or not yet left, and Safe there would stop the charge).
         What the safe stop asks before it sends Safe to end a cycle."""
-        frame = self.link.frame
+        frame = self.seen_frame
         if self.builtin_may_run and not docked_by_seek_dock(self.last_wheels, frame):
             return True
         return self.robot_cycle is not None and not on_home_base(frame)

@@ -18,7 +18,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
-from roomba_bt.sim import SimLink, Simulator, parse_world
+from roomba_bt.sim import SimLink, Simulator, load_world, parse_world
 
 BOX = """
 name: box
@@ -59,7 +59,7 @@ SCRIPT = textwrap.dedent("""
     from roomba_bt.oi import commands as oi
     from roomba_bt.oi.profiles import CREATE2
     from roomba_bt.robot.connection import Connection
-    from roomba_bt.sim import SimLink, Simulator, parse_world
+    from roomba_bt.sim import SimLink, Simulator, load_world, parse_world
 
     class Told(SimLink):
         def write(self, data):
@@ -155,3 +155,38 @@ def test_open_takes_keep_awake_as_the_cli_option_does(fake_links: Any) -> None:
         assert quiet.keep_awake is False and quiet.wake is None
     with Connection.open(link.url, profile=CREATE2) as default:
         assert default.keep_awake is True and default.wake is not None  # a Create 2 sleeps
+
+
+class _Written(SimLink):
+    """The simulator's link, each write kept."""
+
+    def __init__(self, simulator: Simulator) -> None:
+        super().__init__(simulator)
+        self.writes: list[bytes] = []
+
+    def write(self, data: bytes) -> None:
+        self.writes.append(data)
+        super().write(data)
+
+
+def test_a_seek_dock_seen_docked_by_query_list_ends_without_safe() -> None:
+    """pycreate2's way to dock: Seek Dock, then Query List (its ``get_sensors()``) until the
+    home base powers the robot, no stream. The ending saw no stream frame on the home base,
+    took the cycle for one that may still drive and sent Safe (131) first: the 600 / Create 2
+    spec says charging terminates on entering Safe, so the charge the program had just
+    reached was cut. A reply to a Query List is the robot seen as a stream frame is."""
+    simulator = Simulator(load_world("empty-room"), profile=CREATE2, seed=0, trace=False)
+    link = _Written(simulator)
+    with Connection(link, CREATE2) as robot:
+        robot.start("safe")  # no stream: the program asks
+        robot.send(oi.seek_dock())
+        for _ in range(3000):  # the dock is a few seconds away in this world
+            reply = robot.query([34])
+            if reply is not None and reply.charging_sources.home_base:
+                break
+            link.advance(0.1)
+        else:
+            pytest.fail("the robot never docked")
+        link.writes.clear()
+    assert link.writes == [oi.pause_stream().data + oi.start().data]  # no [131] first
+    assert simulator.docked and simulator.mode is OIMode.PASSIVE
