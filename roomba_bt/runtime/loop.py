@@ -215,10 +215,12 @@ class StopRequested(Exception):
 class Interrupted(KeyboardInterrupt):
     """A Ctrl-C that ended a run, raised again by :meth:`MissionRunner.run` once the robot
     is stopped, the run's summary as :attr:`summary`. A ``KeyboardInterrupt``, as the
-    interrupt it stands for (``except KeyboardInterrupt`` catches it, and the program ends
-    on it as on any Ctrl-C); ``except roomba_bt.Interrupted as interrupt:
-    interrupt.summary`` is typed (``interrupt.summary`` on a bare ``KeyboardInterrupt``
-    failed ``mypy --strict``)."""
+    interrupt it stands for (``except KeyboardInterrupt`` catches it); ``except
+    roomba_bt.Interrupted as interrupt: interrupt.summary`` is typed (``interrupt.summary``
+    on a bare ``KeyboardInterrupt`` failed ``mypy --strict``). Uncaught, it ends the program
+    with exit status 1, not by SIGINT (130) as Ctrl-C's own does: Python does that for
+    ``KeyboardInterrupt`` itself only. ``raise SystemExit(interrupt.summary.exit_code)``
+    ends it as ``roomba-bt run`` does (``roomba-bt docs runtime``, a tree built by hand)."""
 
     summary: RunSummary
 

@@ -201,3 +201,57 @@ def test_the_tick_by_tick_example_runs(capsys: pytest.CaptureFixture[str]) -> No
     assert out[-2].endswith("SUCCESS Passive {'legs': 1}") and out[-1] == "Outcome.SUCCESS", out
     simulator = namespace["simulator"]
     assert simulator.mode.label == "Passive"  # type: ignore[attr-defined]
+
+
+#: A run on the real-time simulator until Ctrl-C ("driving" said once it drives), the
+#: interrupt left uncaught (``bare``) or ended as the hand-built tree's example ends it.
+INTERRUPTED_HOST = """
+import sys
+import py_trees
+import roomba_bt
+from roomba_bt.behaviours.actions import Drive, Mode
+
+root = py_trees.composites.Sequence("a", memory=True, children=[
+    Mode("safe", {"to": "safe"}), Drive("fwd", {"velocity": "150 mm/s"}),
+])
+simulator = roomba_bt.Simulator(roomba_bt.load_world("empty-room"), roomba_bt.CREATE2, seed=0)
+
+def driving(runner):
+    if runner.snapshot.tick == 20:
+        print("driving", flush=True)
+
+stack = roomba_bt.RunStack(roomba_bt.TreeMission(root, "ctrl-c"),
+                           roomba_bt.RealtimeSimLink(simulator), profile=roomba_bt.CREATE2,
+                           timeout_s=60.0, observer=driving)
+if sys.argv[1] == "bare":
+    stack.run()
+try:
+    stack.run()
+except roomba_bt.Interrupted as interrupt:
+    raise SystemExit(interrupt.summary.exit_code) from None
+"""
+
+
+@pytest.mark.parametrize(("how", "status"), [("bare", 1), ("as the example", 130)])
+def test_an_interrupted_run_ends_the_program_with_the_status_the_page_says(
+    how: str, status: int
+) -> None:
+    """An uncaught ``roomba_bt.Interrupted`` ends the program with status 1, not by SIGINT
+    as Ctrl-C's own ``KeyboardInterrupt`` does (Python does that for the class itself
+    only): the page said it ended the program "as Ctrl-C does". Its example's ending
+    exits 130, as ``roomba-bt run`` does."""
+    assert "raise SystemExit(interrupt.summary.exit_code) from None" in _example()
+    host = subprocess.Popen(
+        [sys.executable, "-c", INTERRUPTED_HOST, how.split()[0]],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert host.stdout is not None
+    try:
+        said = line(host.stdout, "the run's robot driving")
+        assert said == "driving\n", said
+        host.send_signal(signal.SIGINT)
+        _, err = host.communicate(timeout=HANG_S)
+    finally:
+        host.kill()
+    assert host.returncode == status, err
+    assert ("roomba_bt.runtime.loop.Interrupted" in err) is (how == "bare"), err
