@@ -271,6 +271,9 @@ seek_dock = _without_arguments("seek_dock")
 
 
 def baud(baud_code: int) -> Command:
+    """Baud (129) by the spec's code, 0-11 (7 is 19200, 11 is 115200); :func:`baud_rate`
+    takes the rate in bps. A program's connection changes it with ``Connection.set_baud``,
+    which waits the 100 ms the spec asks and moves the port with it."""
     return encode(129, baud_code)
 
 
@@ -299,6 +302,8 @@ def drive(velocity: int, radius: int | Radius) -> Command:
 
 
 def drive_straight(velocity: int) -> Command:
+    """Drive (137) straight at ``velocity`` mm/s, -500..500 (negative backs up): :func:`drive`
+    with :attr:`Radius.STRAIGHT`, ``drive_straight(200) -> [137][0][200][128][0]``."""
     return encode(137, velocity, Radius.STRAIGHT)
 
 
@@ -326,6 +331,9 @@ def drive_direct(right_velocity: int, left_velocity: int) -> Command:
 
 
 def drive_pwm(right_pwm: int, left_pwm: int) -> Command:
+    """Drive PWM (146), right wheel first, each -255..255 of the battery's voltage (255 full
+    forward). No speed control: the speed follows the load and the charge, so odometry, not
+    the value, says how far it went."""
     return encode(146, right_pwm, left_pwm)
 
 
@@ -356,10 +364,14 @@ def motors(motor_bits: int) -> Command:
 
 
 def motors_off() -> Command:
+    """Motors (138) with no bit set, ``[138][0]``: side brush, main brush and vacuum off
+    (what every safe ending sends after drive 0)."""
     return encode(138, 0)
 
 
 def pwm_motors(main_brush_pwm: int, side_brush_pwm: int, vacuum_pwm: int) -> Command:
+    """PWM Motors (144): the main and side brush -127..127 (negative turns one the other
+    way), the vacuum 0..127, each a share of the battery's voltage (127 full)."""
     return encode(144, main_brush_pwm, side_brush_pwm, vacuum_pwm)
 
 
@@ -375,6 +387,9 @@ def leds(led_bits: int, power_color: int, power_intensity: int) -> Command:
 
 
 def scheduling_leds(weekday_bits: int, scheduling_bits: int) -> Command:
+    """Scheduling LEDs (162): the days, bit 0 Sunday to bit 6 Saturday (:func:`day_bits
+    <roomba_bt.oi.bits.day_bits>`), and colon, PM, AM, clock and schedule, bits 0-4
+    (:func:`scheduling_led_bits <roomba_bt.oi.bits.scheduling_led_bits>`)."""
     return encode(162, weekday_bits, scheduling_bits)
 
 
@@ -409,6 +424,9 @@ def digit_leds_ascii(text: str) -> Command:
 
 
 def buttons(button_bits: int) -> Command:
+    """Buttons (165): pushes the robot's buttons, packet 18's bits (clean, spot, dock, minute,
+    hour, day, schedule, clock from bit 0; :func:`button_bits
+    <roomba_bt.oi.bits.button_bits>`); the robot releases them itself."""
     return encode(165, button_bits)
 
 
@@ -484,6 +502,8 @@ def song_seconds(command: Command) -> float:
 
 
 def play(song_number: int) -> Command:
+    """Play (141) song 0-4, stored before with :func:`song`; in Safe or Full only (a song may
+    be stored in Passive)."""
     return encode(141, song_number)
 
 
@@ -522,10 +542,14 @@ def stream(packet_ids: Iterable[int]) -> Command:
 
 
 def pause_stream() -> Command:
+    """Pause/Resume Stream (150) 0: the stream stops and keeps its packet list
+    (:func:`resume_stream` starts it again). ``Connection.query`` needs it paused."""
     return encode(150, 0)
 
 
 def resume_stream() -> Command:
+    """Pause/Resume Stream (150) 1: the stream paused by :func:`pause_stream` goes on, with
+    the packet list the last Stream (148) gave."""
     return encode(150, 1)
 
 

@@ -375,7 +375,10 @@ class Connection:
         is added to ``round_trips`` (the start-up's, which the stop's allowance comes from: a
         user's later ``query()`` does not change it)."""
         if self.link.streaming:
-            raise RobotError("query() needs the stream paused: a reply cannot be told apart")
+            raise RobotError(
+                "query() needs the stream paused: a reply cannot be told apart from its "
+                "frames; send(commands.pause_stream()) first, and resume_stream() after"
+            )
         reply = ReplyParser(tuple(packet_ids), self.profile, mode_plus_one=self.link.mode_plus_one)
         clock = self.link.transport.now
         asked = clock()

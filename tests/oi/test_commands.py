@@ -305,3 +305,22 @@ def test_the_leds_example_runs_as_its_docstring_writes_it() -> None:
     namespace: dict[str, object] = {"leds": oi.leds}
     exec(example.replace("\nleds(", "\nresult = leds(", 1), namespace)  # its imports too
     assert namespace["result"].data == bytes([139, 4, 0, 128])  # type: ignore[attr-defined]
+
+
+def test_every_command_function_says_what_it_sends() -> None:
+    """What an editor shows on hover, or ``help(commands.play)``: pycreate2's user reads the
+    unit and the range there (``drive_pwm``'s -255..255, ``play``'s 0-4 and its mode), and
+    ten of them showed nothing."""
+    import inspect
+
+    from roomba_bt.oi import encode as module
+
+    bare = [
+        name
+        for name, function in vars(module).items()
+        if inspect.isfunction(function)
+        and function.__module__ == module.__name__
+        and not name.startswith("_")
+        and not (function.__doc__ or "").strip()
+    ]
+    assert bare == []

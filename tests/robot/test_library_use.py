@@ -18,6 +18,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.errors import RobotError
 from roomba_bt.sim import SimLink, Simulator, load_world, parse_world
 
 BOX = """
@@ -190,3 +191,16 @@ def test_a_seek_dock_seen_docked_by_query_list_ends_without_safe() -> None:
         link.writes.clear()
     assert link.writes == [oi.pause_stream().data + oi.start().data]  # no [131] first
     assert simulator.docked and simulator.mode is OIMode.PASSIVE
+
+
+def test_a_query_while_streaming_says_how_to_pause_the_stream() -> None:
+    simulator = Simulator(parse_world(BOX, "<test>"), profile=CREATE2)
+    with Connection(SimLink(simulator), CREATE2) as robot:
+        robot.start("safe", (7, 35))
+        with pytest.raises(RobotError, match=r"send\(commands.pause_stream\(\)\) first"):
+            robot.query([21])
+        robot.send(oi.pause_stream())  # as the message says
+        reply = robot.query([21, 25])
+        assert reply is not None and reply.battery_charge_mah > 0
+        robot.send(oi.resume_stream())
+        assert robot.poll(0.1)
