@@ -162,7 +162,32 @@ def _stop_dropped(ending: SafeStop) -> None:
 # the robot's state, each part in its own module (link.py, writer.py, ending.py, startup.py,
 # silence.py); what stays here is the start-up, the reads and one-line views of the parts.
 class Connection:
-    """A robot on a :class:`~roomba_bt.transport.Transport`: see the module docstring.
+    """One robot's session on a :class:`~roomba_bt.transport.Transport`: start it, read its
+    sensors, send it commands, stop it. pycreate2's ``Create2(port)``, ``start()`` and
+    ``safe()``, ``drive_direct(r, l)`` and ``get_sensors()`` are :meth:`open`,
+    ``start("safe", packets)``, ``send(commands.drive_direct(r, l))`` (mm/s, the right wheel
+    first, as the OI and pycreate2 take them) and :meth:`poll` (the frames the stream sent)
+    or :meth:`query` (a Query List, no stream). Every ending stops the robot and leaves it in
+    Passive: :meth:`close`, the end of a ``with`` block (an exception in it too), the object
+    dropped, or the program's end without either (then with a warning)::
+
+        >>> import roomba_bt
+        >>> from roomba_bt import commands
+        >>> world = roomba_bt.load_world("empty-room")
+        >>> link = roomba_bt.SimLink(roomba_bt.Simulator(world, roomba_bt.CREATE2, seed=0))
+        >>> with roomba_bt.Connection(link, roomba_bt.CREATE2) as robot:  # open(port): a robot
+        ...     robot.start("safe", packets=(7, 35, 43, 44))  # bumps, mode, encoders
+        ...     robot.send(commands.drive_direct(200, 200))
+        ...     frames = robot.poll(0.5)  # what came, each frame 15 ms of the robot's
+        ...     print(robot.mode, "bumped:", frames[-1].frame.any_bump)
+        Safe bumped: False
+        >>> print(robot.mode, link.simulator.requested_left)  # the with's end: stopped
+        Passive 0.0
+
+    The errors to catch: :class:`ModeError` (a command the mode refuses, nothing written),
+    :class:`StreamStalled` (no frame for ``watchdog`` s: drive 0 sent if it drove; a loop that
+    rides stalls through catches it), :class:`LinkDown` (the port or the stream lost),
+    :class:`ConnectionFailed` (not opened, or no answer), all ``roomba_bt.RoombaBtError``.
 
     ``watchdog``: seconds without a valid frame (while a stream runs) before drive 0 is sent
     and :class:`StreamStalled` raised; 0 disables it. ``end_in``: ``"passive"`` (Start) or

@@ -204,3 +204,15 @@ def test_a_query_while_streaming_says_how_to_pause_the_stream() -> None:
         assert reply is not None and reply.battery_charge_mah > 0
         robot.send(oi.resume_stream())
         assert robot.poll(0.1)
+
+
+def test_the_connection_s_docstring_example_runs() -> None:
+    """``help(Connection)`` and an editor's hover showed "see the module docstring", whose
+    text is the session's parts: how to drive a robot with it, and that every ending stops
+    it, were on a page of the docs alone."""
+    import doctest
+
+    [test] = doctest.DocTestFinder(recurse=False).find(Connection, "Connection")
+    result = doctest.DocTestRunner().run(test)
+    assert result.attempted >= 5 and result.failed == 0
+    assert "pycreate2" in (Connection.__doc__ or "")
