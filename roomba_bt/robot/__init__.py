@@ -31,7 +31,14 @@ if TYPE_CHECKING:
         RobotError,
         StreamStalled,
     )
-    from roomba_bt.robot.interface import ModeChange, Odometry, Outbox, RobotHandle, Snapshot
+    from roomba_bt.robot.interface import (
+        ModeChange,
+        Odometer,
+        Odometry,
+        Outbox,
+        RobotHandle,
+        Snapshot,
+    )
     from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
     from roomba_bt.robot.modes import ModeModel, infer_cause
     from roomba_bt.robot.safety import Terminated, sigterm_raises
@@ -47,6 +54,7 @@ __all__ = [
     "ModeError",
     "ModeModel",
     "NoAnswer",
+    "Odometer",
     "Odometry",
     "Outbox",
     "PortLost",
@@ -77,7 +85,9 @@ _MODULE_OF: dict[str, str] = {
         ),
         "errors",
     ),
-    **dict.fromkeys(("ModeChange", "Odometry", "Outbox", "RobotHandle", "Snapshot"), "interface"),
+    **dict.fromkeys(
+        ("ModeChange", "Odometer", "Odometry", "Outbox", "RobotHandle", "Snapshot"), "interface"
+    ),
     **dict.fromkeys(("LinkStatus", "StreamLink", "TimedFrame"), "link"),
     **dict.fromkeys(("ModeModel", "infer_cause"), "modes"),
     **dict.fromkeys(("Terminated", "sigterm_raises"), "safety"),

@@ -216,3 +216,31 @@ def test_the_connection_s_docstring_example_runs() -> None:
     result = doctest.DocTestRunner().run(test)
     assert result.attempted >= 5 and result.failed == 0
     assert "pycreate2" in (Connection.__doc__ or "")
+
+
+ODOMETRY = "### Odometry in a program's own loop"
+
+
+def test_the_odometry_example_drives_a_square_and_comes_back(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A program's square by odometry, as pycreate2's users write one: the encoders'
+    odometry the runtime keeps was a run's alone (``Snapshot.odometry``), and a program
+    driving by hand added up Distance (19) and Angle (20), wrong on older firmware."""
+    import re
+    from pathlib import Path
+
+    page = Path(__file__).resolve().parents[2] / "docs" / "robot.md"
+    section = page.read_text(encoding="utf-8").split(f"\n{ODOMETRY}\n", 1)[1].split("\n#", 1)[0]
+    [block] = re.findall(r"```python\n(.*?)```", section, flags=re.DOTALL)
+    namespace: dict[str, object] = {"__name__": "docs_example"}
+    exec(compile(block, f"{page}:odometry", "exec"), namespace)
+    said = capsys.readouterr().out
+    found = re.fullmatch(r"at \((-?\d+), (-?\d+)\) mm, turned (\d+) deg\n", said)
+    assert found is not None, said
+    assert abs(int(found[1])) < 30 and abs(int(found[2])) < 30  # back where it started
+    assert 360 <= int(found[3]) < 370
+    assert f"at ({found[1]}, {found[2]}) mm, turned {found[3]} deg" in section  # as quoted
+    simulator = namespace["simulator"]
+    assert isinstance(simulator, Simulator) and simulator.mode is OIMode.PASSIVE
+    assert (simulator.requested_left, simulator.requested_right) == (0, 0)
