@@ -157,6 +157,18 @@ def _host_the_recipe(kind: str) -> subprocess.Popen[str]:
     )  # fmt: skip
 
 
+def _ctrl_c_once_driving(host: subprocess.Popen[str], what: str) -> tuple[str, str]:
+    """Ctrl-C to ``host`` once it says "driving"; its stdout and stderr at its end."""
+    assert host.stdout is not None
+    try:
+        said = line(host.stdout, what)
+        assert said == "driving\n", said
+        host.send_signal(signal.SIGINT)
+        return host.communicate(timeout=HANG_S)
+    finally:
+        host.kill()
+
+
 def test_the_asyncio_recipe_runs() -> None:
     out, err = _host_the_recipe("virtual").communicate(timeout=HANG_S)
     assert "outcome      SUCCESS" in out, err
@@ -167,15 +179,7 @@ def test_the_asyncio_recipe_stops_the_robot_on_ctrl_c() -> None:
     """Ctrl-C while the robot drives (in real time): ``asyncio.run`` cancels the coroutine, its
     ``finally`` closes the stack, and the run ends INTERRUPTED with its safe stop delivered
     (without it the mission drove on to its end, and the program waited for it)."""
-    host = _host_the_recipe("wall")
-    assert host.stdout is not None
-    try:
-        said = line(host.stdout, "the recipe's robot driving")
-        assert said == "driving\n", said
-        host.send_signal(signal.SIGINT)
-        out, err = host.communicate(timeout=HANG_S)
-    finally:
-        host.kill()
+    out, err = _ctrl_c_once_driving(_host_the_recipe("wall"), "the recipe's robot driving")
     assert json.loads(out.splitlines()[-1]) == {
         "ended": "KeyboardInterrupt",
         "outcome": "interrupted",
@@ -245,13 +249,6 @@ def test_an_interrupted_run_ends_the_program_with_the_status_the_page_says(
         [sys.executable, "-c", INTERRUPTED_HOST, how.split()[0]],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
-    assert host.stdout is not None
-    try:
-        said = line(host.stdout, "the run's robot driving")
-        assert said == "driving\n", said
-        host.send_signal(signal.SIGINT)
-        _, err = host.communicate(timeout=HANG_S)
-    finally:
-        host.kill()
+    _, err = _ctrl_c_once_driving(host, "the run's robot driving")
     assert host.returncode == status, err
     assert ("roomba_bt.runtime.loop.Interrupted" in err) is (how == "bare"), err
