@@ -197,3 +197,22 @@ def test_the_version_is_written_once_and_is_past_the_previous_release_s() -> Non
     }
     release = tuple(int(part) for part in roomba_bt.__version__.split("."))
     assert len(release) == 3 and release > (0, 1, 0)
+
+
+def test_the_readme_says_how_to_use_it_from_python_and_its_pages_hold_that() -> None:
+    """A pycreate2 user reads the README first, which spoke of the command line and YAML
+    alone: its From Python section names the calls and the pages, and each holds what it
+    says there."""
+    root = Path(__file__).resolve().parents[1]
+    readme = root.joinpath("README.md").read_text(encoding="utf-8")
+    section = readme.split("\n## From Python\n", 1)[1].split("\n## ", 1)[0]
+    for said in ("Connection.open(port)", "commands.drive_direct(200, 200)", "help(roomba_bt)"):
+        assert said in section, said
+    assert (Path(roomba_bt.__file__).parent / "py.typed").is_file()
+    assert ">>> " in (roomba_bt.__doc__ or "")  # help(roomba_bt): a whole run
+    pages = {page: root.joinpath("docs", f"{page}.md").read_text(encoding="utf-8")
+             for page in ("robot", "runtime", "plugins")}  # fmt: skip
+    assert "### Odometry in a program's own loop" in pages["robot"]
+    assert "Connection.open(" in pages["robot"]
+    assert "## From Python: a run tick by tick" in pages["runtime"]
+    assert "### A behaviour in your own program" in pages["plugins"]
