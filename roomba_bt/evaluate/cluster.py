@@ -176,38 +176,76 @@ def dask_client(
 
 @contextlib.contextmanager
 def scheduler_client(scheduler: str, timeout: float | None = None) -> Iterator[Any]:
-    """A client of the scheduler at ``scheduler`` (closed on exit, its IO loop thread
-    ended: :func:`_end_loop`); :class:`SchedulerUnreachableError` if it cannot connect
-    within ``timeout`` s, by default :data:`SCHEDULER_CONNECT_TIMEOUT_S` as it is at the
-    call (a default of the constant itself was bound at import: a program or a test that
-    set the constant later waited the 10 s all the same)."""
+    """A client of the scheduler at ``scheduler`` on an event loop of this evaluation's own
+    (:func:`_event_loop`, ended on exit with the client closed);
+    :class:`SchedulerUnreachableError` if it cannot connect within ``timeout`` s, by default
+    :data:`SCHEDULER_CONNECT_TIMEOUT_S` as it is at the call (a default of the constant itself
+    was bound at import: a program or a test that set the constant later waited the 10 s all
+    the same)."""
     if timeout is None:
         timeout = SCHEDULER_CONNECT_TIMEOUT_S
     distributed = _import_distributed()
-    client = distributed.Client.__new__(distributed.Client)  # kept if __init__ fails
-    try:
-        client.__init__(scheduler, timeout=timeout)
-    except (OSError, TimeoutError) as exc:
-        _end_loop(client)
-        why = f"--scheduler {scheduler}: cannot connect ({exc})"
-        raise SchedulerUnreachableError(why) from None
-    try:
+    with _event_loop() as loop:
+        try:
+            client = distributed.Client(scheduler, loop=loop, timeout=timeout)
+        except (OSError, TimeoutError) as exc:
+            why = f"--scheduler {scheduler}: cannot connect ({exc})"
+            raise SchedulerUnreachableError(why) from None
         with client:
             yield client
+
+
+#: The name of the thread that runs a ``--scheduler`` client's event loop.
+CLIENT_LOOP_THREAD = "roomba-bt Dask client loop"
+
+
+@contextlib.contextmanager
+def _event_loop() -> Iterator[Any]:
+    """A Tornado IO loop running in a thread of its own (:data:`CLIENT_LOOP_THREAD`), for a
+    client given it as its public ``loop``: ended on exit, whatever became of the client.
+    A client that starts its own loop leaves it running once it is closed by anything but
+    its ``close()``: a client whose scheduler was lost closes itself, one that could not
+    connect is closed by its failed ``__init__``, and ``Client.close`` then returns at once.
+    Each such evaluation left an "IO loop" thread and its event loop's two sockets for the
+    rest of the process (tests/conftest.py's Leftovers found them after test_cluster.py);
+    ending it took the client's private ``_loop_runner``. A loop given to the client is
+    the caller's to end (Dask's ``LoopRunner`` neither starts nor stops a loop it did not
+    make), so this one is ended here, through nothing but asyncio's and Tornado's own API."""
+    import asyncio
+
+    from tornado.ioloop import IOLoop
+
+    running: list[tuple[Any, asyncio.Event]] = []
+    ready = threading.Event()
+
+    async def serve() -> None:
+        stop = asyncio.Event()
+        running.append((IOLoop.current(), stop))
+        ready.set()
+        await stop.wait()  # then asyncio.run cancels what the client left scheduled
+
+    def run() -> None:
+        try:
+            asyncio.run(serve())
+        finally:
+            ready.set()  # also when it could not start: not waited on for ever
+
+    thread = threading.Thread(target=run, name=CLIENT_LOOP_THREAD, daemon=True)
+    thread.start()
+    ready.wait()
+    if not running:
+        raise RuntimeError("the Dask client's event loop did not start")
+    loop, stop = running[0]
+    try:
+        yield loop
     finally:
-        _end_loop(client)
+        loop.add_callback(stop.set)
+        thread.join(LOOP_STOP_S)  # a daemon: one still ending does not hold the exit
 
 
-def _end_loop(client: Any) -> None:
-    """End the IO loop thread ``client`` started, if it still runs. Dask's ``Client.close``
-    returns at once for a client already closed, without ending it: one whose scheduler was
-    lost (it closes itself) or that could not connect (its ``__init__`` closes it before
-    raising, and the client is never ours to close). Each such evaluation left an "IO loop"
-    thread and its event loop's two sockets for the rest of the process (tests/conftest.py's
-    Leftovers found them after test_cluster.py)."""
-    runner = getattr(client, "_loop_runner", None)  # Dask's own: no public way to it
-    if runner is not None and runner.is_started():
-        runner.stop()
+#: How long the end of a client's event loop is waited for (s), as Dask's ``LoopRunner``
+#: waits for its own: its tasks are cancelled in milliseconds.
+LOOP_STOP_S = 10.0
 
 
 @contextlib.contextmanager

@@ -312,7 +312,7 @@ def test_the_connect_timeout_is_read_when_a_client_is_made(
     given: list[float] = []
 
     class Unreachable:
-        def __init__(self, address: str, timeout: float) -> None:
+        def __init__(self, address: str, loop: object, timeout: float) -> None:
             given.append(timeout)
             raise OSError("nothing listens")
 
@@ -365,8 +365,10 @@ def test_a_client_whose_scheduler_was_lost_ends_its_io_loop(
 
 
 def _io_loops() -> set[threading.Thread]:
-    """Dask's event loop threads (``distributed.utils.LoopRunner``'s) running now."""
-    return {thread for thread in threading.enumerate() if thread.name == "IO loop"}
+    """The event loop threads of Dask's clients running now: those Dask starts itself
+    (``distributed.utils.LoopRunner``'s) and a ``--scheduler`` client's own."""
+    names = {"IO loop", cluster.CLIENT_LOOP_THREAD}
+    return {thread for thread in threading.enumerate() if thread.name in names}
 
 
 @pytest.mark.parametrize(
@@ -679,3 +681,37 @@ def test_a_worker_killed_at_shutdown_leaves_no_copy_of_the_mission(
         client.close = closing_with_the_worker_stopped  # close_quietly's next step
     assert worker_process.exitcode == -signal.SIGKILL, "killed by its nanny"
     assert not list(tmp_path.glob("roomba-bt-*"))
+
+
+def test_the_dask_engine_reaches_no_private_name_of_dask() -> None:
+    """``cluster.py`` talks to Dask through its public API alone: no attribute and no
+    ``getattr`` name that starts with one underscore (its own ``self._...`` aside), on
+    anything. Ending a client's event loop took ``client._loop_runner``, Dask's own, which a
+    Dask release may rename or change without a word; the client now runs on a loop of this
+    evaluation's own (:func:`cluster._event_loop`), given as ``Client``'s ``loop``."""
+    import ast
+    import inspect
+
+    tree = ast.parse(inspect.getsource(cluster))
+    private = [
+        f"line {node.lineno}: {ast.unparse(node)}"
+        for node in ast.walk(tree)
+        if (
+            isinstance(node, ast.Attribute)
+            and _private(node.attr)
+            and not (isinstance(node.value, ast.Name) and node.value.id == "self")
+        )
+        or (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Name)
+            and node.func.id in {"getattr", "setattr", "hasattr"}
+            and len(node.args) > 1
+            and isinstance(node.args[1], ast.Constant)
+            and _private(str(node.args[1].value))
+        )
+    ]
+    assert private == []
+
+
+def _private(name: str) -> bool:
+    return name.startswith("_") and not name.startswith("__")
