@@ -241,19 +241,27 @@ def _is_action(leaf: Behaviour) -> bool:
     return getattr(declaration, "kind", None) == "action"
 
 
+#: The leaves that only count time beside the work of a parallel (a ``wait`` is ``clean
+#: for the duration``'s timer, ``dock_time_limit`` the docking's bound): RUNNING until their
+#: time is up, so never where a robot was when a limit ran out while another leaf ran.
+TIMERS = frozenset({"wait", "dock_time_limit"})
+
+
 def running_in(root: Behaviour) -> str:
     """`` in dock_approach`` when a time limit runs out under ``root`` (the run's --timeout,
     a ``timeout`` decorator's): the leaf still running (the stage it was in, without its
-    parameters, so equal stages group together), or "". A ``wait`` running beside another
-    leaf is a parallel's timer (``clean for the duration``: the timer and ``cover``): the
-    other is what the robot was doing, and is named."""
-    from roomba_bt.behaviours.actions import Wait  # here: actions -> lean -> this module
-
+    parameters, so equal stages group together), or "". A timer (:data:`TIMERS`) running
+    beside another leaf is a parallel's (``clean for the duration``: the ``wait`` and
+    ``cover``; a docking: ``dock_time_limit`` and its stage): the other is what the robot
+    was doing, and is named. Before, every --timeout of the dock mission ran out "in
+    dock_time_limit", and an evaluation's failures said no stage."""
     running = [
         node
         for node in root.iterate()
         if node.status is py_trees.common.Status.RUNNING and not node.children
     ]
-    doing = [n for n in running if getattr(n, "declaration", None) is not Wait.declaration]
+    doing = [
+        n for n in running if getattr(getattr(n, "declaration", None), "name", "") not in TIMERS
+    ]
     doing = doing or running
     return " in " + escaped(doing[0].name.split("(", 1)[0], ANY_CONTROL) if doing else ""

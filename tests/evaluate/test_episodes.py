@@ -478,3 +478,16 @@ def test_the_stage_names_the_node_of_an_error_or_a_decorator_failure(
                        permissions=Permissions(plugin_files=True))  # fmt: skip
     result = run_episode(spec)
     assert (result.outcome, result.stage) == (outcome, stage), result.reason
+
+
+def test_the_dock_missions_timeout_names_its_stage_not_its_time_limit() -> None:
+    """The shipped dock mission runs its stages in a parallel beside ``dock_time_limit``,
+    a timer RUNNING until its 10 minutes are up. The run's ``--timeout`` (3 s here, the
+    search still turning) ran out "in dock_time_limit", the timer, for every episode: a
+    1000-episode sweep's failures read ``261  TIMEOUT: --timeout 1 min of mission time ran
+    out in dock_time_limit``, no stage. Now the stage the robot was in is named, as a
+    ``wait`` beside ``cover`` leaves ``cover`` named."""
+    spec = EpisodeSpec(str(MISSIONS / "dock.yaml"), "apartment", seed=3, timeout_s=3.0)
+    result = run_episode(spec)
+    assert (result.outcome, result.stage) == ("timeout", "dock_search"), result.reason
+    assert result.reason.endswith("ran out in dock_search")
