@@ -941,8 +941,8 @@ def _run(
     from roomba_bt.evaluate.parallel import ProgressBar, evaluate
 
     bars = [
-        None if args.no_progress else ProgressBar(label=f"{Path(v.path).stem} "
-                                                  f"{' '.join(f'{k}={x}' for k, x in v.params)} ")
+        None if args.no_progress else ProgressBar(label=" ".join([Path(v.path).stem,
+                                                  *(f"{k}={x}" for k, x in v.params), ""]))
         for v in chosen
     ]  # fmt: skip
     progress = bars if partial is None else [_recorded(partial, bar) for bar in bars]

@@ -695,10 +695,18 @@ def _on_dask(specs: list[EpisodeSpec], engine: Engine, bar: Progress | None) -> 
     return {i: r for i, r in enumerate(flat) if r is not None}, retried, interruption
 
 
+#: The terminal's "erase to the end of the line" (ANSI EL, as ``sensors`` clears its screen
+#: with ANSI codes): a redraw shorter than the text it writes over leaves none of it.
+ERASE_TO_END = "\x1b[K"
+
+
 class ProgressBar:
     """``[#########.........] 12/50 ok 11 ETA 8s`` on stderr, redrawn in place on a terminal;
     into a file or a pipe (a CI log), a line of its own after the first episode, each tenth
-    and the last (a redraw per episode filled logs with carriage returns)."""
+    and the last (a redraw per episode filled logs with carriage returns). A redraw erases
+    what is left of the line after it: one shorter than the line before (an ETA from 100 s
+    to 99 s, another variant's bar with a shorter label on the same line) left the last
+    characters of the longer one, ``ETA 99ss``, ``ETA 57s17s``."""
 
     def __init__(self, stream: TextIO | None = None, width: int = 30, label: str = "") -> None:
         self.stream = stream if stream is not None else sys.stderr
@@ -724,6 +732,6 @@ class ProgressBar:
         start, end = ("\r", "\n" if done == total else "") if self.redraw else ("", "\n")
         self.stream.write(
             f"{start}{self.label}[{bar}] {done}/{total} ok {self.ok} "
-            f"elapsed {elapsed:.0f}s ETA {eta:.0f}s{end}"
+            f"elapsed {elapsed:.0f}s ETA {eta:.0f}s{ERASE_TO_END if self.redraw else ''}{end}"
         )
         self.stream.flush()

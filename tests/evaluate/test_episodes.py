@@ -92,6 +92,26 @@ def test_the_bar_redraws_on_a_terminal_and_writes_each_tenth_into_a_log() -> Non
     assert terminal.getvalue().count("\r") == 50 and terminal.getvalue().count("\n") == 1
 
 
+def test_a_redraw_on_a_terminal_erases_what_the_longer_line_before_left() -> None:
+    """A redraw writes over the line from its start: one shorter than the line before it
+    (the ETA from 100 s to 99 s; an A/B's two bars share the line, and ``dock`` redrew over
+    ``my-dock``) left the longer one's last characters, ``ETA 99ss``. Each redraw ends by
+    erasing the rest of the line; a log gets no terminal code."""
+    result = run_episode(episode_specs(BUMP, runs=1, params=(("duration", "1s"),))[0])
+    log, terminal = io.StringIO(), _Terminal()
+    for stream in (log, terminal):
+        long, short = (
+            ProgressBar(stream, width=10, label="my-dock "),
+            ProgressBar(stream, width=10, label="dock "),
+        )
+        long(1, 1000, result)
+        short(1, 1000, result)
+    redraws = terminal.getvalue().split("\r")[1:]
+    assert [r.startswith(("my-dock [", "dock [")) for r in redraws] == [True, True]
+    assert all(r.endswith("\x1b[K") for r in redraws)
+    assert "\x1b" not in log.getvalue()
+
+
 def test_assert_success_rate_passes_and_fails_with_the_report() -> None:
     summary = assert_success_rate(BUMP, runs=2, within_s=20, rate=1.0,
                                   params={"duration": "3s"})  # fmt: skip

@@ -31,6 +31,16 @@ def test_eval_prints_the_report_and_plots(tmp_path: Path,
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_the_progress_label_of_a_mission_without_parameters_is_its_name_once_spaced(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The bar's label is the mission and its parameters, each followed by one space: with
+    no parameter it read ``bump-and-turn  [...`` (an empty parameter text between two)."""
+    assert main(["eval", BUMP, "--runs", "1", "--timeout", "1s"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("bump-and-turn [") and "  [" not in err
+
+
 @pytest.mark.extra("plot")
 def test_every_variant_is_plotted_in_a_panel_of_its_own(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
