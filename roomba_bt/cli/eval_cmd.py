@@ -938,7 +938,7 @@ def _run(
     ``partial`` as it finishes; an exit code when the cluster is not there."""
     from roomba_bt.evaluate.cluster import ClusterUnavailableError, SchedulerUnreachableError
     from roomba_bt.evaluate.episode import MissionNotCompiled
-    from roomba_bt.evaluate.parallel import ProgressBar, evaluate
+    from roomba_bt.evaluate.parallel import ProgressBar, end_bars, evaluate
 
     bars = [
         None if args.no_progress else ProgressBar(label=" ".join([Path(v.path).stem,
@@ -947,7 +947,10 @@ def _run(
     ]  # fmt: skip
     progress = bars if partial is None else [_recorded(partial, bar) for bar in bars]
     try:
-        return evaluate(batches, engine, progress)
+        try:
+            return evaluate(batches, engine, progress)
+        finally:
+            end_bars(bars)  # before what is said next, an error's words too
     except SchedulerUnreachableError as exc:
         print(f"roomba-bt eval: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION

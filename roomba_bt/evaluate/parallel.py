@@ -695,6 +695,21 @@ def _on_dask(specs: list[EpisodeSpec], engine: Engine, bar: Progress | None) -> 
     return {i: r for i, r in enumerate(flat) if r is not None}, retried, interruption
 
 
+def end_bars(bars: Sequence[object]) -> None:
+    """End the line the last drawn of ``bars`` left open on a terminal (an evaluation that
+    stopped before its last episode: Ctrl-C, a lost cluster), so that what is said next
+    starts a line of its own: it followed the bar, ``ETA 567s^Cresults written to ...``."""
+    drawn = [bar for bar in bars if isinstance(getattr(bar, "drawn", None), tuple)]
+    last: Any = max(drawn, key=lambda bar: getattr(bar, "drawn", (-1,))[0], default=None)
+    if last is not None and last.drawn[1]:  # any progress callable without it draws no bar
+        last.stream.write("\n")
+        last.stream.flush()
+        last.drawn = (last.drawn[0], False)
+
+
+#: The order of the progress bars' draws, across bars: :attr:`ProgressBar.drawn`.
+_DRAWS = itertools.count()
+
 #: The terminal's "erase to the end of the line" (ANSI EL, as ``sensors`` clears its screen
 #: with ANSI codes): a redraw shorter than the text it writes over leaves none of it.
 ERASE_TO_END = "\x1b[K"
@@ -716,6 +731,9 @@ class ProgressBar:
         self.ok = 0
         isatty = getattr(self.stream, "isatty", None)
         self.redraw = bool(isatty()) if isatty is not None else False
+        #: when this bar last drew (the order of every bar's draws) and whether that left
+        #: its line open (a terminal's redraw before the last episode): :func:`end_bars`
+        self.drawn = (-1, False)
 
     def __call__(self, done: int, total: int, result: EpisodeResult) -> None:
         self.ok += result.succeeded
@@ -730,6 +748,7 @@ class ProgressBar:
         eta = elapsed / done * (total - done) if done else 0.0
         bar = "#" * filled + "." * (self.width - filled)
         start, end = ("\r", "\n" if done == total else "") if self.redraw else ("", "\n")
+        self.drawn = (next(_DRAWS), not end)
         self.stream.write(
             f"{start}{self.label}[{bar}] {done}/{total} ok {self.ok} "
             f"elapsed {elapsed:.0f}s ETA {eta:.0f}s{ERASE_TO_END if self.redraw else ''}{end}"

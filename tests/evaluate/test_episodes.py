@@ -112,6 +112,30 @@ def test_a_redraw_on_a_terminal_erases_what_the_longer_line_before_left() -> Non
     assert "\x1b" not in log.getvalue()
 
 
+def test_a_bar_left_mid_line_by_an_interrupted_evaluation_is_ended_before_what_follows() -> None:
+    """Ctrl-C on a terminal stopped the bars mid-line, and ``results written to int.jsonl``
+    followed the last one on its line (``ETA 567s^Cresults written ...``). ``end_bars``
+    ends the line the last drawn bar left open, once; a bar that drew its last episode
+    (its own end of line), or a log's, needs none."""
+    from roomba_bt.evaluate.parallel import end_bars
+
+    result = run_episode(episode_specs(BUMP, runs=1, params=(("duration", "1s"),))[0])
+    terminal, log = _Terminal(), io.StringIO()
+    a, b = ProgressBar(terminal, label="a "), ProgressBar(terminal, label="b ")
+    a(3, 10, result)
+    b(3, 10, result)
+    end_bars([a, None, b])
+    end_bars([a, b])
+    assert terminal.getvalue().endswith("\x1b[K\n") and terminal.getvalue().count("\n") == 1
+    b(10, 10, result)  # finished: its own end of line
+    end_bars([a, b])
+    assert terminal.getvalue().count("\n") == 2
+    in_a_log = ProgressBar(log)
+    in_a_log(3, 10, result)
+    end_bars([in_a_log])
+    assert log.getvalue().count("\n") == 1
+
+
 def test_assert_success_rate_passes_and_fails_with_the_report() -> None:
     summary = assert_success_rate(BUMP, runs=2, within_s=20, rate=1.0,
                                   params={"duration": "3s"})  # fmt: skip
