@@ -8,7 +8,14 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.evaluate.episode import EpisodeResult
-from roomba_bt.evaluate.stats import Z95, percentile, reason_group, summarize, wilson_interval
+from roomba_bt.evaluate.stats import (
+    Z95,
+    mcnemar_exact,
+    percentile,
+    reason_group,
+    summarize,
+    wilson_interval,
+)
 
 
 def result(seed: int, outcome: str = "success", time_s: float = 10.0, reason: str = "",
@@ -334,3 +341,17 @@ def test_the_successes_are_counted_by_what_the_mission_said_last() -> None:
     ]  # fmt: skip
     silent = summarize("dock.yaml", "room", [result(1), result(2)])  # no log leaf: no line
     assert silent.endings == () and "successes" not in str(silent)
+
+
+def test_the_page_reads_the_two_sided_p_value_with_its_direction() -> None:
+    """McNemar's p here is two-sided: 5 discordant pairs A's way and 1 B's give the p of 1
+    A's way and 5 B's. docs/evaluation.md read 'a change "helped" when the p-value is
+    small', which a B that failed more often also meets; it now says which way is read from
+    the counts, and that a large p (or a time interval across zero) is no evidence of no
+    difference."""
+    assert mcnemar_exact(5, 1) == mcnemar_exact(1, 5) == pytest.approx(0.21875)
+    page = Path(__file__).resolve().parents[2] / "docs" / "evaluation.md"
+    text = " ".join(page.read_text(encoding="utf-8").split())
+    assert 'A change "helped" when the p-value is small' not in text
+    assert "it is two-sided, so which way is read from the counts" in text
+    assert 'is no evidence of "no difference"' in text
