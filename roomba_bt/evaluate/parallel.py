@@ -28,6 +28,7 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
+from pathlib import PurePath
 from types import FrameType
 from typing import Any, TextIO, cast
 
@@ -41,6 +42,7 @@ from roomba_bt.evaluate.episode import (
 )
 from roomba_bt.evaluate.interleave import Interleaved
 from roomba_bt.evaluate.interleave import Progress as Progress  # re-exported: callers name it here
+from roomba_bt.mission.shipped import SHIPPED_PREFIX
 from roomba_bt.runtime.ending import threads_left
 
 #: How many times a local evaluation starts its workers again after one died with no episode
@@ -203,7 +205,7 @@ def _blame(
             died = alone.died or "exit status unknown"
             how = f"{died}, twice (the second time running it alone)"
             finished(index, died_result(specs[index], how))
-            print(f"roomba-bt eval: seed {specs[index].seed} killed its worker again, alone "
+            print(f"roomba-bt eval: seed {_seeds(specs, [index])} killed its worker again, alone "
                   f"({died}): recorded as DIED", file=sys.stderr)  # fmt: skip
             blamed = True
     if ended.running and not blamed:
@@ -213,9 +215,21 @@ def _blame(
 
 
 def _seeds(specs: Sequence[EpisodeSpec], indices: Sequence[int], shown: int = 10) -> str:
-    seeds = [str(specs[i].seed) for i in indices]
+    """The seeds of ``specs[i]`` for each of ``indices`` (the first ``shown``), each with its
+    variant when ``specs`` hold several (an A/B runs every seed once per variant: its seeds
+    read ``28, 28``, the same episode twice to a reader): ``28 (dock), 28 (my-dock)``."""
+    variants = {(spec.mission, spec.params) for spec in specs}
+    seeds = [_seed_said(specs[i], len(variants) > 1) for i in indices]
     more = f" and {len(seeds) - shown} more" if len(seeds) > shown else ""
     return ", ".join(seeds[:shown]) + more
+
+
+def _seed_said(spec: EpisodeSpec, variant: bool) -> str:
+    """``spec``'s seed, with its variant as the progress bar labels it when ``variant``."""
+    if not variant:
+        return str(spec.seed)
+    name = PurePath(spec.mission.removeprefix(SHIPPED_PREFIX)).stem
+    return f"{spec.seed} ({' '.join([name, *(f'{k}={v}' for k, v in spec.params)])})"
 
 
 @dataclass(frozen=True)

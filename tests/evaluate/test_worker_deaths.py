@@ -7,6 +7,7 @@ starts prints no traceback."""
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -119,6 +120,32 @@ def test_a_local_worker_killed_from_outside_still_runs_its_episodes_again(
     assert [r.outcome for r in results] == ["success"] * 4
     assert replace(results[2], wall_s=0.0) == replace(run_episode(specs[2]), wall_s=0.0)
     assert run.retried >= 1
+
+
+def test_the_seeds_said_of_a_dead_worker_in_an_a_b_name_their_variants(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An A/B runs each seed once per variant: a worker killed from outside in a sweep of
+    dock against my-dock was said as ``seed(s) 28, 28 were running``, the same seed twice
+    with nothing to tell which episode was which. Each is said with its variant, as its
+    progress bar is labelled: ``3 (once)``, ``3 (once-b)``."""
+    marker = tmp_path / "killed"
+    once = f"if _seed() == 3 and not os.path.exists({str(marker)!r}):"
+    kill = f"open({str(marker)!r}, 'w').close(); os.kill(os.getpid(), 9)"
+    (tmp_path / "once.py").write_text(
+        _DIES_ON_SEED.replace("if _seed() == 3:", once).replace("os._exit(1)", kill)
+    )
+    tree = "plugins: [./once.py]\ntree:\n  sequence:\n    - dies_on_seed_3\n"
+    (tmp_path / "once.yaml").write_text(tree)
+    (tmp_path / "once-b.yaml").write_text(tree)
+    code = main(["eval", str(tmp_path / "once.yaml"), str(tmp_path / "once-b.yaml"),
+                 "--runs", "4", "--seed", "1", "--timeout", "5s", "--jobs", "2",
+                 "--allow-plugin-files", "--no-progress"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 0, err
+    said = [line for line in err.splitlines() if "a worker process died" in line]
+    assert len(said) == 1 and re.search(r"seed\(s\) (\d \(once(-b)?\), )*3 \(once(-b)?\)", said[0])
+    assert re.search(r"seed\(s\) [\d, ]+ (were|ran)", err) is None, err
 
 
 _DIES_ONCE_THEN_RUNS = """\
