@@ -42,7 +42,7 @@ from roomba_bt.evaluate.episode import (
     hung_result,
     run_episode,
 )
-from roomba_bt.evaluate.parallel import NO_WORKERS, SCHEDULER_LOST
+from roomba_bt.evaluate.parallel import NO_WORKERS, SCHEDULER_LOST, seeds_said
 from roomba_bt.evaluate.sources import remove_copies
 from roomba_bt.installation import optional_import_failure
 from roomba_bt.runtime.wall_limit import WallLimit, WallLimitReached
@@ -806,10 +806,9 @@ def _say_reruns(specs: Sequence[EpisodeSpec], keys: list[str]) -> int:
 
 def _seeds_of(specs: Sequence[EpisodeSpec], keys: list[str], shown: int = 10) -> str:
     """The seeds of the episodes keyed ``episode-BATCH-i`` (or ``...-i-alone``), the first
-    ``shown`` of them, in order."""
-    seeds = sorted({specs[int(key.split("-")[2])].seed for key in keys})
-    more = f" and {len(seeds) - shown} more" if len(seeds) > shown else ""
-    return ", ".join(str(seed) for seed in seeds[:shown]) + more
+    ``shown`` of them, in order, each with its variant in an A/B (:func:`seeds_said`: they
+    read ``75, 75``, one seed for two episodes)."""
+    return seeds_said(specs, sorted({int(key.split("-")[2]) for key in keys}), shown)
 
 
 def warm_up(client: Any) -> None:

@@ -143,7 +143,8 @@ def run_episodes(
             why = "; ".join(f"seed {specs[i].seed}: {run.results[i].reason}" for i in ended.hung)
             print(f"roomba-bt eval: an episode ran past its wall-clock limit, its worker ended "
                   f"({why}); the {len(ended.lost)} episode(s) its pool had taken run again in "
-                  f"new workers: seeds {_seeds(specs, ended.lost)}", file=sys.stderr)  # fmt: skip
+                  f"new workers: seeds {seeds_said(specs, ended.lost)}",
+                  file=sys.stderr)  # fmt: skip
             continue
         todo = [i for i in todo if i not in ended.running]
         if _blame(specs, ended, finished, wall_limit_s) or not todo:
@@ -152,7 +153,7 @@ def run_episodes(
             raise WorkersLostError(
                 f"a worker process died {POOL_RESTARTS + 1} times with no episode to blame "
                 f"(ended from outside: the OOM killer?); {len(todo)} episode(s) did not "
-                f"finish: seeds {_seeds(specs, todo)}",
+                f"finish: seeds {seeds_said(specs, todo)}",
                 run.in_order(),
                 run.retried,
             )
@@ -190,13 +191,13 @@ def _blame(
     whose worker dies again is recorded as DIED (:func:`~roomba_bt.evaluate.episode.died_result`,
     how it died as the reason). Whether one was: else the worker was ended from outside.
     What happens is said on stderr as it happens."""
-    running = f"seed(s) {_seeds(specs, ended.running)}" if ended.running else ""
+    running = f"seed(s) {seeds_said(specs, ended.running)}" if ended.running else ""
     queued = [i for i in ended.lost if i not in ended.running]
     print(f"roomba-bt eval: a worker process died: {ended.died or 'exit status unknown'}; "
           + (f"{running} were running: each runs again alone" if running else
              "no episode was running: none to blame")
           + (f"; the {len(queued)} other episode(s) its pool had taken run again in new "
-             f"workers: seeds {_seeds(specs, queued)}" if queued else ""),
+             f"workers: seeds {seeds_said(specs, queued)}" if queued else ""),
           file=sys.stderr)  # fmt: skip
     blamed = False
     for index in ended.running:
@@ -205,8 +206,8 @@ def _blame(
             died = alone.died or "exit status unknown"
             how = f"{died}, twice (the second time running it alone)"
             finished(index, died_result(specs[index], how))
-            print(f"roomba-bt eval: seed {_seeds(specs, [index])} killed its worker again, alone "
-                  f"({died}): recorded as DIED", file=sys.stderr)  # fmt: skip
+            print(f"roomba-bt eval: seed {seeds_said(specs, [index])} killed its worker again, "
+                  f"alone ({died}): recorded as DIED", file=sys.stderr)  # fmt: skip
             blamed = True
     if ended.running and not blamed:
         print(f"roomba-bt eval: {running} ran alone without a death: the worker was "
@@ -214,7 +215,7 @@ def _blame(
     return blamed
 
 
-def _seeds(specs: Sequence[EpisodeSpec], indices: Sequence[int], shown: int = 10) -> str:
+def seeds_said(specs: Sequence[EpisodeSpec], indices: Sequence[int], shown: int = 10) -> str:
     """The seeds of ``specs[i]`` for each of ``indices`` (the first ``shown``), each with its
     variant when ``specs`` hold several (an A/B runs every seed once per variant: its seeds
     read ``28, 28``, the same episode twice to a reader): ``28 (dock), 28 (my-dock)``."""

@@ -163,6 +163,11 @@ def test_the_seeds_run_again_are_named_from_their_keys(capsys: pytest.CaptureFix
     assert cluster._seeds_of(specs, keys) == (
         "100, 101, 102, 103, 104, 105, 106, 107, 108, 109 and 2 more"
     )
+    # an A/B: seed 100 of each variant, each said with its variant (it read "100" once)
+    ab = [specs[0], dataclasses.replace(specs[0], params=(("turn_speed", "90mm/s"),))]
+    assert cluster._seeds_of(ab, ["episode-0a1b2c-1", "episode-0a1b2c-0"]) == (
+        "100 (dock), 100 (dock turn_speed=90mm/s)"
+    )
     assert cluster._say_reruns(specs, keys[:2]) == 2
     err = capsys.readouterr().err
     assert_quoted("docs/evaluation.md", "roomba-bt eval: 2 episode(s) ran again", err, numbers=True)
