@@ -625,7 +625,7 @@ def run_on_client(
                     break
                 key = f"episode-{batch}-{i}-alone"
                 finished(i, _alone(client, watch, travelling[i], wall_limit_s, key, first,
-                                   gathered))  # fmt: skip
+                                   gathered, seeds_said(specs, [i])))  # fmt: skip
         except KeyboardInterrupt as exc:
             interrupt = exc
             client.cancel([f for f in futures.values() if not f.done()])
@@ -712,7 +712,7 @@ def _gather(
                                                      gathered.asks_scheduler)  # fmt: skip
         i = index[future.key]
         if status == "error":  # (type, exception, traceback)
-            given_up[i] = _killed_worker(specs[i], result[1])
+            given_up[i] = _killed_worker(specs[i], result[1], seeds_said(specs, [i]))
         elif status == "cancelled":  # its result is Dask's FutureCancelledError
             gathered.cancelled(result)
         else:
@@ -720,7 +720,7 @@ def _gather(
     return given_up
 
 
-def _killed_worker(spec: EpisodeSpec, error: BaseException) -> BaseException:
+def _killed_worker(spec: EpisodeSpec, error: BaseException, said: str = "") -> BaseException:
     """``error``, Dask's ``KilledWorker`` (each worker that held the episode died, more than
     the scheduler's ``allowed-failures``), said on stderr. A worker runs the episodes queued
     on it one after the other, and they all count each death: the one that killed it is
@@ -730,20 +730,22 @@ def _killed_worker(spec: EpisodeSpec, error: BaseException) -> BaseException:
 
     if not isinstance(error, KilledWorker):
         raise error
-    print(f"roomba-bt eval: seed {spec.seed}: {error.allowed_failures + 1} Dask worker(s) died "
-          "running it or with it queued: it runs again alone once the others are done",
+    print(f"roomba-bt eval: seed {said or spec.seed}: {error.allowed_failures + 1} Dask "
+          "worker(s) died running it or with it queued: it runs again alone once the others "
+          "are done",
           file=sys.stderr)  # fmt: skip
     return error
 
 
 def _alone(
     client: Any, watch: WorkerWatch, spec: EpisodeSpec, wall_limit_s: float | None, key: str,
-    first: BaseException, gathered: _Gathered,
+    first: BaseException, gathered: _Gathered, said: str = "",
 ) -> EpisodeResult | None:  # fmt: skip
     """The episode Dask gave up on (``first``, its ``KilledWorker``) run again with no other
     episode of the evaluation beside it: its result, or DIED when its workers die again
-    (:func:`died_on_workers`), said on stderr; None when it was cancelled (``watch`` found no
-    worker for it, the scheduler was lost: noted in ``gathered``)."""
+    (:func:`died_on_workers`), said on stderr (its seed as ``said``, with its variant in
+    an A/B: :func:`~roomba_bt.evaluate.parallel.seeds_said`); None when it was cancelled
+    (``watch`` found no worker for it, the scheduler was lost: noted in ``gathered``)."""
     from concurrent.futures import CancelledError
 
     from distributed.scheduler import KilledWorker
@@ -753,7 +755,7 @@ def _alone(
     try:
         result: EpisodeResult = future.result()
     except KilledWorker as again:
-        return died_on_workers(spec, first, again)
+        return died_on_workers(spec, first, again, said)
     except CancelledError as cancelled:
         gathered.cancelled(cancelled)
         return None
@@ -761,12 +763,15 @@ def _alone(
         if not future.done():  # Ctrl-C
             client.cancel([future])
         future.release()
-    print(f"roomba-bt eval: seed {spec.seed} ran alone without a death (it was queued on a "
+    print(f"roomba-bt eval: seed {said or spec.seed} ran alone without a death (it was "
+          "queued on a "
           "dying worker)", file=sys.stderr)  # fmt: skip
     return result
 
 
-def died_on_workers(spec: EpisodeSpec, first: BaseException, again: BaseException) -> EpisodeResult:
+def died_on_workers(
+    spec: EpisodeSpec, first: BaseException, again: BaseException, said: str = ""
+) -> EpisodeResult:
     """The DIED record of an episode whose Dask workers kept dying (``first``, Dask's
     ``KilledWorker`` among the others) and again when it ran alone (``again``): a behaviour
     calling ``os._exit``, a crash in C code; how many died, the last worker, said on stderr."""
@@ -775,7 +780,8 @@ def died_on_workers(spec: EpisodeSpec, first: BaseException, again: BaseExceptio
     how = (f"{int(getattr(first, 'allowed_failures', 0)) + 1} Dask worker(s) died running it, "
            f"{allowed + 1} more when it ran alone, the last {last} (the scheduler's "
            f"distributed.scheduler.allowed-failures is {allowed})")  # fmt: skip
-    print(f"roomba-bt eval: seed {spec.seed} killed its workers again, alone: recorded as DIED",
+    print(f"roomba-bt eval: seed {said or spec.seed} killed its workers again, alone: recorded "
+          "as DIED",
           file=sys.stderr)  # fmt: skip
     return died_result(spec, how, worker=last)
 

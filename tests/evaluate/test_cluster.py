@@ -720,3 +720,25 @@ def test_the_dask_engine_reaches_no_private_name_of_dask() -> None:
 
 def _private(name: str) -> bool:
     return name.startswith("_") and not name.startswith("__")
+
+
+def test_an_episode_whose_dask_workers_kept_dying_is_said_with_its_variant(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """In an A/B every seed is two episodes: the lines of one whose Dask workers died (run
+    again alone, recorded as DIED) said ``seed 3`` of either; the evaluation says each as
+    :func:`~roomba_bt.evaluate.parallel.seeds_said` does, ``3 (dock turn_speed=90mm/s)``."""
+    from distributed.scheduler import KilledWorker
+
+    from roomba_bt.evaluate.parallel import seeds_said
+
+    ab = [SPECS[0], dataclasses.replace(SPECS[0], params=(("turn_speed", "90mm/s"),))]
+    said = seeds_said(ab, [1])
+    first = KilledWorker("episode-0a1b2c-1", None, allowed_failures=0)
+    assert cluster._killed_worker(ab[1], first, said) is first
+    died = cluster.died_on_workers(ab[1], first, first, said)
+    err = capsys.readouterr().err
+    assert said == f"{SPECS[0].seed} (dock turn_speed=90mm/s)"
+    assert f"seed {said}: 1 Dask worker(s) died running it or with it queued" in err
+    assert f"seed {said} killed its workers again, alone: recorded as DIED" in err
+    assert died.outcome == "died"
