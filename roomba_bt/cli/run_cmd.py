@@ -105,9 +105,9 @@ def _add_run_parser(sub: Any) -> None:
         Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
         virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage
         (or a --profile the robot's frames show wrong before anything of the mission was sent),
-        3 not started: the port could not be opened or the robot did not answer (nothing of
-        the mission sent: safe to retry), 4 a behaviour raised an exception (sys.exit() too) or
-        the run hung past --wall-limit, 7
+        3 not started: the port could not be opened, the robot did not answer or its stream
+        never came (nothing of the mission sent: safe to retry), 4 a behaviour raised an
+        exception (sys.exit() too) or the run hung past --wall-limit, 7
         succeeded but failed --strict (or, with --strict, not started: the mission has
         warnings), 8 the link was lost after the run started (the robot may have moved: the
         summary's safe stop line says whether the stop reached it), {INTERNAL_ERROR_SAID},

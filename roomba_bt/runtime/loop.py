@@ -843,11 +843,23 @@ def run_ended_by(
     return None, terminate_raised(exc)
 
 
+#: what the reason of a run the link ended before its stream's first frame adds: the robot
+#: answered the start-up, but with no frame the tree never ticked, so nothing of the mission
+#: was sent and a retry is as safe as after a robot that never answered (exit 3, ``NO
+#: CONNECTION``; decided: a service's ``RestartPreventExitStatus=8`` kept a run whose stream
+#: request a noisy cable lost from being tried again, though nothing had moved)
+NOT_STARTED = (
+    "the mission did not start: no sensor frame came after the robot answered the start-up, "
+    "so nothing of the mission was sent"
+)
+
+
 def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool, wrote: bool) -> None:
     """The outcome and reason of a run that ``exc`` ended (Ctrl-C aside): the operator's
     stop, the link (its own errors, :class:`LinkDown` and :class:`ConnectionFailed`;
     ``answered``: the robot had streamed, so it was not merely never there; a bridge that
-    closed before a byte, :class:`TurnedAway`, with none answered: not started; frames of
+    closed before a byte, :class:`TurnedAway`, with none answered: not started; a link lost
+    before the stream's first frame: not started either, :data:`NOT_STARTED`; frames of
     another model than the profile's before the run ``wrote`` a command since its start-up:
     a wrong setting, exit 2, nothing moved), or an
     exception in a behaviour, an ``OSError`` too, or its ``sys.exit()``, a
@@ -865,8 +877,14 @@ def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool, wrote: 
         summary.reason, summary.link_error = str(exc), exc
     elif isinstance(exc, LinkDown):
         wrong = exc.mismatch is not None and not wrote  # before a command of the mission
-        summary.outcome = Outcome.WRONG_PROFILE if wrong else Outcome.CONNECTION_LOST
         summary.reason, summary.headline, summary.link_error = str(exc), exc.headline, exc
+        if wrong:
+            summary.outcome = Outcome.WRONG_PROFILE
+        elif not answered:  # no frame: no tick, nothing of the mission sent (decided: 3)
+            summary.outcome = Outcome.NO_CONNECTION
+            summary.reason += f"; {NOT_STARTED}"
+        else:
+            summary.outcome = Outcome.CONNECTION_LOST
     else:  # a bug in a behaviour must still end in a safe stop. An OSError is one too: the
         # link turns its own I/O errors into LinkDown (PortLost) and ConnectionFailed where
         # it reads and writes (robot/link.py), so a bare one came from a behaviour's code

@@ -61,8 +61,9 @@ class ExitCode(IntEnum):
     #: robot's frames show wrong before anything of the mission was written
     #: (``Outcome.WRONG_PROFILE``): a setting, which fails the same way again
     INVALID = 2
-    #: could not start: the port could not be opened or the robot did not answer the
-    #: start-up (``Outcome.NO_CONNECTION``); no command of the mission was sent, so trying
+    #: could not start: the port could not be opened, the robot did not answer the
+    #: start-up, or its stream's first frame never came (``Outcome.NO_CONNECTION``: the tree
+    #: never ticked); no command of the mission was sent, so trying
     #: again is safe (systemd's ``Restart=on-failure``, docs/unattended.md). ``sensors``,
     #: ``sim`` and ``eval`` exit 3 for their own connection's failure
     CONNECTION = 3
@@ -118,7 +119,9 @@ class Outcome(Enum):
     TIMEOUT = "timeout"
     INTERRUPTED = "interrupted"
     CONNECTION_LOST = "connection lost"
-    #: the robot never answered the start-up (it was never connected, so nothing was lost)
+    #: the robot never answered the start-up (it was never connected, so nothing was lost),
+    #: or the link failed before its stream's first frame (no tick: the mission never
+    #: started; 0.1.0 said CONNECTION_LOST, both exit 3)
     NO_CONNECTION = "no connection"
     #: the robot's frames show another model than the profile's (the robot layer's
     #: ``mismatch``) before the run wrote anything of the mission: nothing moved, and a

@@ -80,3 +80,42 @@ def test_eval_records_the_faults_its_episodes_met(
     ]
     records = [json.loads(line) for line in out.read_text().splitlines()]
     assert [r["outcome"] for r in records] == ["CONNECTION LOST"] * 2
+
+
+#: the robot resets as its stream is asked for: the start-up was answered, no frame came
+RESET_BEFORE_A_FRAME = ["--reset-at", "0", "--faults-from-stream"]
+#: what the reason of such a run (and episode) ends with
+NOT_STARTED = (
+    "the mission did not start: no sensor frame came after the robot answered the start-up, "
+    "so nothing of the mission was sent"
+)
+
+
+def test_a_run_whose_stream_never_came_was_not_started(capsys: pytest.CaptureFixture[str]) -> None:
+    """The link failed before the stream's first frame: the tree never ticked, nothing of
+    the mission was sent. NO CONNECTION, exit 3, safe to retry (decided; it was 8, "lost
+    after the run started", where a service's RestartPreventExitStatus=8 left it to a
+    person; 0.1.0: CONNECTION LOST, exit 3)."""
+    argv = ["run", *BUMP, "--fast", "--display", "none", *RESET_BEFORE_A_FRAME]
+    assert main(argv) == ExitCode.CONNECTION
+    out, err = capsys.readouterr()
+    assert "outcome      NO CONNECTION (sim://empty-room: the robot reset: " in out
+    assert "ticks        0 " in out
+    assert f"; {NOT_STARTED})\n" in out
+    assert err.startswith("roomba-bt: no connection: sim://empty-room: the robot reset: ")
+    assert err.rstrip().endswith(NOT_STARTED)
+
+
+def test_an_episode_whose_stream_never_came_is_no_connection(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``eval``'s episode says it as the run does: NO CONNECTION, not CONNECTION LOST."""
+    out = tmp_path / "never.jsonl"
+    argv = ["eval", *BUMP, "--runs", "1", "--no-progress", "--out", str(out),
+            *RESET_BEFORE_A_FRAME]  # fmt: skip
+    code = main(argv)
+    [record] = [json.loads(line) for line in out.read_text().splitlines()]
+    assert record["outcome"] == "NO CONNECTION"
+    assert record["reason"].endswith(NOT_STARTED)
+    assert "NO CONNECTION: sim://empty-room: the robot reset: " in capsys.readouterr().out
+    assert code == ExitCode.OK  # an evaluation's own exit: its episodes ran (eval's table)

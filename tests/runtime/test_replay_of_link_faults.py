@@ -110,10 +110,14 @@ def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and
         ended = "wrong profile" if profile is ROOMBA500 else "connection lost"
         assert f"replay: the recorded run ended in {ended}" in out
         return
-    _says_the_recorded_loss_not_its_own_stop(out, caplog)
+    # before the first tick nothing of the mission was sent: not started (exit 3's outcome)
+    ended = "NO CONNECTION" if faults.disconnect_at == 0.0 else "CONNECTION LOST"
+    _says_the_recorded_loss_not_its_own_stop(out, caplog, ended)
 
 
-def _says_the_recorded_loss_not_its_own_stop(out: str, caplog: pytest.LogCaptureFixture) -> None:
+def _says_the_recorded_loss_not_its_own_stop(
+    out: str, caplog: pytest.LogCaptureFixture, ended: str = "CONNECTION LOST"
+) -> None:
     """A replay whose recorded run lost its link says how that run ended, in its summary's
     outcome (once: not again on a last line), and no stop of its own: it printed "ERROR ...
     the stop was written but is unconfirmed", "outcome CONNECTION LOST (the safe stop did
@@ -121,7 +125,7 @@ def _says_the_recorded_loss_not_its_own_stop(out: str, caplog: pytest.LogCapture
     stop NOT DELIVERED" of a replay that reaches no robot (``monitor RECORD``'s rule)."""
     from roomba_bt.monitor.recorded import NO_STOP_REPLAYED
 
-    assert "outcome      CONNECTION LOST (the recorded run's: " in out, out
+    assert f"outcome      {ended} (the recorded run's: " in out, out
     assert f"safe stop    {NO_STOP_REPLAYED}" in out, out
     assert "did not reach the robot" not in out and "NOT DELIVERED" not in out
     assert "the recorded run ended in" not in out

@@ -217,10 +217,10 @@ def test_a_reset_right_after_our_stream_request_names_the_cable_too(
     run_mission: RunMission,
 ) -> None:
     """The noisy-cable report: a lost 148 made the stream request's packet id 7 a Reset, and
-    the run blamed a battery dip alone."""
+    the run blamed a battery dip alone. Before the stream's first frame: not started."""
     run = run_mission(DRIVE_60_CM, host_line=LosesByte(STREAM, 0), timeout=10.0)
     reason = run.summary.reason
-    assert run.summary.outcome is Outcome.CONNECTION_LOST
+    assert run.summary.outcome is Outcome.NO_CONNECTION
     assert "the robot reset: its start-up banner was on the line" in reason
     assert "a battery or power dip" in reason
     assert "or a byte of our command 0.00 s before lost on the line (a bad cable" in reason
@@ -305,19 +305,31 @@ def test_a_stream_request_that_lost_a_byte_is_asked_for_again(
     assert "a byte of the request may have been lost on the way to the robot" in said[0]
 
 
-def test_a_stream_request_lost_every_time_ends_the_run_as_before(run_mission: RunMission) -> None:
+def test_a_stream_request_lost_every_time_ends_the_run_not_started(run_mission: RunMission) -> None:
     """Asked again :data:`STREAM_ASKS_AGAIN` times; then the ending of a stream lost (here
     the line garbled: the zeros ended the second request's wait with packet group 0, a list
-    the run cannot read), exit 8 (docs/reliability.md said 3, as before 0.2.0), the robot
-    stopped in Passive, with a word of the cable."""
+    the run cannot read), the robot stopped in Passive, with a word of the cable. No frame
+    came, so the tree never ticked and nothing of the mission was sent: NO CONNECTION, exit
+    3, safe to retry (decided; it was exit 8, "lost after the run started", which a
+    service's ``RestartPreventExitStatus=8`` left for a person; 0.1.0 said CONNECTION LOST,
+    exit 3)."""
     line = LosesByteOfEvery(*[(STREAM, 5)] * (STREAM_ASKS_AGAIN + 1))
     run = run_mission(DRIVE_60_CM, host_line=line, timeout=10.0)
-    _lost_and_stopped(
-        run,
+    summary = run.summary
+    assert (summary.outcome, summary.exit_code) == (Outcome.NO_CONNECTION, ExitCode.CONNECTION)
+    assert summary.ticks == 0
+    for words in (
         "the line is garbled",
         f"no frame came though the stream was asked for {STREAM_ASKS_AGAIN + 1} times: bytes "
         "from the computer to the robot may be lost (check the cable",
+    ):
+        assert words in summary.reason
+    assert summary.reason.endswith(
+        "; the mission did not start: no sensor frame came after the robot answered the "
+        "start-up, so nothing of the mission was sent"
     )
+    sim = run.simulator
+    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
     assert sum(data.endswith(STREAM) for _, data in run.link.writes) == STREAM_ASKS_AGAIN + 1
 
 
