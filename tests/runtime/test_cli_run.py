@@ -999,3 +999,37 @@ def test_after_a_behaviour_s_exception_the_live_tree_s_last_screen_is_the_tree_a
     for name in ("mode(safe)", "pre", "motors(main_brush=on)"):
         assert shown[name] == "✓", live
     assert shown == {name: left[name] for name in shown}, (live, final)
+
+
+DECORATED = """
+mission: decorated
+tree:
+  sequence:
+    - mode: safe
+    - timeout:
+        after: 2s
+        do: {drive: {velocity: 100 mm/s, distance: 5 cm}}
+    - retry: {times: 2, do: {wait: 0.1s}}
+      name: twice
+"""
+
+
+def test_the_tree_before_the_run_is_the_one_show_draws(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """``run`` drew its tree before the run with the live nodes' names, ``timeout`` and
+    ``twice``, where ``show`` drew ``timeout(after=2s)`` and ``retry(times=2) named 'twice'``:
+    a user comparing the two saw two trees. The log keeps the live names (the record and the
+    golden recordings hold them)."""
+    path = tmp_path / "decorated.yaml"
+    path.write_text(DECORATED)
+    assert main(["show", str(path)]) == 0
+    shown = capsys.readouterr().out.splitlines()
+    caplog.set_level(logging.INFO, logger="roomba_bt.run")
+    assert main(["run", str(path), "--fast", "--display", "log"]) == 0
+    out = capsys.readouterr().out
+    tree = shown[1 : shown.index("")]  # after the mission's line, up to the packets
+    assert "    -^- timeout(after=2s)" in tree
+    assert "    -^- retry(times=2) named 'twice'" in tree
+    assert out.splitlines()[: len(tree)] == tree
+    assert "twice -> SUCCESS" in caplog.messages  # the log's name: the node's own
