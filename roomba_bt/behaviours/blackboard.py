@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import py_trees
 
-from roomba_bt.behaviours.units import MARK, UnitError, ValueType, closest, held
+from roomba_bt.behaviours.units import MARK, UnitError, ValueType, closest, closest_name, held
 from roomba_bt.errors import RoombaBtError
 from roomba_bt.robot.interface import Odometry
 from roomba_bt.yamlsource import quoted
@@ -150,6 +150,7 @@ class RunBoard:
         "__weakref__",
         "client",
         "hints",
+        "meant",
         "mission",
         "prefix",
         "running",
@@ -170,6 +171,9 @@ class RunBoard:
         #: of those keys, the declared key each may be a misspelling of (`` (did you mean
         #: 'dirt_level'?)``), "" for none: ``dirt_levl`` ran silently beside ``dirt_level``
         self.hints: dict[str, str] = {}
+        #: the same as names (``{"dirt_levl": "dirt_level"}``), for an evaluation's records:
+        #: its report says the hint again from them (``eval --from``)
+        self.meant: dict[str, str] = {}
         #: claimed and not yet ended (:meth:`ended`): its names are not another run's to take
         self.running = False
         #: the runtime's py_trees client, the snapshot's writer (:meth:`write_snapshot`),
@@ -344,6 +348,7 @@ class RunBoard:
             storage.pop(name, None)
         self.said.clear()
         self.hints.clear()
+        self.meant.clear()
         self.written.clear()
 
 
@@ -514,6 +519,7 @@ def declare_keys(types: Mapping[str, ValueType]) -> None:
     py_trees.blackboard.Blackboard.storage[board.types_key] = dict(types)  # {}: still said
     board.said.clear()
     board.hints.clear()
+    board.meant.clear()
     board.written.clear()
     board.replace_client(types)
 
@@ -550,6 +556,14 @@ def undeclared_writes(board: RunBoard | None = None) -> tuple[tuple[str, str], .
     return tuple((board or _RUNNING.board).said.items())
 
 
+def undeclared_meant(board: RunBoard | None = None) -> tuple[tuple[str, str], ...]:
+    """Each undeclared key written this run (:func:`undeclared_writes`) that may be a
+    misspelling of a declared key, with that key: ``(("dirt_levl", "dirt_level"),)``. What
+    an evaluation records beside the writes, so that its report says `` (did you mean
+    'dirt_level'?)`` as ``run``'s summary does (:func:`undeclared_hinted`)."""
+    return tuple((board or _RUNNING.board).meant.items())
+
+
 def undeclared_hinted(board: RunBoard) -> tuple[tuple[str, str, str], ...]:
     """:func:`undeclared_writes` of ``board``'s run, each with the declared key it may be a
     misspelling of (`` (did you mean 'dirt_level'?)``, "" for none): what ``run``'s summary
@@ -573,6 +587,9 @@ def _said_undeclared(
     board.said[key] = by + where
     names = sorted(declared)
     hint = board.hints[key] = closest(key, names)
+    meant = closest_name(key, names)
+    if hint and meant is not None:
+        board.meant[key] = meant
     keys = ", ".join(names) or "none"
     _log.warning(
         "write_key(%r)%s%s: blackboard key %r is not declared by the mission%s (it declares: "

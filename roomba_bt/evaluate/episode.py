@@ -32,7 +32,12 @@ from types import FrameType
 from typing import Any
 
 from roomba_bt import yamlsource
-from roomba_bt.behaviours.blackboard import RunBoard, read_key, undeclared_writes
+from roomba_bt.behaviours.blackboard import (
+    RunBoard,
+    read_key,
+    undeclared_meant,
+    undeclared_writes,
+)
 from roomba_bt.behaviours.reasons import GUARD_STOPPED
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
 from roomba_bt.mission import (
@@ -256,6 +261,11 @@ class EpisodeResult:
     #: and where (:func:`~roomba_bt.behaviours.blackboard.undeclared_writes`): the warning a
     #: run says, which an episode's silenced log does not; the summary says it once
     undeclared: tuple[tuple[str, str], ...] = ()
+    #: of those keys, each that may be a misspelling of a declared key, with that key
+    #: (``(("dirt_levl", "dirt_level"),)``: :func:`~roomba_bt.behaviours.blackboard.
+    #: undeclared_meant`): the summary's warning says `` (did you mean 'dirt_level'?)`` as
+    #: ``run``'s does (it said none: the records held no declared key to suggest)
+    undeclared_like: tuple[tuple[str, str], ...] = ()
     #: each action of the user's own code whose commands the mode guard refused, with its
     #: class and where (:attr:`~roomba_bt.runtime.summary.RunSummary.refused_actions`): what
     #: ``run`` tells its author on stderr, which the summary says once for the episodes
@@ -727,6 +737,7 @@ def _measured(
         coverage=_coverage(simulator, spec.start_area or ""),
         keys=final_values(spec.keys, board),
         undeclared=_pairs_as_given(spec, undeclared_writes(board)),
+        undeclared_like=undeclared_meant(board),
         refused_actions=_pairs_as_given(spec, summary.refused_actions),
         said=summary.said,
         profile=spec.profile,

@@ -42,7 +42,11 @@ episode no behaviour held, in files written before they were recorded, and under
 action of the user's own code (a plugin's) whose commands the mode guard refused, with its
 class and where it is defined (``{"passive_drive": "PassiveDrive (lab.py:7)"}``; its JSON text
 in CSV; empty or absent: none, or a file written before it was recorded): what ``run`` tells
-its author on stderr, which the summary says again.
+its author on stderr, which the summary says again. ``undeclared_like`` holds, of the
+``undeclared_keys``, each that may be a misspelling of a key the mission declares, with that
+key (``{"dirt_levl": "dirt_level"}``; its JSON text in CSV; empty or absent: none, or a file
+written before it was recorded): the summary's `` (did you mean 'dirt_level'?)``, as ``run``
+says it.
 
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
@@ -139,6 +143,7 @@ COLUMNS: dict[str, tuple[str, str, Allowed]] = {
     "slowest_tick": ("slowest_tick_s", "float?", AT_LEAST_0),
     "slowest_tick_in": ("slowest_in", "str?", None),
     "refused_actions": ("refused_actions", "refused", None),
+    "undeclared_like": ("undeclared_like", "like", None),
 }
 
 #: the coverage columns (empty when the episode did not clean): name -> (Coverage field,
@@ -205,7 +210,7 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
             value = dict(value)
         elif kind == "hazard falls":
             value = sum(hazard_falls(dict(value)).values())
-        elif kind in ("undeclared", "refused"):
+        elif kind in ("undeclared", "refused", "like"):
             value = dict(value)
         out[column] = value
     if not result.slowest_in:  # no behaviour held its ticks: no such tick, not one of 0 s
@@ -376,6 +381,7 @@ _EXPECTED = {
     "falls by cause": "an object of cause: count, or null",
     "undeclared": "an object of key: writer, or null",
     "refused": "an object of action: its class and where, or null",
+    "like": "an object of key: the declared key it may be a misspelling of, or null",
     "coverage": "a finite number or null", "coverage text": "a string or null",
     "coverage by area": "an object of area: fraction, or null",
     "coverage curve": "a list of [t, fraction], or null",
@@ -394,7 +400,7 @@ _JSON_TYPES: dict[str, frozenset[type]] = {
     "bool": frozenset({bool}), "outcome": frozenset({str}), "params": frozenset({dict}),
     "falls total": frozenset({int, _NONE}), "hazard falls": frozenset({int, _NONE}),
     "falls by cause": frozenset({dict, _NONE}), "undeclared": frozenset({dict, _NONE}),
-    "refused": frozenset({dict, _NONE}),
+    "refused": frozenset({dict, _NONE}), "like": frozenset({dict, _NONE}),
     "coverage": _NUMBER | {_NONE}, "coverage text": frozenset({str, _NONE}),
     "coverage by area": frozenset({dict, _NONE}), "coverage curve": frozenset({list, _NONE}),
     "provenance text": frozenset({str, _NONE}), "provenance map": frozenset({dict, _NONE}),
@@ -549,7 +555,7 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
             except (TypeError, ValueError):  # "-1 is not a count of falls" named no column
                 _bad(column, kind, record.get(column))
             continue
-        if kind in ("undeclared", "refused"):
+        if kind in ("undeclared", "refused", "like"):
             values[name] = _undeclared(record.get(column), column, _EXPECTED[kind])
             continue
         raw = record[column]
@@ -751,11 +757,13 @@ class PartialResults:
 def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
     """The record's structured values as CSV cells (``None`` is an empty cell already)."""
     undeclared, refused = record["undeclared_keys"], record["refused_actions"]
+    like = record["undeclared_like"]
     cells = {
         "params": ";".join(f"{k}={v}" for k, v in record["params"].items()),
         "falls_by_cause": ";".join(f"{c}={n}" for c, n in record["falls_by_cause"].items()),
         "undeclared_keys": json.dumps(undeclared) if undeclared else "",  # a writer's ; and =
         "refused_actions": json.dumps(refused) if refused else "",
+        "undeclared_like": json.dumps(like) if like else "",
     }
     if record.get("sources") is not None:
         cells["sources"] = ";".join(f"{n}={d}" for n, d in record["sources"].items())

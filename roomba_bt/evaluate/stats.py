@@ -16,6 +16,7 @@ from collections import Counter
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
+from roomba_bt.behaviours.units import closest
 from roomba_bt.evaluate.episode import TRAPPED_RADIUS_MM, EpisodeResult
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import (
@@ -140,6 +141,9 @@ class Summary:
     #: where, and the episodes it was written in (:attr:`EpisodeResult.undeclared`): said
     #: once, where each episode's run would have warned of it
     undeclared: tuple[tuple[str, str, int], ...] = ()
+    #: of those keys, each that may be a misspelling of a declared key, with that key
+    #: (:attr:`EpisodeResult.undeclared_like`): the warning's `` (did you mean ...?)``
+    undeclared_like: tuple[tuple[str, str], ...] = ()
     #: each action of the user's own code whose commands the mode guard refused, its class
     #: and where, and the episodes (:attr:`EpisodeResult.refused_actions`): said once, with
     #: the fix ``run`` tells on stderr
@@ -243,8 +247,11 @@ class Summary:
         """The undeclared keys written, each as ``run`` warns of it, and in how many of the
         episodes: ``write_key('secret') by 'probe' at lab.py:10: blackboard key 'secret' is
         not declared by the mission, in 3 of 20 episodes; ...``."""
+        meant = dict(self.undeclared_like)
         return [
-            undeclared_said(key, where, episodes=f", in {episodes} of {self.runs} episodes")
+            undeclared_said(
+                key, where, _hint(key, meant), episodes=f", in {episodes} of {self.runs} episodes"
+            )
             for key, where, episodes in self.undeclared
         ]
 
@@ -322,6 +329,7 @@ class Summary:
     def to_dict(self) -> dict[str, object]:
         """The summary for scripts (``eval --json``): rates as fractions, times in seconds;
         ``rate`` and ``interval`` null when no episode finished."""
+        meant = dict(self.undeclared_like)  # an undeclared key's did-you-mean
         return {
             "mission": self.mission,
             "world": self.world,
@@ -353,7 +361,12 @@ class Summary:
             "episodes_without_cpu_time": self.untimed if self.timings else None,
             "mission_time": self.simulated_s,
             "undeclared_keys": [
-                {"key": key, "written": where.strip(), "episodes": episodes}
+                {
+                    "key": key,
+                    "written": where.strip(),
+                    "episodes": episodes,
+                    "did_you_mean": meant.get(key),
+                }
                 for key, where, episodes in self.undeclared
             ],
             "refused_actions": [
@@ -394,6 +407,24 @@ def _with_episodes(
             first, episodes = found.get(name, (where, 0))
             found[name] = (first, episodes + 1)
     return tuple((name, where, n) for name, (where, n) in found.items())
+
+
+def _first_meant(per_episode: Iterable[tuple[tuple[str, str], ...]]) -> tuple[tuple[str, str], ...]:
+    """Each undeclared key's declared key it may be, as the first episode that wrote it
+    says (every episode runs the same mission, so they agree)."""
+    meant: dict[str, str] = {}
+    for pairs in per_episode:
+        for key, like in pairs:
+            meant.setdefault(key, like)
+    return tuple(meant.items())
+
+
+def _hint(key: str, meant: dict[str, str]) -> str:
+    """`` (did you mean 'dirt_level'?)`` for ``key`` as ``run``'s summary says it
+    (:func:`~roomba_bt.behaviours.units.closest`, a look-alike letter named too), "" when no
+    declared key is like it."""
+    like = meant.get(key)
+    return closest(key, [like]) if like else ""
 
 
 def summarize(
@@ -439,6 +470,7 @@ def summarize(
         episodes_with_falls_by_cause=tuple((c, episodes_by_cause[c]) for c, _ in in_order),
         episodes_with_hazard_falls=sum(1 for r in results if hazard_falls(dict(r.falls))),
         undeclared=_with_episodes(r.undeclared for r in results),
+        undeclared_like=_first_meant(r.undeclared_like for r in results),
         refused_actions=_with_episodes(r.refused_actions for r in results),
         slow_ticks=tuple((where, slowest, n) for where, (slowest, n) in slow.items()),
         longest_trapped_s=max((r.longest_trapped_s for r in results), default=0.0),

@@ -1051,8 +1051,41 @@ def test_an_undeclared_key_written_is_said_once_with_its_episodes(
     assert main([*words, "--json"]) == 0
     (variant,) = json.loads(capsys.readouterr().out)["variants"]
     assert variant["undeclared_keys"] == [
-        {"key": "secret", "written": f"by 'sometimes_writer' at {plugin}:17", "episodes": 2}
-    ]
+        {"key": "secret", "written": f"by 'sometimes_writer' at {plugin}:17", "episodes": 2,
+         "did_you_mean": None}
+    ]  # fmt: skip
+
+
+def test_a_misspelt_key_is_said_with_its_did_you_mean_as_run_says_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``run``'s summary says ``write_key('dirt_levl') ... (did you mean 'dirt_level'?)``;
+    ``eval``'s said the same warning without it (an episode's log is silenced, and its
+    result kept no declared key). Said in the summary, ``--json`` and again from the
+    records (``eval --from``: the ``undeclared_like`` column)."""
+    plugin = tmp_path / "sometimes.py"
+    plugin.write_text(_SOMETIMES.replace('"secret"', '"dirt_levl"'))
+    mission = tmp_path / "sometimes.yaml"
+    mission.write_text("plugins: [./sometimes.py]\nblackboard:\n  dirt_level: int\n"
+                       "tree:\n  sequence:\n    - sometimes_writer\n")  # fmt: skip
+    out_file = tmp_path / "r.jsonl"
+    words = ["eval", str(mission), "--runs", "2", "--allow-plugin-files", "--no-progress",
+             "--wall-limit", "none", "--out", str(out_file)]  # fmt: skip
+    assert main(words) == 0
+    said = (
+        f"warning      write_key('dirt_levl') by 'sometimes_writer' at {plugin}:17: blackboard "
+        "key 'dirt_levl' is not declared by the mission (did you mean 'dirt_level'?), in 1 of 2 "
+        "episodes; declare it under blackboard: (dirt_levl: {type: ...}), or name a declared "
+        "key in a parameter listed in writes_keys\n"
+    )
+    assert said in capsys.readouterr().out
+    records = [json.loads(line) for line in out_file.read_text().splitlines()]
+    assert [r["undeclared_like"] for r in records] == [{"dirt_levl": "dirt_level"}, {}]
+    assert main(["eval", "--from", str(out_file)]) == 0
+    assert said in capsys.readouterr().out
+    assert main(["eval", "--from", str(out_file), "--json"]) == 0
+    (variant,) = json.loads(capsys.readouterr().out)["variants"]
+    assert variant["undeclared_keys"][0]["did_you_mean"] == "dirt_level"
 
 
 _ROGUE = '''\
