@@ -763,6 +763,14 @@ def _param_problem(p: object) -> str | None:
         )
     if not (isinstance(p.name, str) and _NAME.match(p.name)):
         return f"parameter name {p.name!r} is not snake_case ([a-z][a-z0-9_]*)"
+    if p.type is VALUE_TYPES["mark"]:  # a mark is the odometry the `mark` action keeps
+        return (
+            f"parameter {p.name!r}: type MARK has no written form, so no mission can give "
+            "it a value (the `mark` action writes one to a key): a parameter that names a "
+            f"mark key is Param({p.name!r}, STR, from_blackboard=False), the key typed with "
+            f"reads_keys={{{p.name!r}: MARK}} (odometry's since) or writes_keys={{{p.name!r}: "
+            "MARK}"
+        )
     unit = p.type.unit or "the type's unit"
     for which, bound in (("minimum", p.minimum), ("maximum", p.maximum)):
         if bound is not None and not _is_number(bound):

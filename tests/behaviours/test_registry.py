@@ -15,6 +15,7 @@ from py_trees.common import Status
 import roomba_bt.behaviours
 from roomba_bt.behaviours import (
     INT,
+    MARK,
     SPEED,
     Condition,
     Declaration,
@@ -170,6 +171,16 @@ def test_a_plugin_that_declares_itself_wrongly_is_named() -> None:
             r"a choice of words is enum\('left', 'right'\) \(from roomba_bt\.behaviours imp",
         ),
         ("sends_drive", {"sends": (137,)}, "a condition only reads"),
+        # accepted, and no mission could give it: a mark has no written form
+        (
+            "mark_param",
+            {"params": (Param("since", MARK),)},
+            r"parameter 'since': type MARK has no written form, so no mission can give it a "
+            r"value \(the `mark` action writes one to a key\): a parameter that names a mark "
+            r"key is Param\('since', STR, from_blackboard=False\), the key typed with "
+            r"reads_keys=\{'since': MARK\} \(odometry's since\) or writes_keys=\{'since': "
+            r"MARK\}$",
+        ),
     ],
 )
 def test_declaration_errors(name: str, declared: dict[str, Any], message: str) -> None:
