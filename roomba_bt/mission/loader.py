@@ -481,7 +481,7 @@ class Loader:
         if allowed and any(target.is_relative_to(root) for root in roots):
             return False
         said = _outside_message(what, text, target, roots, wording) if allowed else None
-        self.ctx.error(iloc.at(said or _not_allowed(text, wording, target, self.ctx.registry)))
+        _say_refused(self.ctx, iloc, said, (text, wording, target))
         return True
 
     def _again(self, target: Path, text: str, iloc: Loc) -> bool:
@@ -948,26 +948,54 @@ def record_declared(node: yaml.Node, _key_loc: Loc, loc: Loc) -> ValueType:
     )  # fmt: skip
 
 
-def _not_allowed(text: str, wording: Wording, target: Path, registry: Registry) -> str:
+def _served_by_packages(text: str, target: Path, registry: Registry) -> str | None:
+    """The warning for a ``plugins:`` entry whose every declared behaviour (read from its
+    source, not run) an installed package serves, when plugin files are not allowed: the
+    entry is redundant, so the mission runs on the packages' behaviours, the file not
+    loaded; None for any other entry. Decided: it was refused (exit 2) with "take it out",
+    though nothing was missing; "or install the plugin as a package" before that told a
+    user who had installed it to do so. With plugin files allowed the file is loaded, and
+    its names clash with the packages' (docs/plugins.md, Two plugins, one name)."""
+    if _module_named(text, target):
+        return None
+    names = names_declared_in(target)
+    served = {name: registry.served_by_package(name) for name in names}
+    if not names or not all(served.values()):
+        return None
+    packages = "; ".join(f"{name} by {origin}" for name, origin in served.items())
+    return (
+        f"plugin file {path_written(text)} not loaded, and need not be: installed plugins "
+        f"serve what it declares ({packages}); take {path_written(text)} out of the "
+        "mission's plugins:"
+    )
+
+
+def _say_refused(
+    ctx: Context, iloc: Loc, said: str | None, plugin: tuple[str, Wording, Path]
+) -> None:
+    """An entry refused at ``iloc``: ``said`` (outside the folders it may be read from), or
+    a plugin file not allowed, an error (:func:`_not_allowed`) unless installed packages
+    serve all it declares: then a warning that it can go (:func:`_served_by_packages`), the
+    file not loaded all the same."""
+    text, wording, target = plugin
+    served = None if said else _served_by_packages(text, target, ctx.registry)
+    if served is not None:
+        ctx.warn(iloc.at(served).as_warning())
+    else:
+        ctx.error(iloc.at(said or _not_allowed(text, wording, target)))
+
+
+def _not_allowed(text: str, wording: Wording, target: Path) -> str:
     """Why a plugin file is not imported without the caller's permission, and how to give it;
     for a module's name, which no permission would import, that it is none
-    (:func:`_module_named`). Where installed packages serve every behaviour the file declares
-    (read from its source, not run), that the entry can go: "or install the plugin as a
-    package" told a user who had installed it to do so."""
+    (:func:`_module_named`). One an installed package serves whole is no error
+    (:func:`_served_by_packages`): not here."""
     named = _module_named(text, target)
     if named:
         return named
-    said = f"plugin file {path_written(text)} not loaded: a mission file cannot run code on its own"
-    names = names_declared_in(target)
-    served = {name: registry.served_by_package(name) for name in names}
-    if names and all(served.values()):
-        packages = "; ".join(f"{name} by {origin}" for name, origin in served.items())
-        return (
-            f"{said}, and need not: installed plugins serve what it declares ({packages}); "
-            f"take {path_written(text)} out of the mission's plugins:"
-        )
     return (
-        f"{said}; allow its plugin files with {wording.allow_plugin_files} (or install the "
+        f"plugin file {path_written(text)} not loaded: a mission file cannot run code on its "
+        f"own; allow its plugin files with {wording.allow_plugin_files} (or install the "
         "plugin as a package)"
     )
 

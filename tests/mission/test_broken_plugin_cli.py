@@ -22,6 +22,7 @@ from runtime.installed import (  # tests/runtime: plugins installed
 )
 
 from roomba_bt.cli import main
+from roomba_bt.runtime.summary import ExitCode
 
 Capsys = pytest.CaptureFixture[str]
 
@@ -351,30 +352,40 @@ def test_validate_s_json_and_github_formats_say_a_plugin_that_did_not_load(
     ), annotation
 
 
-def test_a_plugin_file_an_installed_package_serves_is_told_it_can_go(
+def test_a_plugin_file_an_installed_package_serves_is_a_warning_that_it_can_go(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
 ) -> None:
     """A mission that kept its ``plugins:`` line after the plugin was installed as a package
-    was told "(or install the plugin as a package)": it is installed. Now the entry is told
-    it can go (the file read, not run); a file declaring a name no package serves is told
-    as before."""
+    was told "(or install the plugin as a package)": it is installed. Then the entry was
+    told it can go, and still refused, exit 2, though the package served all it declares.
+    Decided: the entry is redundant, so a warning (the file read, not run; not loaded), the
+    mission runs on the package's behaviour, and ``validate --strict`` fails it (exit 7); a
+    file declaring a name no package serves is refused as before."""
     _installed(tmp_path, monkeypatch, ("bt-s29-sound", "s29_sound", WORKING), compiler_too=True)
     (tmp_path / "sound.py").write_text(WORKING)
     (tmp_path / "other.py").write_text(WORKING.replace('"s29_sound"', '"s29_other"'))
-    mission = tmp_path / "m.yaml"
-    mission.write_text("mission: m\nplugins: [./sound.py, ./other.py]\ntree: s29_sound\n")
-    for command in (["validate"], ["run", "--fast", "--display", "none"]):
-        assert main([*command, str(mission)]) == 2
+    redundant = tmp_path / "m.yaml"
+    redundant.write_text("mission: m\nplugins: [./sound.py]\ntree: s29_sound\n")
+    warned = (
+        "m.yaml:2:11: warning: plugin file './sound.py' not loaded, and need not be: installed "
+        "plugins serve what it declares (s29_sound by 's29_sound' (s29_sound, from "
+        "bt-s29-sound)); take './sound.py' out of the mission's plugins:"
+    )
+    for command, code in (
+        (["validate"], ExitCode.OK),
+        (["validate", "--strict"], ExitCode.STRICT),
+        (["run", "--fast", "--display", "none"], ExitCode.OK),
+    ):
+        assert main([*command, str(redundant)]) == code, command
         out, err = capsys.readouterr()
-        said = out + err
-        assert (
-            "m.yaml:2:11: plugin file './sound.py' not loaded: a mission file cannot run code "
-            "on its own, and need not: installed plugins serve what it declares (s29_sound by "
-            "'s29_sound' (s29_sound, from bt-s29-sound)); take './sound.py' out of the "
-            "mission's plugins:"
-        ) in said, said
-        assert (
-            "m.yaml:2:23: plugin file './other.py' not loaded: a mission file cannot run code "
-            "on its own; allow its plugin files with --allow-plugin-files (or install the "
-            "plugin as a package)"
-        ) in said, said
+        assert warned in (out + err).replace(str(tmp_path) + "/", ""), out + err
+    both = tmp_path / "both.yaml"
+    both.write_text("mission: m\nplugins: [./sound.py, ./other.py]\ntree: s29_sound\n")
+    assert main(["validate", str(both)]) == ExitCode.INVALID
+    said = capsys.readouterr().out
+    assert (
+        "both.yaml:2:23: plugin file './other.py' not loaded: a mission file cannot run code "
+        "on its own; allow its plugin files with --allow-plugin-files (or install the "
+        "plugin as a package)"
+    ) in said, said
+    assert "both.yaml: failed (1 error)" in said  # the served entry is no error
