@@ -590,6 +590,8 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     ("docs/runtime.md", "m.yaml:1:1: cannot read mission file"): "tests/mission/"
     "test_hostile_files.py::test_a_mission_file_that_cannot_be_read_is_named_with_what_is_"
     "wanted",
+    ("docs/ci.md", "w.yaml:1:1: cannot read file"): "tests/mission/"
+    "test_hostile_files.py::test_validate_names_a_file_it_cannot_read_as_either",
     ("docs/simulator.md", "roomba-bt run: w.yaml: world: cannot be read"): "tests/cli/"
     "test_world_files.py::test_a_world_file_that_cannot_be_read_says_what_is_wanted",
     ("docs/evaluation.md", "roomba-bt eval: warning: slowest tick"): "tests/runtime/test_"

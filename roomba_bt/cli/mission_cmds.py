@@ -343,16 +343,30 @@ def _checked(file: str, found: str, params: dict[str, str], args: argparse.Names
 
 def _neither(diagnostics: list[Diagnostic]) -> list[Diagnostic]:
     """``diagnostics``, an empty file's said as neither a mission nor a world: ``validate``
-    takes both, and "the mission file is empty" was said of a world being drawn. An empty
-    file it includes is still an empty mission file (a library is expected there)."""
+    takes both, and "the mission file is empty" was said of a world being drawn; so is a
+    file it cannot read ("cannot read mission file 'w.yaml'" of a world: it cannot be told
+    which). An empty file it includes is still an empty mission file (a library is expected
+    there)."""
     from dataclasses import replace
 
-    from roomba_bt.mission.source import EMPTY_FILE, EMPTY_MISSION
+    from roomba_bt.mission.source import (
+        EITHER_WANTED,
+        EMPTY_FILE,
+        EMPTY_MISSION,
+        MISSION_WANTED,
+        UNREADABLE_FILE,
+        UNREADABLE_MISSION,
+    )
 
-    if len(diagnostics) != 1 or diagnostics[0].message != EMPTY_MISSION:
+    if len(diagnostics) != 1 or diagnostics[0].included_from:
         return diagnostics
-    (empty,) = diagnostics
-    return diagnostics if empty.included_from else [replace(empty, message=EMPTY_FILE)]
+    (only,) = diagnostics
+    if only.message == EMPTY_MISSION:
+        return [replace(only, message=EMPTY_FILE)]
+    if only.message.startswith(f"{UNREADABLE_MISSION} ") and only.message.endswith(MISSION_WANTED):
+        said = only.message.removesuffix(MISSION_WANTED) + EITHER_WANTED
+        return [replace(only, message=said.replace(UNREADABLE_MISSION, UNREADABLE_FILE, 1))]
+    return diagnostics
 
 
 def show_command(args: argparse.Namespace) -> int:

@@ -80,6 +80,13 @@ def loc_of(node: yaml.Node, file: str, path: str) -> Loc:
 #: said of it, as an include or a plugin file says it ("cannot read mission file: Permission
 #: denied" named neither the file nor what would do)
 MISSION_WANTED = "wanted: a mission file (YAML text) this user may read"
+#: how such a file's diagnostic begins (its path follows)
+UNREADABLE_MISSION = "cannot read mission file"
+#: what ``validate``, which takes a mission or a world, says of a file it cannot read: it
+#: cannot tell which the file is, and "cannot read mission file 'w.yaml': ...; wanted: a
+#: mission file" was said of a world
+UNREADABLE_FILE = "cannot read file"
+EITHER_WANTED = "wanted: a mission or a world file (YAML text) this user may read"
 
 
 def compose(
@@ -97,7 +104,7 @@ def compose(
         if include is not None:
             name, where = include
             return None, [where.at(f"cannot read included file {path_written(name)}: {why}")]
-        said = f"cannot read mission file {path_written(display)}: {why}; {MISSION_WANTED}"
+        said = f"{UNREADABLE_MISSION} {path_written(display)}: {why}; {MISSION_WANTED}"
         return None, [Diagnostic(display, 1, 1, said)]
     except UnicodeDecodeError as exc:
         line, column = yamlsource.undecodable_position(exc)

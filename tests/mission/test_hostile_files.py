@@ -153,11 +153,36 @@ UNREADABLE = (
     "m.yaml:1:1: cannot read mission file 'm.yaml': {why}; wanted: a mission file (YAML text) "
     "this user may read"
 )
+#: what ``validate`` says, which takes a mission or a world and cannot tell which a file it
+#: cannot read is (it said "cannot read mission file 'w.yaml' ...; wanted: a mission file" of
+#: a world)
+UNREADABLE_EITHER = (
+    "{name}:1:1: cannot read file '{name}': {why}; wanted: a mission or a world file (YAML "
+    "text) this user may read"
+)
 
 
 @pytest.mark.parametrize(
-    "command", [["validate"], ["show"], ["run", "--fast"], ["eval", "--runs", "1"]]
+    ("name", "text"),
+    [("m.yaml", "tree: {wait: 1s}\n"), ("w.yaml", "rooms:\n  - [[0, 0], [2, 0], [2, 2]]\n")],
+    ids=["mission", "world"],
 )
+def test_validate_names_a_file_it_cannot_read_as_either(
+    name: str, text: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """``validate w.yaml``, a world it cannot read: "cannot read mission file 'w.yaml' ...;
+    wanted: a mission file". It cannot tell a mission from a world unread: the file, and
+    either."""
+    (tmp_path / name).write_text(text)
+    monkeypatch.chdir(tmp_path)
+    refuse_open(monkeypatch, name)
+    assert main(["validate", name]) == 2
+    out = capsys.readouterr().out
+    assert UNREADABLE_EITHER.format(name=name, why="Permission denied") in out.splitlines(), out
+    assert_quoted("docs/ci.md", "w.yaml:1:1: cannot read file", out.replace("m.yaml", "w.yaml"))
+
+
+@pytest.mark.parametrize("command", [["show"], ["run", "--fast"], ["eval", "--runs", "1"]])
 def test_a_mission_file_that_cannot_be_read_is_named_with_what_is_wanted(
     command: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
 ) -> None:
@@ -184,7 +209,8 @@ def test_a_mission_file_chmod_000_is_named_with_what_is_wanted(
     (tmp_path / "m.yaml").chmod(0)
     monkeypatch.chdir(tmp_path)
     assert main(["validate", "m.yaml"]) == 2
-    assert UNREADABLE.format(why="Permission denied") in capsys.readouterr().out.splitlines()
+    said = UNREADABLE_EITHER.format(name="m.yaml", why="Permission denied")
+    assert said in capsys.readouterr().out.splitlines()
 
 
 @pytest.mark.skipif(not Path("/proc/self/mem").is_file(), reason="Linux's /proc/self/mem")
@@ -194,7 +220,7 @@ def test_a_mission_file_the_system_fails_to_read_is_named_with_what_is_wanted(
     """A regular file whose read fails for root too (``/proc/self/mem`` at offset 0: an
     input/output error): the system's words, the file, and what is wanted."""
     assert main(["validate", "/proc/self/mem"]) == 2
-    said = UNREADABLE.replace("m.yaml", "/proc/self/mem").format(why="Input/output error")
+    said = UNREADABLE_EITHER.format(name="/proc/self/mem", why="Input/output error")
     assert said in capsys.readouterr().out.splitlines()
 
 
