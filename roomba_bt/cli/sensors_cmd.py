@@ -185,6 +185,7 @@ def _show_live(
 
     connection = Connection(link, profile, baud=args.baud)
     connection.profile_setting = profile_setting(args)  # a wrong profile's fix
+    connection.waiter = "roomba-bt sensors"  # a lost stream's grace: no run waited it
     with sigterm_raises(), connection:
         if streamed:
             connection.start("passive", (ALL_SENSORS,))

@@ -243,6 +243,9 @@ class Connection:
         self.stream_asked_again = 0
         #: the stream asked for again when it went silent mid-run (robot/stall_asks.py)
         self.stall_asks = StallAsks()
+        #: who waited the grace for frames, as a lost stream's reason says it (``then the
+        #: run waited the 2 s grace``): ``roomba-bt sensors`` sets its own name, being no run
+        self.waiter = "the run"
         #: the bytes to the robot this session found lost and put right, by what they were
         #: (``"a Query List"``, ``"the stream request"``, ``"a wheel command"``: the run's
         #: motion watch adds its own): the evidence a fall of unknown cause names the cable

@@ -344,6 +344,7 @@ class StreamLost(LinkDown):
         came_back: float | None = None,
         setting: str | None = None,
         lost_before: str = "",
+        waiter: str = "the run",
     ) -> None:
         self.silent_for = silent_for
         self.grace = grace
@@ -385,7 +386,7 @@ class StreamLost(LinkDown):
             tail += f"; {words.gap_fix}"
         super().__init__(
             port,
-            f"{what}; {action}, then the run waited the {grace:g} s grace{tail}",
+            f"{what}; {action}, then {waiter} waited the {grace:g} s grace{tail}",
             headline,
         )
 

@@ -165,10 +165,10 @@ def explain_silence(
     cause to raise (see the module docstring). Writing may raise
     :class:`~roomba_bt.robot.errors.PortLost`: then that is the cause."""
 
-    def lost(probed: str, *, answers_nothing: bool = True) -> StreamLost:
+    def lost(probed: str, *, answers_nothing: bool = True, back: float | None = None) -> StreamLost:
         return StreamLost(
             connection.name, silent_for, grace, 0, watchdog=connection.watchdog,
-            halted=halted, probed=probed,
+            halted=halted, probed=probed, waiter=connection.waiter, came_back=back,
             lost_before=bytes_lost_said(connection) if answers_nothing else "",
         )  # fmt: skip
 
@@ -203,12 +203,11 @@ def explain_silence(
     if _answers(connection):
         connection.unheard = None
         if idle is None or idle < SLEEP_AFTER_S:  # no sleep by the OI's rule: said as seen
-            return StreamLost(
-                connection.name, silent_for, grace, 0, watchdog=connection.watchdog,
-                halted=halted, came_back=silent_for + connection.transport.now() - asked,
-                probed=f"it answered again after a BRC pulse ({pulse.how}), having been "
+            return lost(
+                f"it answered again after a BRC pulse ({pulse.how}), having been "
                 f"{idle_said(idle)} in Passive without a command or a pulse from us: too soon "
                 "to sleep (the OI sleeps after 5 minutes of that)",
+                answers_nothing=False, back=silent_for + connection.transport.now() - asked,
             )  # fmt: skip
         return RobotAsleep(
             connection.name, idle, keep_awake=connection.keep_awake, on_dock=_on_dock(connection),
@@ -259,7 +258,7 @@ def _asked_again(
             )
         return StreamLost(
             connection.name, silent_for, grace, 0, watchdog=connection.watchdog, halted=halted,
-            probed=probed, lost_before=lost_before,
+            waiter=connection.waiter, probed=probed, lost_before=lost_before,
         )  # fmt: skip
     connection.unheard = None
     # the mode the robot answered with, not the model's: it may have fallen to Passive
@@ -271,7 +270,7 @@ def _asked_again(
         said = f"it answered again, in {answered.label} (last seen in {mode}, which never sleeps)"
     return StreamLost(
         connection.name, silent_for, grace, 0, watchdog=connection.watchdog, halted=halted,
-        came_back=silent_for + clock() - asked, probed=said,
+        waiter=connection.waiter, came_back=silent_for + clock() - asked, probed=said,
     )  # fmt: skip
 
 
@@ -296,7 +295,7 @@ def garbled_line(
         )
     return StreamLost(
         connection.name, silent_for, grace, garbled, watchdog=link.watchdog, halted=halted,
-        mismatch=mismatch, setting=connection.profile_setting,
+        waiter=connection.waiter, mismatch=mismatch, setting=connection.profile_setting,
     )  # fmt: skip
 
 

@@ -140,3 +140,18 @@ def test_sensors_interrupted_says_so_and_exits_130(
     monkeypatch.setattr(sensors_cmd, "_print_table", interrupted)
     assert main(["sensors", "--baud", str(rate)]) == 130
     assert capsys.readouterr().err.strip().splitlines()[-1] == "roomba-bt: interrupted"
+
+
+def test_a_lost_stream_says_sensors_waited_the_grace_not_a_run(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``sensors`` during a stall that did not end said "then the run waited the 2 s grace":
+    no run was there. Its own name now."""
+    from roomba_bt.oi.profiles import CREATE2
+
+    with sim_pty_server(CREATE2, "--sleep-at", "0.5", "--faults-from-stream") as port:
+        code = main(["sensors", "--port", port, "--count", "1000", "--rate", "66"])
+    err = capsys.readouterr().err
+    assert code == 3, err
+    assert "then roomba-bt sensors waited the 2 s grace" in err, err
+    assert "the run" not in err, err
