@@ -49,6 +49,19 @@ from roomba_bt.transport.open_failure import (
 
 log = logging.getLogger(__name__)
 
+#: pyserial's words (serialposix) for a read the port said was ready that returned nothing:
+#: Linux shows a device unplugged (a USB adapter pulled, a pty whose other end closed) so
+#: "device reports readiness to read but returned no data (device disconnected or multiple
+#: access on port?)", which a run's outcome carried raw after "the port is gone"
+NO_DATA_TEXT = "device reports readiness to read but returned no data"
+#: the same in our words, the port's kind left to the reason around it (``the port is gone
+#: (the cable was pulled or the adapter reset)``; a pty's: the program at its other end
+#: ended): pyserial's add nothing to them, its two guesses being these
+NO_DATA_SAID = (
+    "it said bytes were waiting and gave none: its other end gone, or another program "
+    "reading the same port"
+)
+
 #: Bytes taken from the port in one read; a 115200 baud link carries 172 bytes per 15 ms.
 READ_CHUNK = 4096
 #: A read this large is taken for a backlog and the port is drained
@@ -434,12 +447,15 @@ class SerialTransport:
 
     def _failure(self, exc: BaseException) -> BaseException | str:
         """The cause a failed read or write is said with: ``exc``, unless the far end of a
-        ``socket://`` closed the connection before it sent a byte. A second client of the
+        ``socket://`` closed the connection before it sent a byte, or pyserial's words for a
+        port that is gone are said in ours (:data:`NO_DATA_SAID`). A second client of the
         simulator's TCP server (or of a bridge that serves one) is closed at once, and was
         told "the port is gone ... Broken pipe", its stop "NOT DELIVERED", and doctor sent
         its user to check the cable of a robot that was fine, driven by another run."""
         closed = error_number(exc) in CLOSED_ERRORS or SOCKET_CLOSED_TEXT in str(exc)
-        return CLOSED_AT_ONCE if self._socket and not self._heard and closed else exc
+        if self._socket and not self._heard and closed:
+            return CLOSED_AT_ONCE
+        return NO_DATA_SAID if NO_DATA_TEXT in str(exc) else exc
 
     def _wait(self, timeout: float) -> bytes:
         """What comes within ``timeout`` seconds on a port that had nothing."""

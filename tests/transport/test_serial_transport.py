@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+import serial
 from waits import HANG_S, line  # tests/waits.py: a hang's bound, a line within it
 
 from roomba_bt.transport import (
@@ -195,6 +196,34 @@ def test_a_vanished_far_end_raises_transport_error_naming_the_port(kind: str) ->
                     transport.write(bytes([137, 0, 0, 0, 0]))
             assert str(failed.value).startswith(end.url + ": could not ")
             assert isinstance(failed.value, ConnectionError)
+        finally:
+            transport.close()
+
+
+def test_a_port_gone_is_said_in_our_words_not_pyserials(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run whose adapter was pulled (or whose ``sim --pty`` was killed) ended "the port is
+    gone (...): it failed on read (device reports readiness to read but returned no data
+    (device disconnected or multiple access on port?))": pyserial's words, raw. Said in
+    ours; pyserial's add nothing to them."""
+    with FAR_ENDS["pty"]() as end:
+        transport = open_transport(end.url)
+        try:
+
+            def gone(size: int = 1) -> bytes:
+                raise serial.SerialException(
+                    "device reports readiness to read but returned no data (device "
+                    "disconnected or multiple access on port?)"
+                )
+
+            monkeypatch.setattr(transport.port, "read", gone)
+            with pytest.raises(TransportError) as failed:
+                transport.read(0.02)
+            assert failed.value.cause == (
+                "it said bytes were waiting and gave none: its other end gone, or another "
+                "program reading the same port"
+            )
+            assert str(failed.value).endswith(f"could not read: {failed.value.cause}")
+            assert "readiness" not in str(failed.value)
         finally:
             transport.close()
 
