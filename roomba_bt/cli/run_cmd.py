@@ -738,7 +738,7 @@ def _run_and_report(
     if quiet and not args.verbose:  # nothing but the summary (and what went wrong)
         logging.getLogger().setLevel(max(logging.getLogger().level, logging.WARNING))
     if not quiet:  # as show draws it: the live tree's names feed the log and the record
-        print(_render_tree(mission, reviewed=True), flush=True)
+        print(_render_tree(mission), flush=True)
     stack.runner.gate = monitor.session if monitor is not None else None
     # after the safe stop a signal is ignored until the run is closed, then ends the process
     # (robot/safety.py, InterruptGuard)
@@ -942,25 +942,24 @@ def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSum
         print(f"refused: {hint}", file=sys.stderr)
 
 
-def _render_tree(
-    mission: Any, status: bool = False, as_ticked: Any = None, reviewed: bool = False
-) -> str:
+def _render_tree(mission: Any, status: bool = False, as_ticked: Any = None) -> str:
     """The tree as py_trees draws it, each name and message escaped to one line (a plugin's
     ``feedback_message`` reached the terminal raw: :func:`~roomba_bt.runtime.display.text_tree`),
     in the symbols and colours stdout can show (:func:`~roomba_bt.runtime.display.tree_symbols`:
     ``[ok]`` on an ASCII stdout, no colour with ``NO_COLOR``); ``as_ticked``: the statuses
-    as the run left them (a :class:`~roomba_bt.runtime.display.TreeStatuses`). ``reviewed``:
-    the tree ``show`` draws (``CompiledMission.reviewed``: ``timeout(after=2s)``, a node's
-    ``name:`` after what it is), for the tree before the run: it drew the live nodes'
-    names, ``timeout``, and a user comparing it with ``show`` saw two trees. The live
-    names stay what the log, the record and the tree after the run say (a golden
-    recording holds them)."""
+    as the run left them (a :class:`~roomba_bt.runtime.display.TreeStatuses`). Each node is
+    named as ``show`` names it (``timeout(after=2s)``, a node's ``name:`` after what it is:
+    ``CompiledMission.reviewed_names``), before the run and after it: the live nodes' names,
+    ``timeout``, made a user comparing it with ``show`` see two trees. The live names stay
+    what the log and the record say (a golden recording holds them)."""
     from roomba_bt.runtime.display import text_tree, tree_symbols
 
     symbols = tree_symbols(sys.stdout)
-    drawn = getattr(mission, "reviewed", None)
-    root = drawn() if reviewed and drawn is not None else mission.root
-    return text_tree(root, show_status=status, symbols=symbols, as_ticked=as_ticked)
+    reviewed_names = getattr(mission, "reviewed_names", None)
+    names = reviewed_names() if reviewed_names is not None else None
+    return text_tree(
+        mission.root, show_status=status, symbols=symbols, as_ticked=as_ticked, names=names
+    )
 
 
 def _where_it_ended(simulator: Any) -> str:

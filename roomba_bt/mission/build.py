@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
+from uuid import UUID
 from weakref import WeakKeyDictionary
 
 from py_trees.behaviour import Behaviour
@@ -132,6 +133,22 @@ class CompiledMission:
         if self.plan is None:
             return self.root
         return build(_as_reviewed(self.plan))
+
+    def reviewed_names(self) -> dict[UUID, str]:
+        """Each live node's name as ``show`` draws it (:meth:`reviewed`), by the live node's
+        id: ``run`` draws its tree before and after the run in ``show``'s words
+        (``timeout(after=2s)``) with the live nodes' statuses, where the tree after the run
+        said ``timeout`` under one that said ``timeout(after=2s)``. The log and the record
+        keep the live names. Below a node whose drawn twin has other children, the live
+        names stand."""
+        names: dict[UUID, str] = {}
+        pairs = [(self.root, self.reviewed())]
+        while pairs:
+            live, drawn = pairs.pop()
+            names[live.id] = drawn.name
+            if len(live.children) == len(drawn.children):
+                pairs.extend(zip(live.children, drawn.children, strict=True))
+        return names
 
     def __post_init__(self) -> None:
         # the root remembers the blackboard its mission declares: a tree built in Python

@@ -16,7 +16,7 @@ import threading
 import time
 import weakref
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from functools import partial
 from typing import TYPE_CHECKING, Literal, TextIO
@@ -269,6 +269,7 @@ def text_tree(
     show_status: bool = False,
     symbols: dict[object, str] | None = None,
     as_ticked: TreeStatuses | None = None,
+    names: Mapping[UUID, str] | None = None,
 ) -> str:
     """The tree as ``py_trees.display.unicode_tree`` draws it (the run's tree before it
     starts, and with ``show_status`` each node's status and message at its end), each
@@ -280,7 +281,9 @@ def text_tree(
     printed, so the behaviour keeps its message as it set it (a ``failure_reason`` or the
     monitor read it too, and escape it where they print it). ``symbols``: py_trees' unicode
     ones by default, the stream's own from :func:`tree_symbols`. ``as_ticked``: the statuses,
-    messages and tip its last tick left (the tree's stop since marked every node INVALID)."""
+    messages and tip its last tick left (the tree's stop since marked every node INVALID).
+    ``names``: a node's name to draw by its id (``show``'s, ``CompiledMission.reviewed_names``),
+    its own where none is given."""
     if symbols is None:
         symbols = py_trees.display.unicode_symbols
     if as_ticked is not None and as_ticked.nodes:
@@ -292,7 +295,7 @@ def text_tree(
 
     def walk(node: py_trees.behaviour.Behaviour, depth: int) -> None:
         bold, reset = ("", "") if node.id != tip_id else (symbols["bold"], symbols["bold_reset"])
-        name = name_shown(node.name)
+        name = name_shown(node.name if names is None else names.get(node.id, node.name))
         line = f"{'    ' * depth}{bold}{symbols[node_kind(node)]}{reset} "
         if show_status:  # py_trees' three bold spans, so that a terminal shows the same
             status, feedback = ticked.get(node.id) or (node.status, node.feedback_message)

@@ -968,7 +968,7 @@ def test_after_a_behaviour_s_exception_the_tree_and_the_log_show_how_far_the_run
     out = capsys.readouterr().out
     tree = out[out.index("{-} sequence [") : out.index("mission ")]
     assert "--> mode(safe) [✓]" in tree, tree
-    assert "--> pre [✓]" in tree, tree
+    assert "--> drive(velocity=200 mm/s, duration=0.1s) named 'pre' [✓]" in tree, tree
     assert "--> motors(main_brush=on) [✓]" in tree, tree
     assert "--> boom [-] -- raised RuntimeError" in tree, tree
     if display == "log":
@@ -988,7 +988,8 @@ def test_after_a_behaviour_s_exception_the_live_tree_s_last_screen_is_the_tree_a
     """The live tree's last screen is drawn after the run's end has stopped the tree, which
     marks every node INVALID: it showed ``[-]`` on every node, ``mode(safe)`` and the
     sequence too, right above the tree printed after the run with the marks the run left
-    (session 37). It shows those marks: the same as the tree under it."""
+    (session 37). It shows those marks: the same as the tree under it, which names each
+    node as ``show`` does (the live screen keeps the nodes' own, shorter names)."""
     options = ("--display", "tree", "--allow-plugin-files")
     assert _run_file(tmp_path, "boom.yaml", BOOM, *options, plugins={"boom.py": BOOM_PLUGIN}) == 4
     out = capsys.readouterr().out
@@ -998,7 +999,9 @@ def test_after_a_behaviour_s_exception_the_live_tree_s_last_screen_is_the_tree_a
     assert shown["sequence"] == "*", live
     for name in ("mode(safe)", "pre", "motors(main_brush=on)"):
         assert shown[name] == "✓", live
-    assert shown == {name: left[name] for name in shown}, (live, final)
+    as_shown = {"pre": "drive(velocity=200 mm/s, duration=0.1s) named 'pre'"}
+    as_shown |= {"timeout": "timeout(after=3s)"}
+    assert shown == {name: left[as_shown.get(name, name)] for name in shown}, (live, final)
 
 
 DECORATED = """
@@ -1014,13 +1017,14 @@ tree:
 """
 
 
-def test_the_tree_before_the_run_is_the_one_show_draws(
+def test_the_trees_before_and_after_the_run_are_named_as_show_draws(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
 ) -> None:
-    """``run`` drew its tree before the run with the live nodes' names, ``timeout`` and
-    ``twice``, where ``show`` drew ``timeout(after=2s)`` and ``retry(times=2) named 'twice'``:
-    a user comparing the two saw two trees. The log keeps the live names (the record and the
-    golden recordings hold them)."""
+    """``run`` drew its trees with the live nodes' names, ``timeout`` and ``twice``, where
+    ``show`` drew ``timeout(after=2s)`` and ``retry(times=2) named 'twice'``: a user comparing
+    the two saw two trees, and once the tree before the run was show's, the tree after it
+    still said ``timeout [✓]``. The log keeps the live names (the record and the golden
+    recordings hold them)."""
     path = tmp_path / "decorated.yaml"
     path.write_text(DECORATED)
     assert main(["show", str(path)]) == 0
@@ -1032,4 +1036,9 @@ def test_the_tree_before_the_run_is_the_one_show_draws(
     assert "    -^- timeout(after=2s)" in tree
     assert "    -^- retry(times=2) named 'twice'" in tree
     assert out.splitlines()[: len(tree)] == tree
+    after = out.splitlines()[len(tree) :]
+    assert "    -^- timeout(after=2s) [✓]" in after
+    assert (
+        "    -^- retry(times=2) named 'twice' [✓] -- succeeded [status: 0 failure from 2]" in after
+    )
     assert "twice -> SUCCESS" in caplog.messages  # the log's name: the node's own
