@@ -996,7 +996,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     # Where the rooms stand, what else is wrong is checked for its place too (every problem
     # at once: a shape outside every room was said only once the rest was mended); a check
     # that leans on a part in error is left for the next reading (no error of its own).
-    broken = {re.split(r"[.\[]", p.field, maxsplit=1)[0] for p in c.problems}
+    broken = {_leans_on(p.field) for p in c.problems}
     room_polys = tuple(r for r in rooms if r is not None)
     if c.problems and ("rooms" in broken or "(document)" in broken or not room_polys):
         raise WorldError(c.problems)
@@ -1022,6 +1022,15 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     if c.problems:
         raise WorldError(c.problems)
     return replace(world, warnings=tuple(c.warnings)) if c.warnings else world
+
+
+def _leans_on(field: str) -> str:
+    """The part of the world a problem at ``field`` leaves in doubt: its top-level key, but
+    ``robot.battery`` alone for the charge (the start does not lean on it: a world with a
+    start off the floor and ``battery: 1.5`` said the battery only, and the start once
+    that was mended)."""
+    top = re.split(r"[.\[]", field, maxsplit=1)[0]
+    return "robot.battery" if field.startswith("robot.battery") else top
 
 
 def _room(c: _Checker, value: object, path: PathKey) -> Polygon | None:
@@ -1299,8 +1308,9 @@ def _check_placement(
     """The dock stands on the floor, the robot fits where it starts and its start region
     has room for it. A start not given is said to be the default one, where it comes from
     (a dock off the floor puts it off the floor too: that is said once, at the dock).
-    ``broken``: the top-level keys already in error; the start is not judged beside a
-    robot, dock or areas in error (it leans on them)."""
+    ``broken``: the parts already in error (:func:`_leans_on`); the start is not judged
+    beside a robot, dock or areas in error (it leans on them), but it is beside a battery
+    in error."""
     _check_inside_rooms(c, world)
     dock = world.dock
     dock_off = dock is not None and not _faces_floor(world, dock)

@@ -711,6 +711,22 @@ def test_where_things_stand_is_said_with_the_other_problems_at_once() -> None:
     assert len(problems("rooms: [[[0, 0], [4, 0]]]\ndrops: [{rect: [10, 10, 11, 11]}]\n")) == 1
 
 
+def test_a_start_off_the_floor_is_said_beside_a_battery_in_error() -> None:
+    """A stranger's world with ``battery: 1.5`` and a start off the floor was said the
+    battery alone (every ``robot`` problem kept the start from being judged), and the start
+    only once the battery was mended: the start does not lean on the charge. Beside an
+    error in the start itself, or in the dock it defaults from, it is still not judged."""
+    rooms = "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\n"
+    found = problems(rooms + "robot: {start: {at: [5, 2]}, battery: 1.5}\n")
+    assert [f.split(": found")[0] for f in found] == [
+        "w.yaml:2:16: robot.start",
+        "w.yaml:2:39: robot.battery",
+    ], found
+    assert "found a start pose (5.00, 2.00) m where the robot does not fit" in found[0]
+    [found_one] = problems(rooms + "robot: {start: {at: [5, 2], heading: east}}\n")
+    assert found_one.startswith("w.yaml:2:38: robot.start.heading: found "), found_one
+
+
 def _many_obstacles(count: int) -> str:
     """A 40 m x 35 m room holding ``count`` small triangles, one a line (the hostile file's)."""
     rows = [
