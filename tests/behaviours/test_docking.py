@@ -26,8 +26,10 @@ from roomba_bt.behaviours.docking.common import (
     DockWatch,
     drive_direct,
     hazard_of,
+    note_stage,
     view_of,
 )
+from roomba_bt.evaluate.episode import failure_stage
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.ir import IR_CHARACTERS, dock_character
@@ -323,6 +325,38 @@ def test_time_limits_are_said_as_the_durations_they_are(
     # each names the stage it gave up in
     assert limit.feedback_message.startswith(f"search: gave up after the time limit of {said} (")
     assert search.feedback_message == f"search: no dock beam seen in {said}"
+
+
+def test_a_docking_run_that_never_saw_a_beam_says_so_at_its_time_limit(
+    robot: StubRobot, make: Make
+) -> None:
+    """A stranger's flat with the dock behind a closed door: ``clean`` ended FAILURE
+    "search: gave up after the time limit of 10 min (stage search was running)", the words
+    of a search that was merely slow. Where no stage past the search began in the docking
+    run (a receiver seeing a beam ends the search), the message says that no receiver saw
+    one and what keeps a dock out of sight; a run that got further says nothing of it."""
+    for went_on in (False, True):
+        limit = make(DockTimeLimit, limit=2.0)
+        search = make(DockSearch, timeout=60.0)
+        robot.set_frame(frame())
+        limit.tick_once()  # a new docking run
+        search.tick_once()
+        if went_on:
+            note_stage("approach")
+            note_stage("search")  # the approach lost the beams: the search again
+        robot.set_frame(frame(), ticks=round(2.0 / 0.015) + 1)
+        limit.tick_once()
+        assert status(limit) is Status.FAILURE
+        said = limit.feedback_message
+        assert said.startswith("search: gave up after the time limit of 2 s (stage search was")
+        if went_on:
+            assert said.endswith("(stage search was running)"), said
+        else:
+            assert said.endswith(
+                "(stage search was running): no receiver saw the dock's beams; is the dock "
+                "powered, and can the robot get to it (a closed door, a virtual wall)?"
+            ), said
+            assert failure_stage(said) == "search"  # eval's grouping reads it still
 
 
 def test_wait_for_charge_fails_with_its_stage(robot: StubRobot, make: Make) -> None:

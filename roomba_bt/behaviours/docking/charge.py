@@ -12,12 +12,14 @@ from roomba_bt.behaviours.declare import Param, declare
 from roomba_bt.behaviours.docking.common import (
     FAILED,
     OK,
+    PAST_SEARCH_KEY,
     RUN_KEY,
     RUNNING,
     STAGE_KEY,
     DockingRun,
     current_stage,
     note_stage,
+    past_search,
 )
 from roomba_bt.behaviours.lean import behaviour_tick, tick_ended
 from roomba_bt.behaviours.units import DURATION
@@ -71,6 +73,17 @@ class DockWaitCharge(Action):
     _limit = 0.0
 
 
+#: What a docking run that never got past the search adds to its time limit's message:
+#: the dock unreachable (behind a closed door) or unpowered read the same as a search that
+#: was merely slow, "stage search was running", and an owner whose robot could not get home
+#: was not told why it might be
+#: (after the stage's parentheses, which ``eval`` reads the stage from)
+_NO_BEAM = (
+    ": no receiver saw the dock's beams; is the dock powered, and can the robot get to it "
+    "(a closed door, a virtual wall)?"
+)
+
+
 @declare(
     "dock_time_limit",
     kind="action",
@@ -87,6 +100,7 @@ class DockTimeLimit(Action):
         self._t0 = self.snapshot.time
         storage, board = py_trees.blackboard.Blackboard.storage, run_board()
         storage.pop(board.name(STAGE_KEY), None)  # a new docking run
+        storage.pop(board.name(PAST_SEARCH_KEY), None)
         storage[board.name(RUN_KEY)] = DockingRun(id(self), self._t0, self.name)
         self._limit = self.number("limit") - 1e-9  # read once a start
 
@@ -110,7 +124,7 @@ class DockTimeLimit(Action):
             stage = current_stage() or "search"
             self.feedback_message = (
                 f"{stage}: gave up after the time limit of {duration_said(self.number('limit'))} "
-                f"(stage {stage} was running)"
+                f"(stage {stage} was running){'' if past_search() else _NO_BEAM}"
             )
             return FAILED
         return RUNNING

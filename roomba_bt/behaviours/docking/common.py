@@ -65,10 +65,24 @@ class DockingRun(NamedTuple):
         return f"<docking run since t={self.started:.2f} s{by}>"
 
 
+#: Set (True) once a stage past the search began in this docking run: a receiver saw the
+#: dock's beams (the search succeeds at the first one), for ``dock_time_limit``'s message.
+PAST_SEARCH_KEY = "/roomba/docking/past_search"
+
+
 def note_stage(stage: str) -> None:
     """Keep ``stage`` as this run's docking stage (the run's own name for
-    :data:`STAGE_KEY`: :func:`~roomba_bt.behaviours.blackboard.run_board`)."""
-    py_trees.blackboard.Blackboard.storage[run_board().name(STAGE_KEY)] = stage
+    :data:`STAGE_KEY`: :func:`~roomba_bt.behaviours.blackboard.run_board`), and note a
+    stage past the search (:data:`PAST_SEARCH_KEY`)."""
+    storage, board = py_trees.blackboard.Blackboard.storage, run_board()
+    storage[board.name(STAGE_KEY)] = stage
+    if stage != "search":
+        storage[board.name(PAST_SEARCH_KEY)] = True
+
+
+def past_search() -> bool:
+    """Did a stage past the search begin in this docking run (a beam was seen)?"""
+    return py_trees.blackboard.Blackboard.storage.get(run_board().name(PAST_SEARCH_KEY)) is True
 
 
 def current_stage() -> str | None:
