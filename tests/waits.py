@@ -14,12 +14,14 @@ is not one of these: it stays the test's own number.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import select
+import socket
 import subprocess
 import threading
 import time
-from collections.abc import Callable, Coroutine
+from collections.abc import Callable, Coroutine, Iterator
 from typing import IO, Any, TypeVar
 
 #: The most a test waits for something that only a hang would keep from happening: generous
@@ -140,6 +142,74 @@ def ended(proc: subprocess.Popen[str], ceiling: float = HANG_S) -> tuple[str, st
 def finished(args: list[str], ceiling: float = HANG_S) -> subprocess.CompletedProcess[str]:
     """``args`` run to its end, its output read through text pipes (:func:`ended`:
     ``subprocess.run``'s timeout ends a late one with SIGKILL and loses what it said)."""
-    with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as proc:
+    with child(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
         out, err = ended(proc, ceiling)
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+
+
+@contextlib.contextmanager
+def child(args: list[str], within: float = HANG_S, **popen: Any) -> Iterator[subprocess.Popen[str]]:
+    """``subprocess.Popen(args, text=True, **popen)`` for the ``with`` block, ended after it
+    within ``within`` s. ``with Popen(...)`` waits for the child with no bound as it leaves
+    the block: a test that failed before its child ended (a line that never came) held CI
+    there for ever. A child still running after the block is told to stop (SIGTERM, as
+    :func:`ended`), then killed; one that not even SIGKILL ends fails the test."""
+    proc: subprocess.Popen[str] = subprocess.Popen(args, text=True, **popen)
+    try:
+        yield proc
+    finally:
+        for stream in (proc.stdin, proc.stdout, proc.stderr):
+            if stream is not None:
+                stream.close()
+        for stop in (proc.terminate, proc.kill):
+            if proc.poll() is not None:
+                break
+            stop()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(timeout=within)
+        if proc.poll() is None:
+            raise AssertionError(f"{proc.args} still ran after SIGKILL and {within:g} s (hung?)")
+
+
+def reaped(pid: int, what: str, within: float = HANG_S) -> int:
+    """The exit code of the child ``pid`` once it has ended, looking every millisecond; fail,
+    saying ``what`` hung, if it runs on after ``within`` s. A bare ``os.waitpid(pid, 0)``
+    waits for ever, even after a SIGKILL (a child stuck in the kernel, in a pty's close, is
+    not ended by it)."""
+    found: list[int] = []
+
+    def gone() -> bool:
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            found.append(os.waitstatus_to_exitcode(status))
+        return bool(done)
+
+    until(gone, what, within)
+    return found[0]
+
+
+def accepted(listener: socket.socket, what: str, within: float = HANG_S) -> socket.socket:
+    """The next connection ``listener`` takes (blocking, as ``accept()`` returns it); fail,
+    saying ``what`` never came, if none does within ``within`` s: a bare ``accept()`` on a
+    listener without a timeout waits for ever for a client that never connects."""
+    listener.settimeout(within)
+    try:
+        return listener.accept()[0]
+    except TimeoutError:
+        raise AssertionError(f"{what}: not within {within:g} s (hung?)") from None
+
+
+def received(source: socket.socket | int, size: int, what: str, within: float = HANG_S) -> bytes:
+    """Up to ``size`` bytes from a socket or a descriptor (a pty's master), once it has any
+    (``b""`` at its end); fail, saying ``what`` never came, if nothing does within
+    ``within`` s: a bare ``recv()`` or ``os.read()`` waits for ever on a far end that never
+    writes. A socket keeps the timeout (its sends are bounded by it too)."""
+    if isinstance(source, socket.socket):
+        source.settimeout(within)
+        try:
+            return source.recv(size)
+        except TimeoutError:
+            raise AssertionError(f"{what}: not within {within:g} s (hung?)") from None
+    if not select.select([source], [], [], within)[0]:
+        raise AssertionError(f"{what}: not within {within:g} s (hung?)")
+    return os.read(source, size)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, reaped  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 
@@ -63,7 +63,7 @@ class Terminal:
         with contextlib.suppress(ChildProcessError):  # reaped already by :meth:`exited`
             if os.waitpid(self.pid, os.WNOHANG) == (0, 0):
                 os.kill(self.pid, signal.SIGKILL)
-                os.waitpid(self.pid, 0)
+                reaped(self.pid, "the run left running by a failed test, killed")
         self.hang_up()
 
     def hang_up(self) -> None:

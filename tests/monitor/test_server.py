@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+import waits  # its received(): a socket's read within a hang's bound
 from waits import HANG_S, awaited, joined, waited  # tests/waits.py: a hang's bound
 
 from roomba_bt.mission import load_mission
@@ -278,7 +279,7 @@ def _raw_status(port: int, head: str) -> int:
     blank line): what no browser or HTTP library sends."""
     with socket.create_connection(("127.0.0.1", port), timeout=HANG_S) as sock:
         sock.sendall(f"{head}\r\n\r\n".encode())
-        return int(sock.recv(200).split()[1])
+        return int(waits.received(sock, 200, "the server's answer").split()[1])
 
 
 def test_a_request_with_no_host_or_an_empty_one_is_refused_on_loopback(
@@ -563,7 +564,8 @@ def test_a_body_refused_as_too_large_leaves_no_task_pending_at_the_end(
         )
         sender = threading.Thread(target=client.sendall, args=(b"a" * size,), daemon=True)
         sender.start()  # the whole body, as curl sends it, while the 413 is read
-        assert client.recv(64).startswith(b"HTTP/1.1 413"), "the body is refused"
+        answer = waits.received(client, 64, "the server's answer to the body too large")
+        assert answer.startswith(b"HTTP/1.1 413"), "the body is refused"
         sender.join(HANG_S)  # its body taken whole (the 413 read) before the server closes
         server.close()
         del server  # its loop, and any task left on it, are destroyed with it

@@ -17,7 +17,7 @@ import struct
 import threading
 import time
 
-from waits import joined  # tests/waits.py: a hang's bound
+from waits import accepted, joined, received  # tests/waits.py: a hang's bound
 
 #: how long the proxy's loop waits for a socket to be ready before it looks at its state
 _POLL_S = 0.01
@@ -98,7 +98,7 @@ class ResettingBridge:
                         self._pass_on(sock)
 
     def _accept(self) -> None:
-        client, _ = self._listener.accept()
+        client = accepted(self._listener, "the client select() said was waiting")
         if self._pair is not None or time.monotonic() < self._down_until:
             _reset(client)
             return
@@ -114,7 +114,7 @@ class ResettingBridge:
         client, robot = self._pair
         target = robot if source is client else client
         try:
-            data = source.recv(4096)
+            data = received(source, 4096, "the bytes select() said were waiting")
             if data:
                 target.sendall(data)
                 return

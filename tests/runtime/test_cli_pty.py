@@ -18,7 +18,7 @@ from typing import Any
 
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
-from waits import HANG_S, ended, finished, line  # tests/waits.py: waits that end as it does
+from waits import HANG_S, ended, finished, line, reaped  # tests/waits.py: waits that end as it does
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
@@ -179,8 +179,7 @@ def test_the_terminal_closing_ends_with_the_safe_stop_and_exit_130(
         _wait_for_driving(record)
     finally:
         os.close(terminal)  # the terminal goes: SIGHUP to the run's session
-    _, status = os.waitpid(pid, 0)
-    assert os.waitstatus_to_exitcode(status) == 130
+    assert reaped(pid, "the run, its terminal gone") == 130
     assert ends_with_the_safe_stop(load_record(record).outbound)
 
 

@@ -11,7 +11,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from waits import HANG_S  # tests/waits.py: a hang's bound
+from waits import HANG_S, accepted, received  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.oi import commands as C
@@ -35,7 +35,8 @@ def held_robot() -> Iterator[str]:
     first = socket.create_connection(address_of(served.endpoint.address), timeout=WAIT_S)
     try:
         first.sendall(C.start().data + C.sensors(35).data)
-        assert first.recv(1) == b"\x01"  # Passive: the server took this one
+        # Passive: the server took this one
+        assert received(first, 1, "the first client's sensor byte") == b"\x01"
         yield served.endpoint.address
     finally:
         first.close()
@@ -53,7 +54,8 @@ def test_the_tcp_server_turns_a_second_client_away_and_says_so(
     caplog.set_level(logging.WARNING, logger="roomba_bt.sim.server")
     second = socket.create_connection(address_of(held_robot), timeout=WAIT_S)
     try:
-        assert second.recv(1) == b""  # closed at once: nothing of the robot's stream
+        # closed at once: nothing of the robot's stream
+        assert received(second, 1, "the second client's close") == b""
     finally:
         second.close()
     said = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.sim.server"]
@@ -82,8 +84,7 @@ def test_a_socket_closed_after_the_robot_spoke_is_still_a_port_gone() -> None:
     listener = socket.create_server(("127.0.0.1", 0))
     transport = SerialTransport.open(f"socket://127.0.0.1:{listener.getsockname()[1]}")
     try:
-        listener.settimeout(WAIT_S)
-        far, _ = listener.accept()
+        far = accepted(listener, "the transport's connection", WAIT_S)
         far.sendall(b"\x01")
         got = b""
         for _ in range(int(WAIT_S / 0.05)):

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 from serial import rfc2217
-from waits import HANG_S, joined  # tests/waits.py: a hang's bound
+from waits import HANG_S, accepted, joined  # tests/waits.py: a hang's bound
 
 from roomba_bt.transport import SerialTransport, TransportError
 from roomba_bt.transport import open_failure as failures
@@ -143,7 +143,7 @@ def test_an_rfc2217_server_that_closes_at_once_is_said_as_a_network_s(
     def close_each() -> None:
         with contextlib.suppress(OSError):  # the listener shut: the test is over
             while True:
-                listener.accept()[0].close()
+                accepted(listener, "the next try's connection").close()
 
     closer = threading.Thread(target=close_each, daemon=True)
     closer.start()

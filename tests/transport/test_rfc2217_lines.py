@@ -15,7 +15,7 @@ from collections.abc import Iterator
 import pytest
 from serial import rfc2217, serialutil
 from sim.served import Served  # tests/sim: the simulator served in a thread
-from waits import joined, until  # tests/waits.py: a hang's bound
+from waits import accepted, joined, received, until  # tests/waits.py: a hang's bound
 
 from roomba_bt.sim.server import Rfc2217Endpoint
 from roomba_bt.transport import SerialTransport, TransportError
@@ -110,7 +110,7 @@ class _SwallowingProxy:
     def _accept(self) -> None:
         with contextlib.suppress(OSError):
             while True:
-                client, _ = self.listener.accept()
+                client = accepted(self.listener, "the next client of the bridge")
                 server = socket.create_connection(self._upstream)
                 self._sockets += [client, server]
                 swallowed = bool(self.clients)
@@ -125,7 +125,7 @@ class _SwallowingProxy:
     @staticmethod
     def _pipe(source: socket.socket, sink: socket.socket | None) -> None:
         with contextlib.suppress(OSError):
-            while data := source.recv(4096):
+            while data := received(source, 4096, "the bridge's next bytes"):
                 if sink is not None:
                     sink.sendall(data)
 

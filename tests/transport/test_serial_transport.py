@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 import serial
-from waits import HANG_S, line  # tests/waits.py: a hang's bound, a line within it
+from waits import HANG_S, accepted, line, reaped, received  # tests/waits.py: a hang's bound
 
 from roomba_bt.transport import (
     SerialTransport,
@@ -36,11 +36,12 @@ WAIT_S = HANG_S
 
 @dataclass
 class FarEnd:
-    """The other side of the link, as raw bytes: ``send`` to the transport, ``recv`` from it."""
+    """The other side of the link, as raw bytes: ``send`` to the transport, ``take`` from it
+    (what it has, up to a size, within a hang's bound)."""
 
     url: str
     send: Callable[[bytes], None]
-    recv: Callable[[int], bytes]
+    take: Callable[[int], bytes]
     hang_up: Callable[[], None]
     echoes: bool = False  # loop://: what the transport writes comes back to it
 
@@ -50,8 +51,8 @@ def pty_far_end() -> Iterator[FarEnd]:
     master, slave = os.openpty()
     tty.setraw(slave)
 
-    def recv(size: int) -> bytes:
-        return os.read(master, size)
+    def take(size: int) -> bytes:
+        return received(master, size, "the bytes the transport wrote, at the pty's far end")
 
     closed = threading.Event()
 
@@ -62,7 +63,7 @@ def pty_far_end() -> Iterator[FarEnd]:
             os.close(slave)
 
     try:
-        yield FarEnd(os.ttyname(slave), lambda data: os.write(master, data) and None, recv, hang_up)
+        yield FarEnd(os.ttyname(slave), lambda data: os.write(master, data) and None, take, hang_up)
     finally:
         hang_up()
 
@@ -70,16 +71,15 @@ def pty_far_end() -> Iterator[FarEnd]:
 @contextlib.contextmanager
 def tcp_far_end() -> Iterator[FarEnd]:
     listener = socket.create_server(("127.0.0.1", 0))
-    accepted: list[socket.socket] = []
+    connections: list[socket.socket] = []
 
     def accept() -> socket.socket:
-        if not accepted:
-            listener.settimeout(HANG_S)
-            accepted.append(listener.accept()[0])
-        return accepted[0]
+        if not connections:
+            connections.append(accepted(listener, "the transport's connection"))
+        return connections[0]
 
     def hang_up() -> None:
-        for conn in accepted:
+        for conn in connections:
             conn.close()
         listener.close()
 
@@ -87,7 +87,7 @@ def tcp_far_end() -> Iterator[FarEnd]:
         yield FarEnd(
             f"socket://127.0.0.1:{listener.getsockname()[1]}",
             lambda data: accept().sendall(data),
-            lambda size: accept().recv(size),
+            lambda size: received(accept(), size, "the bytes the transport wrote, at the far end"),
             hang_up,
         )
     finally:
@@ -128,7 +128,7 @@ def test_is_a_transport_and_round_trips_bytes(far_end: FarEnd) -> None:
         else:
             got = b""
             while len(got) < 2:
-                got += far_end.recv(16)
+                got += far_end.take(16)
             assert got == bytes([128, 131])
             far_end.send(bytes(range(200)))
             assert read_until(transport, 200) == bytes(range(200))
@@ -173,7 +173,7 @@ def test_drain_output_waits_for_what_was_written_and_says_a_closed_port(
     if not far_end.echoes:
         got = b""
         while len(got) < 5:
-            got += far_end.recv(16)
+            got += far_end.take(16)
         assert got == bytes([137, 0, 0, 0, 0])
     transport.close()
     if far_end.url.startswith("socket://"):
@@ -188,7 +188,7 @@ def test_a_vanished_far_end_raises_transport_error_naming_the_port(kind: str) ->
         transport = open_transport(end.url)
         try:
             transport.write(b"\x80")
-            end.recv(1)
+            end.take(1)
             end.hang_up()
             with pytest.raises(TransportError) as failed:
                 for _ in range(50):
@@ -307,8 +307,7 @@ def plain_open_error(path: str) -> int:
         except OSError as exc:
             code = exc.errno or 254
         os._exit(code)
-    _, status = os.waitpid(child, 0)
-    code = os.waitstatus_to_exitcode(status)
+    code = reaped(child, "the child opening the device as nobody")
     if code == 255:
         pytest.skip("running as root, and root could not become nobody: root's opens ignore it")
     return code
@@ -442,7 +441,7 @@ def test_hung_up_holds_speed_0_refuses_writes_and_restores_the_rate_on_any_exit(
             assert termios.tcgetattr(slave)[5] == termios.B19200
             assert transport.baud == 19200
             transport.write(b"\x80")
-            assert end.recv(16) == b"\x80", "nothing was written while hung up"
+            assert end.take(16) == b"\x80", "nothing was written while hung up"
             with pytest.raises(KeyboardInterrupt), transport.hung_up():
                 raise KeyboardInterrupt
             assert termios.tcgetattr(slave)[5] == termios.B19200, "restored after Ctrl-C"
@@ -613,7 +612,7 @@ def test_a_bridge_that_resets_is_reconnected_past_one_that_turns_the_connection_
     url = f"socket://127.0.0.1:{listener.getsockname()[1]}"
     transport = SerialTransport.open(url)
     assert transport.reopens
-    first, _ = listener.accept()
+    first = accepted(listener, "the transport's connection")
     first.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
     first.close()  # the bridge reboots: RST
     served: list[socket.socket] = []
@@ -625,11 +624,11 @@ def test_a_bridge_that_resets_is_reconnected_past_one_that_turns_the_connection_
         return looked(port)
 
     def bridge_back() -> None:
-        turned, _ = listener.accept()  # still rebooting: taken and reset at once
+        turned = accepted(listener, "the reopen's first try")  # still rebooting: reset at once
         turned.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
         turned.close()
         dealt.release()
-        served.append(listener.accept()[0])
+        served.append(accepted(listener, "the reopen's second try"))
         dealt.release()
 
     monkeypatch.setattr(serial_port, "_closed_at_once", after_the_bridge)
@@ -641,7 +640,7 @@ def test_a_bridge_that_resets_is_reconnected_past_one_that_turns_the_connection_
         thread.join(WAIT_S)  # it takes the connection the reopen made, at once
         assert served, "the reopen took the connection turned away for served"
         transport.write(b"\x80")
-        assert served[0].recv(1) == b"\x80"
+        assert received(served[0], 1, "the byte written after the reopen") == b"\x80"
         served[0].sendall(b"\x01")
         assert transport.read(1.0) == b"\x01"
     finally:
@@ -664,7 +663,7 @@ def _open_reset_as_it_reads(
 
     def reset_as_it_reads(port: serial_port.protocol_socket.Serial) -> None:
         made.append(port._socket)
-        turned, _ = listener.accept()
+        turned = accepted(listener, "the open's connection")
         turned.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
         turned.close()  # RST
         select.select([port._socket], [], [], HANG_S)  # the reset, on its way
@@ -696,21 +695,21 @@ def test_a_reopen_turned_away_as_it_reads_leaves_no_socket_open(
     listener = socket.create_server(("127.0.0.1", 0))
     url = f"socket://127.0.0.1:{listener.getsockname()[1]}"
     transport = SerialTransport.open(url)
-    accepted = [listener.accept()[0]]
+    first = accepted(listener, "the transport's connection")
     try:
         made = _open_reset_as_it_reads(monkeypatch, listener)
         assert transport.reopen(within=0.3) is None
         assert made and all(sock.fileno() == -1 for sock in made)
     finally:
         transport.close()
-        for sock in (*accepted, listener):
+        for sock in (first, listener):
             sock.close()
 
 
 def test_a_bridge_that_stays_down_is_said_not_to_come_back() -> None:
     listener = socket.create_server(("127.0.0.1", 0))
     transport = SerialTransport.open(f"socket://127.0.0.1:{listener.getsockname()[1]}")
-    listener.accept()[0].close()
+    accepted(listener, "the transport's connection").close()
     listener.close()  # nothing listens there any more
     assert transport.reopen(within=0.3) is None
     assert not transport.is_open
@@ -725,7 +724,7 @@ def test_a_bridge_that_does_not_answer_holds_a_reconnection_no_longer_than_asked
     listener = socket.create_server(("127.0.0.1", 0), backlog=0)
     address = listener.getsockname()
     transport = SerialTransport.open(f"socket://127.0.0.1:{address[1]}")
-    listener.accept()[0].close()
+    accepted(listener, "the transport's connection").close()
     filler = socket.create_connection(address)  # the backlog's one place, taken
     bounds: list[float | None] = []  # each try's connect timeout (a wall-clock bound: flaky)
     connect = socket.create_connection
