@@ -75,12 +75,30 @@ class Terminated(KeyboardInterrupt):
         super().__init__(f"terminated by signal {_name(signum)}")
 
 
+#: the interrupt an early handler raised last, until the start-up's end took it
+#: (:func:`swallowed_interrupt`): Python drops one raised while a weakref callback or a
+#: finalizer runs (importlib's module locks run such a callback as the CLI imports: an
+#: "Exception ignored in ..." line), and the command went on, the whole mission run, exit 0
+_RAISED: list[KeyboardInterrupt] = []
+
+
 def interrupted_early(signum: int, frame: FrameType | None) -> None:
     """The handler of :data:`EARLY_SIGNALS` until the CLI's own are in: Ctrl-C's
     :class:`KeyboardInterrupt`, another signal's :class:`Terminated`, marked as the signal's.
-    Nothing is written yet, so nothing waits for a safe point."""
+    Nothing is written yet, so nothing waits for a safe point. Kept too, in case Python
+    drops it (:data:`_RAISED`)."""
     interrupt = KeyboardInterrupt() if signum == _signal.SIGINT else Terminated(signum)
-    raise delivered(interrupt, signum)
+    _RAISED[:] = [delivered(interrupt, signum)]
+    raise interrupt
+
+
+def swallowed_interrupt() -> KeyboardInterrupt | None:
+    """The interrupt an early handler raised that never ended the start-up (Python dropped
+    it: :data:`_RAISED`), taken: the CLI raises it once its own handlers are in, where the
+    start-up ends. None: none, or the one raised was handled (:func:`main`)."""
+    kept = _RAISED[:1]
+    _RAISED.clear()
+    return kept[0] if kept else None
 
 
 def take_signals_early() -> None:
@@ -115,10 +133,12 @@ def main() -> int:
 
         return command()
     except KeyboardInterrupt as exc:
+        _RAISED.clear()
         return _interrupted(exc)
     except RuntimeError as exc:
         if not isinstance(exc.__cause__, KeyboardInterrupt):
             raise
+        _RAISED.clear()
         return _interrupted(exc.__cause__)
 
 

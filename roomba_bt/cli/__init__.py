@@ -20,7 +20,12 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from roomba_bt import __version__
-from roomba_bt._entry import EARLY_SIGNALS, interrupted_early, take_signals_early
+from roomba_bt._entry import (
+    EARLY_SIGNALS,
+    interrupted_early,
+    swallowed_interrupt,
+    take_signals_early,
+)
 from roomba_bt.cli.streams import guard_std_streams, stdout_problem
 from roomba_bt.installation import IncompleteInstallation, missing_from_installation
 from roomba_bt.robot.wording import COMMAND_LINE, UNATTENDED, ConnectionWording, spoken
@@ -275,6 +280,9 @@ def _as_the_process() -> None:
             if signal.getsignal(signum) is interrupted_early:
                 raising = raise_interrupt if signum == signal.SIGINT else raise_terminated
                 signal.signal(signum, raising)
+    dropped = swallowed_interrupt()  # its raise fell in a callback Python drops it from
+    if dropped is not None:
+        raise dropped
     if not sys.warnoptions:
         from roomba_bt.oi.encode import ENCODE_MODULE_CALLED
 
