@@ -617,6 +617,8 @@ def test_a_run_held_at_its_mission_s_end_says_its_resume_ends_the_run(page: Any)
         assert "breakpoint: sequence ends" in banner, banner
         assert "the mission ended: SUCCESS; resume or step ends the run with it" in banner
         assert "goes back to the mission's mode" not in banner, banner
+        title = page.get_attribute("#resume", "title")
+        assert title == "end the run with the mission's outcome (key r)", title
         page.click("#resume")
         joined(run.thread, "the run held at its end, resumed")
         assert run.result[0].outcome is Outcome.SUCCESS

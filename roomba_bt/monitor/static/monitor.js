@@ -24,6 +24,8 @@ const SLOT = 0.015;
 
 const token = new URLSearchParams(location.search).get("token");
 const $ = (id) => document.getElementById(id);
+// Resume's title as the page has it, for a run that is not held at its mission's end
+const RESUME_TITLE = $("resume").title;
 if (token) {
   // the server has set its HttpOnly cookie with this page (Path=/), which authorises a reload
   // and every request after it: the token leaves the address bar (a screen share, a
@@ -587,6 +589,8 @@ function updateControls() {
   $("controls").hidden = view.header !== null && !h.controls;
   controlButton("pause", !c || s.paused);
   controlButton("resume", !c || silent > 0 || !s.paused);
+  // held at the mission's end, a resume ends the run: its title said it went back to the mode
+  setTitle("resume", s.held_end ? "end the run with the mission's outcome (key r)" : RESUME_TITLE);
   controlButton("step", !c || silent > 0 || !s.paused);
   controlButton("stop", !c);
   menuButtons(c);
@@ -624,6 +628,11 @@ function updateControls() {
   }
   else showBanner("");
   robotTitle();
+}
+
+function setTitle(action, title) {
+  const button = $(action);
+  if (button.title !== title) button.title = title;
 }
 
 // one of the four controls: off when ``off``, and while its control is on its way (pending)
