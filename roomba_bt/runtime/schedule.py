@@ -20,15 +20,22 @@ bunched behind it. The rule (docs/runtime.md, "The stream is the clock"):
 * On a jittery link a batch 0.9 slot late (:data:`JITTER_LATE`) opens a run of late batches,
   which goes on while they come half a slot late or more. Nothing is counted while it lasts:
   the schedule waits, one slot a frame. A batch on time ends it: nothing was lost. A run that
-  lasts :data:`LOST_WINDOW` (longer on a link whose frames spread wider, :func:`run_window`)
+  lasts :data:`LOST_WINDOW` (longer on a link whose frames spread wider, :func:`run_window`),
+  or whose batches all came later than the link's jitter reaches (:meth:`_beyond_jitter`),
   is counted by its least lateness, what every batch of it lacked: frames lost for good.
+  What is still late then goes on as a run of its own (frames lost since); a batch on time
+  ends it.
 * After a gap of a second or more, or a stall ridden through, the frames that waited may come
   as a backlog, over several reads (a TCP bridge, a pty relay, a host that was stopped): each
   is a slot, none lost. The gap opens a run as a late batch does, and what the backlog leaves
   short once it is read (the next batch half a slot after the one before; on a jittery link,
-  the run's window) is counted; the schedule then starts again from that batch (the stream
-  may have come back at another phase). Counted at once, the gap was counted a second time
-  by the backlog's frames: a 6 s stall over WiFi made 6 s of mission time that never passed.
+  the run's window, or after a stall under a second, eight batches none of which came
+  earlier than the first back) is counted; the schedule then moves on to the run's least
+  late batch (the stream may have come back at another phase), and what the later batches
+  lack past it goes on as a run: frames lost since the gap, as on a noisy cable, where 45 %
+  of the frames broken trip the watchdog again and again. Counted at once, the gap was
+  counted a second time by the backlog's frames: a 6 s stall over WiFi made 6 s of mission
+  time that never passed.
 
 The common frame (alone in its batch, less than half a slot late) takes :meth:`late_batch`
 with nothing lost: the schedule follows it (up to :data:`DRIFT`) and its lateness is kept in
@@ -87,8 +94,8 @@ class SlotSchedule:
     """When the robot's frames are due on the link's clock, and what a batch spans."""
 
     __slots__ = (
-        "_reach", "_run_batches", "_run_began", "_run_last", "_run_late", "_run_least",
-        "_run_most", "_run_restart", "_run_tick",
+        "_known", "_reach", "_run_batches", "_run_began", "_run_first", "_run_last", "_run_late",
+        "_run_least", "_run_most", "_run_restart", "_run_tick",
         "due", "spread", "tick",
     )  # fmt: skip
 
@@ -107,9 +114,15 @@ class SlotSchedule:
         self._run_restart = False  # it began after a long gap or a stall ridden through
         self._run_batches = 0  # its batches spaced as the stream is
         self._run_most = 0.0  # the greatest lateness of its batches
+        self._run_first = 0.0  # how late its first batch came
         #: how late jitter made the runs before this one (the most of each, less what it
         #: lost), forgetting by REACH_DECAY a second
         self._reach = 0.0
+        #: the link's jitter has shown past :data:`START_SPREAD` (its spread at the start):
+        #: it is known, and stays so when the spread decays under that again (a run of late
+        #: batches decays it a frame's share a batch: at 45 % of the frames lost, the
+        #: prompt count of lost frames stopped once it had)
+        self._known = False
 
     def run_window(self) -> float:
         """How long a run of late batches lasts before it is counted as frames lost: a
@@ -155,15 +168,25 @@ class SlotSchedule:
                     return count
                 reach = LOST_LATE if calm else COUNT_LATE
                 lost = int((least - reach) / SLOT_SECONDS) + 1 if least >= reach else 0
-                if self._run_restart:  # after a gap the stream may have come back at
-                    self._run_tick = -2  # another phase: the schedule starts again here
-                    self.due = arrival
-                else:  # what is still late goes on as a run of its own (frames lost since)
-                    self._run_tick, self._run_began = tick + count + lost, arrival
-                    self._run_least = self._run_late = late - lost * SLOT_SECONDS
-                    self._run_most = self._run_most - lost * SLOT_SECONDS
-                    self._run_batches = 1
-                    self.due = on_time + lost * SLOT_SECONDS
+                # The schedule moves on by what is lost. After a gap the stream may have
+                # come back at another phase: by the run's least lateness, to its least late
+                # batch (the stream live again; not to this batch, whose lateness past that
+                # is frames lost in the window: started again here, the schedule forgot
+                # them, and 2 % of the bytes lost made 8 s of mission time in 12.5 s); the
+                # gap's lateness is no jitter for the link's reach either
+                if self._run_restart:
+                    shift, self._run_most = least, late - least
+                else:
+                    shift = lost * SLOT_SECONDS
+                    self._run_most -= shift
+                # What is still late goes on as a run of its own (frames lost since); a
+                # batch on time once they are counted ends it (a run went on from a least
+                # of none, which no prompt count passed: the next lost frame waited a window)
+                rest = late - shift
+                self._run_tick = tick + count + lost if rest >= LOST_LATE else -2
+                self._run_began, self._run_least = arrival, rest
+                self._run_late, self._run_restart, self._run_batches = rest, False, 1
+                self.due = on_time + shift
                 return count + lost
         on_time += lost * SLOT_SECONDS
         late -= lost * SLOT_SECONDS
@@ -178,17 +201,22 @@ class SlotSchedule:
         (:attr:`spread`, and the runs before: :attr:`_reach`) by :data:`PROMPT_MARGIN`, for
         :data:`PROMPT_BATCHES` batches: frames lost, told without waiting for the window
         (jitter holds back a few frames, never every one beyond its reach). Only on a link
-        whose jitter is known (past its first half second) and under :data:`PROMPT_REACH`:
+        whose jitter is known (it showed more than :data:`START_SPREAD`, its spread at the
+        start, once: past its first half second) and under :data:`PROMPT_REACH`:
         on a jitterier one, a run's least lateness over a few batches holds jitter of a slot
-        or more, which could be read as a frame lost; nor after a gap, where the stream may
-        have come back at another phase."""
+        or more, which could be read as a frame lost. After a gap (a stall ridden through),
+        the frames back may be a backlog: counted so only after a stall under a second
+        whose batches none came earlier than the first back by more than that jitter (a
+        backlog read comes faster than the stream, and its lateness falls); after a longer
+        gap, the window."""
         jitter = max(self.spread, self._reach)
-        return (
-            self._run_batches >= PROMPT_BATCHES
-            and START_SPREAD < jitter < PROMPT_REACH
-            and not self._run_restart
-            and self._run_least >= jitter + PROMPT_MARGIN
-        )
+        known = self._known = self._known or jitter > START_SPREAD
+        first = self._run_first
+        if self._run_restart:  # a stall under a second, and no backlog: no batch came
+            beyond = first < LOST_WINDOW and self._run_least >= first - jitter - PROMPT_MARGIN
+        else:
+            beyond = self._run_least >= jitter + PROMPT_MARGIN
+        return self._run_batches >= PROMPT_BATCHES and known and jitter < PROMPT_REACH and beyond
 
     def _run_on(
         self, count: int, arrival: float, tick: int, late: float, restart: bool, calm: bool
@@ -204,6 +232,7 @@ class SlotSchedule:
             forgot = (arrival - self._run_last) * REACH_DECAY
             self._reach = max(self._run_most, self._reach - forgot)
             self._run_began, self._run_restart, self._run_least = arrival, restart, late
+            self._run_first = late
             self._run_batches, self._run_most = 1, late
         else:
             fall = self._run_late - late  # (a backlog's is no jitter)
