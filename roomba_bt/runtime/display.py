@@ -9,6 +9,7 @@ flush, outside the measured tick time.
 from __future__ import annotations
 
 import logging
+import math
 import os
 import re
 import shutil
@@ -55,13 +56,16 @@ class MissionClockFormatter(logging.Formatter):
     (``ESC [2J`` clears the screen) reaches the terminal from a message or a traceback."""
 
     clock: Callable[[], float | None] | None = None
+    #: the latest stamp a line had since the run's clock was set (:func:`use_mission_clock`)
+    latest = -math.inf
     #: the run's label (``run --label``), said on each line as ``[robot 3]``: two runs'
     #: lines in one terminal (started with ``&``) told apart; "" for none
     label = ""
 
     def format(self, record: logging.LogRecord) -> str:
         """``t=12.345 LEVEL logger: message``: the record's own ``mission_time`` (passed as
-        ``extra``) if it has one, else the mission clock's now."""
+        ``extra``) if it has one, else the mission clock's now; while a run's clock is set,
+        never a stamp before the line above it (:attr:`latest`)."""
         line = f"{record.levelname} {record.name}: {escaped(_quoted_message(record))}"
         label = type(self).label
         if label:
@@ -72,8 +76,18 @@ class MissionClockFormatter(logging.Formatter):
             line += "\n" + escaped(record.exc_text)
         now: float | None = getattr(record, "mission_time", None)
         clock = type(self).clock
-        if now is None and clock is not None:
-            now = clock()
+        if clock is not None:
+            if now is None:
+                now = clock()
+            # never before the line above: a stall's lines read the link's clock past the
+            # last frame, and the frames back count the stall's slots only once judged (the
+            # schedule's run, runtime/schedule.py): a line of a tick meanwhile read a time
+            # before them (t=4.305 frames are back, then t=4.240 no valid sensor frame)
+            if now is not None:
+                if now < MissionClockFormatter.latest:
+                    now = MissionClockFormatter.latest
+                else:
+                    MissionClockFormatter.latest = now
         return line if now is None else f"t={now:.3f} {line}"
 
 
@@ -93,6 +107,7 @@ def use_mission_clock(runner: MissionRunner | None, label: str = "") -> None:
     (:func:`~roomba_bt.runtime.clock.mission_time_now`), not the last frame's; and with the
     run's ``label`` (``run --label``), if any."""
     MissionClockFormatter.label = label if runner is not None else ""
+    MissionClockFormatter.latest = -math.inf
     if runner is None:
         MissionClockFormatter.clock = None
         return

@@ -128,6 +128,32 @@ def test_the_live_tree_and_the_log_lines_say_the_run_s_label(
     assert "[robot 3]" not in MissionClockFormatter().format(record)  # the run's alone
 
 
+def test_a_run_s_log_line_is_never_stamped_before_the_line_above_it(
+    run_mission: RunMission,
+) -> None:
+    """A stall's lines read the link's clock past the last frame; the frames back count its
+    slots only once the schedule has judged them, and a line meanwhile read less: 't=4.305
+    ... frames are back' and then 't=4.240 ... no valid sensor frame'. A run's lines keep
+    the stamp of the line above until its clock passes it; the next run starts afresh."""
+    run = run_mission(DRIVE)
+
+    def line(at: float) -> str:
+        record = logging.LogRecord("roomba_bt.run", logging.INFO, "", 0, "x", (), None)
+        record.mission_time = at
+        return MissionClockFormatter().format(record).split()[0]
+
+    use_mission_clock(run.runner)
+    try:
+        assert [line(at) for at in (4.305, 4.240, 4.3, 4.5)] == [
+            "t=4.305", "t=4.305", "t=4.305", "t=4.500"
+        ]  # fmt: skip
+        use_mission_clock(run.runner)  # another run's clock
+        assert line(1.0) == "t=1.000"
+    finally:
+        use_mission_clock(None)
+    assert line(0.5) == "t=0.500"  # no run's clock: each line its own time
+
+
 LONG = """
 tree:
   sequence:
