@@ -1173,6 +1173,25 @@ def test_each_quote_of_history_is_said_to_be_history() -> None:
             assert said, f"{doc}: `{quote}` is not said to be history ({markers} before it)"
 
 
+#: The pages written for the project's own people, which keep its history by session: the
+#: layers' map, the measurements' log, the release procedure. Every other page is a user's.
+PROJECT_PAGES = frozenset({"architecture.md", "performance.md", "releasing.md"})
+
+
+def test_the_user_pages_speak_in_releases_not_sessions() -> None:
+    """A user knows releases, not the project's working sessions: "since session 38" told a
+    reader nothing (docs/routines.md said it 72 times until a helper reworded it, after
+    every other page had been). History on a user page is "in 0.1.0" or "since 0.2.0"."""
+    said = [
+        f"{page.relative_to(ROOT)}:{number}: {line.strip()}"
+        for page in DOCS
+        if page.name not in PROJECT_PAGES
+        for number, line in enumerate(page.read_text(encoding="utf-8").splitlines(), 1)
+        if re.search(r"\bsessions? \d", line, re.IGNORECASE)
+    ]
+    assert not said, "\n".join(said)
+
+
 #: The quotes no test holds yet, by page and how they begin (``kind:NAME``: every quote of
 #: that kind on the page), each with why: sessions 40 and 41 held the rest, and these are
 #: what is left, said here so that none is skipped unsaid.
