@@ -266,7 +266,7 @@ def test_a_loops_body_that_blocks_with_the_robot_still_is_said_as_such(
     seen = guard_looks(monkeypatch)
     link = SimLink(_simulator())
     stack = RunStack(roomba_bt.load_mission_text(TO_THE_WALL), link, profile=CREATE2,
-                     timeout_s=30.0, tick_limit=0.02)  # fmt: skip
+                     timeout_s=30.0, tick_limit=0.25)  # fmt: skip
     with stack:
         for index, _ in enumerate(stack.ticks()):
             if index == 0:  # Safe sent, nothing moving yet
@@ -298,7 +298,7 @@ def _loop_recorded(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, halted: bool
     source.write_text(TO_THE_WALL)
     link = SimLink(_simulator())
     mission = roomba_bt.load_mission(str(source), profile=CREATE2)
-    stack = RunStack(mission, link, profile=CREATE2, timeout_s=30.0, tick_limit=0.02,
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=30.0, tick_limit=0.25,
                      record=Recording(path, str(source)))  # fmt: skip
     with stack:
         for tick in stack.ticks():
@@ -379,7 +379,7 @@ def test_a_trees_slow_tick_noted_in_threading_py_replays_as_the_trees(
     source.write_text(TO_THE_WALL)
     mission = roomba_bt.load_mission(str(source), profile=CREATE2)
     stack = RunStack(mission, SimLink(_simulator()), profile=CREATE2, timeout_s=30.0,
-                     tick_limit=0.02, visitors=[WaitsInFinalise(seen)],
+                     tick_limit=0.25, visitors=[WaitsInFinalise(seen)],
                      record=Recording(path, str(source)))  # fmt: skip
     with stack:
         stack.run()

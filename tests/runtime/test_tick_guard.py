@@ -73,7 +73,7 @@ def test_a_tick_that_blocks_gets_drive_0_and_the_run_goes_on(
     run_mission: RunMission, plugin_dir: Path
 ) -> None:
     run = run_mission(
-        MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0
+        MISSION, tick_limit=0.25, permissions=Permissions(plugin_files=True), timeout=20.0
     )
     assert run.summary.outcome.value == "success", run.summary
     assert run.summary.tick_halts == 1
@@ -111,7 +111,7 @@ def test_a_slow_tick_with_the_wheels_at_rest_sends_nothing(
     (plugin_dir / "stuck.py").write_text(_blocking_for(PLUGIN, "0.1"))
     run = run_mission(
         "plugins: [./stuck.py]\ntree:\n  sequence:\n    - mode: safe\n    - stuck\n",
-        tick_limit=0.02, permissions=Permissions(plugin_files=True),
+        tick_limit=0.25, permissions=Permissions(plugin_files=True),
     )  # fmt: skip
     assert run.summary.outcome.value == "success"
     assert run.summary.tick_halts == 0
@@ -157,7 +157,7 @@ def test_a_blocked_tick_that_then_raises_is_counted_and_the_stop_is_the_safe_sto
         PLUGIN.replace("        return Status.SUCCESS", "        raise RuntimeError('gave up')")
     )
     run = run_mission(
-        MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0
+        MISSION, tick_limit=0.25, permissions=Permissions(plugin_files=True), timeout=20.0
     )
     assert run.summary.outcome.value == "error"
     assert "gave up" in run.summary.reason
@@ -180,7 +180,7 @@ def test_a_record_replays_the_guards_acts_byte_for_byte(
     record_path = tmp_path / "run.rec"
     allowed = Permissions(plugin_files=True)
 
-    run = run_mission(MISSION, tick_limit=0.02, permissions=allowed, timeout=20.0,
+    run = run_mission(MISSION, tick_limit=0.25, permissions=allowed, timeout=20.0,
                       record=record_path)  # fmt: skip
     assert run.summary.tick_halts == 1
     record = load_record(record_path)
@@ -210,7 +210,7 @@ def test_the_monitor_shows_each_act_of_a_recorded_run(
 
     record_path = tmp_path / "run.rec"
     allowed = Permissions(plugin_files=True)
-    run_mission(MISSION, tick_limit=0.02, permissions=allowed, timeout=20.0,
+    run_mission(MISSION, tick_limit=0.25, permissions=allowed, timeout=20.0,
                 record=record_path)  # fmt: skip
     (plugin_dir / "stuck.py").write_text(_blocking_for(PLUGIN, "0.0"))
     record = load_record(record_path)
@@ -361,7 +361,7 @@ def test_a_terminate_that_blocks_mid_run_is_the_tick_guards(
     run = run_mission(
         "plugins: [./slowterm.py]\ntree:\n  sequence:\n    - mode: safe\n    - fallback:\n"
         "        - timeout: {after: 150ms, do: slow_term}\n        - wait: 300ms\n",
-        tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0,
+        tick_limit=0.25, permissions=Permissions(plugin_files=True), timeout=20.0,
     )  # fmt: skip
     assert run.summary.outcome.value == "success", run.summary
     assert run.summary.tick_halts == 1
@@ -387,7 +387,7 @@ def test_the_gap_a_blocked_tick_leaves_is_said_as_the_guards(
         )
     )
     run = run_mission(
-        MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0
+        MISSION, tick_limit=0.25, permissions=Permissions(plugin_files=True), timeout=20.0
     )
     summary = run.summary
     assert summary.outcome.value == "success", summary
@@ -474,7 +474,7 @@ def test_the_gap_a_tick_blocked_with_the_robot_still_leaves_is_said_as_such(
     1 of 2 real-time runs of a plugin's 1 s sleep: the gap came out a little over or under
     the second that is said)."""
     run = run_mission(
-        STILL_MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0
+        STILL_MISSION, tick_limit=0.25, permissions=Permissions(plugin_files=True), timeout=20.0
     )
     summary = run.summary
     assert summary.outcome.value == "success", summary
@@ -536,7 +536,7 @@ def test_a_record_of_a_still_tick_replays_its_gap_as_the_run_said_it(
     from roomba_bt.runtime.tick_guard import STILL_NOTE
 
     record_path = tmp_path / "run.rec"
-    run = run_mission(STILL_MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True),
+    run = run_mission(STILL_MISSION, tick_limit=0.25, permissions=Permissions(plugin_files=True),
                       timeout=20.0, record=record_path)  # fmt: skip
     assert run.summary.unread_gaps == 0 and len(_gaps_said(caplog)) == 1
     lines = record_path.read_text().splitlines(keepends=True)
@@ -571,7 +571,7 @@ def test_a_still_tick_explains_only_the_gap_after_it(
     right after it."""
     (plugin_dir / "still.py").write_text(STILL_PLUGIN.replace("advance(1.5)", "advance(0.5)"))
     mission = STILL_MISSION.replace("distance: 2 cm", "distance: 20 cm")
-    run = run_mission(mission, tick_limit=0.02, permissions=Permissions(plugin_files=True),
+    run = run_mission(mission, tick_limit=0.25, permissions=Permissions(plugin_files=True),
                       timeout=20.0, freeze=(1.2, 2.0))  # fmt: skip
     summary = run.summary
     assert summary.outcome.value == "success", summary
@@ -609,7 +609,7 @@ def test_the_gap_a_tick_blocked_while_a_cycle_drove_leaves_is_said_as_such(
     from roomba_bt.runtime.tick_guard import CYCLE_NOTE
 
     record_path = plugin_dir / "run.rec"  # the test's folder
-    run = run_mission(CYCLE_MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True),
+    run = run_mission(CYCLE_MISSION, tick_limit=0.25, permissions=Permissions(plugin_files=True),
                       timeout=20.0, record=record_path)  # fmt: skip
     summary = run.summary
     assert summary.outcome.value == "success", summary
@@ -669,7 +669,7 @@ def test_the_monitor_shows_a_still_tick_live_and_replayed(
     (plugin_dir / "mission.yaml").write_text(STILL_MISSION)
     live = RunFeed(history=5000, mission_name="still")
     live.set_tree(load_mission(plugin_dir / "mission.yaml", permissions=allowed).root)
-    run = run_mission(STILL_MISSION, tick_limit=0.02, permissions=allowed, timeout=20.0,
+    run = run_mission(STILL_MISSION, tick_limit=0.25, permissions=allowed, timeout=20.0,
                       record=record_path, observer=live.observe)  # fmt: skip
     assert run.summary.tick_stills == 1, str(run.summary)
     said = still_events(live)
@@ -716,7 +716,7 @@ def test_a_tick_that_blocks_with_the_motors_on_gets_them_off_and_back_after(
     (plugin_dir / "stuck.py").write_text(MOTORS_PLUGIN)
     record_path = tmp_path / "run.rec"
     allowed = Permissions(plugin_files=True)
-    run = run_mission(MOTORS_MISSION, tick_limit=0.02, permissions=allowed, timeout=20.0,
+    run = run_mission(MOTORS_MISSION, tick_limit=0.25, permissions=allowed, timeout=20.0,
                       record=record_path)  # fmt: skip
     assert run.summary.outcome.value == "success", run.summary
     assert run.summary.tick_halts == 1
