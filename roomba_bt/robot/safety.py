@@ -564,7 +564,9 @@ class InterruptGuard:
     (:attr:`late`): the runner raises it, or reports it, once the stop is done, so an
     operator's Ctrl-C is never lost because it came late (a program would drive its next
     mission). ``raises``: the interrupt is raised in the program after the stop (what the
-    message printed meanwhile says), not only summarised.
+    message printed meanwhile says), not only summarised. The first one's interrupt is kept
+    too (:attr:`kept`) until the run takes it: one Python dropped (its handler ran inside a
+    finalizer) or a plugin swallowed is raised again at the run's next frame.
 
     Used as a context manager around a run; the previous handlers come back on the way out,
     or with ``hold`` every signal stays noted and ignored after it, until :meth:`release`
@@ -617,6 +619,13 @@ class InterruptGuard:
         self.closing = False
         self._said = False  # the message for what is under way now
         self._previous: dict[int, object] = {}
+        #: the interrupt a handler raised, until the run takes it (:meth:`take`): Python
+        #: drops one raised while a finalizer or a weakref callback runs ("Exception ignored
+        #: in ..."), and a plugin's ``except BaseException`` swallows one raised in its code;
+        #: either way the tree ticked on, the robot driving, and a second signal only waited
+        #: for a stop that never began. The run's loop raises it again at its next frame (a
+        #: list: the loop reads it there, one test a frame)
+        self.kept: list[KeyboardInterrupt] = []
 
     def stopping(self, doing: str = SAFE_STOP_UNDER_WAY, during: During = THE_SAFE_STOP) -> None:
         """The run's stop begins, or its next step: from now on a signal waits for it, and
@@ -640,7 +649,15 @@ class InterruptGuard:
             return
         self.stop_begun = self.raised = True  # the run now unwinds into its safe stop
         interrupt = KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
-        raised_when_safe(delivered(interrupt, signum))
+        self.kept[:] = [delivered(interrupt, signum)]  # until the run takes it: it may be lost
+        raised_when_safe(interrupt)
+
+    def take(self) -> KeyboardInterrupt | None:
+        """The interrupt a handler raised that the run has not taken (:attr:`kept`), taken:
+        the run's end calls it, and a signal's interrupt that ended the run is this one."""
+        kept = self.kept[:1]
+        self.kept.clear()
+        return kept[0] if kept else None
 
     def late_interrupt(self) -> KeyboardInterrupt | None:
         """The interrupt a signal that came during the stop stands for (:attr:`late`), or

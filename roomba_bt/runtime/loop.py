@@ -256,6 +256,11 @@ def interrupted(interrupt: KeyboardInterrupt, summary: RunSummary) -> KeyboardIn
     return again.with_traceback(interrupt.__traceback__)
 
 
+#: what a run's reason says a signal came during whose interrupt the run never took (its
+#: handler ran in a finalizer, or a plugin swallowed it, on the tick the run ended on): ``...
+#: during the run (the run had ended: success)``
+THE_RUN = "the run"
+
 #: what a second run() of one runner says
 RUN_TWICE = (
     "this run has ended: a RunStack (a MissionRunner) runs once; build a new RunStack for "
@@ -500,15 +505,21 @@ class MissionRunner(BaseHandle):
                 summary.outcome, summary.reason = Outcome.HUNG, limit.said(exc)
             except BaseException as exc:  # Ctrl-C; a stop, a lost link, a bug, sys.exit()
                 interrupt, raised_in = run_ended_by(exc, self)
+                if interrupt is not None:  # a signal's: the one its handler kept, taken
+                    guard.take()
             finally:
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
                 self._finish(summary, wall_start, raised_in)
-        late = guard.late_interrupt()  # a signal during the stop and shutdown: not lost
+        # a signal whose interrupt the run never took (Python dropped it, or a plugin
+        # swallowed it, in the tick the run ended on), else one during the stop: not lost
+        late, during = guard.take(), THE_RUN
+        if late is None:
+            late, during = guard.late_interrupt(), guard.late_during
         if interrupt is None and late is not None:
             interrupt = late
-            note_late_interrupt(summary, late, guard.late_during)
+            note_late_interrupt(summary, late, during)
         if interrupt is not None and raise_interrupts:  # the robot is stopped: now the caller
             raise interrupted(interrupt, summary) from None
         return summary
@@ -558,6 +569,10 @@ class MissionRunner(BaseHandle):
         flushed = -1  # the stream tick of the last tree tick written whole
         motion = MotionWatch(self.connection, summary)  # the wheels doing what they were told
         checks = MissionTimeChecks(summary, self.timeout_s, self._ending.cycles, motion)
+        # a signal's interrupt the run has not taken: one Python dropped (its handler ran in a
+        # finalizer or weakref callback: "Exception ignored in ...") or a plugin's ``except
+        # BaseException`` swallowed; raised again at the next frame, or the next empty read
+        kept = cast(InterruptGuard, self._guard).kept
         started = perf()  # each tick's start (an interrupt's before the first: none cut short)
         try:
             while True:
@@ -575,7 +590,11 @@ class MissionRunner(BaseHandle):
                     if self.input_ended is not None and (why := self.input_ended()):
                         summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
                         return
+                    if kept:
+                        raise kept[0].with_traceback(None)
                     continue
+                if kept:  # before the tick: the tree ticks no more after the signal
+                    raise kept[0].with_traceback(None)
                 started = perf()
                 mission_time, untick = self._advance(batch, untick), None
                 gate = self.gate

@@ -1,0 +1,170 @@
+"""A signal whose interrupt never reached the run's loop: Python drops an exception a signal
+handler raises while a finalizer or a weakref callback runs ("Exception ignored in ..."),
+and a plugin's ``except BaseException`` around its own code swallows one raised inside it.
+Either way the tree ticked on and the robot drove, and a second Ctrl-C only waited for a
+stop that never began (the run's handler had raised once: one signal per run); systemd's
+single SIGTERM was lost, its stop timed out and SIGKILLed the process, the robot driving.
+The run's handler keeps what it raised until the run takes it, and the run's loop raises it
+again at its next frame (``docs/runtime.md``)."""
+
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+import weakref
+from typing import Any
+
+import py_trees
+import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
+
+from roomba_bt.behaviours.actions import Drive, Mode
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.safety import SIGINT_SAID, Terminated
+from roomba_bt.runtime.loop import THE_RUN
+from roomba_bt.runtime.stack import RunStack, TreeMission
+from roomba_bt.runtime.summary import Outcome
+from roomba_bt.sim import Simulator, load_world
+
+from .simrun import TapLink
+
+#: the tick the signal is sent on; the run would go on for 5 s (333 ticks) without it
+SIGNAL_AT = 40
+
+
+def _signal_main(signum: int) -> None:
+    """``signum`` to the main thread, where the handlers run (as ``test_interrupts.py``)."""
+    signal.pthread_kill(threading.main_thread().ident or 0, signum)
+
+
+def _signal_in_a_callback(signum: int) -> None:
+    """``signum`` sent from inside a weakref callback, whose exception Python drops: the
+    handler runs there (the loop below gives it its chance) and its raise is lost."""
+
+    class Held:
+        pass
+
+    held = Held()
+
+    def callback(_: object) -> None:
+        _signal_main(signum)
+        sum(range(1000))  # the handler runs here, inside the callback
+
+    keep = weakref.ref(held, callback)
+    del held  # the callback runs now
+    assert keep() is None
+
+
+class _SignalsOnce(py_trees.behaviour.Behaviour):
+    """Runs for ever; on its tick :data:`SIGNAL_AT` it sends the signal ``how``: from a
+    weakref callback (``"dropped"``), or from its own code inside ``try: ... except
+    BaseException: pass`` (``"swallowed"``: a plugin that guards its code against anything).
+    Counts its ticks after that one."""
+
+    def __init__(self, signum: int, how: str) -> None:
+        super().__init__("signals")
+        self.signum, self.how = signum, how
+        self.ticks = 0
+        self.after = 0
+
+    def update(self) -> py_trees.common.Status:
+        self.ticks += 1
+        if self.ticks > SIGNAL_AT:
+            self.after += 1
+        elif self.ticks == SIGNAL_AT and self.how == "dropped":
+            _signal_in_a_callback(self.signum)
+        elif self.ticks == SIGNAL_AT:
+            try:
+                _signal_main(self.signum)
+                sum(range(1000))  # the handler raises here
+            except BaseException:  # the plugin's own guard, as found in the field
+                pass
+        return py_trees.common.Status.RUNNING
+
+
+def _stack(signum: int, how: str) -> tuple[RunStack, TapLink, _SignalsOnce]:
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0))
+    signals = _SignalsOnce(signum, how)
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        Mode("safe", {"to": "safe"}),
+        py_trees.composites.Parallel(
+            "both", py_trees.common.ParallelPolicy.SuccessOnOne(), children=[
+                Drive("spin", {"velocity": "100 mm/s", "radius": "spin_left"}), signals,
+            ],
+        ),
+    ])  # fmt: skip
+    stack = RunStack(TreeMission(root, "dropped"), link, profile=CREATE2, timeout_s=5.0)
+    return stack, link, signals
+
+
+@pytest.fixture
+def dropped() -> Any:
+    """What Python dropped meanwhile (``sys.unraisablehook``'s calls): the test's proof that
+    the interrupt was lost where the field lost it, not raised."""
+    seen: list[BaseException | None] = []
+    previous = sys.unraisablehook
+    sys.unraisablehook = lambda unraisable: seen.append(unraisable.exc_value)
+    try:
+        yield seen
+    finally:
+        sys.unraisablehook = previous
+
+
+@pytest.mark.parametrize("how", ["dropped", "swallowed"])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_whose_interrupt_was_lost_ends_the_run_at_its_next_frame(
+    signum: int, how: str, dropped: list[BaseException | None]
+) -> None:
+    """On main the run went on to its 5 s timeout (the signal lost, exit 0 in the CLI);
+    now it ends before its next tick, the safe stop sent and the interrupt raised in the
+    caller, as any signal's."""
+    stack, link, signals = _stack(signum, how)
+    with pytest.raises(KeyboardInterrupt) as caught:
+        stack.run()
+    if how == "dropped":
+        assert [type(exc) for exc in dropped] == [
+            Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+        ]
+    else:
+        assert dropped == []
+    summary = stack.runner.summary
+    assert signals.after == 0, signals.after  # the tree never ticked after the signal
+    assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
+    said = SIGINT_SAID if signum == signal.SIGINT else "SIGTERM"
+    assert summary.reason == said, summary.reason
+    assert isinstance(caught.value, Terminated) == (signum == signal.SIGTERM)
+    assert summary.ended_at is not None and summary.ended_at[1] == "after"  # its tick whole
+    assert summary.safe_stop.startswith("sent "), summary.safe_stop
+    assert link.simulator.mode is OIMode.PASSIVE
+    assert link.simulator.requested_left == link.simulator.requested_right == 0
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+class _EndsWithALostSignal(py_trees.behaviour.Behaviour):
+    """Sends SIGINT from a weakref callback on its first tick and succeeds on it: the run
+    ends well on the very tick whose signal was lost, before a next frame could raise it."""
+
+    def update(self) -> py_trees.common.Status:
+        _signal_in_a_callback(signal.SIGINT)
+        return py_trees.common.Status.SUCCESS
+
+
+def test_a_signal_lost_on_the_runs_last_tick_is_its_interrupt_all_the_same(
+    dropped: list[BaseException | None],
+) -> None:
+    """The tree ended on the tick whose signal Python dropped: no next frame raises it, so
+    the run's end takes it, as one that came during the stop: INTERRUPTED, exit 130, the
+    reason saying how the run had ended (``roomba-bt run a && roomba-bt run b`` does not
+    start ``b``)."""
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0))
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        Mode("safe", {"to": "safe"}), _EndsWithALostSignal("ends"),
+    ])  # fmt: skip
+    stack = RunStack(TreeMission(root, "last"), link, profile=CREATE2, timeout_s=5.0)
+    summary = stack.run(raise_interrupts=False)
+    assert len(dropped) == 1
+    assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
+    assert summary.reason == f"{SIGINT_SAID} during {THE_RUN} (the run had ended: success)"
+    assert_quoted("docs/runtime.md", f"outcome INTERRUPTED ({SIGINT_SAID} during", str(summary))
