@@ -75,11 +75,20 @@ class Terminated(KeyboardInterrupt):
         super().__init__(f"terminated by signal {_name(signum)}")
 
 
-#: the interrupt an early handler raised last, until the start-up's end took it
-#: (:func:`swallowed_interrupt`): Python drops one raised while a weakref callback or a
-#: finalizer runs (importlib's module locks run such a callback as the CLI imports: an
-#: "Exception ignored in ..." line), and the command went on, the whole mission run, exit 0
+#: the interrupt an early handler, or the CLI's own after it, raised last, until the CLI
+#: took it (:func:`swallowed_interrupt`, :func:`main`): Python drops one raised while a
+#: weakref callback or a finalizer runs (importlib's module locks run such a callback as the
+#: CLI imports, a plugin's import too: an "Exception ignored in ..." line), and the command
+#: went on, the whole mission run, exit 0 (:func:`kept`)
 _RAISED: list[KeyboardInterrupt] = []
+
+
+def kept(interrupt: _Interrupt) -> _Interrupt:
+    """``interrupt``, which a handler of the command's is about to raise, kept
+    (:data:`_RAISED`) in case Python drops it: the start-up's end and a run's start raise it
+    again (:func:`swallowed_interrupt`)."""
+    _RAISED[:] = [interrupt]
+    return interrupt
 
 
 def interrupted_early(signum: int, frame: FrameType | None) -> None:
@@ -88,14 +97,14 @@ def interrupted_early(signum: int, frame: FrameType | None) -> None:
     Nothing is written yet, so nothing waits for a safe point. Kept too, in case Python
     drops it (:data:`_RAISED`)."""
     interrupt = KeyboardInterrupt() if signum == _signal.SIGINT else Terminated(signum)
-    _RAISED[:] = [delivered(interrupt, signum)]
-    raise interrupt
+    raise kept(delivered(interrupt, signum))
 
 
 def swallowed_interrupt() -> KeyboardInterrupt | None:
-    """The interrupt an early handler raised that never ended the start-up (Python dropped
+    """The interrupt a handler of the command's raised that never ended it (Python dropped
     it: :data:`_RAISED`), taken: the CLI raises it once its own handlers are in, where the
-    start-up ends. None: none, or the one raised was handled (:func:`main`)."""
+    start-up ends, and as a run begins (a Ctrl-C dropped as a plugin imported). None: none,
+    or the one raised was handled (:func:`main`)."""
     kept = _RAISED[:1]
     _RAISED.clear()
     return kept[0] if kept else None

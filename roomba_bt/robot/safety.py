@@ -26,7 +26,7 @@ from collections.abc import Callable, Iterator
 from types import FrameType
 from typing import Any, ClassVar
 
-from roomba_bt._entry import DELIVERED_BY, EARLY_SIGNALS
+from roomba_bt._entry import DELIVERED_BY, EARLY_SIGNALS, kept
 from roomba_bt._entry import Terminated as Terminated  # its home before the entry point took it
 from roomba_bt._entry import delivered as delivered
 
@@ -180,15 +180,16 @@ def raise_terminated(signum: int, frame: FrameType | None) -> None:
     """A signal handler: the signal raises :class:`Terminated` in the main thread (the CLI
     installs it for SIGTERM and SIGHUP as the process starts, before a run has its own),
     marked as a signal's (:func:`signal_delivered`), at a safe point
-    (:data:`interrupts_deferred`)."""
-    raised_when_safe(delivered(Terminated(signum), signum))
+    (:data:`interrupts_deferred`); kept in case Python drops it
+    (:func:`~roomba_bt._entry.kept`)."""
+    raised_when_safe(kept(delivered(Terminated(signum), signum)))
 
 
 def raise_interrupt(signum: int, frame: FrameType | None) -> None:
     """A signal handler for SIGINT: Python's own (a :class:`KeyboardInterrupt`), marked as a
     signal's (:func:`signal_delivered`), at a safe point (:data:`interrupts_deferred`);
-    :func:`interrupts_told_apart` installs it."""
-    raised_when_safe(delivered(KeyboardInterrupt(), signum))
+    :func:`interrupts_told_apart` installs it; kept as :func:`raise_terminated` keeps it."""
+    raised_when_safe(kept(delivered(KeyboardInterrupt(), signum)))
 
 
 class InterruptsDeferred:

@@ -157,10 +157,10 @@ def test_a_signal_as_soon_as_the_command_takes_it_is_exit_130_without_a_tracebac
             assert_quoted("docs/runtime.md", "roomba-bt: interrupted by SIGQUIT", err)
 
 
-_DROPPED_IN_A_CALLBACK = """\
-import gc, os, signal, sys, weakref
-from roomba_bt import _entry
-_entry.take_signals_early()
+#: a SIGINT sent inside a weakref callback, whose handler runs there: Python drops what it
+#: raises ("Exception ignored in ..."); then ``the WHAT went on`` printed
+_SIGINT_IN_A_CALLBACK = """\
+import gc, os, signal, weakref
 class Held: pass
 held = Held()
 def callback(_):  # its handler runs here: Python drops what it raises
@@ -169,10 +169,14 @@ def callback(_):  # its handler runs here: Python drops what it raises
 keep = weakref.ref(held, callback)
 del held
 gc.collect()
-print("the start-up went on", flush=True)
-sys.argv = ["roomba-bt", "--version"]
-sys.exit(_entry.main())
+print("the {} went on", flush=True)
 """
+
+_DROPPED_IN_A_CALLBACK = (
+    "import sys\nfrom roomba_bt import _entry\n_entry.take_signals_early()\n"
+    + _SIGINT_IN_A_CALLBACK.format("start-up")
+    + 'sys.argv = ["roomba-bt", "--version"]\nsys.exit(_entry.main())\n'
+)
 
 
 def test_an_interrupt_python_dropped_in_a_callback_ends_the_start_up_at_its_end() -> None:
@@ -190,3 +194,45 @@ def test_an_interrupt_python_dropped_in_a_callback_ends_the_start_up_at_its_end(
     assert done.returncode == ExitCode.INTERRUPTED, (done.stdout, done.stderr)
     assert "roomba-bt: interrupted" in done.stderr
     assert "roomba-bt 0." not in done.stdout  # --version's line: the command did not run
+
+
+#: a plugin file whose import runs a weakref callback in which SIGINT's handler runs (the
+#: CLI's own by then: raise_interrupt), as importlib's module locks run one: Python drops it
+_DROPPING_PLUGIN = (
+    _SIGINT_IN_A_CALLBACK.format("import")
+    + """\
+from roomba_bt.behaviours import Condition, declare
+@declare("s43_dropper", kind="condition", reads=(27,))
+class Dropper(Condition):
+    \"\"\"True: the plugin's behaviour, which the mission need not use.\"\"\"
+    def check(self, snapshot):
+        return True
+"""
+)
+
+
+def test_an_interrupt_python_dropped_as_a_plugin_imports_ends_the_command_before_the_run(
+    tmp_path: Path,
+) -> None:
+    """A Ctrl-C whose handler (the CLI's, in after the start-up) ran in a weakref callback
+    as a mission's plugin imported was dropped: the whole mission ran, exit 0. It is raised
+    as the run begins: exit 130, nothing of the mission run."""
+    (tmp_path / "drop.py").write_text(_DROPPING_PLUGIN)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "mission: m\nplugins: [./drop.py]\n"
+        "tree:\n  sequence:\n    - mode: safe\n    - wait: 0.1s\n    - mode: passive\n"
+    )
+    script = (
+        "import sys\nfrom roomba_bt._entry import main\n"
+        f"sys.argv = ['roomba-bt', 'run', {str(mission)!r}, '--fast', '--display', 'none',"
+        " '--allow-plugin-files']\nsys.exit(main())\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=HANG_S
+    )
+    assert "the import went on" in done.stdout  # the interrupt was dropped, as in the field
+    assert "Exception ignored" in done.stderr
+    assert done.returncode == ExitCode.INTERRUPTED, (done.stdout, done.stderr)
+    assert "roomba-bt: interrupted" in done.stderr
+    assert "outcome" not in done.stdout  # no run, so no summary
