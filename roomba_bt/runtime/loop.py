@@ -505,21 +505,12 @@ class MissionRunner(BaseHandle):
                 summary.outcome, summary.reason = Outcome.HUNG, limit.said(exc)
             except BaseException as exc:  # Ctrl-C; a stop, a lost link, a bug, sys.exit()
                 interrupt, raised_in = run_ended_by(exc, self)
-                if interrupt is not None:  # a signal's: the one its handler kept, taken
-                    guard.take()
             finally:
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
                 self._finish(summary, wall_start, raised_in)
-        # a signal whose interrupt the run never took (Python dropped it, or a plugin
-        # swallowed it, in the tick the run ended on), else one during the stop: not lost
-        late, during = guard.take(), THE_RUN
-        if late is None:
-            late, during = guard.late_interrupt(), guard.late_during
-        if interrupt is None and late is not None:
-            interrupt = late
-            note_late_interrupt(summary, late, during)
+        interrupt = ending_interrupt(interrupt, guard, summary)  # a late one: not lost
         if interrupt is not None and raise_interrupts:  # the robot is stopped: now the caller
             raise interrupted(interrupt, summary) from None
         return summary
@@ -569,10 +560,7 @@ class MissionRunner(BaseHandle):
         flushed = -1  # the stream tick of the last tree tick written whole
         motion = MotionWatch(self.connection, summary)  # the wheels doing what they were told
         checks = MissionTimeChecks(summary, self.timeout_s, self._ending.cycles, motion)
-        # a signal's interrupt the run has not taken: one Python dropped (its handler ran in a
-        # finalizer or weakref callback: "Exception ignored in ...") or a plugin's ``except
-        # BaseException`` swallowed; raised again at the next frame, or the next empty read
-        kept = cast(InterruptGuard, self._guard).kept
+        kept = cast(InterruptGuard, self._guard).kept  # a signal's, dropped: raised again
         started = perf()  # each tick's start (an interrupt's before the first: none cut short)
         try:
             while True:
@@ -582,6 +570,8 @@ class MissionRunner(BaseHandle):
                     batch = ride.tripped(stalled)
                 if ride.stall is not None:
                     ride.carry_on(batch)
+                if kept:  # before the tick, or with no frame: the tree ticks no more after it
+                    raise kept[0].with_traceback(None)
                 if not batch:
                     if writer.silenced_by is not None:  # sent past the tick (a thread's)
                         return silenced(root, summary, writer.silenced_by)
@@ -590,11 +580,7 @@ class MissionRunner(BaseHandle):
                     if self.input_ended is not None and (why := self.input_ended()):
                         summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
                         return
-                    if kept:
-                        raise kept[0].with_traceback(None)
                     continue
-                if kept:  # before the tick: the tree ticks no more after the signal
-                    raise kept[0].with_traceback(None)
                 started = perf()
                 mission_time, untick = self._advance(batch, untick), None
                 gate = self.gate
@@ -839,6 +825,27 @@ def noted_fall(
     if summary.first_fall or change is None or not change.fall or change.cause in EXPECTED_FALLS:
         return
     summary.first_fall = f"t={mission_time:.3f}{running_in(root)}: {change.cause}"
+
+
+def ending_interrupt(
+    interrupt: KeyboardInterrupt | None, guard: InterruptGuard, summary: RunSummary
+) -> KeyboardInterrupt | None:
+    """The interrupt :meth:`MissionRunner.run` raises once the robot is stopped: the signal's
+    that ended the run (``interrupt``), else one whose interrupt the run never took (Python
+    dropped it, or a plugin swallowed it, on the tick the run ended on: ``during`` the run),
+    else one that came during the stop (:attr:`InterruptGuard.late`), the run's reason then
+    saying it (:func:`~roomba_bt.runtime.teardown.note_late_interrupt`). The guard's kept
+    interrupt is taken in any case: the run is over."""
+    kept = guard.take()
+    if interrupt is not None:
+        return interrupt
+    if kept is not None:
+        note_late_interrupt(summary, kept, THE_RUN)
+        return kept
+    late = guard.late_interrupt()
+    if late is not None:
+        note_late_interrupt(summary, late, guard.late_during)
+    return late
 
 
 def run_ended_by(
