@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 import py_trees
 
+from roomba_bt._entry import swallowed_interrupt
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.robot.safety import interrupt_reason, sigterm_raises, terminal_stops_ignored
 from roomba_bt.runtime.loop import (
@@ -155,6 +156,7 @@ def ticks(stack: RunStack) -> Generator[Tick, None, None]:
     ended: _Ended | None = None
     # the run's own guard is the worker's, which can set no handler: the terminal's stops are
     # ignored here, as run() has them on the wall clock
+    swallowed_interrupt()  # one kept before this run is not this run's
     with sigterm_raises(), terminal_stops_ignored(stack.runner.on_wall_clock):
         worker.start()
         try:
@@ -166,6 +168,12 @@ def ticks(stack: RunStack) -> Generator[Tick, None, None]:
                     ended = handed
                     break
                 yield handed
+                # a SIGTERM raised in the loop's body that never left it (Python dropped it
+                # in a finalizer, or the body's own ``except BaseException`` took it): the
+                # loop went on, the robot driving, and systemd's one SIGTERM was lost
+                dropped = swallowed_interrupt()
+                if dropped is not None:
+                    raise dropped.with_traceback(None)
         except KeyboardInterrupt as exc:  # Ctrl-C, or Terminated, while the loop waited
             interrupt = exc
             stack.stop(interrupt_reason(exc))

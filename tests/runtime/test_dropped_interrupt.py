@@ -60,8 +60,8 @@ def _signal_in_a_callback(signum: int) -> None:
 class _SignalsOnce(py_trees.behaviour.Behaviour):
     """Runs for ever; on its tick :data:`SIGNAL_AT` it sends the signal ``how``: from a
     weakref callback (``"dropped"``), or from its own code inside ``try: ... except
-    BaseException: pass`` (``"swallowed"``: a plugin that guards its code against anything).
-    Counts its ticks after that one."""
+    BaseException: pass`` (``"swallowed"``: a plugin that guards its code against anything),
+    or none (``"none"``). Counts its ticks after that one."""
 
     def __init__(self, signum: int, how: str) -> None:
         super().__init__("signals")
@@ -75,7 +75,7 @@ class _SignalsOnce(py_trees.behaviour.Behaviour):
             self.after += 1
         elif self.ticks == SIGNAL_AT and self.how == "dropped":
             _signal_in_a_callback(self.signum)
-        elif self.ticks == SIGNAL_AT:
+        elif self.ticks == SIGNAL_AT and self.how == "swallowed":
             try:
                 _signal_main(self.signum)
                 sum(range(1000))  # the handler raises here
@@ -169,3 +169,33 @@ def test_a_signal_lost_on_the_runs_last_tick_is_its_interrupt_all_the_same(
     assert summary.reason == f"{SIGINT_SAID} during {THE_RUN} (the run had ended: success)"
     page = " ".join((ROOT / "docs" / "runtime.md").read_text(encoding="utf-8").split())
     assert f"`{summary.reason}`" in page  # the page's example is what the run says
+
+
+@pytest.mark.parametrize("how", ["dropped", "swallowed"])
+def test_a_sigterm_lost_in_a_program_s_loop_over_ticks_ends_the_run_at_its_next_tick(
+    how: str, dropped: list[BaseException | None]
+) -> None:
+    """``for tick in stack.ticks():``, the program's own loop body: a SIGTERM whose
+    ``Terminated`` Python dropped there (a finalizer) or the body's ``except BaseException``
+    swallowed was kept but never raised again, and the loop went on to the run's 5 s end,
+    the robot driving. It is raised at the next hand-over: the run stopped, INTERRUPTED,
+    and the program gets the interrupt (SIGINT there is Python's own handler's, not ours)."""
+    stack, link, _ = _stack(signal.SIGTERM, "none")
+    after = 0
+    with pytest.raises(Terminated):
+        for tick in stack.ticks():
+            if tick.number > SIGNAL_AT:
+                after += 1
+            elif tick.number == SIGNAL_AT and how == "dropped":
+                _signal_in_a_callback(signal.SIGTERM)
+            elif tick.number == SIGNAL_AT:
+                try:
+                    _signal_main(signal.SIGTERM)
+                    sum(range(1000))  # the handler raises here
+                except BaseException:  # the program's own guard
+                    pass
+    assert len(dropped) == (how == "dropped"), dropped
+    assert after == 0, after  # no tick was handed over after the signal's
+    summary = stack.summary
+    assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
+    assert link.simulator.mode is OIMode.PASSIVE
