@@ -938,13 +938,12 @@ def _run(
     ``partial`` as it finishes; an exit code when the cluster is not there."""
     from roomba_bt.evaluate.cluster import ClusterUnavailableError, SchedulerUnreachableError
     from roomba_bt.evaluate.episode import MissionNotCompiled
-    from roomba_bt.evaluate.parallel import ProgressBar, end_bars, evaluate
+    from roomba_bt.evaluate.parallel import ProgressBar, end_bars, evaluate, variant_said
 
     bars = [
-        None if args.no_progress else ProgressBar(label=" ".join([Path(v.path).stem,
-                                                  *(f"{k}={x}" for k, x in v.params), ""]))
+        None if args.no_progress else ProgressBar(label=f"{variant_said(str(v.path), v.params)} ")
         for v in chosen
-    ]  # fmt: skip
+    ]
     progress = bars if partial is None else [_recorded(partial, bar) for bar in bars]
     try:
         try:

@@ -229,8 +229,15 @@ def _seed_said(spec: EpisodeSpec, variant: bool) -> str:
     """``spec``'s seed, with its variant as the progress bar labels it when ``variant``."""
     if not variant:
         return str(spec.seed)
-    name = PurePath(spec.mission.removeprefix(SHIPPED_PREFIX)).stem
-    return f"{spec.seed} ({' '.join([name, *(f'{k}={v}' for k, v in spec.params)])})"
+    return f"{spec.seed} ({variant_said(spec.mission, spec.params)})"
+
+
+def variant_said(mission: str, params: Sequence[tuple[str, Any]]) -> str:
+    """A variant in a few words, as its progress bar labels it and its seeds are said:
+    the mission file's stem (a shipped one's name) and each parameter it sets,
+    ``dock turn_speed=90mm/s``."""
+    name = PurePath(mission.removeprefix(SHIPPED_PREFIX)).stem
+    return " ".join([name, *(f"{key}={value}" for key, value in params)])
 
 
 @dataclass(frozen=True)
