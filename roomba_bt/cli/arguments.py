@@ -268,6 +268,13 @@ FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
     ("noise", float, 0.0, "analog sensor noise (raw)"),
     ("bit_flip_rate", float, 0.0, "per-byte probability"),
     ("truncate_rate", float, 0.0, "per-frame probability"),
+    (
+        "byte_drop_rate",
+        float,
+        0.0,
+        "per-byte probability (0..1) that a byte from the robot is lost (a long or cheap cable: "
+        "its frame is broken, the parser finds the next one)",
+    ),
     ("reset_at", float, None, "the robot resets at this time (s)"),
     ("stream_stop_at", float, None, "the stream stops at this time (s)"),
     ("stream_gap_at", float, None, "the stream pauses at this time (s), then goes on"),
@@ -307,16 +314,24 @@ def add_fault_options(parser: Any, what: str) -> None:
     )  # fmt: skip
 
 
+def fault_fields_set(args: argparse.Namespace) -> dict[str, Any]:
+    """The fault options given other than at their defaults, by their ``Faults`` fields
+    (``{"host_drop_rate": 0.01, "from_stream": True}``): what a record's header keeps."""
+    given = {
+        name: getattr(args, name)
+        for name, _, default, _ in FAULT_OPTIONS
+        if getattr(args, name) != default
+    }
+    return given | ({"from_stream": True} if args.from_stream else {})
+
+
 def fault_options_set(args: argparse.Namespace) -> list[str]:
     """The fault options given other than at their defaults, as the command line writes
     them (``--host-drop-rate 0.01``): what ``run --port`` refuses and what ``eval``'s line to
     run an episode again repeats."""
-    given = [
-        f"--{name.replace('_', '-')} {getattr(args, name)}"
-        for name, _, default, _ in FAULT_OPTIONS
-        if getattr(args, name) != default
-    ]
-    return given + (["--faults-from-stream"] if args.from_stream else [])
+    given = fault_fields_set(args)
+    from_stream = ["--faults-from-stream"] if given.pop("from_stream", False) else []
+    return [f"--{name.replace('_', '-')} {value}" for name, value in given.items()] + from_stream
 
 
 def faults_given(args: argparse.Namespace, **more: Any) -> Faults | str:

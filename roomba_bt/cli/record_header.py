@@ -20,6 +20,8 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from roomba_bt.cli.arguments import fault_fields_set
+
 if TYPE_CHECKING:
     from roomba_bt.runtime.claimed import ClaimedFile
     from roomba_bt.runtime.stack import Recording
@@ -90,7 +92,9 @@ def simulator_options(args: argparse.Namespace, folder: Path) -> dict[str, Any] 
     """The simulator's options as given: the world (its name when it was given by name, a
     shipped world's or one of ``ROOMBA_BT_WORLDS``'s; a file's path from the record's
     ``folder``) and its file's digest, the seed, ``--random-start``, ``--battery``,
-    ``--odometry-error`` and ``--fast``; None on a robot's port.
+    ``--odometry-error`` and ``--fast``, and the fault options given (``faults``, by their
+    ``Faults`` fields: ``{"byte_drop_rate": 0.02}``; absent when none was, as in a record
+    made before they were kept); None on a robot's port.
 
     A world of ``ROOMBA_BT_WORLDS``'s was written as its file's path from the record's
     folder (``../../worlds/living.yaml``), and ``monitor RECORD``, which reads a record's world
@@ -105,7 +109,7 @@ def simulator_options(args: argparse.Namespace, folder: Path) -> dict[str, Any] 
     given = args.world or DEFAULT_WORLD
     source = Path(getattr(args, "world_source", "") or given)
     by_name = not Path(given).is_file()  # as load_world took it: no file, so a name
-    return {
+    options: dict[str, Any] = {
         "world": given if by_name else source_name(source, folder),
         "world_sha256": file_digest(source),
         "seed": args.seed,
@@ -114,6 +118,10 @@ def simulator_options(args: argparse.Namespace, folder: Path) -> dict[str, Any] 
         "odometry_error": args.odometry_error or 0.0,
         "fast": bool(args.fast),
     }
+    faults = fault_fields_set(args)
+    if faults:  # a run on a bad cable said nothing of it, and was made again on a clean one
+        options["faults"] = faults
+    return options
 
 
 def run_options(args: argparse.Namespace, folder: Path) -> dict[str, Any]:

@@ -910,6 +910,11 @@ def _report_on_stdout(
         print(_coverage_line(simulator, sys.stdout))
     if simulator is not None:
         print(_where_it_ended(simulator))
+        from roomba_bt.sim.narrate import what_the_line_did
+
+        line = what_the_line_did(simulator, "computer")
+        if line is not None:  # the faults asked for, counted: beside what the run found
+            print(f"simulator    {line}")
     sys.stdout.flush()  # here, where its failure is noted, not at the process's exit
 
 

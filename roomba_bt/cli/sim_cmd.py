@@ -115,15 +115,11 @@ def run_sim(args: argparse.Namespace) -> int:
         f"wheels {simulator.requested_left:.0f}/{simulator.requested_right:.0f} mm/s",
         file=sys.stderr,
     )
-    from roomba_bt.sim.narrate import after_the_cut
+    from roomba_bt.sim.narrate import after_the_cut, what_the_line_did
 
-    line = simulator.host_line
+    line = what_the_line_did(simulator)
     if line is not None:
-        print(
-            f"roomba-bt sim: the line lost {line.dropped} and changed {line.corrupted} of the "
-            "bytes from the client",
-            file=sys.stderr,
-        )
+        print(f"roomba-bt sim: {line}", file=sys.stderr)
     cut = after_the_cut(simulator)
     if cut is not None:
         print(f"roomba-bt sim: {cut}", file=sys.stderr)

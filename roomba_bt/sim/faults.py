@@ -29,6 +29,10 @@ class Faults:
     ``truncate_rate``  probability that a stream frame is cut short: a random 1..n-1 bytes of
                        it are sent, the rest never (the next frame follows at once)
     ``drop_rate``      probability that a stream frame is never sent (its distance/angle lost)
+    ``byte_drop_rate`` probability that a robot->host byte is lost on the line (a long or
+                       cheap cable: the frame it was in is short by a byte, fails its checksum
+                       or takes the next one's first byte, and the host's parser resyncs on
+                       the next valid frame; :class:`RobotLine`)
     ``host_drop_rate`` probability that a host->robot byte is lost on the line (the robot's
                        parser then waits for it and takes the next command's bytes in its
                        place: a bad cable loses bytes both ways; :class:`HostLine`)
@@ -83,6 +87,7 @@ class Faults:
     from_stream: bool = False
     host_drop_rate: float = 0.0
     host_corrupt_rate: float = 0.0
+    byte_drop_rate: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.from_stream, bool):
@@ -92,6 +97,7 @@ class Faults:
             ("bit_flip_rate", 0.0, 1.0),
             ("truncate_rate", 0.0, 1.0),
             ("drop_rate", 0.0, 1.0),
+            ("byte_drop_rate", 0.0, 1.0),
             ("host_drop_rate", 0.0, 1.0),
             ("host_corrupt_rate", 0.0, 1.0),
             ("latency", 0.0, 10.0),
@@ -142,6 +148,68 @@ class Faults:
 
 
 NO_FAULTS = Faults()
+
+
+def bytes_to_next(rng: random.Random, rate: float) -> int:
+    """Bytes to the next one a per-byte fault of probability ``rate`` hits (0: this one),
+    drawn geometrically: one draw per hit, not one per byte (a stream is 2 000 bytes a
+    second, and ``eval`` runs hours of it)."""
+    if rate >= 1.0:
+        return 0
+    u = 1.0 - rng.random()  # in (0, 1]
+    return int(math.log(u) / math.log1p(-rate))
+
+
+class RobotLine:
+    """The robot->host direction of a bad cable (``Faults.byte_drop_rate``): each byte the
+    robot sends is lost on its way with that probability, drawn from a generator of its own
+    (``robot-line:SEED``), so the other faults of a seed draw as they did without it. The
+    simulator's output (:meth:`StreamOutput._emit <roomba_bt.sim.replies.StreamOutput._emit>`)
+    passes every byte through here last: stream frames, replies and injected text alike.
+
+    What a marginal cable does, and what the host's parser must survive: a frame with a
+    byte lost is one byte short, so its checksum fails, or it is completed by the next
+    frame's header (``13 05 1d 02 19 [0d lost] 00 a3 | 13 ...``) and fails there; the parser
+    skips to the next ``19`` that heads a valid frame. At 2 % of 29-byte frames' bytes,
+    45 % of the frames are broken (``1 - 0.98**29``), and a broken frame can take the next
+    one with it (docs/reliability.md, "A cable that loses bytes from the robot")."""
+
+    __slots__ = ("_next", "_rate", "_rng", "dropped", "passed_on")
+
+    def __init__(self, faults: Faults, seed: int) -> None:
+        self._rate = faults.byte_drop_rate
+        self._rng = random.Random(f"robot-line:{seed}")
+        #: bytes still to pass before the next lost one
+        self._next = bytes_to_next(self._rng, self._rate)
+        #: bytes lost so far, and bytes that reached the host (``run``'s and ``sim``'s
+        #: summaries say both)
+        self.dropped = 0
+        self.passed_on = 0
+
+    @staticmethod
+    def of(faults: Faults, seed: int) -> RobotLine | None:
+        """The line's faults for a simulator with ``faults``; None when no robot->host byte
+        is lost (the common case: the output tests for None)."""
+        return RobotLine(faults, seed) if faults.byte_drop_rate else None
+
+    def passed(self, data: bytes) -> bytes:
+        """What of ``data`` reaches the host."""
+        at = self._next
+        if at >= len(data):  # the usual case at a low rate: the whole frame
+            self._next = at - len(data)
+            self.passed_on += len(data)
+            return data
+        kept = bytearray()
+        start = 0
+        while at < len(data):
+            kept += data[start:at]
+            self.dropped += 1
+            start = at + 1
+            at = start + bytes_to_next(self._rng, self._rate)
+        kept += data[start:]
+        self._next = at - len(data)
+        self.passed_on += len(kept)
+        return bytes(kept)
 
 
 class HostLine:

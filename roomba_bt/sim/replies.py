@@ -38,6 +38,7 @@ from roomba_bt.oi.odometry import OLD_FIRMWARE_ANGLE_FACTOR
 from roomba_bt.oi.packets import VALID_PACKET_IDS, expand
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import byte_sum_for
+from roomba_bt.sim.faults import RobotLine, bytes_to_next
 from roomba_bt.sim.power import Power
 from roomba_bt.sim.sensing import far_groups
 
@@ -122,7 +123,7 @@ class StreamOutput(Power):
     __slots__ = (
         "_delayed", "_flip_in", "_frame", "_gapped_stream", "_next_inject", "_out",
         "_plain_output", "_reply_packers", "_stream", "_stream_ids", "_stream_paused",
-        "bytes_sent", "frames_sent",
+        "bytes_sent", "frames_sent", "robot_line",
     )  # fmt: skip
 
     def _init_output(self) -> None:
@@ -151,10 +152,13 @@ class StreamOutput(Power):
             or faults.bit_flip_rate
             or faults.truncate_rate
             or faults.drop_rate
+            or faults.byte_drop_rate
         )
         #: bytes still to send before the next bit flip (drawn geometrically: one draw per
         #: flip, not one per byte)
         self._flip_in = self._next_flip() if faults.bit_flip_rate else 0
+        #: the bytes' way to the host, when a fault loses some (None: every byte arrives)
+        self.robot_line = RobotLine.of(faults, self.seed)
         self.bytes_sent = 0
         self.frames_sent = 0
 
@@ -244,6 +248,10 @@ class StreamOutput(Power):
         if faults.bit_flip_rate:
             data = self._flip_bits(data)
         self.bytes_sent += len(data)
+        if self.robot_line is not None:  # last: the bytes the other faults made, lost
+            data = self.robot_line.passed(data)
+            if not data:
+                return
         if faults.latency:
             self._delayed.append((self.time + faults.latency, data))
         else:
@@ -251,11 +259,7 @@ class StreamOutput(Power):
 
     def _next_flip(self) -> int:
         """Bytes to the next flipped one: geometric with the per-byte rate (0: this one)."""
-        rate = self.faults.bit_flip_rate
-        if rate >= 1.0:
-            return 0
-        u = 1.0 - self._fault_rng.random()  # in (0, 1]
-        return int(math.log(u) / math.log1p(-rate))
+        return bytes_to_next(self._fault_rng, self.faults.bit_flip_rate)
 
     def _flip_bits(self, data: bytes) -> bytes:
         """``data`` with one bit flipped in each byte the geometric draws land on."""

@@ -27,11 +27,12 @@ BUMP = ["bump-and-turn", "-p", "duration=3s"]
     ],
     ids=["sim", "run", "eval"],
 )
+@pytest.mark.parametrize("option", ["--host-drop-rate", "--byte-drop-rate"])
 def test_a_fault_rate_out_of_range_is_refused_by_its_option(
-    argv: list[str], capsys: pytest.CaptureFixture[str]
+    argv: list[str], option: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert main([*argv, "--host-drop-rate", "2"]) == ExitCode.INVALID
-    assert "--host-drop-rate: found 2.0; allowed: 0.0..1.0" in capsys.readouterr().err
+    assert main([*argv, option, "2"]) == ExitCode.INVALID
+    assert f"{option}: found 2.0; allowed: 0.0..1.0" in capsys.readouterr().err
 
 
 def test_a_real_robot_is_given_no_simulated_faults(capsys: pytest.CaptureFixture[str]) -> None:
@@ -48,6 +49,33 @@ def test_run_fast_meets_the_faults_it_is_given(capsys: pytest.CaptureFixture[str
     argv = ["run", *BUMP, "--fast", "--display", "none", "--reset-at", "1", "--faults-from-stream"]
     assert main(argv) == ExitCode.LINK_LOST
     assert "the robot reset: its start-up banner was on the line" in capsys.readouterr().err
+
+
+def test_run_on_a_cable_losing_bytes_from_the_robot_says_how_many_and_keeps_time(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--byte-drop-rate``: 2 % of the robot's bytes lost in the middle of its frames (what
+    a long, cheap cable does), seeded. The summary says how many the line lost, and they
+    are the bytes that did not arrive (the record holds what did); the parser resyncs on
+    every frame after a broken one, a ``wait: 10s`` lasts 10 s of mission time, and the
+    record's header keeps the fault, so the run can be made again from it."""
+    monkeypatch.chdir(tmp_path)
+    Path("wait.yaml").write_text("tree:\n  sequence:\n    - mode: safe\n    - wait: 10s\n")
+    argv = ["run", "wait.yaml", "--fast", "--display", "none", "--seed", "3",
+            "--byte-drop-rate", "0.02", "--record", "r.jsonl"]  # fmt: skip
+    assert main(argv) == ExitCode.OK
+    out = capsys.readouterr().out
+    said = out.split("simulator    the line lost ")[1].split()
+    lost, sent = int(said[0]), int(said[3])
+    assert said[4:8] == ["bytes", "from", "the", "robot"]
+    assert 0.015 * sent < lost < 0.025 * sent
+    lines = [json.loads(line) for line in Path("r.jsonl").read_text().splitlines()]
+    arrived = sum(len(bytes.fromhex(line["b"])) for line in lines if line.get("d") == "in")
+    assert arrived == sent - lost
+    assert "duration     10.0" in out
+    frames = out.split("frames       ")[1].split(",")
+    assert int(frames[1].split()[0]) > 100  # lost: every broken frame's slot counted
+    assert lines[0]["simulator"]["faults"] == {"byte_drop_rate": 0.02}
 
 
 def test_each_episode_draws_its_faults_from_its_seed() -> None:

@@ -61,6 +61,54 @@ def test_latency_delays_every_robot_byte() -> None:
     assert sim.read() == bytes([1])
 
 
+def test_a_byte_lost_from_the_robot_breaks_its_frame_and_the_parser_takes_the_next_one() -> None:
+    """``byte_drop_rate``: a long, cheap cable loses a byte in the middle of a frame (the
+    frame-level faults lose whole frames, or their tails); the parser loses that frame and
+    takes every frame no byte was lost from, resynchronised on the checksum."""
+    sim = Simulator(world(BOX), seed=5, faults=Faults(byte_drop_rate=0.02))
+    clean = Simulator(world(BOX), seed=5)
+    start = C.start().data + C.full().data + C.stream(IDS).data + C.drive(200, 500).data
+    sim.receive(start)
+    clean.receive(start)
+    parser = StreamParser(IDS)
+    taken = whole = 0
+    for _ in range(2000):  # 30 s, fed as it arrives
+        sim.step()
+        clean.step()
+        data, sent = sim.read(), clean.read()
+        whole += data == sent
+        taken += len(parser.feed(data, sim.time))
+    line = sim.robot_line
+    assert line is not None and clean.robot_line is None
+    assert line.passed_on + line.dropped == sim.bytes_sent == clean.bytes_sent
+    assert 0.015 * sim.bytes_sent < line.dropped < 0.025 * sim.bytes_sent
+    # 22-byte frames: 1 - 0.98**22, 36 % of them broken
+    assert sim.frames_sent == 2000 and 0.5 * 2000 < whole < 0.9 * 2000
+    assert taken == whole  # no frame lost but those a byte was lost from
+    assert parser.counters.checksum_failures > 0
+
+
+def test_the_robot_line_is_seeded_and_leaves_the_other_faults_draws_as_they_were() -> None:
+    """Its generator is its own (``robot-line:SEED``): the frames a seed drops are the same
+    with bytes lost from the rest, so a fault added to a run changes only what it adds."""
+    both = Faults(drop_rate=0.2, byte_drop_rate=0.05)
+    data, _ = stream_bytes(both, seed=2)
+    assert data == stream_bytes(both, seed=2)[0] != stream_bytes(both, seed=3)[0]
+
+    def frames_dropped(faults: Faults) -> list[float]:
+        sim = Simulator(world(BOX), seed=2, faults=faults)
+        sim.receive(C.start().data + C.stream(IDS).data)
+        times = []
+        for _ in range(200):
+            sim.step()
+            if not sim.read():
+                times.append(sim.time)
+        return times
+
+    lost_bytes_only = frames_dropped(Faults(drop_rate=0.2, byte_drop_rate=0.0001))
+    assert lost_bytes_only == frames_dropped(Faults(drop_rate=0.2))
+
+
 def test_injected_text_is_skipped_by_the_parser() -> None:
     text = "battery-current-zero 252\r\n"
     data, sim = stream_bytes(Faults(inject_text=text, inject_every=0.5))
@@ -330,7 +378,7 @@ def test_a_lost_data_byte_makes_the_robot_take_the_next_commands_opcode_as_data(
     assert sim.requested_left or sim.requested_right  # the "stop" set it going
 
 
-@pytest.mark.parametrize("name", ["host_drop_rate", "host_corrupt_rate"])
-def test_host_line_rates_are_checked(name: str) -> None:
+@pytest.mark.parametrize("name", ["host_drop_rate", "host_corrupt_rate", "byte_drop_rate"])
+def test_line_rates_are_checked(name: str) -> None:
     with pytest.raises(ValueError, match=f"faults.{name}: found 1.5; allowed: 0.0..1.0"):
         Faults(**{name: 1.5})
