@@ -184,7 +184,9 @@ class SlotSchedule:
                 # of none, which no prompt count passed: the next lost frame waited a window)
                 rest = late - shift
                 self._run_tick = tick + count + lost if rest >= LOST_LATE else -2
-                self._run_began, self._run_least = arrival, rest
+                # (its last batch this one: the one before the stall kept, the gap to each
+                # batch after grew past a second, said as one nobody read, 5 % of the bytes)
+                self._run_began, self._run_last, self._run_least = arrival, arrival, rest
                 self._run_late, self._run_restart, self._run_batches = rest, False, 1
                 self.due = on_time + shift
                 return count + lost
