@@ -222,6 +222,16 @@ def end_in_unsaid(header: Mapping[str, Any]) -> bool:
 #: recorded run wrote. A record made before has none: replayed as then, never listened after.
 STOP_LISTENED = "stop_listened"
 
+#: header key, the seconds of the link's clock a read with nothing to give waits, one step at
+#: least, where they come in steps: the in-process simulator's 15 ms (``SimLink.read_step``,
+#: ``run --fast``). A read there whose wait was shorter than a step got the next step's
+#: frame, and its replay, which gave a chunk only to a read whose wait reached its stamp,
+#: gave it to the read after: on a cable losing the robot's bytes (``--byte-drop-rate``),
+#: the watchdog's short waits between broken frames, the replay of 4 records in 10 differed
+#: ("first difference ... expected Drive (137) 89 00 96 fc 18, sent nothing", exit 1).
+#: A record made before has none: replayed as then.
+READ_STEP = "read_step"
+
 #: Seconds of the link's clock between two flushes of the record to the operating system: a
 #: run killed outright (``kill -9``, the OOM killer) loses at most this much of its record.
 #: Before, the file was flushed only at the run's end, and a killed 2 s run's record stopped
@@ -442,9 +452,7 @@ class RecordingTransport:
         #: written gzip-compressed (the path ends in ``.gz``)
         self.compressed = compressed_name(path)
         head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, MADE_BY: __version__, **header}
-        if self.wall_clock or self.loses_bytes:
-            head[STOP_LISTENED] = True
-        line = json.dumps(head) + "\n"
+        line = json.dumps(head | _clock_words(inner, self.wall_clock, self.loses_bytes)) + "\n"
         claiming = claimed is None
         claimed = claimed or ClaimedFile(path)
         if required:  # an earlier record is emptied only once the disk takes the header
@@ -636,6 +644,17 @@ BAUD_NOTE = "baud"
 RECORD_STOPPED = "record_stopped"
 #: how far back from a failed write's end of file a line's end is looked for
 _TAIL_BYTES = 1 << 16
+
+
+def _clock_words(inner: Transport, wall_clock: bool, loses_bytes: bool) -> dict[str, Any]:
+    """What a record's header says of its link's clock, for the replay: its stop was
+    listened after (:data:`STOP_LISTENED`: the wall clock, a line losing bytes to the
+    robot), its reads wait whole steps (:data:`READ_STEP`: the in-process simulator's)."""
+    words: dict[str, Any] = {STOP_LISTENED: True} if wall_clock or loses_bytes else {}
+    step = getattr(inner, "read_step", None)
+    if step and not wall_clock:
+        words[READ_STEP] = step
+    return words
 
 
 def _mark_stopped(file: LineFile, path: str, t: float, why: str, within: int | None = None) -> bool:
@@ -1597,6 +1616,9 @@ def header_problem(header: dict[str, Any]) -> str | None:
         seconds = header.get(name, 0.0)
         if type(seconds) not in (int, float) or not 0.0 <= seconds < math.inf:
             return f"header field {name!r} is {seconds!r}; expected seconds, 0 or more"
+    step = header.get(READ_STEP, 1.0)
+    if type(step) not in (int, float) or not 0.0 < step <= 1.0:
+        return f"header field {READ_STEP!r} is {step!r}; expected seconds, above 0 up to 1"
     end_in = header.get(END_IN, "passive")
     if end_in not in ("passive", "stop"):
         return f"header field {END_IN!r} is {end_in!r}; expected 'stop' (or none: Start)"
@@ -1691,6 +1713,16 @@ STAMP_SLACK = 0.5e-6
 DIFFERENCE_CONTEXT = 256
 
 
+def read_reach(now: float, timeout: float, step: float | None) -> float:
+    """Where a read's wait of ``timeout`` from ``now`` ends on a record's clock: at its time,
+    or on a link whose reads wait whole steps (:data:`READ_STEP`) at the first step at or
+    past it, one at least, as ``SimLink.read`` steps (its clock, and so the record's, is on
+    its steps: a chunk's stamp is one)."""
+    if step is None:
+        return now + timeout
+    return now + max(1, math.ceil((timeout - 1e-9) / step)) * step
+
+
 class ReplayTransport:
     """A transport that plays back the "in" side of a record on the recorded clock.
 
@@ -1736,6 +1768,8 @@ class ReplayTransport:
         self._out_times: deque[tuple[int, float]] = deque()
         self._recorded = record.out_bytes
         self._listened = bool(record.header.get(STOP_LISTENED, False))
+        #: the recorded link's read step (:data:`READ_STEP`), or None: a read's wait as given
+        self._step: float | None = record.header.get(READ_STEP)
         self._ended = record.ended
         self._progress = progress
         self._last_t = record.last_chunk_t  # a replay's last read or write is its 100 %
@@ -1928,9 +1962,7 @@ class ReplayTransport:
         if self._up_to_the_switch:
             return self._read_before_the_switch()
         t, data, written_before = self._inbound[0]
-        late = (
-            t - STAMP_SLACK > self._now + timeout
-        )  # past the wait, by more than its stamp's rounding
+        late = t - STAMP_SLACK > read_reach(self._now, timeout, self._step)  # its rounding
         if (late and not self._as_recorded) or self.written < written_before:
             return self._nothing_for(timeout)
         self._inbound.popleft()
@@ -1949,7 +1981,7 @@ class ReplayTransport:
         wait for a quiet line after a followed baud change (``silence._stop_heard``) read
         for ever at the record's end, its signals deferred, and only SIGKILL ended the
         replay."""
-        moved = self._now + timeout
+        moved = read_reach(self._now, timeout, self._step)
         if timeout > 0.0 and moved <= self._now:
             moved = math.nextafter(self._now, math.inf)
         self._now = moved

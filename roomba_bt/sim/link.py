@@ -41,6 +41,11 @@ class SimLink:
 
     #: its clock is the simulator's, as fast as the host steps it: not the wall clock's pace
     wall_clock = False
+    #: a read with nothing sent waits whole steps of the simulator, one at least (``read``):
+    #: it gets a frame one step on however short its wait. A record says so
+    #: (``runtime/recording.py``, ``READ_STEP``), and its replay gives each chunk to the read
+    #: that got it here; None where the clock is not the simulator's steps
+    read_step: float | None = STEP_SECONDS
 
     def __init__(self, simulator: Simulator, name: str = "sim://") -> None:
         self.simulator = simulator
@@ -143,6 +148,7 @@ class RealtimeSimLink(SimLink):
     clock's (tests hand in their own)."""
 
     wall_clock = True  # paced to it
+    read_step = None  # a wait ends at its time on the wall clock
 
     def __init__(
         self,
