@@ -910,6 +910,10 @@ def _report_on_stdout(
         print(_coverage_line(simulator, sys.stdout))
     if simulator is not None:
         print(_where_it_ended(simulator))
+        if not summary.stop_delivered:  # what the run could not see, the simulator can
+            print(f"simulator    the robot ended in {simulator.mode.label}, wheels "
+                  f"{simulator.requested_left:.0f}/{simulator.requested_right:.0f} mm/s "
+                  "(the run could not confirm its stop)")  # fmt: skip
         from roomba_bt.sim.narrate import what_the_line_did
 
         line = what_the_line_did(simulator, "computer")

@@ -78,6 +78,21 @@ def test_run_on_a_cable_losing_bytes_from_the_robot_says_how_many_and_keeps_time
     assert lines[0]["simulator"]["faults"] == {"byte_drop_rate": 0.02}
 
 
+def test_a_stop_the_run_could_not_confirm_is_said_as_the_simulator_saw_it(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``run dock --fast --byte-drop-rate 0.05``: 95 % of dock's frames broken, the line
+    garbled past the grace, exit 8, "final mode unknown ... the stop was not delivered".
+    The robot's own sensors could not say where it ended; the simulator knows, and the
+    rehearsing user was not told: stopped in Passive (the stop went out on a clean line)."""
+    argv = ["run", "dock", "--fast", "--display", "none", "--byte-drop-rate", "0.05"]
+    assert main(argv) == ExitCode.LINK_LOST
+    out = capsys.readouterr().out
+    assert "final mode   unknown: last seen in Safe, the stop was not delivered" in out
+    said = "simulator    the robot ended in Passive, wheels 0/0 mm/s (the run could not confirm"
+    assert said in out
+
+
 def test_each_episode_draws_its_faults_from_its_seed() -> None:
     """An evaluation with a bad cable is repeatable episode by episode: the same seed loses
     the same bytes, another seed others."""
