@@ -121,6 +121,8 @@ class TapLink(SimLink):
         self.arrivals: list[float] = []
         self._late = 0.0
         self._draws = random.Random(7)
+        if jitter or burst > 1 or freeze is not None:  # reads off the simulator's steps
+            self.read_step = None
 
     def write(self, data: bytes) -> None:
         self.writes.append((self.simulator.time, bytes(data)))
@@ -162,6 +164,8 @@ class BridgeLink(SimLink):
     hiccup, a power-save burst: no byte is lost). What the robot sends each step is one
     chunk; so is each write. A read takes at most ``most`` bytes (a backlog is read over
     several reads, as from a socket)."""
+
+    read_step = None  # a read ends at its time: a record's replay waits as long
 
     def __init__(
         self,
