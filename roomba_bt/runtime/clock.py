@@ -43,8 +43,10 @@ class StreamClock:
         self._ride = ride
         self._summary = summary
         self._connection = connection
-        #: when the robot's frames are due on the link's clock: the slots a batch spans
-        self.schedule = SlotSchedule()
+        #: when the robot's frames are due on the link's clock: the slots a batch spans (on
+        #: the simulator's steps, ``read_step``: a calm link from the start)
+        stepped = getattr(connection.transport, "read_step", None) is not None
+        self.schedule = SlotSchedule(stepped)
         #: the stream tick index of the last batch's newest frame (-1 before the first)
         self.tick = -1
         #: the slots that passed while the monitor held the run paused (``clock_held``)

@@ -452,7 +452,8 @@ class RecordingTransport:
         #: written gzip-compressed (the path ends in ``.gz``)
         self.compressed = compressed_name(path)
         head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, MADE_BY: __version__, **header}
-        line = json.dumps(head | _clock_words(inner, self.wall_clock, self.loses_bytes)) + "\n"
+        words = _clock_words(self.read_step, self.wall_clock, self.loses_bytes)
+        line = json.dumps(head | words) + "\n"
         claiming = claimed is None
         claimed = claimed or ClaimedFile(path)
         if required:  # an earlier record is emptied only once the disk takes the header
@@ -566,6 +567,11 @@ class RecordingTransport:
             self._log("out", data)
             self.out_bytes += len(data)
 
+    @property
+    def read_step(self) -> float | None:
+        """Its reads wait whole steps of the simulator (:data:`READ_STEP`), or None."""
+        return None if self.wall_clock else getattr(self._inner, "read_step", None)
+
     #: the bytes of the record's "out" side so far, whoever wrote them (the link, the probe
     #: that asks after a stop, the baud hunt): an end note's ``written`` is one, read when
     #: the run was ended (``loop.note_written``)
@@ -646,15 +652,12 @@ RECORD_STOPPED = "record_stopped"
 _TAIL_BYTES = 1 << 16
 
 
-def _clock_words(inner: Transport, wall_clock: bool, loses_bytes: bool) -> dict[str, Any]:
+def _clock_words(step: float | None, wall_clock: bool, loses_bytes: bool) -> dict[str, Any]:
     """What a record's header says of its link's clock, for the replay: its stop was
     listened after (:data:`STOP_LISTENED`: the wall clock, a line losing bytes to the
     robot), its reads wait whole steps (:data:`READ_STEP`: the in-process simulator's)."""
     words: dict[str, Any] = {STOP_LISTENED: True} if wall_clock or loses_bytes else {}
-    step = getattr(inner, "read_step", None)
-    if step and not wall_clock:
-        words[READ_STEP] = step
-    return words
+    return words | ({READ_STEP: step} if step else {})
 
 
 def _mark_stopped(file: LineFile, path: str, t: float, why: str, within: int | None = None) -> bool:
@@ -1769,7 +1772,7 @@ class ReplayTransport:
         self._recorded = record.out_bytes
         self._listened = bool(record.header.get(STOP_LISTENED, False))
         #: the recorded link's read step (:data:`READ_STEP`), or None: a read's wait as given
-        self._step: float | None = record.header.get(READ_STEP)
+        self.read_step: float | None = record.header.get(READ_STEP)
         self._ended = record.ended
         self._progress = progress
         self._last_t = record.last_chunk_t  # a replay's last read or write is its 100 %
@@ -1962,7 +1965,7 @@ class ReplayTransport:
         if self._up_to_the_switch:
             return self._read_before_the_switch()
         t, data, written_before = self._inbound[0]
-        late = t - STAMP_SLACK > read_reach(self._now, timeout, self._step)  # its rounding
+        late = t - STAMP_SLACK > read_reach(self._now, timeout, self.read_step)  # its rounding
         if (late and not self._as_recorded) or self.written < written_before:
             return self._nothing_for(timeout)
         self._inbound.popleft()
@@ -1981,7 +1984,7 @@ class ReplayTransport:
         wait for a quiet line after a followed baud change (``silence._stop_heard``) read
         for ever at the record's end, its signals deferred, and only SIGKILL ended the
         replay."""
-        moved = read_reach(self._now, timeout, self._step)
+        moved = read_reach(self._now, timeout, self.read_step)
         if timeout > 0.0 and moved <= self._now:
             moved = math.nextafter(self._now, math.inf)
         self._now = moved

@@ -14,7 +14,8 @@ bunched behind it. The rule (docs/runtime.md, "The stream is the clock"):
   :data:`DRIFT` (a robot clock slower than the host's, a link that got slower, are followed
   slowly; jitter hardly moves it). Cumulative: drift and jitter never add up to a slot.
 * Each frame is one slot. On a calm link (:attr:`spread`, the latest frames' lateness as a
-  decaying maximum, under :data:`CALM`: the simulator's virtual clock, a replay of it) a
+  decaying maximum, under :data:`CALM`: the simulator's virtual clock, from its first
+  frame, and a replay of it; any link once its frames show it) a
   batch half a slot late or more (:data:`LOST_LATE`) has ``int((late - 7.5 ms) / 15 ms) + 1``
   lost slots before it, counted at once, as the arrival times say.
 * On a jittery link a batch 0.9 slot late (:data:`JITTER_LATE`) opens a run of late batches,
@@ -99,11 +100,15 @@ class SlotSchedule:
         "due", "spread", "tick",
     )  # fmt: skip
 
-    def __init__(self) -> None:
+    def __init__(self, stepped: bool = False) -> None:
         #: when the frame of the last tick's slot was due
         self.due = NO_FRAME_YET
-        #: how late frames came lately: the largest lateness, decaying by SPREAD_DECAY a frame
-        self.spread = START_SPREAD
+        #: how late frames came lately: the largest lateness, decaying by SPREAD_DECAY a frame.
+        #: A link whose reads come on the simulator's steps (``stepped``: ``read_step``, the
+        #: virtual clock) is calm from its first frame: taken for jittery at the start, a
+        #: cable losing 5 % of the robot's bytes opened a run that waited its window, and a
+        #: ``wait: 1s`` first in a mission took 1.7-2.5 s of the robot's time
+        self.spread = 0.0 if stepped else START_SPREAD
         #: the slot index after the last batch (:meth:`slots` keeps it; the runner its own)
         self.tick = -1
         self._run_tick = -2  # the tick after the run's last late batch (none: -2)
