@@ -14,6 +14,14 @@ taken for a gap nobody read, the wheels and the motors given their last commands
 tick the guard saw past its limit with nothing moving, or while a built-in cycle may have
 driven the robot (:meth:`StallRide.tick_still`), sent nothing and gets nothing back, but
 the frames it left unread are its own too.
+
+A loaded machine (a pty simulator beside a busy build, a paused run on a shared laptop) makes
+a late frame every few seconds, and each was two warnings: 21 of them in 5 minutes of a pause,
+which nobody can act on. The first stall is said in full, trip and return; those ridden
+through in the minute after it are counted, and said as one line when a minute has gone by
+(:class:`LateFrames`: how many, the longest, how many sent drive 0). A stall that lasts half
+its grace is said at once all the same (a real one: a cable, a robot asleep), and one that
+ends the run says why as ever.
 """
 
 from __future__ import annotations
@@ -24,6 +32,7 @@ from collections.abc import Callable, Sequence
 from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.printable import duration_words
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import StreamStalled
 from roomba_bt.robot.hazards import sets_going
@@ -37,6 +46,41 @@ log = logging.getLogger("roomba_bt.runtime.loop")
 #: What frames back after a stall say of a run the monitor holds paused: nothing goes on
 #: until the operator resumes (the wheels and motors were stopped by the pause itself)
 PAUSED_GOES_ON = "the run stays paused (the mission goes on at the resume)"
+
+#: After a stall is said, the link's seconds in which the next ones ridden through are counted
+#: and summed up in one line rather than each said (:class:`LateFrames`)
+QUIET_S = 60.0
+
+
+class LateFrames:
+    """The stalls ridden through since the last one said: how many, the longest gap and how
+    many sent drive 0, summed up in one line once :data:`QUIET_S` has gone by."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.longest = 0.0
+        self.halts = 0
+
+    def add(self, gap: float, halted: bool) -> None:
+        self.count += 1
+        self.longest = max(self.longest, gap)
+        self.halts += halted
+
+    def said(self, name: str, since: float, goes_on: str) -> str:
+        """The line: ``frames were late 21 more times in the last 5 min 2 s (longest 421
+        ms), each back within the grace: ...``."""
+        sent = (
+            f"drive 0 sent in {self.halts} (the robot stopped until the frames came back)"
+            if self.halts
+            else "the robot was not driving (nothing sent)"
+        )
+        return (
+            f"{name}: frames were late {self.count} more "
+            f"{'time' if self.count == 1 else 'times'} in the last {duration_words(since)} "
+            f"(longest {self.longest * 1000:.0f} ms), each back within the grace: {sent}; "
+            f"{goes_on} (a busy computer or link; said once a minute, the summary's stalls "
+            "line counts them all)"
+        )
 
 
 class StallRide:
@@ -80,6 +124,15 @@ class StallRide:
         #: once frames are back, while the frames that waited are read (the stall's
         #: backlog, over several reads): when the last of its batches came (None: not back)
         self._backlog_read_at: float | None = None
+        #: the link's time the last stall was said (None: none yet), the stalls ridden
+        #: through since, counted and not said, and whether the one ridden now is such a one
+        #: (its trip not said: said late if it lasts half the grace)
+        self._said_at: float | None = None
+        self._late = LateFrames()
+        #: the link's time the tally began (the line before it was said)
+        self._late_since = 0.0
+        self._quiet = False
+        self._tripped: StreamStalled | None = None
 
     def tripped(self, stalled: StreamStalled) -> Sequence[SensorFrame]:
         """The watchdog tripped (drive 0 sent): the ride begins, no frames this read; or,
@@ -96,12 +149,29 @@ class StallRide:
         link = self.connection.link
         self.stall = (link.bytes_read, stalled.halted, link.silent_since)
         self._backlog_read_at = None
-        log.warning(
-            "%s%s; waiting up to %g s for valid frames", stalled,
-            ", and motors off" if self._motors_off() is not None else "", self.grace,
-            extra={"mission_time": self._clock(stalled.silent_for)},
-        )  # fmt: skip
+        at = link.silent_since + stalled.silent_for
+        said_at = self._said_at  # a minute gone with stalls counted: said at this one's end
+        self._quiet = said_at is not None and (at - said_at < QUIET_S or self._late.count > 0)
+        self._tripped = stalled
+        if not self._quiet:
+            self._say_trip(stalled, stalled.silent_for, at)
         return ()
+
+    def _say_trip(self, stalled: StreamStalled, silent_for: float, at: float) -> None:
+        """The trip's warning, at the trip, or ``silent_for`` into a stall whose trip was
+        counted rather than said (:attr:`_quiet`) once it has lasted half the grace."""
+        still = (
+            f"; still none {silent_for * 1000:.0f} ms after the last (half the grace)"
+            if silent_for > stalled.silent_for
+            else ""
+        )
+        log.warning(
+            "%s%s%s; waiting up to %g s for valid frames", stalled,
+            ", and motors off" if self._motors_off() is not None else "", still, self.grace,
+            extra={"mission_time": self._clock(silent_for)},
+        )  # fmt: skip
+        self._said_at = at
+        self._quiet = False
 
     def carry_on(self, batch: Sequence[SensorFrame]) -> None:
         """During a ride, after a read: frames back end the wait; none raise the stall's
@@ -115,23 +185,43 @@ class StallRide:
         if read_at is not None:
             self._backlog_read(batch, read_at)
         elif batch:
-            self._back(stall[2])
+            self._back(stall[2], stall[1])
         else:
+            if self._quiet and self._tripped is not None:
+                now = self.connection.link.transport.now()
+                if now - stall[2] >= self.grace / 2:
+                    self._say_trip(self._tripped, now - stall[2], now)
             self.connection.check_stall(stall[0], self.grace, stall[1])
 
-    def _back(self, silent_since: float) -> None:
+    def _back(self, silent_since: float, halted: bool) -> None:
         """Valid frames came back within the grace: the tree goes on, on the frames that
-        waited first (a stall's backlog, read over several reads: a network bridge's)."""
+        waited first (a stall's backlog, read over several reads: a network bridge's). A
+        stall whose trip was not said is counted, and the count said once :data:`QUIET_S`
+        has gone by since the last line (:class:`LateFrames`)."""
         self.gap_explained = True
         self.summary.stalls_ridden += 1
         connection = self.connection
-        gap = connection.link.silent_since - silent_since
+        back_at = connection.link.silent_since
+        gap = back_at - silent_since
         goes_on = PAUSED_GOES_ON if self.paused() else "the mission goes on"
-        log.warning(
-            "%s: valid frames are back after %.0f ms; %s", connection.name, gap * 1000,
-            goes_on, extra={"mission_time": self._clock(gap)},
-        )  # fmt: skip
         self._backlog_read_at = connection.link.arrival
+        said_at = self._said_at
+        if self._quiet and said_at is not None:
+            late = self._late
+            if not late.count:
+                self._late_since = said_at
+            late.add(gap, halted)
+            if back_at - said_at >= QUIET_S:
+                line = late.said(connection.name, back_at - self._late_since, goes_on)
+                log.warning(line, extra={"mission_time": self._clock(gap)})
+                self._late = LateFrames()
+                self._said_at = back_at
+            return
+        log.warning(
+            "%s: valid frames are back after %.0f ms; %s%s", connection.name, gap * 1000,
+            goes_on, "; stalls in the next minute are counted, and said once a minute",
+            extra={"mission_time": self._clock(gap)},
+        )  # fmt: skip
 
     def _backlog_read(self, batch: Sequence[SensorFrame], read_at: float) -> None:
         """While the stall's backlog is read: once a batch comes spaced as the stream is (half

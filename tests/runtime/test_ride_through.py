@@ -6,6 +6,7 @@ wheels get their command again; a loss longer than the grace ends as exit 8, its
 from __future__ import annotations
 
 import logging
+import re
 from pathlib import Path
 
 import pytest
@@ -296,3 +297,46 @@ def test_after_the_robot_s_own_fall_nothing_from_before_it_is_held_or_moving(
     assert link.writes == []  # no drive 0: nothing drives
     assert connection.release_forward() is None  # nothing to send again
     connection.close()
+
+
+class LatePatchesLink(BadPatchLink):
+    """Silent for 0.3 s every 5 s of simulated time from 1 s on (a loaded machine's late
+    frames), and once, at ``long_at``, for 1.5 s: past half the 2 s grace."""
+
+    def __init__(self, simulator: Simulator, long_at: float) -> None:
+        super().__init__(simulator, 0.0, 0.0, "silent")
+        self.long_at = long_at
+
+    def read(self, timeout: float) -> bytes:
+        now = self.simulator.time
+        late = now >= 1.0 and (now - 1.0) % 5.0 < 0.3
+        if late or self.long_at <= now < self.long_at + 1.5:
+            BadPatchLink.read(self, timeout)  # the simulator goes on; its bytes are lost
+            return b""
+        return BadPatchLink.read(self, timeout)
+
+
+def test_stalls_ridden_through_in_a_minute_are_summed_up_and_a_long_one_is_still_said(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A run paused in the monitor over the pty simulator on a loaded machine said two
+    warnings at every late frame (21 in 5 minutes), which nobody can act on. The first
+    stall is said in full; those ridden through in the next minute are counted and said as
+    one line a minute (how many, the longest); a stall that lasts half its grace is said at
+    once all the same."""
+    caplog.set_level(logging.WARNING, logger="roomba_bt.runtime.loop")
+    summary, _ = run(tmp_path, LatePatchesLink, 93.0, timeout=130.0)
+    assert summary.outcome is Outcome.TIMEOUT, summary.reason  # the mission went on
+    assert summary.stalls == summary.stalls_ridden >= 26
+    said = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.runtime.loop"]
+    tripped = [line for line in said if "waiting up to 2 s" in line]
+    assert len(tripped) == 2, said  # the first, and the long one at half its grace
+    assert "still none" not in tripped[0]
+    assert re.search(r"still none 10\d\d ms after the last \(half the grace\)", tripped[1])
+    summed = [line for line in said if "frames were late" in line]
+    assert len(summed) == 1, said  # once a minute, not at each (the rest in the summary)
+    assert re.search(r"late 1[1-3] more times in the last 1 min( \d+ s)? \(longest 3\d\d ms\)",
+                     summed[0]), summed  # fmt: skip
+    assert "drive 0 sent in 1" in summed[0]
+    # 2 stalls said in full, trip and return, and 1 line summing up 12 of the rest
+    assert len(said) == 5, said
