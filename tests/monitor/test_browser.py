@@ -166,6 +166,32 @@ def test_a_node_s_menu_opens_from_the_keyboard_and_sets_a_breakpoint(
     assert live.session.state.paused
 
 
+def test_a_subtree_folds_and_unfolds_from_the_keyboard(live: LiveRun, page: Any) -> None:
+    """The ▾/▸ toggles took a mouse's click only: no focus, no key, and a screen reader heard
+    nothing of whether a subtree was open. Tab reaches a parent's toggle, Enter or Space
+    folds and unfolds its subtree (its node's menu stays shut), and ``aria-expanded`` says
+    which; a leaf has no toggle to stop at."""
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    row = '.node[data-name="there and back"]'
+    toggle = page.locator(f"{row} .toggle")
+    children = page.locator(f'{row} ~ .node[data-name^="drive("]')
+    assert children.count() == 2 and children.first.is_visible()
+    assert toggle.get_attribute("aria-expanded") == "true"
+    page.focus(f"{row} .name")
+    page.keyboard.press("Shift+Tab")  # back from the name: its own toggle
+    assert page.evaluate("document.activeElement.classList.contains('toggle')")
+    page.keyboard.press("Enter")
+    assert toggle.get_attribute("aria-expanded") == "false" and toggle.inner_text() == "▸"
+    assert children.first.is_hidden() and children.last.is_hidden()
+    assert page.is_hidden("#node-menu")
+    page.keyboard.press(" ")
+    assert toggle.get_attribute("aria-expanded") == "true" and toggle.inner_text() == "▾"
+    assert children.first.is_visible() and children.last.is_visible()
+    leaf = page.locator(f'{row} ~ .node[data-name^="drive("] .toggle').first
+    assert leaf.get_attribute("tabindex") is None and leaf.get_attribute("aria-expanded") is None
+
+
 def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, child: Child) -> None:
     proc = child(monitored_run(SHUTTLE))
     page.goto(_url_from(proc))

@@ -152,6 +152,15 @@ function buildTree(nodes) {
     toggle.className = "toggle";
     toggle.textContent = n.children.length ? "▾" : "";
     toggle.addEventListener("click", (ev) => { ev.stopPropagation(); toggleNode(n.i); });
+    if (n.children.length) {
+      // reached by Tab and worked by Enter or Space, its state said (aria-expanded): the
+      // subtrees folded by a mouse only
+      toggle.tabIndex = 0; toggle.setAttribute("role", "button");
+      toggle.setAttribute("aria-label", `${n.name}: its subtree`);
+      toggle.addEventListener("keydown", (ev) => {
+        if (ev.key === "Enter" || ev.key === " ") { ev.preventDefault(); ev.stopPropagation(); toggleNode(n.i); }
+      });
+    }
     const kind = document.createElement("span"); kind.className = "kind"; kind.textContent = SYMBOL[n.kind] || "-->";
     const name = document.createElement("span"); name.className = "name"; name.textContent = n.name;
     // reached by Tab, its menu opened by Enter or Space: the breakpoints and forces were a
@@ -187,7 +196,11 @@ function applyCollapse() {
   for (const i of view.collapsed) if (view.tree[i]) for (const d of descendants(i, [])) hidden.add(d);
   view.rows.forEach((r, i) => {
     r.row.hidden = hidden.has(i);
-    if (view.tree[i].children.length) r.toggle.textContent = view.collapsed.has(i) ? "▸" : "▾";
+    if (view.tree[i].children.length) {
+      r.toggle.textContent = view.collapsed.has(i) ? "▸" : "▾";
+      r.toggle.setAttribute("aria-expanded", String(!view.collapsed.has(i)));
+      r.toggle.title = view.collapsed.has(i) ? "expand (Enter)" : "collapse (Enter)";
+    }
   });
   followRunning();
 }
