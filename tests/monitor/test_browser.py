@@ -498,11 +498,21 @@ def test_an_ended_run_s_timeline_says_it_reads_no_more_and_a_drag_does_not_stay(
     proc = child(monitored_run(BRUSHES))
     page.goto(_url_from(proc))
     _wait_for_wheels_turning(page)
+    page.click("#packets-panel summary")
     page.click("#stop")
     _, err = proc.communicate(timeout=HANG_S)
     assert proc.returncode == 130, err
     page.wait_for_selector('#link:text("ended")', timeout=WAIT_MS)
     page.wait_for_selector("#timeline:disabled", timeout=WAIT_MS)
+    # the streamed packets' title at the run's end, one line beside its marker (it took two,
+    # its words squeezed into a column)
+    title = page.inner_text("#packets-title").lower()  # in capitals before
+    assert title.endswith(": the last frame, before the run's safe stop"), title
+    lines_high = page.eval_on_selector(
+        "#packets-panel summary",
+        "s => s.getBoundingClientRect().height / parseFloat(getComputedStyle(s.querySelector('h2')).lineHeight)",
+    )  # fmt: skip
+    assert lines_high < 1.5, lines_high
     label = page.inner_text("#timeline-label")
     assert label.startswith("last tick "), label
     assert "the monitor has closed: no rewinding here" in label, label
