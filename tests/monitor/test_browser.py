@@ -510,8 +510,9 @@ def test_an_ended_run_s_timeline_says_it_reads_no_more_and_a_drag_does_not_stay(
     assert title.endswith(": the last frame, before the run's safe stop"), title
     lines_high = page.eval_on_selector(
         "#packets-panel summary",
-        "s => s.getBoundingClientRect().height / parseFloat(getComputedStyle(s.querySelector('h2')).lineHeight)",
-    )  # fmt: skip
+        "s => s.getBoundingClientRect().height"
+        " / parseFloat(getComputedStyle(s.querySelector('h2')).lineHeight)",
+    )
     assert lines_high < 1.5, lines_high
     label = page.inner_text("#timeline-label")
     assert label.startswith("last tick "), label
