@@ -309,6 +309,7 @@ class LiveMonitor:
         from roomba_bt.monitor.feed import EventLogHandler, RunFeed
         from roomba_bt.monitor.session import MonitorSession
         from roomba_bt.monitor.views import world_view
+        from roomba_bt.runtime.display import live_names
 
         self.options = options
         self.loader = loader
@@ -330,7 +331,7 @@ class LiveMonitor:
             started=started,
             label=label,
         )
-        self.feed.set_tree(mission.root)
+        self.feed.set_tree(mission.root, live_names(mission))
         self.session = MonitorSession(
             self.feed,
             simulator=simulator is not None,

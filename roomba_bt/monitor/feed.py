@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from enum import Enum
 from typing import TYPE_CHECKING, Any, NamedTuple
+from uuid import UUID
 
 import py_trees
 from py_trees.common import Status
@@ -124,11 +125,16 @@ class NodeInfo:
     parent: int | None
     children: tuple[int, ...]
     condition: bool  # may be forced to SUCCESS/FAILURE
+    #: the name the page draws, ``show``'s for a node no ``name:`` renamed (``retry(times=40)``;
+    #: :func:`~roomba_bt.runtime.display.live_names`); :attr:`name`, the node's own, is
+    #: what the events, the API and a breakpoint's words say
+    label: str = ""
 
     def as_json(self) -> dict[str, Any]:
         return {
             "i": self.index,
             "name": self.name,
+            "label": self.label or self.name,
             "kind": self.kind,
             "depth": self.depth,
             "parent": self.parent,
@@ -138,9 +144,10 @@ class NodeInfo:
 
 
 def describe_tree(
-    root: py_trees.behaviour.Behaviour,
+    root: py_trees.behaviour.Behaviour, names: Mapping[UUID, str] | None = None
 ) -> tuple[list[py_trees.behaviour.Behaviour], list[NodeInfo]]:
-    """The nodes in ``show``'s order (depth first, parents before children) and their info."""
+    """The nodes in ``show``'s order (depth first, parents before children) and their info;
+    ``names``: each node's name as the page draws it, by its id (its labels)."""
     nodes: list[py_trees.behaviour.Behaviour] = []
     parents: list[int | None] = []
     depths: list[int] = []
@@ -165,6 +172,7 @@ def describe_tree(
             parent=parents[i],
             children=tuple(children[i]),
             condition=isinstance(node, Condition),
+            label=(names or {}).get(node.id, node.name).replace("\n", " "),
         )
         for i, node in enumerate(nodes)
     ]
@@ -527,9 +535,13 @@ class RunFeed:
     def infos(self) -> list[NodeInfo]:
         return self.trees.get(self.generation, [])
 
-    def set_tree(self, root: py_trees.behaviour.Behaviour) -> int:
-        """A (new) tree to watch (before the run, or from the tick thread); its generation."""
-        nodes, infos = describe_tree(root)
+    def set_tree(
+        self, root: py_trees.behaviour.Behaviour, names: Mapping[UUID, str] | None = None
+    ) -> int:
+        """A (new) tree to watch (before the run, or from the tick thread); its generation.
+        ``names``: its nodes' names as the page draws them
+        (:func:`~roomba_bt.runtime.display.live_names`)."""
+        nodes, infos = describe_tree(root, names)
         self.trees[self.generation + 1] = infos
         self._nodes = nodes
         self._last = [node.status for node in nodes]

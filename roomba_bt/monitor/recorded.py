@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, Self
 from roomba_bt.monitor.feed import Ending, RunFeed
 from roomba_bt.monitor.session import STEP, MonitorSession
 from roomba_bt.printable import escaped
+from roomba_bt.runtime.display import live_names
 from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.recording import (
     ENDED,
@@ -75,7 +76,7 @@ def replay_into_feed(
         robot=record.header.get("port") or "", started=recorded_start(record),
         label=record.label,
     )  # fmt: skip
-    feed.set_tree(mission.root)
+    feed.set_tree(mission.root, live_names(mission))
     with MissionWordsOnThePage(feed), ActsOnThePage():  # the page says them; stderr: trouble
         summary, transport, lost = replay_judged(
             record, mission, profile=profile, packets=packets, baud=baud, name=name,

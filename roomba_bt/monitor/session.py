@@ -46,6 +46,7 @@ from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.printable import duration_words
+from roomba_bt.runtime.display import live_names
 from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.teardown import setup_tree
 
@@ -500,7 +501,7 @@ class MonitorSession:
         self._forces.release_all(runner)  # the nodes are gone: released with them
         self.state.breakpoints.clear()
         self.state.held_end = ""
-        self.feed.set_tree(mission.root)
+        self.feed.set_tree(mission.root, live_names(mission))
         self._said(runner, "reload", f"reloaded {mission.name}: the new tree starts from its root")
         self.state.paused = was_paused
         if not was_paused:  # the reload's own pause lasts no frame: nothing to count down

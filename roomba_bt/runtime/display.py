@@ -278,6 +278,29 @@ def tree_symbols(stream: TextIO) -> dict[object, str]:
     return symbols
 
 
+def live_names(mission: object) -> Mapping[UUID, str] | None:
+    """Each node's name in the live views, the terminal's live tree and the monitor's page,
+    by the live node's id: ``show``'s (``CompiledMission.reviewed_names``) for a node the
+    mission did not rename (``timeout(after=2s)``, ``retry(times=40)``, where the live views
+    said ``timeout`` and ``retry`` between two printed trees that said more), and the name a
+    ``name:`` gave (``docking``), not ``show``'s ``subtree dock(time_limit=10min, ...):
+    parallel(policy=one) named 'docking'``: that is for reviewing a name against what the
+    node is, and its 200 characters pushed the node's status off a terminal's line and the
+    page's panel. The one place both views take their names from; None for a mission that
+    has none (a tree built in Python: its nodes' own names). The log, the events, the record
+    and the monitor's API keep the nodes' own names."""
+    reviewed = getattr(mission, "reviewed_names", None)
+    if reviewed is None:
+        return None
+    names: dict[UUID, str] = reviewed()
+    root = getattr(mission, "root", None)
+    for node in root.iterate() if root is not None else ():
+        drawn = names.get(node.id)
+        if drawn is not None and drawn.endswith(f" named {shortened(node.name)!r}"):
+            names[node.id] = node.name
+    return names
+
+
 def text_tree(
     root: py_trees.behaviour.Behaviour,
     *,
@@ -347,6 +370,7 @@ def fitted_tree(
     columns: int,
     marks: dict[py_trees.common.Status, str] | None = None,
     as_left: TreeStatuses | None = None,
+    names: Mapping[UUID, str] | None = None,
 ) -> list[str]:
     """The tree as at most ``rows`` lines of at most ``columns`` characters.
 
@@ -363,7 +387,10 @@ def fitted_tree(
     ``as_left``: the statuses the run left its tree in (``MissionRunner.tree_as_left``), for
     the last screen after the run's end has stopped the tree: the stop marks every node
     INVALID, and that screen showed ``[-]`` on every node above the tree printed under it
-    with the right marks (``mode(safe) [✓]``, ``boom [-] -- raised RuntimeError``)."""
+    with the right marks (``mode(safe) [✓]``, ``boom [-] -- raised RuntimeError``).
+
+    ``names``: a node's name to draw by its id (:func:`live_names`), its own where none is
+    given."""
     shown = marks or _MARKS
     lines: list[tuple[str, bool]] = []  # (text, on the running path)
     left = as_left.nodes if as_left is not None else {}
@@ -375,7 +402,7 @@ def fitted_tree(
         folded = not running and children and depth > 0
         hidden = sum(1 for _ in node.iterate()) - 1 if folded else 0
         more = f" +{hidden}" if hidden else ""
-        name = name_shown(node.name)
+        name = name_shown(node.name if names is None else names.get(node.id, node.name))
         kind = _KIND_SYMBOLS[node_kind(node)]
         line = f"{'  ' * depth}{kind} {name} [{shown[status]}]{more}"
         lines.append((line, running))
@@ -649,6 +676,9 @@ class TerminalDisplay:
         #: codes in it before every screen)
         self.plain = plain_terminal() or not stream.isatty()
         self.marks = status_marks(stream)
+        #: the tree whose names :attr:`names` holds (a ``--watch`` reload brings another)
+        self._named: py_trees.behaviour.Behaviour | None = None
+        self.names: Mapping[UUID, str] | None = None
 
     def __call__(self, runner: MissionRunner) -> None:
         now = time.monotonic()
@@ -669,8 +699,11 @@ class TerminalDisplay:
         if self.label:
             status.insert(0, self.label[:columns])
         # the status lines, a blank line, the tree, and the cursor's line left free
+        mission = runner.mission
+        if mission.root is not self._named:  # live_names builds the tree again: once
+            self._named, self.names = mission.root, live_names(mission)
         tree = fitted_tree(
-            runner.mission.root, rows - 2 - len(status), columns, self.marks, as_left
+            mission.root, rows - 2 - len(status), columns, self.marks, as_left, self.names
         )
         screen = "\n".join(status) + "\n\n" + "\n".join(tree) + "\n"
         text = "\n" + screen if self.plain else "\x1b[H\x1b[J" + screen

@@ -19,6 +19,7 @@ from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.monitor.views import world_view
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.display import live_names
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.recording import load_record
 from roomba_bt.runtime.stack import RunStack, TreeMission
@@ -113,7 +114,7 @@ def start_live_run(
         robot=robot,
         label=label,
     )
-    feed.set_tree(compiled.root)
+    feed.set_tree(compiled.root, live_names(compiled))  # as run --monitor does
     session = MonitorSession(feed, simulator=True, stream_packets=packets)
     server = MonitorServer(feed, session, host=host, port=port, readonly=readonly)
     server.start()

@@ -192,6 +192,41 @@ def test_a_subtree_folds_and_unfolds_from_the_keyboard(live: LiveRun, page: Any)
     assert leaf.get_attribute("tabindex") is None and leaf.get_attribute("aria-expanded") is None
 
 
+RETRIED = """
+mission: retried
+tree:
+  sequence:
+    - mode: safe
+    - repeat:
+        do:
+          retry:
+            times: 3
+            do:
+              sequence:
+                - {name: there, drive: {velocity: 100 mm/s, distance: 3 cm}}
+                - drive: {velocity: -100 mm/s, distance: 3 cm}
+"""
+
+
+def test_the_page_names_a_node_as_the_printed_trees_do(
+    page: Any, child: Child, tmp_path: Path
+) -> None:
+    """The page said ``retry`` where the trees ``run`` prints before and after said
+    ``retry(times=3)`` (``show``'s names); a node renamed by ``name:`` keeps that name
+    (``show``'s ``drive(...) named 'there'`` is for reviewing it). The node's own name
+    stays its handle: ``data-name``, the API, the events."""
+    mission = tmp_path / "retried.yaml"
+    mission.write_text(RETRIED)
+    proc = child(monitored_run(mission))
+    page.goto(_url_from(proc))
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    assert page.inner_text('.node[data-name="retry"] .name') == "retry(times=3)"
+    assert page.inner_text('.node[data-name="there"] .name') == "there"
+    page.click("#stop")
+    _, err = proc.communicate(timeout=HANG_S)
+    assert proc.returncode == 130, err
+
+
 def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, child: Child) -> None:
     proc = child(monitored_run(SHUTTLE))
     page.goto(_url_from(proc))

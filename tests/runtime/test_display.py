@@ -24,6 +24,7 @@ from roomba_bt.runtime.display import (
     StatusChangeLogger,
     TerminalDisplay,
     fitted_tree,
+    live_names,
     logging_off_the_tick,
     observer_for,
     sensor_line,
@@ -59,6 +60,17 @@ tree:
   sequence:
     - mode: safe
     - drive: {velocity: 200 mm/s, distance: 10 cm}
+"""
+
+NAMED = """
+tree:
+  sequence:
+    - mode: safe
+    - timeout:
+        after: 5s
+        do:
+          drive: {velocity: 200 mm/s, distance: 10 cm}
+          name: gentle
 """
 
 
@@ -104,6 +116,22 @@ def test_terminal_display_draws_the_tree_with_statuses(run_mission: RunMission) 
     assert "sequence" in text and "drive" in text
     assert "✓" in text
     assert f"mode={OIMode.PASSIVE.label}" in text or "mode=Safe" in text
+
+
+def test_the_live_tree_names_each_node_as_the_printed_trees_do(run_mission: RunMission) -> None:
+    """The trees printed before and after a run say ``show``'s names (``timeout(after=5s)``),
+    while the live tree between them said the nodes' own (``timeout``): two trees for one.
+    A node renamed by ``name:`` keeps that name live (``gentle``): ``show``'s ``drive(...)
+    named 'gentle'`` is for reviewing it, and a long one pushed the status off the line."""
+    run = run_mission(NAMED)
+    out = _Terminal()
+    display = TerminalDisplay(out, size=lambda: (120, 24))
+    display.render(run.runner)
+    assert display.writer.wait_written(HANG_S)
+    assert "-^- timeout(after=5s) [" in out.getvalue(), out.getvalue()  # its drive folded in
+    names = live_names(run.runner.mission)
+    assert names is not None
+    assert sorted(names.values()) == ["gentle", "mode(safe)", "sequence", "timeout(after=5s)"]
 
 
 def test_the_live_tree_and_the_log_lines_say_the_run_s_label(

@@ -156,13 +156,13 @@ function buildTree(nodes) {
       // reached by Tab and worked by Enter or Space, its state said (aria-expanded): the
       // subtrees folded by a mouse only
       toggle.tabIndex = 0; toggle.setAttribute("role", "button");
-      toggle.setAttribute("aria-label", `${n.name}: its subtree`);
+      toggle.setAttribute("aria-label", `${n.label || n.name}: its subtree`);
       toggle.addEventListener("keydown", (ev) => {
         if (ev.key === "Enter" || ev.key === " ") { ev.preventDefault(); ev.stopPropagation(); toggleNode(n.i); }
       });
     }
     const kind = document.createElement("span"); kind.className = "kind"; kind.textContent = SYMBOL[n.kind] || "-->";
-    const name = document.createElement("span"); name.className = "name"; name.textContent = n.name;
+    const name = document.createElement("span"); name.className = "name"; name.textContent = n.label || n.name;
     // reached by Tab, its menu opened by Enter or Space: the breakpoints and forces were a
     // mouse's or a finger's only
     name.tabIndex = 0; name.setAttribute("role", "button"); name.setAttribute("aria-haspopup", "true");
@@ -289,7 +289,7 @@ function renderStatuses(state) {
 function openMenu(i, ev, from) {
   const menu = $("node-menu"), n = view.tree[i];
   view.menuNode = i; view.menuFrom = from || null;
-  $("node-menu-title").textContent = n.name + (n.condition ? " (condition)" : "");
+  $("node-menu-title").textContent = (n.label || n.name) + (n.condition ? " (condition)" : "");
   const reason = (view.liveState && view.liveState.reasons || {})[String(i)];
   $("node-menu-reason").textContent = reason ? "failed: " + reason : "";
   menuButtons(view.connected && view.header && view.header.controls && !view.finished
