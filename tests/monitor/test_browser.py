@@ -350,6 +350,9 @@ def test_a_view_only_link_has_its_controls_off_and_cannot_pause(page: Any) -> No
         page.click('.node[data-name="there and back"] .name')
         assert page.is_visible("#node-menu")
         assert all(b.is_disabled() for b in page.query_selector_all("#node-menu button"))
+        # and says why (its greyed buttons said nothing)
+        why = page.inner_text("#node-menu-why")
+        assert why == "view only: breakpoints and forces are on the control link", why
         page.keyboard.press("Escape")
         tick = int(page.inner_text("#tick"))
         page.keyboard.press("p")

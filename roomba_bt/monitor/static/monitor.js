@@ -292,8 +292,7 @@ function openMenu(i, ev, from) {
   $("node-menu-title").textContent = (n.label || n.name) + (n.condition ? " (condition)" : "");
   const reason = (view.liveState && view.liveState.reasons || {})[String(i)];
   $("node-menu-reason").textContent = reason ? "failed: " + reason : "";
-  menuButtons(view.connected && view.header && view.header.controls && !view.finished
-    && !view.otherRun);
+  menuState();
   $("force-row").hidden = !(n.condition && view.header && view.header.can_force);
   menu.hidden = false;
   const box = from ? from.getBoundingClientRect() : null;
@@ -302,6 +301,25 @@ function openMenu(i, ev, from) {
   menu.style.top = Math.min(y + 8, window.innerHeight - 120) + "px";
   if (from) (menu.querySelector("button:not([disabled])") || menu).focus();
   ev.stopPropagation();
+}
+// why the node menu's buttons are off ("" if they are not): a menu of greyed buttons said
+// nothing, and a class's projector (the view-only link) took it for broken
+function menuOffBecause() {
+  const h = view.header;
+  if (view.otherRun) return "a different run is now served here: reload to watch it";
+  if (view.finished) return "the run has ended: nothing to break or force";
+  if (!view.connected || !h) return "no connection to the run: breakpoints and forces are off";
+  if (h.controls) return "";
+  if (h.view_only) return "view only: breakpoints and forces are on the control link";
+  if (h.source === "record") return "a recorded run: breakpoints and forces are for a live run";
+  return h.readonly ? "read-only (--monitor-readonly): no breakpoints or forces" : "no controls on this page";
+}
+// the node menu's buttons, and the line that says why they are off
+function menuState() {
+  const why = menuOffBecause(), line = $("node-menu-why");
+  menuButtons(why === "");
+  if (line.textContent !== why) line.textContent = why;
+  line.hidden = why === "";
 }
 // the node menu's buttons on (``on``), its force off while the run is silent (it sets the
 // robot going; a breakpoint holds it)
@@ -606,7 +624,7 @@ function updateControls() {
   setTitle("resume", s.held_end ? "end the run with the mission's outcome (key r)" : RESUME_TITLE);
   controlButton("step", !c || silent > 0 || !s.paused);
   controlButton("stop", !c);
-  menuButtons(c);
+  menuState();
   statusBar(s);
   document.body.classList.toggle("stale", silent > 0 || (!view.connected && !(view.finished && view.ended)));
   if (view.connected) setBadge(silent ? `no word from the run for ${silent} s` : "connected", !silent);
