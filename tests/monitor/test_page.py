@@ -427,3 +427,16 @@ def test_a_browser_s_shortcut_is_no_control_and_q_stops_the_run(live: LiveRun, p
     joined(live.thread, "the run, stopped by the page's q")  # not told to stop by the test
     assert live.result[0].outcome is Outcome.INTERRUPTED, live.result[0].outcome
     assert sent == ["pause", "step", "stop"], sent
+
+
+def test_a_record_s_node_menu_says_why_its_buttons_are_off(
+    recorded: MonitorServer, page: Any
+) -> None:
+    """A record's player opened a node's menu of greyed buttons that said nothing (and, as
+    its run is over, would have said the run ended, which is not why)."""
+    page.goto(recorded.url)
+    page.wait_for_selector('#source:text("record")', timeout=WAIT_MS)
+    page.click('.node[data-name="there and back"] .name')
+    assert all(b.is_disabled() for b in page.query_selector_all("#node-menu button"))
+    why = page.inner_text("#node-menu-why")
+    assert why == "a recorded run: breakpoints and forces are for a live run", why

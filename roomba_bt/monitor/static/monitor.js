@@ -307,11 +307,12 @@ function openMenu(i, ev, from) {
 function menuOffBecause() {
   const h = view.header;
   if (view.otherRun) return "a different run is now served here: reload to watch it";
+  // a record's player is "finished" from its start: that is not why
+  if (h && h.source === "record") return "a recorded run: breakpoints and forces are for a live run";
   if (view.finished) return "the run has ended: nothing to break or force";
   if (!view.connected || !h) return "no connection to the run: breakpoints and forces are off";
   if (h.controls) return "";
   if (h.view_only) return "view only: breakpoints and forces are on the control link";
-  if (h.source === "record") return "a recorded run: breakpoints and forces are for a live run";
   return h.readonly ? "read-only (--monitor-readonly): no breakpoints or forces" : "no controls on this page";
 }
 // the node menu's buttons, and the line that says why they are off
