@@ -213,7 +213,7 @@ class StallRide:
             late.add(gap, halted)
             if back_at - said_at >= QUIET_S:
                 line = late.said(connection.name, back_at - self._late_since, goes_on)
-                log.warning(line, extra={"mission_time": self._clock(gap)})
+                log.warning("%s", line, extra={"mission_time": self._clock(gap)})
                 self._late = LateFrames()
                 self._said_at = back_at
             return
