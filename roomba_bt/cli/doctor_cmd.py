@@ -717,11 +717,12 @@ def _profile(
 def _undecided(found: Any, why: str, reset_tried: bool, report: Report) -> None:
     """Several models fit: each named, and what would tell them apart. Where the default
     profile (the Create 2) is one of them, it is [ok] and the default's, the others named
-    for an owner whose label says so: the evidence cannot tell a Create 2 from a Roomba 500
-    whose checksum covers the header, and a [warn] advising --profile roomba500 met every
-    Create 2 owner (the most of them) for a doubt their label settles. Otherwise a [warn], and
-    the one that sends nothing another lacks, to use until it is known (the profile the
-    caller goes on with: ``Identification.assumed``)."""
+    for an owner whose label says so: the evidence cannot tell a Create 2 from a Roomba 600
+    without the mode + 1 bug or a Roomba 500 whose checksum covers the header, and a [warn]
+    advising --profile roomba500 met every Create 2 owner (the most of them) for a doubt
+    their label settles. Otherwise a [warn], and the one that sends nothing another lacks,
+    to use until it is known (the profile the caller goes on with:
+    ``Identification.assumed``)."""
     from roomba_bt.oi.identify import telling_apart
     from roomba_bt.oi.profiles import DEFAULT_PROFILE
 
@@ -987,13 +988,13 @@ def _missions(profile: Any, baud: int, report: Report) -> None:
         (fits if size <= budget else too_big).append(f"{name} {size}")
     text = f"a 15 ms slot carries {budget} bytes at {baud} baud; frames: " + ", ".join(fits)
     if too_big:
-        from roomba_bt.oi.profiles import SEND_BAUD
+        from roomba_bt.oi.profiles import SEND_BAUD, at_19200_of
 
         report.warn(
             "missions",
             text + "; too big: " + ", ".join(too_big),
             "switch the robot to 115200 to run those: "
-            + "; ".join(p.at_19200 for p in report.models or (profile,))
+            + at_19200_of(report.models or (profile,))
             + f" ({SEND_BAUD})",
         )
     else:

@@ -20,7 +20,9 @@ them; the simulator produces them from its profile):
   500's. One that covers it rules nothing out: the 500 shares the 600's firmware, so which
   rule a real 500 follows is not certain, and the ``roomba500`` profile takes both.
 * **The mode reading right after Start.** Passive is 1; firmware that reports mode + 1 reads
-  2. Of the profiles only the Roomba 600 has that bug (``reports_mode_plus_one``).
+  2. Of the profiles only the Roomba 600 has that bug (``reports_mode_plus_one``): a 2 tells
+  a 600, a 1 rules no model out (a 600 on firmware without the bug reads 1 too, and then
+  looks like a Create 2 to every probe here but its label).
 * **Values only one model's ranges allow.** The 500's wall signal (27) reaches 4095, the 600's
   1023; the 600's stasis (58) reads 2 or 3 (the wheel too dirty to read), the 500's 0 or 1. A
   reading outside a profile's range rules that profile out (a reading inside both says
@@ -138,8 +140,9 @@ class Identification:
     @property
     def assumed(self) -> RobotProfile:
         """The profile to speak to the robot with: the one that fits; of several, the
-        default if it is one (the evidence cannot tell a Create 2 from a Roomba 500 whose
-        checksum covers the header, and a Create 2 owner is the likelier), else
+        default if it is one (the evidence cannot tell a Create 2 from a 600 without the
+        mode + 1 bug or a 500 whose checksum covers the header, and a Create 2 owner is the
+        likelier), else
         :attr:`cautious`; the default when none fits. ``doctor`` and ``--profile auto``
         fall back alike."""
         if self.best is None or (not self.decided and DEFAULT_PROFILE in self.candidates):
@@ -161,13 +164,6 @@ def identify(
     candidates = list(PROFILES.values())
     evidence: list[str] = []
 
-    def keep(test: bool | None, keep_if: bool, field: str, note: str) -> None:
-        nonlocal candidates
-        if test is None:
-            return
-        candidates = [p for p in candidates if getattr(p, field) is (test if keep_if else not test)]
-        evidence.append(note)
-
     if reset_tried:
         has_reset = banner is not None
         candidates = [p for p in candidates if p.has_command("reset") is has_reset]
@@ -185,13 +181,15 @@ def identify(
             if header_in_checksum
             else "its stream checksum leaves the header out (Roomba 500)"
         )
-    keep(
-        mode_plus_one, True, "reports_mode_plus_one",
-        "it reports the OI mode + 1 (the Roomba 600 firmware bug)"
-        if mode_plus_one
-        else "it reports the OI mode as is (a Create 2 or a Roomba 500; a 600 on fixed firmware "
-        "too)",
-    )  # fmt: skip
+    if mode_plus_one:
+        candidates = [p for p in candidates if p.reports_mode_plus_one]
+        evidence.append("it reports the OI mode + 1 (the Roomba 600 firmware bug)")
+    elif mode_plus_one is not None:
+        # rules no model out: the bug is some 600 firmware's, not every 600's, and the
+        # runtime learns the offset whatever the profile (robot/modes.py)
+        evidence.append(
+            "it reports the OI mode as is (a Create 2 or a Roomba 500; a 600 on fixed firmware too)"
+        )
     for pid, value in sorted((readings or {}).items()):
         fits = [p for p in candidates if p.packet(pid).minimum <= value <= p.packet(pid).maximum]
         if len(fits) < len(candidates):
@@ -210,12 +208,12 @@ def telling_apart(candidates: tuple[RobotProfile, ...]) -> list[str]:
     not have: the caller offers it, if it may)."""
     ways: list[str] = []
     for pid in MODEL_RANGE_PACKETS:
-        tops = {p.packet(pid).maximum: p for p in candidates}
+        tops = {p.packet(pid).maximum for p in candidates}
         if len(tops) > 1:
             low, high = min(tops), max(tops)
+            readers = " or ".join(p.title for p in candidates if p.packet(pid).maximum == high)
             ways.append(
-                f"a {PACKETS[pid].title.lower()} ({pid}) over {low}, which only the "
-                f"{tops[high].title} reads"
+                f"a {PACKETS[pid].title.lower()} ({pid}) over {low}, which only the {readers} reads"
             )
     return ways
 

@@ -152,10 +152,7 @@ class RobotProfile:
     @property
     def at_19200(self) -> str:
         """How this robot comes to talk at 19200 and what brings it back, in a sentence."""
-        return (
-            f"on the {self.title}, 19200 comes after {self.slow_baud_how}, and lasts "
-            f"{self.slow_baud_until}"
-        )
+        return at_19200_of((self,))
 
     @property
     def baud_command_rates(self) -> tuple[int, ...]:
@@ -272,6 +269,20 @@ class RobotProfile:
     @property
     def packets(self) -> Mapping[int, PacketSpec]:
         return _PROFILE_PACKETS[self.name]
+
+
+def at_19200_of(profiles: Iterable[RobotProfile]) -> str:
+    """How each of ``profiles`` comes to talk at 19200 and what brings it back: a sentence a
+    procedure, the models that share one named together (``on the iRobot Create 2 or Roomba
+    600 series, 19200 comes after ...``), as doctor says it of the models it could not tell
+    apart: the Create 2's sentence and the 600's, word for word the same, were said twice."""
+    ways: dict[tuple[str, str], list[str]] = {}
+    for profile in profiles:
+        ways.setdefault((profile.slow_baud_how, profile.slow_baud_until), []).append(profile.title)
+    return "; ".join(
+        f"on the {' or '.join(titles)}, 19200 comes after {how}, and lasts {until}"
+        for (how, until), titles in ways.items()
+    )
 
 
 def _lookup(command: CommandSpec | int | str) -> CommandSpec:

@@ -46,9 +46,10 @@ def _run(port: str, tmp_path: Path, *extra: str, **kwargs: Any) -> subprocess.Co
          "roomba600 (Roomba 600 series), from --profile auto: identified"),
         ("roomba500", "--profile auto: Roomba 500 series (roomba500): its stream checksum "
          "leaves the header out", "roomba500 (Roomba 500 series), from --profile auto: identified"),
-        ("create2", "--profile auto: the iRobot Create 2 (create2) or a Roomba 500 series "
-         "(--profile roomba500): not told apart (", "create2 (iRobot Create 2), from --profile "
-         "auto: not told apart from a Roomba 500 series (--profile roomba500)"),
+        ("create2", "--profile auto: the iRobot Create 2 (create2) or a Roomba 600 series "
+         "(--profile roomba600) or a Roomba 500 series (--profile roomba500): not told apart (",
+         "create2 (iRobot Create 2), from --profile auto: not told apart from a Roomba 600 "
+         "series (--profile roomba600) or a Roomba 500 series (--profile roomba500)"),
     ],
 )  # fmt: skip
 def test_run_profile_auto_identifies_the_robot_and_the_summary_says_how(
