@@ -54,9 +54,16 @@ def _display_text(value: object) -> str:
                 "Digit LEDs ASCII table of the spec)"
             )
     if len(text) > DISPLAY_DIGITS:
+        said = f"the display has {DISPLAY_DIGITS} digits; {described(text)} has {len(text)} "
+        digits = text.replace(":", "", 1)
+        if len(digits) == DISPLAY_DIGITS and text.index(":") == 2:  # a clock's time, 12:30
+            raise UnitError(
+                f"{said}characters, and its colon is none of them: the colon between the "
+                f'second and third digits is a scheduling LED (display: "{digits}" with '
+                "schedule_leds: {leds: [colon]} shows " + text + ")"
+            )
         raise UnitError(
-            f"the display has {DISPLAY_DIGITS} digits; {described(text)} has {len(text)} "
-            "characters: show it in parts, display leaves with a wait between them"
+            f"{said}characters: show it in parts, display leaves with a wait between them"
         )
     return text
 

@@ -59,6 +59,10 @@ def test_the_create2_has_no_display_and_three_buttons_said_at_each_leaf(tmp_path
                                "ASCII 32..126 but * + @"),
         ('display: "h\u00e9"', 16, "character 2, '\u00e9' (code 233), is not on the display"),
         ('display: "Hey, you"', 16, "the display has 4 digits; 'Hey, you' has 8 characters"),
+        # a clock's time: its colon is the scheduling LED between the digits, not "in parts"
+        ('display: "12:30"', 16, "the display has 4 digits; '12:30' has 5 characters, and its "
+         "colon is none of them: the colon between the second and third digits is a scheduling "
+         'LED (display: "1230" with schedule_leds: {leds: [colon]} shows 12:30)'),
         ("schedule_leds: {days: [mon, wen]}", 29, "unknown day 'wen' (did you mean 'wed'?)"),
         ("schedule_leds: {leds: clok}", 29, "unknown LED 'clok' (did you mean 'clock'?)"),
         ("press: [clean, minutes]", 14, "unknown button 'minutes' (did you mean 'minute'?)"),
