@@ -170,7 +170,9 @@ def _network_words(port: str) -> LinkWords:
             "bridge does)"
         ),
         sleep_advice=(
-            "a robot left 5 minutes in Passive (waiting on its dock) sleeps: keep it in Safe"
+            "a robot left 5 minutes in Passive sleeps, on its dock too, where Safe does not "
+            "hold (the powered charger drops it to Passive, both specs): keep it in Safe off "
+            "the dock"
         ),
     )
 

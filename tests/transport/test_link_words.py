@@ -82,6 +82,18 @@ def test_the_robot_s_errors_on_a_bridge_name_it(port: str) -> None:
         assert not any(word in message.lower() for word in CABLE_WORDS), message
 
 
+def test_a_raw_bridge_s_sleep_advice_does_not_send_a_docked_robot_to_safe() -> None:
+    """Keep-awake's warning on ``socket://`` said "a robot left 5 minutes in Passive (waiting
+    on its dock) sleeps: keep it in Safe": on a powered dock Safe does not hold (both specs,
+    "Safe Mode": the charger drops it to Passive, as the simulator does) and the battery does
+    not charge in it. Safe is the advice off the dock only."""
+    advice = link_of("socket://192.168.4.1:23").sleep_advice
+    assert advice == (
+        "a robot left 5 minutes in Passive sleeps, on its dock too, where Safe does not hold "
+        "(the powered charger drops it to Passive, both specs): keep it in Safe off the dock"
+    )
+
+
 def test_a_device_path_keeps_the_cable_s_words() -> None:
     """The words docs/reliability.md and docs/doctor.md quote, on a device path."""
     assert no_answer_causes("/dev/ttyUSB0")[2] == (
