@@ -155,10 +155,11 @@ def test_a_stream_sample_reads_each_frames_checksum_rule_and_the_widest_readings
     assert link.read(0.1) == b""  # paused: nothing more comes
 
 
-def test_identify_robot_tells_a_600_and_a_500_and_names_a_create2_or_500() -> None:
+def test_identify_robot_tells_a_600_and_a_500_and_names_a_create2_or_600_or_500() -> None:
     """``--profile auto``: the mode + 1 tells the 600, the checksum the 500; a Create 2's
-    evidence fits a 500 that sums the header too, and the default is assumed. No Reset
-    (7) is written: it restarts a 600's OI, and a 500 has none."""
+    evidence fits a 600 without the mode + 1 bug and a 500 that sums the header too, and the
+    default is assumed. No Reset (7) is written: it restarts a 600's OI, and a 500 has
+    none."""
     link = _link(profile=ROOMBA600)
     written: list[bytes] = []
     write = link.write
@@ -171,7 +172,7 @@ def test_identify_robot_tells_a_600_and_a_500_and_names_a_create2_or_500() -> No
     told = identify_robot(_link(profile=ROOMBA500), 115200)
     assert not isinstance(told, str) and told.candidates == (ROOMBA500,)
     told = identify_robot(_link(profile=CREATE2), 115200)
-    assert not isinstance(told, str) and told.candidates == (CREATE2, ROOMBA500)
+    assert not isinstance(told, str) and told.candidates == (CREATE2, ROOMBA600, ROOMBA500)
     assert told.assumed is CREATE2
 
 
