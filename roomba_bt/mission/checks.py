@@ -1053,7 +1053,33 @@ def profile_commands(
     return errors, warnings
 
 
-def waits_past_sleep(modes: ModeCheck, profile: RobotProfile) -> tuple[str, ...]:
+def _restarts_a_cycle(node: Node, looping: bool = False) -> bool:
+    """Whether ``node`` holds a leaf that starts a built-in cycle (Clean, Spot, Max, Seek
+    Dock) under a decorator that starts its child again (a ``repeat``): a cycle sent over
+    and over, as clean-builtin's Clean every ``${cycle}``."""
+    decorator = answers(node)
+    looping = looping or (decorator is not None and bool(decorator.restarts_on))
+    if node.decl is not None and node.decl.starts_cycle:
+        return looping
+    return any(_restarts_a_cycle(child, looping) for child in node.children)
+
+
+def _beside_a_cycle(root: Node) -> set[int]:
+    """The nodes of each parallel's branch that runs beside another branch that starts a
+    built-in cycle over and over (:func:`_restarts_a_cycle`): while they run, the robot
+    cleans and hears its cycle's command again and again, and sleeps at no point of it."""
+    beside: set[int] = set()
+    for node in root.walk():
+        if not every_tick(node):
+            continue
+        cycling = [_restarts_a_cycle(branch) for branch in node.children]
+        for index, branch in enumerate(node.children):
+            if any(cycles for other, cycles in enumerate(cycling) if other != index):
+                beside.update(id(n) for n in branch.walk())
+    return beside
+
+
+def waits_past_sleep(root: Node, modes: ModeCheck, profile: RobotProfile) -> tuple[str, ...]:
     """Each ``wait`` longer than the 5 minutes (:data:`~roomba_bt.oi.profiles.PASSIVE_SLEEP_S`)
     that the mode pass found may run in Passive, said ``file:line:column: wait(10min)``,
     where ``profile``'s robot sleeps in Passive: with nothing from us, it cannot finish
@@ -1061,13 +1087,18 @@ def waits_past_sleep(modes: ModeCheck, profile: RobotProfile) -> tuple[str, ...]
     wiring slept on its charger 5 minutes into it, and the run ended "the robot fell
     asleep", exit 8). Not a warning of
     ``validate``: whether the port can pulse is known only when the run starts
-    (:func:`roomba_bt.runtime.long_run.say_waits_past_sleep`)."""
+    (:func:`roomba_bt.runtime.long_run.say_waits_past_sleep`). Not a wait beside a branch
+    of its parallel that starts a built-in cycle over and over (:func:`_beside_a_cycle`):
+    clean-builtin's ``wait: ${duration}`` was named so on every run without keep-awake,
+    "it cannot finish", and the run ended SUCCESS."""
     found: list[str] = []
+    beside = _beside_a_cycle(root)
     for node, entry in modes.entered.values():
         decl = node.decl
         duration = node.params.get("duration")
         if (
             decl is None
+            or id(node) in beside
             or decl.name != "wait"
             or OIMode.PASSIVE not in entry
             or not isinstance(duration, float)

@@ -258,7 +258,7 @@ def _checked(
         sends=frozenset(sends),
         plan=tree,
         warnings=_kept(ctx.warnings, _tree_warnings(tree, modes, profile, ignored), dead_warnings),
-        waits_past_sleep=waits_past_sleep(modes, profile),
+        waits_past_sleep=waits_past_sleep(tree, modes, profile),
     )
     return mission, []
 

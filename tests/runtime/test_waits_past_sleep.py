@@ -65,3 +65,32 @@ def test_the_run_names_the_wait_at_its_start_and_the_dock_at_its_end(
 def test_asleep_off_the_dock_says_no_dock() -> None:
     text = str(RobotAsleep("/dev/ttyUSB0", 300.0, keep_awake=True, pulses=True))
     assert "the robot fell asleep" in text and "dock (charging" not in text
+
+
+CYCLE_ONCE = """
+mission: one-cycle-beside-a-wait
+tree:
+  parallel:
+    policy: one
+    children:
+      - wait: 30min
+      - sequence: [{mode: passive}, clean, {wait: 30min}]
+"""
+
+
+def test_a_wait_beside_a_branch_that_starts_the_robot_s_cycle_over_and_over_is_not_named(
+    capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """clean-builtin's ``wait: ${duration}`` (20 min) runs beside a ``repeat`` that sends
+    Clean every ``${cycle}``: the robot cleans all along, and a cycle runs no sleep. On a
+    link without keep-awake (a raw TCP bridge, a pty, ``--no-keep-awake``) every run of it
+    began "wait(20min) may run in Passive ... it cannot finish (the robot falls asleep 5
+    minutes into it and the run ends, exit 8)", and ended SUCCESS. A cycle started once
+    beside a long wait ends and leaves the robot idle: that wait is still named."""
+    assert load_mission("clean-builtin", profile="roomba600").waits_past_sleep == ()
+    code = main(["run", "clean-builtin", "--profile", "roomba600", "--fast", "--no-keep-awake"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert not [r for r in caplog.records if "may run in Passive" in r.getMessage()]
+    (said,) = load_mission_text(CYCLE_ONCE).waits_past_sleep
+    assert said.endswith(":7:9: wait(30min)"), said
