@@ -78,15 +78,19 @@ __all__ = [
 
 
 def _display(path: Path) -> str:
-    """How a diagnostic names a file: by its path from the working folder; else a shipped
-    file by its shipped name (``roomba-bt:lib/docking.yaml``, as an include writes it and a
-    record holds it: ``validate dock`` named it by its site-packages path, a different line
-    on every machine); else as given."""
+    """How a diagnostic names a file: a shipped file by its shipped name
+    (``roomba-bt:lib/docking.yaml``, as an include writes it and a record holds it:
+    ``validate dock`` named it by its site-packages path, a different line on every
+    machine, and so did a folder above the venv, ``~`` over ``~/roomba/venv``, as the path
+    from there); else by its path from the working folder; else as given."""
     resolved = path.resolve()
+    shipped = shipped_name(resolved)
+    if shipped is not None:
+        return shipped
     try:
         return str(resolved.relative_to(Path.cwd()))
     except ValueError:
-        return shipped_name(resolved) or str(path)
+        return str(path)
 
 
 def compile_mission(

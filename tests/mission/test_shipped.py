@@ -237,3 +237,18 @@ def test_a_patrol_that_docks_on_a_low_battery_says_so_under_its_success(capsys: 
     out = capsys.readouterr().out
     assert "outcome      SUCCESS\nmission said the battery is below 15%: the patrol ended " in out
     assert "before its 2 laps were done; docking" in out
+
+
+def test_a_shipped_file_is_named_by_its_shipped_name_from_a_folder_above_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A user whose venv lies under the folder they work in (``~/roomba/venv``, run from
+    ``~``) was told ``roomba/venv/lib/python3.11/site-packages/roomba_bt/missions/
+    patrol.yaml:134:17: wait(10min) may run in Passive ...``: the path from the working
+    folder came before the shipped name, which docs/unattended.md quotes
+    (``roomba-bt:patrol.yaml:134:17``)."""
+    from roomba_bt.mission import load_mission
+
+    monkeypatch.chdir(SHIPPED_DIR.parent.parent)
+    (said,) = load_mission("patrol", {"charge_for": "10min"}).waits_past_sleep
+    assert said.startswith("roomba-bt:patrol.yaml:"), said
