@@ -1038,11 +1038,13 @@ def profile_commands(
         for opcode in decl.sends:
             problem = profile.command_unavailable(opcode)
             if problem is not None:
-                errors.append(node.loc.at(f"{decl.name} sends {problem} {choose}"))
+                # "reboot: reset (7) is not available ...": it read "reboot sends reset (7)
+                # is not available ...", two verbs
+                errors.append(node.loc.at(f"{decl.name}: {problem} {choose}"))
                 continue
             warning = profile.command_warning(opcode)
             if warning is not None:
-                warnings.append(node.loc.at(f"{decl.name} sends {warning}").as_warning())
+                warnings.append(node.loc.at(f"{decl.name}: {warning}").as_warning())
         lacking = None if decl.needs is None else decl.needs(node.params, profile)
         if lacking is None:
             continue
