@@ -60,6 +60,12 @@ COMMAND_WAIT_S = HANG_S
 #: Reset tried: a 600 on firmware without the mode + 1 bug, or a 500, which may sum the
 #: header too (its profile takes both rules).
 CREATE2_OR_500 = "iRobot Create 2 (or a Roomba 600 series or Roomba 500 series, by its label)"
+#: The profile step's line for such a robot: the default, the others for an owner's label.
+CREATE2_OR_500_STEP = (
+    "[ok]   profile   iRobot Create 2 (--profile create2, the default), or a Roomba 600 "
+    "series (--profile roomba600) or a Roomba 500 series (--profile roomba500) if its label "
+    "says so: "
+)
 
 
 def _started(*args: str) -> subprocess.Popen[str]:
@@ -106,9 +112,7 @@ def test_doctor_finds_an_awake_create2_on_a_pty_at_either_rate(
     assert f"[ok]   baud      {baud}: answered [1, 0, 0]" in out
     # a Create 2 owner is not warned: the default, the 600 and the 500 named for an owner
     # whose label says so (a [warn] advising --profile roomba500 met every Create 2)
-    assert "[ok]   profile   iRobot Create 2 (--profile create2, the default), or a Roomba 600 " \
-        "series (--profile roomba600) or a Roomba 500 series (--profile roomba500) if its " \
-        "label says so: " in out  # fmt: skip
+    assert CREATE2_OR_500_STEP in out
     assert "[ok]   mode      Passive (35 = 1, as is)" in out
     assert any(" 0 bytes skipped" in line for line in _step(out, "stream"))
     missions = _step(out, "missions")[0]
@@ -550,11 +554,7 @@ def test_a_500_whose_checksum_covers_the_header_is_not_called_a_create2(
     code, out = _doctor_in_process(robot, allow_reset=False)
     assert code == ExitCode.OK, out
     [profile] = _step(out, "profile")
-    assert profile.startswith(
-        "[ok]   profile   iRobot Create 2 (--profile create2, the default), or a Roomba 600 "
-        "series (--profile roomba600) or a Roomba 500 series (--profile roomba500) if its "
-        "label says so"
-    )
+    assert profile.startswith(CREATE2_OR_500_STEP), out
     fix = out.split(profile)[1].splitlines()[1]
     assert fix.lstrip().startswith("note: tell them apart by the model on its label; ")
     assert "a wall signal (27) over 1023, which only the Roomba 500 series reads" in fix
@@ -583,11 +583,7 @@ def test_a_600_that_reports_the_mode_as_is_is_named_and_its_setting_fits(
     code, out = _doctor_in_process(robot, allow_reset=False)
     assert code == ExitCode.OK, out
     [profile] = _step(out, "profile")
-    assert profile.startswith(
-        "[ok]   profile   iRobot Create 2 (--profile create2, the default), or a Roomba 600 "
-        "series (--profile roomba600) or a Roomba 500 series (--profile roomba500) if its "
-        "label says so"
-    ), out
+    assert profile.startswith(CREATE2_OR_500_STEP), out
     [setting] = _step(out, "setting")
     assert setting == "[ok]   setting   ROOMBA_BT_PROFILE=roomba600: fits this robot", out
     assert "stasis (58) over 1, which only the iRobot Create 2 or Roomba 600 series reads" in out
