@@ -107,7 +107,70 @@ def swallowed_interrupt() -> KeyboardInterrupt | None:
     or the one raised was handled (:func:`main`)."""
     kept = _RAISED[:1]
     _RAISED.clear()
+    if kept and _DROPPED and _DROPPED[0][0] is kept[0]:
+        _DROPPED.clear()  # raised again by whoever took it: no longer dropped
     return kept[0] if kept else None
+
+
+#: the signal's interrupt (ours: :data:`DELIVERED_BY`) that Python dropped, and the callback
+#: it dropped it in (:func:`note_dropped`), until it is taken (:func:`dropped_interrupt`)
+_DROPPED: list[tuple[KeyboardInterrupt, str]] = []
+
+
+def note_dropped(unraisable: sys.UnraisableHookArgs) -> None:
+    """``sys.unraisablehook`` while the command runs (:func:`take_signals_early`): Python
+    calls it for an exception it drops, one raised in a finalizer or a weakref callback. A
+    signal's interrupt of ours dropped there is kept (:data:`_DROPPED`) for the command to
+    end on at its next check, and said in one line naming the callback (its traceback,
+    Python's "Exception ignored in ...", named nothing a user could act on); anything else
+    goes to Python's own hook."""
+    interrupt = unraisable.exc_value
+    signum = getattr(interrupt, DELIVERED_BY, None)
+    if not isinstance(interrupt, KeyboardInterrupt) or signum is None:
+        sys.__unraisablehook__(unraisable)
+        return
+    where = _callback_named(unraisable.object)
+    _DROPPED[:] = [(interrupt, where)]
+    try:  # noqa: SIM105  (contextlib is not imported here: see above)
+        print(
+            f"roomba-bt: {_name(signum)} came while Python ran {where}, a finalizer or weakref "
+            "callback, which drops what it raises: it is raised again at the next check",
+            file=sys.stderr,
+        )
+    except OSError:  # stderr closed: the exit code says it all the same
+        pass
+
+
+def _callback_named(callback: object) -> str:
+    """``WeakKeyDictionary.__init__.<locals>.remove (.../weakref.py:369)``: the callback (a
+    function, a bound ``__del__``, a generator) by its qualified name and where it is
+    written (a plugin's module has a made-up name: its file says whose it is)."""
+    if callback is None:
+        return "a finalizer"
+    name = getattr(callback, "__qualname__", None) or type(callback).__qualname__
+    code = (
+        getattr(callback, "__code__", None)
+        or getattr(getattr(callback, "__func__", None), "__code__", None)
+        or getattr(callback, "gi_code", None)
+    )
+    if code is None:
+        return str(name)
+    return f"{name} ({code.co_filename}:{code.co_firstlineno})"
+
+
+def dropped_interrupt() -> KeyboardInterrupt | None:
+    """The signal's interrupt Python dropped in a callback (:func:`note_dropped`) that
+    nothing raised again, taken (the kept one too, if it is that one): a command that went
+    on past it ends on it (exit 130). None: none was dropped. Unlike
+    :func:`swallowed_interrupt`, never one a command caught on purpose (the monitor's
+    Ctrl-C, its way to end, exit 0)."""
+    dropped = _DROPPED[:1]
+    _DROPPED.clear()
+    if not dropped:
+        return None
+    if _RAISED and _RAISED[0] is dropped[0][0]:
+        _RAISED.clear()
+    return dropped[0][0]
 
 
 def take_signals_early() -> None:
@@ -117,7 +180,10 @@ def take_signals_early() -> None:
     and its ``kill -INT`` is the script's only way to ask a stop, while ``nohup`` ignores
     SIGHUP on purpose (it stays ignored, and so the safety module reads it:
     :data:`~roomba_bt.robot.safety.IGNORED_AT_START`). A handler a program set is left as it
-    is. Signal handlers are the main thread's: elsewhere nothing is set."""
+    is. Signal handlers are the main thread's: elsewhere nothing is set. Python's hook for
+    the exceptions it drops gives way to :func:`note_dropped` (one a program set stays)."""
+    if sys.unraisablehook is sys.__unraisablehook__:
+        sys.unraisablehook = note_dropped
     hang_up = getattr(_signal, "SIGHUP", None)
     for signum in EARLY_SIGNALS:
         now = _signal.getsignal(signum)

@@ -22,6 +22,8 @@ from typing import NoReturn
 from roomba_bt import __version__
 from roomba_bt._entry import (
     EARLY_SIGNALS,
+    INTERRUPTED,
+    dropped_interrupt,
     interrupted_early,
     swallowed_interrupt,
     take_signals_early,
@@ -156,6 +158,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             _as_the_process()
         with spoken(_command_line_wording()):  # the connections' messages name the flags
             code = _command(argv)
+        dropped = dropped_interrupt() if process else None
+        if dropped is not None and code != INTERRUPTED:  # a run's own ending says it
+            code = _interrupted(dropped, process)  # Python dropped it, and the command went on
         return code
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP before a run took them
         code = _interrupted(exc, process)
@@ -287,6 +292,20 @@ def _as_the_process() -> None:
         from roomba_bt.oi.encode import ENCODE_MODULE_CALLED
 
         warnings.filterwarnings("default", re.escape(ENCODE_MODULE_CALLED), DeprecationWarning)
+
+
+def raise_lost_interrupt(args: argparse.Namespace) -> None:
+    """A check a command makes before what an operator's signal must stop (a run's start,
+    each file ``validate`` checks): the interrupt a signal handler of the process raised
+    that never ended the command (Python dropped it in a weakref callback or a finalizer,
+    importlib's module locks run one as a plugin imports; a plugin's ``except
+    BaseException`` took it) is raised here. The mission ran to its end, exit 0, and a
+    ``validate`` of a thousand files went on to say them all. The process's alone
+    (``args.as_the_process``): only its handlers keep what they raise for it."""
+    if getattr(args, "as_the_process", False):
+        lost = swallowed_interrupt()
+        if lost is not None:
+            raise lost.with_traceback(None)
 
 
 def _answer_given(code: int | None) -> None:

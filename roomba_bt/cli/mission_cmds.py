@@ -16,6 +16,7 @@ import weakref
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from roomba_bt.cli import raise_lost_interrupt
 from roomba_bt.cli.arguments import (
     add_command,
     add_param_option,
@@ -244,6 +245,7 @@ def validate_command(args: argparse.Namespace) -> int:
     checked: list[report.Checked] = []
     paths: list[str] = []  # each checked file's path, "" for one that could not be read
     for file, found, problem in _each_file_once(args.files):
+        raise_lost_interrupt(args)  # a signal Python dropped: nothing said, exit 130
         paths.append(found)
         if problem is not None:
             checked.append(report.Checked(file, problem=problem))

@@ -11,6 +11,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
+from roomba_bt.cli import raise_lost_interrupt
 from roomba_bt.cli.arguments import (
     LABEL_LENGTH,
     MIN_WATCHDOG,
@@ -749,8 +750,7 @@ def _run_and_report(
     stack.runner.wall_limit_s = args.wall_limit_s  # a stuck tree named (eval's HUNG)
     closed = False
     try:
-        if getattr(args, "as_the_process", False):
-            _dropped_before_the_run()
+        raise_lost_interrupt(args)  # one Python dropped as a plugin imported: nothing sent
         summary = _run_held(args, stack, monitor)
         stack.close()
         closed = True
@@ -782,19 +782,6 @@ def _run_and_report(
         raise
     finally:
         stack.runner.release_interrupts()  # the summary is out
-
-
-def _dropped_before_the_run() -> None:
-    """A signal the command's handler raised before the run's own took over, that Python
-    dropped (it ran in a weakref callback or a finalizer: importlib's module locks run one
-    as a plugin imports), is raised now, before anything of the mission is sent: the run
-    went on to its mission's end, exit 0, the operator's Ctrl-C lost. The process's alone
-    (``args.as_the_process``): only its handlers keep what they raise for it."""
-    from roomba_bt._entry import swallowed_interrupt
-
-    dropped = swallowed_interrupt()
-    if dropped is not None:
-        raise dropped
 
 
 def _run_held(args: argparse.Namespace, stack: RunStack, monitor: LiveMonitor | None) -> RunSummary:
@@ -1265,6 +1252,7 @@ def replay_command(args: argparse.Namespace) -> int:
     if isinstance(recorded, int):
         return recorded
     record = recorded.record
+    raise_lost_interrupt(args)  # one Python dropped as the record was read: no replay
     # the tree as its last tick left it: a replay ended by a difference stops it (all INVALID)
     as_ticked = TreeAsTicked() if args.display == "tree" else None
     observer = StatusChangeLogger() if args.display == "log" else as_ticked
