@@ -8,6 +8,10 @@ readable arguments (special radii, LEDs and motors by name, songs as notes, days
 Drive (137), velocity -200 mm/s, radius 500 mm (the spec's example)::
 
     [137][0xFF][0x38][0x01][0xF4]  ==  [137][255][56][1][244]
+
+A program reaches it as ``from roomba_bt import commands`` (or ``from roomba_bt.oi import
+commands``): pycreate2's methods as functions that build a :class:`Command`, which
+``Connection.send`` writes (``robot.send(commands.drive_direct(200, 200))``, in mm/s).
 """
 
 from __future__ import annotations
@@ -33,6 +37,64 @@ from roomba_bt.oi.opcodes import (
     ArgSpec,
     CommandSpec,
 )
+
+#: What ``from roomba_bt.commands import *`` gives and ``help(roomba_bt.commands)`` lists:
+#: the commands and what they are built of, not this module's own imports (``sys``,
+#: ``struct``, ``cast``... came with the star, and a type checker refused them)
+__all__ = [
+    "BAUD_CODES",
+    "BAUD_RATES",
+    "NAMED_NOTES",
+    "NOTE_NAMES",
+    "STRAIGHT_RADII",
+    "Command",
+    "EncodeError",
+    "Note",
+    "Radius",
+    "baud",
+    "baud_rate",
+    "buttons",
+    "clean",
+    "command_size",
+    "control",
+    "decode_command",
+    "digit_leds_ascii",
+    "digit_leds_raw",
+    "drive",
+    "drive_direct",
+    "drive_pwm",
+    "drive_straight",
+    "encode",
+    "full",
+    "halt",
+    "leds",
+    "max_clean",
+    "motors",
+    "motors_off",
+    "note_name",
+    "note_number",
+    "pause_stream",
+    "play",
+    "power",
+    "pwm_motors",
+    "query_list",
+    "reset",
+    "resume_stream",
+    "safe",
+    "schedule",
+    "scheduling_leds",
+    "seek_dock",
+    "sensors",
+    "set_day_time",
+    "song",
+    "song_seconds",
+    "spin",
+    "spot",
+    "start",
+    "stop",
+    "stream",
+    "turns_wheels",
+]
 
 
 class Radius(IntEnum):
@@ -127,8 +189,10 @@ def _fixed_form(spec: CommandSpec) -> _FixedForm | None:
 
 #: :func:`_fixed_form` of each opcode that has one (built at import: about 30 Structs)
 _FIXED_FORMS: dict[int, _FixedForm] = {
-    opcode: form for opcode, spec in COMMANDS.items() if (form := _fixed_form(spec)) is not None
-}
+    opcode: form
+    for opcode, form in ((opcode, _fixed_form(spec)) for opcode, spec in COMMANDS.items())
+    if form is not None
+}  # (a walrus here left its ``form`` a name of the module, in help() and the star import)
 
 
 def encode(command: int | str | CommandSpec, *args: int, tail: Sequence[int] = ()) -> Command:

@@ -295,6 +295,35 @@ def test_the_encoder_module_is_reached_as_a_module_by_every_import() -> None:
     assert "encode" not in roomba_bt.oi.__all__  # no name of the package hides a submodule
 
 
+def test_the_commands_module_names_its_commands_and_not_its_imports() -> None:
+    """``roomba_bt.commands`` had no ``__all__``: ``from roomba_bt.oi.encode import *`` gave
+    ``sys``, ``struct``, ``warnings``, ``cast``, ``dataclass`` (and ``form``, a walrus's
+    leftover) beside the commands, which ``mypy --strict`` refused as not exported, and
+    ``help()`` listed them as the module's data. Every public function and class it defines
+    is named, and nothing it merely imports but the error every command raises (its
+    own path, ``roomba_bt.oi.encode``: ``roomba_bt.commands`` as a path warns until 0.3.0)."""
+    import inspect
+    import types
+
+    from roomba_bt import commands as top_commands
+
+    assert "__all__" in vars(c) and top_commands is c
+    starred: dict[str, object] = {}
+    exec("from roomba_bt.oi.encode import *", starred)  # its module by its own path
+    starred.pop("__builtins__")
+    assert sorted(starred) == sorted(c.__all__)
+    assert not [name for name, value in starred.items() if isinstance(value, types.ModuleType)]
+    defined = {
+        name
+        for name, value in vars(c).items()
+        if not name.startswith("_")
+        and (inspect.isfunction(value) or inspect.isclass(value))
+        and value.__module__ == c.__name__
+    }
+    assert defined - {"EncodeError"} <= set(c.__all__), defined - set(c.__all__)
+    assert "form" not in vars(c)
+
+
 def test_the_leds_example_runs_as_its_docstring_writes_it() -> None:
     """``oi.leds``'s example named ``led_bits`` as if it were beside it: ``oi.led_bits`` was an
     AttributeError, and nothing said where it lives."""
