@@ -494,6 +494,15 @@ def firmware_read(profile: RobotProfile) -> str:
     )
 
 
+def rate_of(rate: int, user: str) -> str:
+    """``the 115200 of the run``: the baud rate a connection was at, said for its ``user``
+    (:attr:`~roomba_bt.robot.connection.Connection.waiter`, ``the run`` or the command that
+    set its own name), where the robot is found talking at another: ``roomba-bt sensors``
+    has no run, and said "not the 115200 of the run" (``the 115200 roomba-bt sensors
+    opened it at``)."""
+    return f"the {rate} of the run" if user == "the run" else f"the {rate} {user} opened it at"
+
+
 class BaudChanged(LinkDown):
     """The robot's port changed its rate in the middle of the run (a battery swap or a reset
     brings a Create 2 back at its default rate): garbage on the line since the last valid
@@ -503,7 +512,7 @@ class BaudChanged(LinkDown):
 
     def __init__(
         self, port: str, rate: int, was: int, garbage_s: float, garbage_bytes: int, *,
-        halted: bool,
+        halted: bool, user: str = "the run",
     ) -> None:  # fmt: skip
         self.rate = rate
         self.was = was
@@ -515,7 +524,7 @@ class BaudChanged(LinkDown):
         )
         super().__init__(
             port,
-            f"the robot now talks at another baud rate: {rate}, not the {was} of the run; "
+            f"the robot now talks at another baud rate: {rate}, not {rate_of(was, user)}; "
             f"no valid sensor frame for {garbage_s * 1000:.0f} ms while {garbage_bytes} bytes "
             f"arrived, then valid frames at {rate}: the port followed it (a battery swap or a "
             f"reset brings the robot back at its default rate); {action}",

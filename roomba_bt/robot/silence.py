@@ -49,6 +49,7 @@ from roomba_bt.robot.errors import (
     RobotAsleep,
     StreamLost,
     idle_said,
+    rate_of,
 )
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus
 from roomba_bt.robot.wake import SLEEP_AFTER_S
@@ -414,7 +415,10 @@ def follow_baud(connection: Connection) -> BaudChanged | None:
                 connection.baud = rate
             _confirm_at(connection, rate)
             halted = connection.halt()
-            return BaudChanged(connection.name, rate, was, garbage_s, garbage_bytes, halted=halted)
+            return BaudChanged(
+                connection.name, rate, was, garbage_s, garbage_bytes, halted=halted,
+                user=connection.waiter,
+            )  # fmt: skip
     finally:
         connection.baud_listened = (link.transport.now(), link.bytes_read)
     return None
@@ -522,8 +526,9 @@ def answers_elsewhere(connection: Connection, silent: NoAnswer) -> ConnectionFai
     )
     return ConnectionFailed(
         connection.name,
-        f"the robot answers at {found.baud} baud, not at the {run_rate} of the run: it answered "
-        f"no Query List at {run_rate}, and Start and a Query List at {found.baud}{how}; open "
+        f"the robot answers at {found.baud} baud, not at {rate_of(run_rate, connection.waiter)}: "
+        f"it answered no Query List at {run_rate}, and Start and a Query List at "
+        f"{found.baud}{how}; open "
         f"it at {found.baud} (--baud {found.baud} or --baud auto; in Python, "
         f"Connection.open(port, baud={found.baud}))",
     )

@@ -155,3 +155,21 @@ def test_a_lost_stream_says_sensors_waited_the_grace_not_a_run(
     assert code == 3, err
     assert "then roomba-bt sensors waited the 2 s grace" in err, err
     assert "the run" not in err, err
+
+
+def test_a_robot_at_another_rate_is_said_at_the_rate_sensors_opened_it_at_not_a_run_s(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``sensors`` on a robot that talks at 19200 said "the robot answers at 19200 baud, not
+    at the 115200 of the run": no run was there. The rate is said as sensors' own (one
+    function words it for both, the connection's user passed in)."""
+    from roomba_bt.oi.profiles import CREATE2
+
+    with sim_pty_server(CREATE2, "--baud", "19200") as port:
+        code = main(["sensors", "--port", port, "--count", "1"])
+    err = capsys.readouterr().err
+    assert code == 3, err
+    assert (
+        "the robot answers at 19200 baud, not at the 115200 roomba-bt sensors opened it at:" in err
+    )
+    assert "the run" not in err, err
