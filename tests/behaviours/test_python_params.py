@@ -201,3 +201,24 @@ def test_repeat_checks_its_count_and_time() -> None:
     with pytest.raises(ParamError, match=r"Repeat 'r': duration: -1 s"):
         Repeat("r", py_trees.behaviours.Success("c"), duration=-1)
     assert Repeat("r", py_trees.behaviours.Success("c"), times=3).times == 3
+
+
+def test_units_are_written_as_in_yaml_and_a_bare_number_is_the_canonical_unit() -> None:
+    """docs/runtime.md, a tree built by hand: a pycreate2 or ROS program writes radians and
+    metres with their unit (the mission language's parser reads them); a bare number is the
+    canonical unit (decided), so ``1.57`` is 1.57 degrees; a wrong unit names the leaf, the
+    parameter and the units there are, as the page quotes it."""
+    import math
+
+    assert Turn("t", {"angle": "1.57 rad"}).params["angle"] == pytest.approx(math.degrees(1.57))
+    assert Turn("t", {"angle": "0.25 turn"}).params["angle"] == pytest.approx(90.0)
+    assert Turn("t", {"angle": 1.57}).params["angle"] == 1.57
+    assert Drive("d", {"velocity": "0.2 m/s"}).params["velocity"] == pytest.approx(200.0)
+    assert Drive("d", {"velocity": 0.2}).params["velocity"] == 0.2
+    assert Drive("d", {"distance": "50 cm"}).params["distance"] == pytest.approx(500.0)
+    with pytest.raises(ParamError) as caught:
+        Turn("t", {"angle": "90 m"})
+    said = "turn 't': angle: unknown angle unit 'm' in '90 m'; use one of: deg, °, rad, turn, turns"
+    assert str(caught.value) == said
+    page = " ".join((MISSIONS.parents[1] / "docs" / "runtime.md").read_text().split())
+    assert f"`{said}`" in page
