@@ -8,6 +8,7 @@ import ast
 import doctest
 import importlib
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -126,7 +127,11 @@ def strict_mypy(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     assert roomba_bt.__doc__ is not None
     example = doctest.DocTestParser().get_doctest(roomba_bt.__doc__, {}, "roomba_bt", str(INIT), 0)
     folder = tmp_path_factory.mktemp("typed")
-    programs = {"user.py": "".join(step.source for step in example.examples), "typed.py": TYPED}
+    programs = {
+        "user.py": "".join(step.source for step in example.examples),
+        "typed.py": TYPED,
+        "by_hand.py": _by_hand_example(),
+    }
     for name, text in programs.items():
         (folder / name).write_text(text)
     checkout = INIT.parents[1]  # this roomba_bt, not another one installed in the venv
@@ -142,13 +147,31 @@ def strict_mypy(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     return {**said, "end": (lines or [""])[-1], "all": done.stdout + done.stderr}
 
 
+def _by_hand_example() -> str:
+    """docs/runtime.md's program that drives the robot by hand, then hands its connection to
+    a mission (the pycreate2 user's first program)."""
+    page = (INIT.parents[1] / "docs" / "runtime.md").read_text(encoding="utf-8")
+    section = page.split("## From Python: a connection driven by hand, then a mission", 1)[1]
+    [block] = re.findall(r"```python\n(.*?)```", section.split("\n## ", 1)[0], flags=re.DOTALL)
+    return str(block)
+
+
+def test_the_by_hand_example_type_checks_as_a_user_copies_it(strict_mypy: dict[str, str]) -> None:
+    """It read ``robot.latest.frame``: ``latest`` is None until a frame has come, and a
+    pycreate2 user who copied the page into a typed program got ``mypy --strict``'s
+    union-attr error (the package ships ``py.typed``)."""
+    assert strict_mypy["by_hand.py"] == "", strict_mypy["all"]
+    assert strict_mypy["end"].endswith("(checked 3 source files)"), strict_mypy["all"]
+
+
 def test_the_packages_example_type_checks_as_a_user_copies_it(strict_mypy: dict[str, str]) -> None:
     """The example called ``.label`` on ``summary.final_mode``, which is None when no robot
     answered: a user who copied it into a program got ``mypy --strict``'s union-attr error
     (the package ships ``py.typed``). Its lines, as a file, pass ``mypy --strict``: nothing
-    said of it, in a run that checked it (two files: :data:`TYPED` beside it)."""
+    said of it, in a run that checked it (three files: :data:`TYPED` and the page's program
+    driven by hand beside it)."""
     assert strict_mypy["user.py"] == "", strict_mypy["all"]
-    assert strict_mypy["end"].endswith("(checked 2 source files)"), strict_mypy["all"]
+    assert strict_mypy["end"].endswith("(checked 3 source files)"), strict_mypy["all"]
 
 
 def test_the_typed_interrupt_pattern_passes_mypy_strict(strict_mypy: dict[str, str]) -> None:
