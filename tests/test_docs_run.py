@@ -560,6 +560,8 @@ QUOTED = [
 #: broken plugin installed): the test that makes the line holds the page to it with
 #: ``quoted.assert_quoted`` (the page, how the quote begins: the test named).
 QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
+    ("docs/runtime.md", "replay: interrupted at mission time"): "tests/cli/"
+    "test_replay_interrupted.py::test_a_replay_interrupted_exits_130_and_judges_no_bytes",
     ("docs/runtime.md", "roomba-bt: SIGINT came while Python ran"): "tests/cli/test_entry.py::"
     "test_an_interrupt_python_dropped_while_validate_reads_a_file_ends_it_at_the_next",
     ("docs/evaluation.md", "roomba-bt eval: 3 episode(s) hung"): "tests/evaluate/"

@@ -1271,6 +1271,14 @@ def replay_command(args: argparse.Namespace) -> int:
     if args.display == "tree":
         print(_render_tree(recorded.mission, status=True, as_ticked=as_ticked))
     print(summary)
+    if summary.outcome is Outcome.INTERRUPTED:  # a signal's (the record's own stops are its
+        # end: INPUT_ENDED): the operator's stop, exit 130, not a verdict on bytes it cut
+        # short (its stop's drive 0 was "the first difference", exit 1, or 0 where it matched)
+        print(
+            f"replay: interrupted at mission time {summary.mission_time_s:.3f} s of "
+            f"{record.last_t:.3f} s: no verdict on the tree's bytes"
+        )
+        return ExitCode.INTERRUPTED
     code = _replay_verdict(summary, transport, recorded, lost)
     ending = record.ending  # its end note, said last (a record made before has none)
     if ending is not None and lost is None:  # a lost link's: the summary's outcome said it
