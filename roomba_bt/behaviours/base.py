@@ -30,7 +30,7 @@ from roomba_bt.behaviours.driving import (
     needs_mode_message,
 )
 from roomba_bt.behaviours.lean import DirectLeaf, InvalidStatus, behaviour_tick, checked_status
-from roomba_bt.oi.encode import Command, halt, motors_off, turns_wheels
+from roomba_bt.oi.encode import COMMAND_WANTED, Command, halt, motors_off, turns_wheels
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, Effect
 from roomba_bt.robot.hazards import sets_going
@@ -191,8 +191,7 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             raise RuntimeError(f"behaviour {self.name!r} has no robot: call setup(robot=...)")
         if type(command) is not Command:  # raw bytes would pass no mode guard nor range check
             raise TypeError(
-                f"send() takes a Command from roomba_bt.oi.commands (such as "
-                f"commands.drive(200, 32767)), not {type(command).__name__} {command!r:.60}"
+                f"send() takes {COMMAND_WANTED}, not {type(command).__name__} {command!r:.60}"
             )
         spec = command.spec
         declaration = self.declaration

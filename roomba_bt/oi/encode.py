@@ -43,6 +43,7 @@ from roomba_bt.oi.opcodes import (
 #: ``struct``, ``cast``... came with the star, and a type checker refused them)
 __all__ = [
     "BAUD_CODES",
+    "COMMAND_WANTED",
     "BAUD_RATES",
     "NAMED_NOTES",
     "NOTE_NAMES",
@@ -110,6 +111,14 @@ class Radius(IntEnum):
 #: 0x7FFF. They lie outside -2000..2000 and are sent unchanged.
 STRAIGHT_RADII = frozenset({0x8000, 0x7FFF, -0x8000})
 _RADIUS_ALLOWED = "in -2000..2000 mm, or 32768/32767 (straight) or -1/1 (spin in place)"
+
+
+#: what ``send()`` takes, as its refusal of raw bytes or an opcode says it (a connection's
+#: and a behaviour's): the import a program writes, not the module path that warns
+COMMAND_WANTED = (
+    "a Command from roomba_bt.commands (from roomba_bt import commands: "
+    "commands.drive(200, 32767), commands.safe())"
+)
 
 
 @dataclass(frozen=True, slots=True)

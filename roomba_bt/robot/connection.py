@@ -31,7 +31,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.encode import BAUD_CODES, Command, turns_wheels
+from roomba_bt.oi.encode import BAUD_CODES, COMMAND_WANTED, Command, turns_wheels
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, profile_given
@@ -773,9 +773,8 @@ def _refusal(connection: Connection, command: object) -> Exception:
     if connection.ending.closed:
         return ConnectionClosed(connection.name)
     return TypeError(
-        f"send() takes a Command from roomba_bt.oi.commands (e.g. oi.drive(200, 32767), "
-        f"oi.safe()), not {type(command).__name__} {command!r:.40}: the mode guard reads the "
-        "command, and raw bytes would pass it by"
+        f"send() takes {COMMAND_WANTED}, not {type(command).__name__} {command!r:.40}: the "
+        "mode guard reads the command, and raw bytes would pass it by"
     )
 
 

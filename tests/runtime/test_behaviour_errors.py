@@ -236,7 +236,8 @@ class Says(Condition):
         ("says", _says("Status.FAILURE"),  # SUCCESS
          "raised InvalidCheck: Says.check() returned", "at {plugin}:12"),
         ("raw_bytes", RAW,
-         "raised TypeError: send() takes a Command from roomba_bt.oi.commands", "at {plugin}:12"),
+         "raised TypeError: send() takes a Command from roomba_bt.commands (from roomba_bt "
+         "import commands: commands.drive(200, 32767), commands.safe())", "at {plugin}:12"),
         ("sneaky", UNDECLARED,
          "raised UndeclaredCommand: sneaky sent drive (137), which its declaration does not "
          "list: add 137 to @declare(sends=...) (it lists leds (139))", "at {plugin}:13"),
