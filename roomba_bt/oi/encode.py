@@ -43,7 +43,6 @@ from roomba_bt.oi.opcodes import (
 #: ``struct``, ``cast``... came with the star, and a type checker refused them)
 __all__ = [
     "BAUD_CODES",
-    "COMMAND_WANTED",
     "BAUD_RATES",
     "NAMED_NOTES",
     "NOTE_NAMES",
