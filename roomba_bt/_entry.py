@@ -160,16 +160,16 @@ def _callback_named(callback: object) -> str:
 
 def dropped_interrupt() -> KeyboardInterrupt | None:
     """The signal's interrupt Python dropped in a callback (:func:`note_dropped`) that
-    nothing raised again, taken (the kept one too, if it is that one): a command that went
-    on past it ends on it (exit 130). None: none was dropped. Unlike
-    :func:`swallowed_interrupt`, never one a command caught on purpose (the monitor's
-    Ctrl-C, its way to end, exit 0)."""
+    nothing raised again and no later signal's took the place of, taken: a command that
+    went on past it ends on it (exit 130). None: none was dropped, or a signal came after
+    it, whose interrupt ended the command or was caught on purpose (the monitor's Ctrl-C,
+    its way to end, exit 0), or a run's own handler dropped it (the run raises it again
+    itself). Unlike :func:`swallowed_interrupt`, never one a command caught on purpose."""
     dropped = _DROPPED[:1]
     _DROPPED.clear()
-    if not dropped:
+    if not dropped or not _RAISED or _RAISED[0] is not dropped[0][0]:
         return None
-    if _RAISED and _RAISED[0] is dropped[0][0]:
-        _RAISED.clear()
+    _RAISED.clear()
     return dropped[0][0]
 
 

@@ -305,3 +305,25 @@ def test_an_interrupt_python_dropped_after_the_last_check_still_ends_the_command
     assert done.returncode == ExitCode.INTERRUPTED, (done.stdout, done.stderr)
     assert done.stderr.splitlines()[-1] == "roomba-bt: interrupted", done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_a_dropped_interrupt_is_superseded_by_a_later_signal_s() -> None:
+    """A Ctrl-C Python dropped, then a second one that the command caught on purpose (the
+    monitor's way to end, exit 0): the command ends as the second said, not 130 for the
+    first. One dropped and not superseded is the command's to end on."""
+    import types
+
+    from roomba_bt import _entry
+
+    def dropped(signum: int) -> KeyboardInterrupt:
+        interrupt = _entry.kept(_entry.delivered(KeyboardInterrupt(), signum))
+        hook = types.SimpleNamespace(exc_value=interrupt, object=None)
+        _entry.note_dropped(hook)  # type: ignore[arg-type]
+        return interrupt
+
+    first = dropped(signal.SIGINT)
+    assert _entry.dropped_interrupt() is first
+    dropped(signal.SIGINT)
+    _entry.kept(_entry.delivered(KeyboardInterrupt(), signal.SIGINT))  # the second, caught
+    assert _entry.dropped_interrupt() is None
+    assert _entry.swallowed_interrupt() is not None  # (the kept one, taken: as it was)
