@@ -21,12 +21,13 @@ import math
 import os
 import select
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from types import FrameType
 from typing import Any, ClassVar
 
-from roomba_bt._entry import DELIVERED_BY, EARLY_SIGNALS, kept
+from roomba_bt._entry import DELIVERED_BY, EARLY_SIGNALS, kept, note_dropped
 from roomba_bt._entry import Terminated as Terminated  # its home before the entry point took it
 from roomba_bt._entry import delivered as delivered
 
@@ -620,6 +621,8 @@ class InterruptGuard:
         self.closing = False
         self._said = False  # the message for what is under way now
         self._previous: dict[int, object] = {}
+        #: the hook put in for what Python drops (:func:`~roomba_bt._entry.note_dropped`)
+        self._hooked: Callable[[sys.UnraisableHookArgs], None] | None = None
         #: the interrupt a handler raised, until the run takes it (:meth:`take`): Python
         #: drops one raised while a finalizer or a weakref callback runs ("Exception ignored
         #: in ..."), and a plugin's ``except BaseException`` swallows one raised in its code;
@@ -674,6 +677,9 @@ class InterruptGuard:
                 self._previous[signum] = signal.signal(signum, self._handle)
             for signum in self.ignoring:
                 self._previous[signum] = signal.signal(signum, signal.SIG_IGN)
+            if sys.unraisablehook is sys.__unraisablehook__:  # a program's own hook stays
+                # a program's run says where Python dropped its interrupt, as the CLI does
+                sys.unraisablehook = self._hooked = note_dropped
         return self
 
     def __exit__(self, *exc_info: object) -> None:
@@ -689,3 +695,6 @@ class InterruptGuard:
         for signum, previous in self._previous.items():
             signal.signal(signum, previous)  # type: ignore[arg-type]
         self._previous.clear()
+        if self._hooked is not None and sys.unraisablehook is self._hooked:
+            sys.unraisablehook = sys.__unraisablehook__
+        self._hooked = None

@@ -10,6 +10,7 @@ again at its next frame (``docs/runtime.md``)."""
 from __future__ import annotations
 
 import signal
+import subprocess
 import sys
 import threading
 import weakref
@@ -18,6 +19,7 @@ from typing import Any
 import py_trees
 import pytest
 from quoted import ROOT  # tests/quoted.py: the repository's root
+from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.oi.modes import OIMode
@@ -199,3 +201,58 @@ def test_a_sigterm_lost_in_a_program_s_loop_over_ticks_ends_the_run_at_its_next_
     summary = stack.summary
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
     assert link.simulator.mode is OIMode.PASSIVE
+
+
+#: a program's run (``stack.run()``) whose tree's leaf sends SIGINT from inside a weakref
+#: callback, as :func:`_signal_in_a_callback` does: Python drops the run's interrupt there
+_PROGRAM_S_DROPPED_RUN = """
+import os, signal, sys, weakref
+import py_trees
+import roomba_bt
+from roomba_bt.behaviours.actions import Mode
+
+class Once(py_trees.behaviour.Behaviour):
+    def __init__(self):
+        super().__init__("once")
+        self.ticks = 0
+    def update(self):
+        self.ticks += 1
+        if self.ticks == 5:
+            class Held: pass
+            held = Held()
+            def lost_here(_):
+                os.kill(os.getpid(), signal.SIGINT)
+                sum(range(1000))
+            keep = weakref.ref(held, lost_here)
+            del held
+        return py_trees.common.Status.RUNNING
+
+children = [Mode("safe", {"to": "safe"}), Once()]
+root = py_trees.composites.Sequence("root", memory=True, children=children)
+world = roomba_bt.load_world("empty-room")
+sim = roomba_bt.Simulator(world, roomba_bt.CREATE2, seed=0, trace=False)
+stack = roomba_bt.RunStack(roomba_bt.TreeMission(root, "lost"), roomba_bt.SimLink(sim),
+                           profile=roomba_bt.CREATE2, timeout_s=5.0)
+try:
+    stack.run()
+except roomba_bt.Interrupted as interrupt:
+    print(interrupt.summary.outcome.value, sys.unraisablehook is sys.__unraisablehook__)
+"""
+
+
+def test_a_program_s_run_says_in_one_line_where_python_dropped_its_interrupt() -> None:
+    """Python's ``Exception ignored in: <function ...lost_here at 0x...>`` and a traceback
+    ending in the run's own handler were what a program's stderr said of it; the interrupt
+    is raised again all the same, and where it was lost is one line naming the callback by
+    its name, file and line. The hook is Python's own again once the run has ended."""
+    done = subprocess.run(
+        [sys.executable, "-c", _PROGRAM_S_DROPPED_RUN],
+        capture_output=True, text=True, timeout=HANG_S,
+    )  # fmt: skip
+    assert done.stdout.split() == ["interrupted", "True"], (done.stdout, done.stderr)
+    assert "Traceback" not in done.stderr and "Exception ignored" not in done.stderr
+    assert (
+        "roomba-bt: SIGINT came while Python ran Once.update.<locals>.lost_here (<string>:16), "
+        "a finalizer or weakref callback, which drops what it raises: it is raised again at "
+        "the next check"
+    ) in done.stderr, done.stderr
