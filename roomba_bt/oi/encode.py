@@ -559,10 +559,21 @@ def song(song_number: int, notes: Sequence[Note | tuple[int, int]]) -> Command:
         if isinstance(note, Note):
             tail += (note.number, note.duration)
         elif isinstance(note, tuple) and len(note) == 2:
+            if isinstance(note[0], str):  # a name, as a mission writes it: said how to give it
+                raise EncodeError("song", "note_number", _named_note_said(note[0]), note[0])
             tail += note
         else:
             raise EncodeError("song", "note", "a Note or a (number, duration) pair", note)
     return encode(140, song_number, len(notes), tail=tail)
+
+
+def _named_note_said(name: str) -> str:
+    """What :func:`song` says of a note given by name (``("C4", 16)``): a MIDI number, and
+    the call that gives the name's (``note_number('C4')``, 60)."""
+    try:
+        return f"a MIDI number 0-255 (note_number({name!r}) gives {note_number(name)})"
+    except EncodeError:
+        return "a MIDI number 0-255 (note_number('C4') gives one for a name like C4, C#5 or rest)"
 
 
 def song_seconds(command: Command) -> float:

@@ -230,3 +230,21 @@ def test_anything_with_index_is_an_integer_argument() -> None:
 def test_what_is_no_integer_is_refused_saying_what_is_allowed(value: object) -> None:
     with pytest.raises(EncodeError, match=r"an integer \(int, or a type with __index__"):
         c.drive(value, 100)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("name", "said"),
+    [("C4", "song: note_number must be a MIDI number 0-255 (note_number('C4') gives 60), got 'C4'"),
+     ("H4", "song: note_number must be a MIDI number 0-255 (note_number('C4') gives one for a "
+            "name like C4, C#5 or rest), got 'H4'")],
+)  # fmt: skip
+def test_a_song_note_given_by_name_says_the_call_that_gives_its_number(
+    name: str, said: str
+) -> None:
+    """A mission writes ``"C4 250ms"``; a program that wrote ``song(0, [("C4", 16)])`` was
+    told "note_number must be an integer (int, or a type with __index__ such as numpy's; not a
+    bool) in 0..255 MIDI", with nothing of :func:`note_number`, which turns the name into
+    one."""
+    with pytest.raises(EncodeError) as caught:
+        c.song(0, [(name, 16)])  # type: ignore[list-item]
+    assert str(caught.value) == said
