@@ -212,44 +212,44 @@ class Dropper(Condition):
 )
 
 
+def _dropped_as_the_plugin_imports(
+    tmp_path: Path, *command: str
+) -> subprocess.CompletedProcess[str]:
+    """``roomba-bt COMMAND... m.yaml [other.yaml] --allow-plugin-files`` as the process, where
+    ``m.yaml``'s plugin's import runs a weakref callback in which SIGINT's handler runs
+    (:data:`_DROPPING_PLUGIN`): Python drops the interrupt. ``other.yaml``, the same mission
+    without the plugin, is there for a command that names it (``{other}``)."""
+    (tmp_path / "drop.py").write_text(_DROPPING_PLUGIN)
+    tree = "tree:\n  sequence:\n    - mode: safe\n    - wait: 0.1s\n    - mode: passive\n"
+    (tmp_path / "m.yaml").write_text(f"mission: m\nplugins: [./drop.py]\n{tree}")
+    (tmp_path / "other.yaml").write_text(f"mission: other\n{tree}")
+    argv = [
+        "roomba-bt",
+        *(word.format(m=tmp_path / "m.yaml", other=tmp_path / "other.yaml") for word in command),
+        "--allow-plugin-files",
+    ]
+    script = (
+        f"import sys\nfrom roomba_bt._entry import main\nsys.argv = {argv!r}\nsys.exit(main())\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=HANG_S
+    )
+    assert "the import went on" in done.stdout  # the interrupt was dropped, as in the field
+    assert done.returncode == ExitCode.INTERRUPTED, (done.stdout, done.stderr)
+    assert "Traceback" not in done.stderr and "Exception ignored" not in done.stderr
+    assert done.stderr.splitlines()[-1] == "roomba-bt: interrupted", done.stderr
+    return done
+
+
 def test_an_interrupt_python_dropped_as_a_plugin_imports_ends_the_command_before_the_run(
     tmp_path: Path,
 ) -> None:
     """A Ctrl-C whose handler (the CLI's, in after the start-up) ran in a weakref callback
     as a mission's plugin imported was dropped: the whole mission ran, exit 0. It is raised
     as the run begins: exit 130, nothing of the mission run."""
-    (tmp_path / "drop.py").write_text(_DROPPING_PLUGIN)
-    mission = tmp_path / "m.yaml"
-    mission.write_text(
-        "mission: m\nplugins: [./drop.py]\n"
-        "tree:\n  sequence:\n    - mode: safe\n    - wait: 0.1s\n    - mode: passive\n"
-    )
-    script = (
-        "import sys\nfrom roomba_bt._entry import main\n"
-        f"sys.argv = ['roomba-bt', 'run', {str(mission)!r}, '--fast', '--display', 'none',"
-        " '--allow-plugin-files']\nsys.exit(main())\n"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, timeout=HANG_S
-    )
-    assert "the import went on" in done.stdout  # the interrupt was dropped, as in the field
+    done = _dropped_as_the_plugin_imports(tmp_path, "run", "{m}", "--fast", "--display", "none")
     assert "SIGINT came while Python ran callback (" in done.stderr  # where it was lost
-    assert "Traceback" not in done.stderr
-    assert done.returncode == ExitCode.INTERRUPTED, (done.stdout, done.stderr)
-    assert "roomba-bt: interrupted" in done.stderr
     assert "outcome" not in done.stdout  # no run, so no summary
-
-
-def _dropping_mission(tmp_path: Path) -> Path:
-    """A mission whose plugin's import runs a weakref callback in which SIGINT's handler
-    runs (:data:`_DROPPING_PLUGIN`): Python drops the interrupt."""
-    (tmp_path / "drop.py").write_text(_DROPPING_PLUGIN)
-    mission = tmp_path / "m.yaml"
-    mission.write_text(
-        "mission: m\nplugins: [./drop.py]\n"
-        "tree:\n  sequence:\n    - mode: safe\n    - wait: 0.1s\n    - mode: passive\n"
-    )
-    return mission
 
 
 def test_an_interrupt_python_dropped_while_validate_reads_a_file_ends_it_at_the_next(
@@ -260,19 +260,7 @@ def test_an_interrupt_python_dropped_while_validate_reads_a_file_ends_it_at_the_
     times in 30, ``Exception ignored in: <function WeakKeyDictionary...remove>`` and its
     traceback on stderr): it went on to check and say every file, exit 0. Now it ends before
     the next file, exit 130, none said, and stderr names the callback in one line."""
-    mission = _dropping_mission(tmp_path)
-    other = tmp_path / "other.yaml"
-    other.write_text(mission.read_text().replace("plugins: [./drop.py]\n", ""))
-    script = (
-        "import sys\nfrom roomba_bt._entry import main\n"
-        f"sys.argv = ['roomba-bt', 'validate', {str(mission)!r}, {str(other)!r},"
-        " '--allow-plugin-files']\nsys.exit(main())\n"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, timeout=HANG_S
-    )
-    assert "the import went on" in done.stdout  # the interrupt was dropped, as in the field
-    assert done.returncode == ExitCode.INTERRUPTED, (done.stdout, done.stderr)
+    done = _dropped_as_the_plugin_imports(tmp_path, "validate", "{m}", "{other}")
     assert "ok" not in done.stdout.replace("the import went on", "")  # no file said
     assert done.stderr.splitlines() == [
         f"roomba-bt: SIGINT came while Python ran callback ({tmp_path / 'drop.py'}:4), a "
@@ -292,19 +280,7 @@ def test_an_interrupt_python_dropped_after_the_last_check_still_ends_the_command
     """A command with no check left (here ``show``, whose plugin drops the interrupt) went
     on to its end and exited 0: the operator's Ctrl-C lost. It still does its work, whole
     (nothing half-written), and exits 130 saying so."""
-    mission = _dropping_mission(tmp_path)
-    script = (
-        "import sys\nfrom roomba_bt._entry import main\n"
-        f"sys.argv = ['roomba-bt', 'show', {str(mission)!r}, '--allow-plugin-files']\n"
-        "sys.exit(main())\n"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, timeout=HANG_S
-    )
-    assert "the import went on" in done.stdout
-    assert done.returncode == ExitCode.INTERRUPTED, (done.stdout, done.stderr)
-    assert done.stderr.splitlines()[-1] == "roomba-bt: interrupted", done.stderr
-    assert "Traceback" not in done.stderr
+    _dropped_as_the_plugin_imports(tmp_path, "show", "{m}")
 
 
 def test_a_dropped_interrupt_is_superseded_by_a_later_signal_s() -> None:
