@@ -107,14 +107,14 @@ def swallowed_interrupt() -> KeyboardInterrupt | None:
     or the one raised was handled (:func:`main`)."""
     kept = _RAISED[:1]
     _RAISED.clear()
-    if kept and _DROPPED and _DROPPED[0][0] is kept[0]:
+    if kept and _DROPPED and _DROPPED[0] is kept[0]:
         _DROPPED.clear()  # raised again by whoever took it: no longer dropped
     return kept[0] if kept else None
 
 
-#: the signal's interrupt (ours: :data:`DELIVERED_BY`) that Python dropped, and the callback
-#: it dropped it in (:func:`note_dropped`), until it is taken (:func:`dropped_interrupt`)
-_DROPPED: list[tuple[KeyboardInterrupt, str]] = []
+#: the signal's interrupt (ours: :data:`DELIVERED_BY`) that Python dropped in a callback
+#: (:func:`note_dropped`), until it is taken (:func:`dropped_interrupt`)
+_DROPPED: list[KeyboardInterrupt] = []
 
 
 def note_dropped(unraisable: sys.UnraisableHookArgs) -> None:
@@ -129,8 +129,8 @@ def note_dropped(unraisable: sys.UnraisableHookArgs) -> None:
     if not isinstance(interrupt, KeyboardInterrupt) or signum is None:
         sys.__unraisablehook__(unraisable)
         return
+    _DROPPED[:] = [interrupt]
     where = _callback_named(unraisable.object)
-    _DROPPED[:] = [(interrupt, where)]
     try:  # noqa: SIM105  (contextlib is not imported here: see above)
         print(
             f"roomba-bt: {_name(signum)} came while Python ran {where}, a finalizer or weakref "
@@ -167,10 +167,10 @@ def dropped_interrupt() -> KeyboardInterrupt | None:
     itself). Unlike :func:`swallowed_interrupt`, never one a command caught on purpose."""
     dropped = _DROPPED[:1]
     _DROPPED.clear()
-    if not dropped or not _RAISED or _RAISED[0] is not dropped[0][0]:
+    if not dropped or not _RAISED or _RAISED[0] is not dropped[0]:
         return None
     _RAISED.clear()
-    return dropped[0][0]
+    return dropped[0]
 
 
 def take_signals_early() -> None:
