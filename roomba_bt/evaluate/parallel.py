@@ -28,6 +28,8 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
+from multiprocessing.context import BaseContext
+from multiprocessing.process import BaseProcess
 from pathlib import PurePath
 from types import FrameType
 from typing import Any, TextIO, cast
@@ -245,7 +247,7 @@ class _Round:
     """How a pool round ended. When a worker died: the episodes the pool had taken and lost
     (running or queued in it: a broken pool ends every worker), those of them that had
     started (``running``: one of these may have killed it) and how it died (its exit status,
-    :func:`_how_it_died`; "" when unknown); the episodes never handed to the pool or
+    :meth:`_WorkersKept.how_one_died`; "" when unknown); the episodes never handed to the pool or
     refused by a retired worker (``unstarted``: :class:`WorkerRetired`), and those ended at
     the wall-clock limit (``hung``: their HUNG results
     are in)."""
@@ -270,13 +272,13 @@ def _pool_round(
     forks = "fork" in multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("fork" if forks else "spawn")
     watch = _Watch(context, wall_limit_s)
+    workers = _WorkersKept(context)  # their exit codes say how one died
     executor = ProcessPoolExecutor(
         max_workers=min(jobs, len(todo)),
-        mp_context=context,
+        mp_context=cast(BaseContext, workers),
         initializer=_worker_started,
         initargs=(watch.reports, wall_limit_s or 0.0),
     )
-    workers = getattr(executor, "_processes", None)  # their exit codes say how one died
     queue = iter(todo)
     running: dict[Future[EpisodeResult], int] = {}
     lost: list[int] = []
@@ -310,25 +312,52 @@ def _pool_round(
             for index, result in watch.overdue(specs, running):
                 finished(index, result)
     except BaseException:  # Ctrl-C (or an episode's bug): no worker left running
-        _terminate(executor)
+        workers.terminate()
         raise
     finally:
         executor.shutdown(wait=True, cancel_futures=True)
         began = watch.close(lost)
-    died = _how_it_died(workers) if lost and not watch.hung else ""
+    died = workers.how_one_died() if lost and not watch.hung else ""
     return _Round(sorted(lost), began, sorted([*retired, *queue]), sorted(watch.hung), died)
 
 
-def _how_it_died(workers: dict[int, Any] | None) -> str:
-    """How the worker that broke a pool ended, read from the pool's processes once it is
-    shut down (the others were ended with SIGTERM): ``exit status 1``, ``killed by SIGSEGV
-    (a crash in C code)``; "" when it cannot be told (Python's pool keeps them privately)."""
-    codes = [
-        p.exitcode
-        for p in (workers or {}).values()
-        if p.exitcode is not None and p.exitcode not in (0, -ENDS_A_WORKER)
-    ]
-    return "; ".join(exit_status(code) for code in dict.fromkeys(codes))
+class _WorkersKept:
+    """The multiprocessing context a pool starts its workers with (``ProcessPoolExecutor``'s
+    public ``mp_context``: the pool calls its ``Process`` for each worker), which keeps
+    each worker it starts: once the pool is shut down (its workers joined), their exit codes
+    say how the one that broke it ended (:meth:`how_one_died`), and a Ctrl-C ends them
+    (:meth:`terminate`). Both read the pool's private ``_processes`` before, which a
+    Python release may rename or empty at its shutdown; the rest is ``context``'s own."""
+
+    def __init__(self, context: BaseContext) -> None:
+        self._context = context
+        self.processes: list[BaseProcess] = []
+
+    def Process(self, *args: Any, **kwargs: Any) -> BaseProcess:  # the context's own name
+        process = cast(BaseProcess, self._context.Process(*args, **kwargs))  # type: ignore[attr-defined]
+        self.processes.append(process)
+        return process
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._context, name)
+
+    def terminate(self) -> None:
+        """End every worker still running at once (an episode on the simulator drives
+        nothing): SIGTERM, which a started worker takes at once (:func:`_worker_started`)."""
+        for process in self.processes:
+            if process.exitcode is None:
+                process.terminate()
+
+    def how_one_died(self) -> str:
+        """How the worker that broke the pool ended, read once the pool is shut down (the
+        others were ended with SIGTERM): ``exit status 1``, ``killed by SIGSEGV (a crash in
+        C code)``; "" when none ended otherwise."""
+        codes = [
+            p.exitcode
+            for p in self.processes
+            if p.exitcode is not None and p.exitcode not in (0, -ENDS_A_WORKER)
+        ]
+        return "; ".join(exit_status(code) for code in dict.fromkeys(codes))
 
 
 #: What a signal that killed a worker most often means.
@@ -448,18 +477,8 @@ ASK_WHERE: signal.Signals | None = getattr(signal, "SIGUSR1", None)
 END_AT_ONCE: signal.Signals = getattr(signal, "SIGKILL", signal.SIGTERM)
 
 
-def _terminate(executor: ProcessPoolExecutor) -> None:
-    """End the workers at once (an episode on the simulator drives nothing)."""
-    terminate = getattr(executor, "terminate_workers", None)  # Python 3.14
-    if terminate is not None:
-        terminate()
-        return
-    for process in list(getattr(executor, "_processes", {}).values()):
-        process.terminate()
-
-
 #: The signals a pool worker leaves to its parent (a terminal sends Ctrl-C and its hangup to
-#: the whole process group), and the one its parent ends it with (:func:`_terminate`).
+#: the whole process group), and the one its parent ends it with (:meth:`_WorkersKept.terminate`).
 LEFT_TO_THE_PARENT: tuple[signal.Signals, ...] = tuple(
     s for s in (signal.SIGINT, getattr(signal, "SIGHUP", None)) if s is not None
 )

@@ -96,7 +96,7 @@ def test_an_episode_that_kills_its_worker_is_recorded_as_died_and_the_sweep_goes
 
 
 def test_a_local_worker_killed_from_outside_still_runs_its_episodes_again(
-    tmp_path: Path,
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """A death no episode repeats alone (the OOM killer, a kill -9) is no episode's fault: the
     episodes that were running finish alone, with their own results."""
@@ -120,6 +120,34 @@ def test_a_local_worker_killed_from_outside_still_runs_its_episodes_again(
     assert [r.outcome for r in results] == ["success"] * 4
     assert replace(results[2], wall_s=0.0) == replace(run_episode(specs[2]), wall_s=0.0)
     assert run.retried >= 1
+    # how it died, read from the worker processes the pool started (its context kept them)
+    assert "a worker process died: killed by SIGKILL (the OOM killer? a kill -9?)" in (
+        capsys.readouterr().err
+    )
+
+
+def test_the_pool_s_private_attributes_are_not_read() -> None:
+    """How a dead worker ended, and the ending of the workers at a Ctrl-C, are read from the
+    processes the pool's context started (its public ``mp_context``), not from
+    ``ProcessPoolExecutor``'s private ``_processes``, which a Python release may rename or
+    empty at its shutdown."""
+    import ast
+    from concurrent.futures import ProcessPoolExecutor
+
+    import roomba_bt.evaluate
+
+    with ProcessPoolExecutor(max_workers=1) as pool:  # no worker starts before a submit
+        private = {name for name in vars(pool) if name.startswith("_")}
+    read = []
+    for path in sorted(Path(roomba_bt.evaluate.__file__).parent.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            named = node.attr if isinstance(node, ast.Attribute) else None
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                named = node.value  # getattr(pool, "_processes")
+            if named in private:
+                read.append(f"{path.name}:{node.lineno}: {named}")
+    assert "_processes" in private  # what the test looks for is there to be read
+    assert read == []
 
 
 def test_the_seeds_said_of_a_dead_worker_in_an_a_b_name_their_variants(
