@@ -535,3 +535,39 @@ def test_the_dock_missions_timeout_names_its_stage_not_its_time_limit() -> None:
     result = run_episode(spec)
     assert (result.outcome, result.stage) == ("timeout", "dock_search"), result.reason
     assert result.reason.endswith("ran out in dock_search")
+
+
+def test_a_sweep_s_results_are_kept_small_in_the_process_that_gathers_them() -> None:
+    """The parent of a sweep keeps every result until its report: it held about 3 KB an
+    episode (300 MB at 100 000 episodes), mostly each result's ``__dict__`` and its own copy
+    of the same words (mission, world, outcome, reason, worker...) unpickled from its worker.
+    Results arrive from the pool as pickles; 2 000 of them, as the pool hands them over, are
+    now kept in about 0.96 KB each (2.66 KB before, on CPython 3.11), their words shared."""
+    import pickle
+    import tracemalloc
+
+    spec = episode_specs(BUMP, runs=1, params=(("duration", "1s"),), trace_every=0)[0]
+    result = run_episode(spec)  # as eval runs one without --plot: no trajectory
+    arriving = [
+        pickle.dumps(dataclasses.replace(result, seed=s, time_s=s / 7)) for s in range(2000)
+    ]
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        kept = [pickle.loads(one) for one in arriving]
+        per_result = (tracemalloc.get_traced_memory()[0] - before) / len(kept)
+    finally:
+        tracemalloc.stop()
+    assert per_result < 1300, per_result  # 2 660 B before
+    assert not hasattr(kept[0], "__dict__")
+    assert kept[0].reason is kept[1].reason and kept[0].mission is kept[1].mission
+    assert kept[0] == dataclasses.replace(result, seed=0, time_s=0.0)
+
+
+def test_results_from_worker_processes_share_their_words() -> None:
+    """The pool's results are unpickled as they arrive, each text shared with the results
+    before it: a word held once, not once an episode."""
+    results = run_episodes(_short_specs(4), jobs=2)
+    assert len({id(r.mission) for r in results}) == 1
+    assert len({id(r.world) for r in results}) == 1
+    assert len({id(r.outcome) for r in results}) == 1
