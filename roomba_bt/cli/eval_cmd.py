@@ -91,6 +91,8 @@ from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
+    from collections.abc import Sequence
+
     from roomba_bt.cli.eval_resume import Resumed
     from roomba_bt.cli.validate_report import Checked
     from roomba_bt.evaluate import EvaluationError
@@ -376,7 +378,7 @@ def eval_command(args: argparse.Namespace) -> int:
         return partial
     if partial is not None:
         resumed.record_into(partial)
-    done = _run(args, chosen, batches, engine, partial)
+    done = _run(args, chosen, batches, engine, partial, resumed.earlier)
     if isinstance(done, int):
         if partial is not None:
             partial.done(keep=resumed.reused > 0)  # the episodes read back are kept there
@@ -933,23 +935,33 @@ def _run(
     batches: list[list[EpisodeSpec]],
     engine: Engine,
     partial: PartialResults | None = None,
+    earlier: Sequence[Sequence[EpisodeResult]] = (),
 ) -> list[Evaluation] | int:
-    """Every variant's episodes on the engine, a progress bar each, each record into
+    """Every variant's episodes on the engine, their progress bars drawn together (counting
+    in the episodes ``earlier``, per variant, that ``--resume`` read back), each record into
     ``partial`` as it finishes; an exit code when the cluster is not there."""
     from roomba_bt.evaluate.cluster import ClusterUnavailableError, SchedulerUnreachableError
     from roomba_bt.evaluate.episode import MissionNotCompiled
-    from roomba_bt.evaluate.parallel import ProgressBar, end_bars, evaluate, variant_said
+    from roomba_bt.evaluate.parallel import evaluate, variant_said
+    from roomba_bt.evaluate.progress import ProgressBars
 
-    bars = [
-        None if args.no_progress else ProgressBar(label=f"{variant_said(str(v.path), v.params)} ")
-        for v in chosen
-    ]
-    progress = bars if partial is None else [_recorded(partial, bar) for bar in bars]
+    bars = None
+    if not args.no_progress:
+        already = [(len(e), sum(r.succeeded for r in e)) for e in earlier]
+        already = already or [(0, 0)] * len(chosen)
+        bars = ProgressBars(
+            [variant_said(str(v.path), v.params) for v in chosen],
+            [done + len(batch) for (done, _), batch in zip(already, batches, strict=True)],
+            already=already,
+        )
+    shown = [bars.bar(b) if bars is not None else None for b in range(len(chosen))]
+    progress = shown if partial is None else [_recorded(partial, bar) for bar in shown]
     try:
         try:
             return evaluate(batches, engine, progress)
         finally:
-            end_bars(bars)  # before what is said next, an error's words too
+            if bars is not None:
+                bars.end()  # before what is said next, an error's words too
     except SchedulerUnreachableError as exc:
         print(f"roomba-bt eval: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION

@@ -24,7 +24,6 @@ from __future__ import annotations
 import contextlib
 import logging
 import signal
-import sys
 import threading
 import time
 import traceback
@@ -43,6 +42,7 @@ from roomba_bt.evaluate.episode import (
     run_episode,
 )
 from roomba_bt.evaluate.parallel import NO_WORKERS, SCHEDULER_LOST, seeds_said
+from roomba_bt.evaluate.progress import say
 from roomba_bt.evaluate.sources import remove_copies
 from roomba_bt.installation import optional_import_failure
 from roomba_bt.runtime.wall_limit import WallLimit, WallLimitReached
@@ -386,10 +386,9 @@ def say_when_no_worker(
         if workers:  # one joined as the wait ended
             return
     up_to = "" if worker_wait_s is None else f" up to {worker_wait_s:g} s (--worker-wait)"
-    print(
+    say(
         f"roomba-bt eval: the cluster at {scheduler} has 0 workers; waiting{up_to} for one "
-        f"(start `dask worker {scheduler} --nthreads 1` on a machine; Ctrl-C to stop)...",
-        file=sys.stderr,
+        f"(start `dask worker {scheduler} --nthreads 1` on a machine; Ctrl-C to stop)..."
     )
 
 
@@ -730,10 +729,9 @@ def _killed_worker(spec: EpisodeSpec, error: BaseException, said: str = "") -> B
 
     if not isinstance(error, KilledWorker):
         raise error
-    print(f"roomba-bt eval: seed {said or spec.seed}: {error.allowed_failures + 1} Dask "
-          "worker(s) died running it or with it queued: it runs again alone once the others "
-          "are done",
-          file=sys.stderr)  # fmt: skip
+    say(f"roomba-bt eval: seed {said or spec.seed}: {error.allowed_failures + 1} Dask "
+        "worker(s) died running it or with it queued: it runs again alone once the others "
+        "are done")  # fmt: skip
     return error
 
 
@@ -763,9 +761,9 @@ def _alone(
         if not future.done():  # Ctrl-C
             client.cancel([future])
         future.release()
-    print(f"roomba-bt eval: seed {said or spec.seed} ran alone without a death (it was "
-          "queued on a "
-          "dying worker)", file=sys.stderr)  # fmt: skip
+    say(f"roomba-bt eval: seed {said or spec.seed} ran alone without a death (it was "
+        "queued on a "
+        "dying worker)")  # fmt: skip
     return result
 
 
@@ -780,9 +778,8 @@ def died_on_workers(
     how = (f"{int(getattr(first, 'allowed_failures', 0)) + 1} Dask worker(s) died running it, "
            f"{allowed + 1} more when it ran alone, the last {last} (the scheduler's "
            f"distributed.scheduler.allowed-failures is {allowed})")  # fmt: skip
-    print(f"roomba-bt eval: seed {said or spec.seed} killed its workers again, alone: recorded "
-          "as DIED",
-          file=sys.stderr)  # fmt: skip
+    say(f"roomba-bt eval: seed {said or spec.seed} killed its workers again, alone: recorded "
+        "as DIED")  # fmt: skip
     return died_result(spec, how, worker=last)
 
 
@@ -805,8 +802,8 @@ def _say_reruns(specs: Sequence[EpisodeSpec], keys: list[str]) -> int:
     their seeds said on stderr, as the local pool says its own: whatever ``--reproducible``
     leaves out of stdout, a lost worker leaves this trace."""
     if keys:
-        print(f"roomba-bt eval: {len(keys)} episode(s) ran again after a Dask worker holding "
-              f"them was lost: seeds {_seeds_of(specs, keys)}", file=sys.stderr)  # fmt: skip
+        say(f"roomba-bt eval: {len(keys)} episode(s) ran again after a Dask worker holding "
+            f"them was lost: seeds {_seeds_of(specs, keys)}")  # fmt: skip
     return len(keys)
 
 

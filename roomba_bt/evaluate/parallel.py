@@ -20,7 +20,6 @@ import itertools
 import multiprocessing
 import os
 import signal
-import sys
 import threading
 import time
 import traceback
@@ -32,7 +31,7 @@ from multiprocessing.context import BaseContext
 from multiprocessing.process import BaseProcess
 from pathlib import PurePath
 from types import FrameType
-from typing import Any, TextIO, cast
+from typing import Any, cast
 
 from roomba_bt.evaluate import episode
 from roomba_bt.evaluate.episode import (
@@ -44,6 +43,9 @@ from roomba_bt.evaluate.episode import (
 )
 from roomba_bt.evaluate.interleave import Interleaved
 from roomba_bt.evaluate.interleave import Progress as Progress  # re-exported: callers name it here
+from roomba_bt.evaluate.progress import ProgressBar as ProgressBar  # re-exported, as Progress
+from roomba_bt.evaluate.progress import end_bars as end_bars
+from roomba_bt.evaluate.progress import say
 from roomba_bt.mission.shipped import SHIPPED_PREFIX
 from roomba_bt.runtime.ending import threads_left
 
@@ -143,10 +145,9 @@ def run_episodes(
         run.retried += len(ended.lost)
         if ended.hung:  # ended here: no death
             why = "; ".join(f"seed {specs[i].seed}: {run.results[i].reason}" for i in ended.hung)
-            print(f"roomba-bt eval: an episode ran past its wall-clock limit, its worker ended "
-                  f"({why}); the {len(ended.lost)} episode(s) its pool had taken run again in "
-                  f"new workers: seeds {seeds_said(specs, ended.lost)}",
-                  file=sys.stderr)  # fmt: skip
+            say(f"roomba-bt eval: an episode ran past its wall-clock limit, its worker ended "
+                f"({why}); the {len(ended.lost)} episode(s) its pool had taken run again in "
+                f"new workers: seeds {seeds_said(specs, ended.lost)}")  # fmt: skip
             continue
         todo = [i for i in todo if i not in ended.running]
         if _blame(specs, ended, finished, wall_limit_s) or not todo:
@@ -195,12 +196,11 @@ def _blame(
     What happens is said on stderr as it happens."""
     running = f"seed(s) {seeds_said(specs, ended.running)}" if ended.running else ""
     queued = [i for i in ended.lost if i not in ended.running]
-    print(f"roomba-bt eval: a worker process died: {ended.died or 'exit status unknown'}; "
-          + (f"{running} were running: each runs again alone" if running else
-             "no episode was running: none to blame")
-          + (f"; the {len(queued)} other episode(s) its pool had taken run again in new "
-             f"workers: seeds {seeds_said(specs, queued)}" if queued else ""),
-          file=sys.stderr)  # fmt: skip
+    say(f"roomba-bt eval: a worker process died: {ended.died or 'exit status unknown'}; "
+        + (f"{running} were running: each runs again alone" if running else
+           "no episode was running: none to blame")
+        + (f"; the {len(queued)} other episode(s) its pool had taken run again in new "
+           f"workers: seeds {seeds_said(specs, queued)}" if queued else ""))  # fmt: skip
     blamed = False
     for index in ended.running:
         alone = _pool_round(specs, [index], 1, finished, wall_limit_s)
@@ -208,12 +208,12 @@ def _blame(
             died = alone.died or "exit status unknown"
             how = f"{died}, twice (the second time running it alone)"
             finished(index, died_result(specs[index], how))
-            print(f"roomba-bt eval: seed {seeds_said(specs, [index])} killed its worker again, "
-                  f"alone ({died}): recorded as DIED", file=sys.stderr)  # fmt: skip
+            say(f"roomba-bt eval: seed {seeds_said(specs, [index])} killed its worker again, "
+                f"alone ({died}): recorded as DIED")  # fmt: skip
             blamed = True
     if ended.running and not blamed:
-        print(f"roomba-bt eval: {running} ran alone without a death: the worker was "
-              "ended from outside (the OOM killer? a kill -9?)", file=sys.stderr)  # fmt: skip
+        say(f"roomba-bt eval: {running} ran alone without a death: the worker was "
+            "ended from outside (the OOM killer? a kill -9?)")  # fmt: skip
     return blamed
 
 
@@ -734,64 +734,3 @@ def _on_dask(specs: list[EpisodeSpec], engine: Engine, bar: Progress | None) -> 
             flat, retried = exc.results, exc.retried
             interruption = Interruption(exc.cause, exc.why)
     return {i: r for i, r in enumerate(flat) if r is not None}, retried, interruption
-
-
-def end_bars(bars: Sequence[object]) -> None:
-    """End the line the last drawn of ``bars`` left open on a terminal (an evaluation that
-    stopped before its last episode: Ctrl-C, a lost cluster), so that what is said next
-    starts a line of its own: it followed the bar, ``ETA 567s^Cresults written to ...``."""
-    drawn = [bar for bar in bars if isinstance(getattr(bar, "drawn", None), tuple)]
-    last: Any = max(drawn, key=lambda bar: getattr(bar, "drawn", (-1,))[0], default=None)
-    if last is not None and last.drawn[1]:  # any progress callable without it draws no bar
-        last.stream.write("\n")
-        last.stream.flush()
-        last.drawn = (last.drawn[0], False)
-
-
-#: The order of the progress bars' draws, across bars: :attr:`ProgressBar.drawn`.
-_DRAWS = itertools.count()
-
-#: The terminal's "erase to the end of the line" (ANSI EL, as ``sensors`` clears its screen
-#: with ANSI codes): a redraw shorter than the text it writes over leaves none of it.
-ERASE_TO_END = "\x1b[K"
-
-
-class ProgressBar:
-    """``[#########.........] 12/50 ok 11 ETA 8s`` on stderr, redrawn in place on a terminal;
-    into a file or a pipe (a CI log), a line of its own after the first episode, each tenth
-    and the last (a redraw per episode filled logs with carriage returns). A redraw erases
-    what is left of the line after it: one shorter than the line before (an ETA from 100 s
-    to 99 s, another variant's bar with a shorter label on the same line) left the last
-    characters of the longer one, ``ETA 99ss``, ``ETA 57s17s``."""
-
-    def __init__(self, stream: TextIO | None = None, width: int = 30, label: str = "") -> None:
-        self.stream = stream if stream is not None else sys.stderr
-        self.width = width
-        self.label = label
-        self.started = time.perf_counter()
-        self.ok = 0
-        isatty = getattr(self.stream, "isatty", None)
-        self.redraw = bool(isatty()) if isatty is not None else False
-        #: when this bar last drew (the order of every bar's draws) and whether that left
-        #: its line open (a terminal's redraw before the last episode): :func:`end_bars`
-        self.drawn = (-1, False)
-
-    def __call__(self, done: int, total: int, result: EpisodeResult) -> None:
-        self.ok += result.succeeded
-        if (
-            not self.redraw
-            and done not in (1, total)
-            and done * 10 // total == (done - 1) * 10 // total
-        ):
-            return
-        filled = round(self.width * done / max(total, 1))
-        elapsed = time.perf_counter() - self.started
-        eta = elapsed / done * (total - done) if done else 0.0
-        bar = "#" * filled + "." * (self.width - filled)
-        start, end = ("\r", "\n" if done == total else "") if self.redraw else ("", "\n")
-        self.drawn = (next(_DRAWS), not end)
-        self.stream.write(
-            f"{start}{self.label}[{bar}] {done}/{total} ok {self.ok} "
-            f"elapsed {elapsed:.0f}s ETA {eta:.0f}s{ERASE_TO_END if self.redraw else ''}{end}"
-        )
-        self.stream.flush()

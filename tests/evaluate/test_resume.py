@@ -388,17 +388,16 @@ def test_an_interrupted_evaluation_says_its_plot_is_not_drawn(
     """A Ctrl-C after the second of 5 episodes: the summary and the records of the two are
     out, exit 130, and ``--plot``'s file was not made without a word; now said, with how to
     draw them all, and how to run the rest (``--resume``, given an ``--out`` to resume)."""
-    import roomba_bt.evaluate.parallel as parallel
+    from roomba_bt.evaluate.progress import ProgressBars
 
-    class CtrlCAtTheSecond:
-        def __init__(self, **_: object) -> None:
-            pass
-
-        def __call__(self, done: int, total: int, result: object) -> None:
+    def ctrl_c_at_the_second(self: ProgressBars, b: int) -> object:
+        def progress(done: int, total: int, result: object) -> None:
             if done == 2:
                 raise KeyboardInterrupt
 
-    monkeypatch.setattr(parallel, "ProgressBar", CtrlCAtTheSecond)
+        return progress
+
+    monkeypatch.setattr(ProgressBars, "bar", ctrl_c_at_the_second)
     plot = tmp_path / "p.png"
     written = ["--out", str(tmp_path / "r.jsonl")] if out else []
     argv = ["eval", BUMP, "-p", "duration=1s", "--runs", "5", "--jobs", "1", "--wall-limit",

@@ -1,0 +1,137 @@
+"""An evaluation's progress bars as a user sees them: on a terminal (what stays on the screen,
+read through a small emulator of the few codes the bars write), in a log, and resumed."""
+
+from __future__ import annotations
+
+import io
+import re
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+BUMP = str(MISSIONS / "bump-and-turn.yaml")
+_AB = ["eval", BUMP, "--sweep", "duration=1s,2s", "--runs", "6", "--jobs", "1",
+       "--wall-limit", "none", "--timeout", "10s"]  # fmt: skip
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def screen(written: str) -> list[str]:
+    """The lines a terminal shows after ``written``: text, ``\\r``, ``\\n``, and the ANSI
+    codes the bars use (EL ``ESC[K``, CPL ``ESC[nF``, ED ``ESC[J``); any other is an error."""
+    lines, row, col = [""], 0, 0
+    for token in re.findall(r"\x1b\[\d*[A-Za-z]|\r|\n|[^\x1b\r\n]+", written):
+        if token == "\r":
+            col = 0
+        elif token == "\n":
+            row, col = row + 1, 0
+            lines += [""] * (row + 1 - len(lines))
+        elif token.startswith("\x1b["):
+            code, count = token[-1], int(token[2:-1] or 1)
+            if code == "K":
+                lines[row] = lines[row][:col]
+            elif code == "F":
+                row, col = max(0, row - count), 0
+            elif code == "J":
+                lines[row] = lines[row][:col]
+                del lines[row + 1 :]
+            else:
+                raise AssertionError(f"unexpected terminal code {token!r}")
+        else:
+            line = lines[row].ljust(col)
+            lines[row] = line[:col] + token + line[col + len(token) :]
+            col += len(token)
+    return lines
+
+
+def _bars(lines: list[str]) -> list[str]:
+    return [line for line in lines if "[" in line and "] " in line and " ok " in line]
+
+
+def test_an_a_b_s_bars_each_keep_a_line_of_their_own_on_a_terminal(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The two variants' bars were redrawn with a carriage return on the one line, taking
+    turns there (a flicker no one could read, and at the end one of them was left). Each now
+    keeps a line, redrawn in place, both there after every episode and at the end."""
+    terminal = _Terminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    monkeypatch.setattr("roomba_bt.evaluate.progress.REDRAW_S", 0.0)  # each episode drawn
+    assert main(_AB) == 0
+    written = terminal.getvalue().split("variant ")[0]  # the bars, before the report
+    shown = _bars(screen(written))
+    assert [line.split()[:2] for line in shown] == [
+        ["bump-and-turn", "duration=1s"],
+        ["bump-and-turn", "duration=2s"],
+    ], shown
+    assert all(" 6/6 ok " in line for line in shown), shown
+    # after each episode, not only at the end: the screen holds both bars, one above the other
+    cut = [m.end() for m in re.finditer(re.escape("\x1b[K"), written)]
+    for end in cut[1::2]:
+        assert len(_bars(screen(written[:end]))) == 2, screen(written[:end])
+
+
+def test_an_a_b_s_progress_in_a_log_is_a_few_lines_without_terminal_codes(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Into a pipe (a CI log), each variant's bar wrote a line at each tenth of its own: 22
+    lines for an A/B, ten times that for a sweep of ten. One line now, at the first episode,
+    each tenth of the whole and the last, every variant's count on it; no control code."""
+    assert main([*_AB[:5], "10", *_AB[6:]]) == 0
+    err = capsys.readouterr().err
+    assert "\r" not in err and "\x1b" not in err
+    lines = [line for line in err.splitlines() if " ok " in line and "] " in line]
+    assert 2 <= len(lines) <= 12, lines
+    assert lines[-1].startswith("[#") and " 20/20 ok " in lines[-1]
+    assert "bump-and-turn duration=1s 10/10 ok" in lines[-1]
+    assert "bump-and-turn duration=2s 10/10 ok" in lines[-1]
+
+
+def test_a_resumed_evaluation_s_bars_count_the_episodes_read_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--resume`` after 3 of 6 seeds a variant: the bars counted only what was left (``1/3``
+    to ``3/3``), as if the sweep had started again; they go on from ``4/6`` to ``6/6``."""
+    out = str(tmp_path / "ab.jsonl")
+    first = [*_AB[:5], "3", *_AB[6:], "--out", out]
+    assert main(first) == 0
+    capsys.readouterr()
+    assert main([*_AB, "--out", out, "--resume"]) == 0
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if " ok " in line and "] " in line]
+    assert " 7/12 ok " in lines[0], lines  # the first episode run now: 6 read back, and it
+    assert " 12/12 ok " in lines[-1], lines
+    assert "duration=1s 6/6 ok" in lines[-1] and "duration=2s 6/6 ok" in lines[-1]
+    assert not any("/3 ok" in line or "/6 ok" in line.split(": ")[0] for line in lines), lines
+
+
+def test_a_message_said_while_the_bars_are_drawn_takes_their_place_on_its_own_line() -> None:
+    """A worker's death said on stderr while the bars were drawn began mid-line, after the
+    last bar, and the next redraw wrote over it. The bars are taken away first, the message
+    takes their place and they are drawn again below it."""
+    from roomba_bt.evaluate import progress
+    from roomba_bt.evaluate.episode import EpisodeResult
+
+    terminal = _Terminal()
+    bars = progress.ProgressBars(["a", "b"], [4, 4], stream=terminal, interval_s=0.0)
+    result = EpisodeResult(seed=1, outcome="success", reason="", time_s=1.0, wall_s=0.1, ticks=1,
+                           start=(0, 0, 0), end=(0, 0, 0), bumps=0, contact_steps=(),
+                           docked=False, charging=False, cliffs=0, fell=False, violations=0,
+                           loops=0.0, longest_stall_s=0.0)  # fmt: skip
+    bars.bar(0)(1, 4, result)
+    bars.bar(1)(1, 4, result)
+    import contextlib
+
+    with contextlib.redirect_stderr(terminal):
+        progress.say("roomba-bt eval: a worker process died: killed by SIGKILL")
+    bars.bar(0)(2, 4, result)
+    shown = screen(terminal.getvalue())
+    assert shown[0] == "roomba-bt eval: a worker process died: killed by SIGKILL", shown
+    assert [line.split()[0] for line in shown[1:]] == ["a", "b"], shown
+    assert " 2/4 ok 2 " in shown[1] and " 1/4 ok 1 " in shown[2]
