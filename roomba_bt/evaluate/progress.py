@@ -50,12 +50,14 @@ REDRAW_S = 0.1
 _DRAWS = itertools.count()
 
 
-def bar_line(label: str, done: int, total: int, ok: int, elapsed: float, eta: float,
+def bar_line(label: str, done: int, total: int, ok: int, elapsed: float, eta: float | None,
              width: int) -> str:  # fmt: skip
-    """One bar: ``dock [#########.........] 12/50 ok 11 elapsed 3s ETA 8s``."""
+    """One bar: ``dock [#########.........] 12/50 ok 11 elapsed 3s ETA 8s`` (``ETA ?``
+    before an episode of it ran: a resumed variant's episodes read back tell no pace)."""
     filled = round(width * done / max(total, 1))
     bar = "#" * filled + "." * (width - filled)
-    return f"{label}[{bar}] {done}/{total} ok {ok} elapsed {elapsed:.0f}s ETA {eta:.0f}s"
+    left = "?" if eta is None else f"{eta:.0f}s"
+    return f"{label}[{bar}] {done}/{total} ok {ok} elapsed {elapsed:.0f}s ETA {left}"
 
 
 def _on_a_terminal(stream: TextIO) -> bool:
@@ -161,8 +163,10 @@ class ProgressBars:
 
         return progress
 
-    def _eta(self, elapsed: float, ran: int, left: int) -> float:
-        return elapsed / ran * left if ran else 0.0
+    def _eta(self, elapsed: float, ran: int, left: int) -> float | None:
+        if not left:
+            return 0.0
+        return elapsed / ran * left if ran else None
 
     def _lines(self, elapsed: float, width: int) -> list[str]:
         return [

@@ -135,3 +135,25 @@ def test_a_message_said_while_the_bars_are_drawn_takes_their_place_on_its_own_li
     assert shown[0] == "roomba-bt eval: a worker process died: killed by SIGKILL", shown
     assert [line.split()[0] for line in shown[1:]] == ["a", "b"], shown
     assert " 2/4 ok 2 " in shown[1] and " 1/4 ok 1 " in shown[2]
+
+
+def test_a_resumed_variant_yet_to_run_an_episode_says_no_eta() -> None:
+    """A variant whose episodes so far were all read back said ``ETA 0s`` beside its
+    ``162/1000``: nothing of it had run to tell its pace. It says ``ETA ?`` until one has;
+    a variant with none left says ``ETA 0s``."""
+    from roomba_bt.evaluate import progress
+    from roomba_bt.evaluate.episode import EpisodeResult
+
+    log = io.StringIO()
+    bars = progress.ProgressBars(["a", "b", "c"], [10, 10, 4], stream=log,
+                                 already=[(4, 4), (4, 4), (4, 3)])  # fmt: skip
+    result = EpisodeResult(seed=5, outcome="failure", reason="", time_s=1.0, wall_s=0.1, ticks=1,
+                           start=(0, 0, 0), end=(0, 0, 0), bumps=0, contact_steps=(),
+                           docked=False, charging=False, cliffs=0, fell=False, violations=0,
+                           loops=0.0, longest_stall_s=0.0)  # fmt: skip
+    bars.bar(0)(1, 6, result)
+    lines = bars._lines(elapsed=3.0, width=10)
+    assert lines[0].startswith("a [") and lines[0].endswith("] 5/10 ok 4 elapsed 3s ETA 15s")
+    assert lines[1].endswith("] 4/10 ok 4 elapsed 3s ETA ?"), lines
+    assert lines[2].endswith("] 4/4 ok 3 elapsed 3s ETA 0s"), lines
+    assert log.getvalue().count("\n") == 1 and "13/24 ok 11" in log.getvalue()
