@@ -11,7 +11,7 @@ order they ran.
 
 from __future__ import annotations
 
-from collections import defaultdict, deque
+from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -53,16 +53,31 @@ class Interleaved:
 
     def progress(self, bars: Sequence[Progress | None]) -> Progress | None:
         """One progress callback for the interleaved run that calls batch ``b``'s bar with
-        that batch's own count and total; None when there is no bar."""
+        that batch's own count and total; None when there is no bar. Each episode's batch is
+        found by its key (a result carries its mission, parameters and seed), forgotten once
+        its result came: a deque per episode (760 bytes, kept to the end) was 76 MB at
+        100 000 episodes; the batch alone is kept (about 100 bytes with its key), a deque
+        only for a key several hold."""
         if not any(bars):
             return None
-        waiting: dict[_Key, deque[int]] = defaultdict(deque)
+        waiting: dict[_Key, int | deque[int]] = {}
         for spec, (batch, _) in zip(self.specs, self.places, strict=True):
-            waiting[_key_of(spec.mission, spec.params, spec.seed)].append(batch)
+            key = _key_of(spec.mission, spec.params, spec.seed)
+            held = waiting.get(key)
+            if held is None:
+                waiting[key] = batch
+                continue
+            queued = held if isinstance(held, deque) else deque([held])
+            queued.append(batch)
+            waiting[key] = queued
         done = [0] * len(self.sizes)
 
         def progress(_: int, __: int, result: EpisodeResult) -> None:
-            batch = waiting[_key_of(result.mission, result.params, result.seed)].popleft()
+            key = _key_of(result.mission, result.params, result.seed)
+            held = waiting[key]
+            batch = held.popleft() if isinstance(held, deque) else held
+            if not isinstance(held, deque) or not held:
+                del waiting[key]
             done[batch] += 1
             bar = bars[batch]
             if bar is not None:

@@ -84,3 +84,66 @@ def test_nothing_to_run_starts_no_pool(jobs: int) -> None:
     """Every episode read back (``eval --resume``): an empty result per batch."""
     done = evaluate([[], []], Engine("local", jobs, wall_limit_s=5.0))
     assert [(e.results, e.interrupted) for e in done] == [([], False), ([], False)]
+
+
+def test_the_bars_callback_keeps_little_per_episode_and_lets_go_as_results_come() -> None:
+    """To find each result's variant, the callback kept a deque per episode (760 bytes,
+    held to the end of the run): 76 MB at 100 000 episodes. It keeps each episode's variant
+    alone (about 100 bytes with its key), and lets go of the key when its result comes (the
+    dictionary's table stays, as Python's do)."""
+    import dataclasses
+    import tracemalloc
+
+    batches = [
+        episode_specs(BUMP, runs=2000, params=(("duration", duration),), trace_every=0)
+        for duration in ("1s", "2s")
+    ]
+    work = Interleaved.of(batches)
+    counted = [0, 0]
+
+    def bar(b: int):  # type: ignore[no-untyped-def]
+        def progress(done: int, total: int, result: EpisodeResult) -> None:
+            counted[b] = done
+
+        return progress
+
+    result = EpisodeResult(seed=0, outcome="success", reason="", time_s=1.0, wall_s=0.1,
+                           ticks=1, start=(0, 0, 0), end=(0, 0, 0), bumps=0, contact_steps=(),
+                           docked=False, charging=False, cliffs=0, fell=False, violations=0,
+                           loops=0.0, longest_stall_s=0.0)  # fmt: skip
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        callback = work.progress([bar(0), bar(1)])
+        assert callback is not None
+        held = tracemalloc.get_traced_memory()[0] - before
+        for spec in work.specs:
+            callback(0, 0, dataclasses.replace(result, mission=spec.mission, params=spec.params,
+                                               seed=spec.seed))  # fmt: skip
+        left = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert counted == [2000, 2000]
+    assert held / len(work.specs) < 300, held / len(work.specs)  # 900 bytes before
+    assert left < held * 0.8, (held, left)
+
+
+def test_a_batch_given_twice_has_each_result_counted_on_its_own_bar_in_turn() -> None:
+    """Two batches of the same specs (the same key twice): the first result of a key goes
+    to the first batch holding it, the next to the next."""
+    import dataclasses
+
+    a = _ab(2)[0]
+    work = Interleaved.of([a, a])
+    seen: list[tuple[int, int]] = []
+    callback = work.progress(
+        [
+            lambda done, total, r: seen.append((0, r.seed)),
+            lambda done, total, r: seen.append((1, r.seed)),
+        ]
+    )
+    assert callback is not None
+    result = run_episodes(a[:1])[0]
+    for spec in work.specs:
+        callback(0, 0, dataclasses.replace(result, seed=spec.seed))
+    assert seen == [(0, 5), (1, 5), (0, 6), (1, 6)]
