@@ -715,6 +715,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
             faults=args.faults,
             permissions=permissions(args, v.path),
             trace_every=2 if args.plot else 0,  # only the plot reads trajectories
+            simplify_path=bool(args.plot),  # as drawn, made in the worker
         )
         for v in chosen
     ]

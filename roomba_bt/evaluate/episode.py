@@ -40,6 +40,7 @@ from roomba_bt.behaviours.blackboard import (
     undeclared_writes,
 )
 from roomba_bt.behaviours.reasons import GUARD_STOPPED
+from roomba_bt.evaluate.paths import kept_path
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
 from roomba_bt.mission import (
     NO_PERMISSIONS,
@@ -122,6 +123,11 @@ class EpisodeSpec:
     #: simulator keeps no trace (``eval`` without ``--plot``: a result's trajectory held
     #: about 3 MB per robot-hour, which a thousand-episode sweep kept for nothing)
     trace_every: int = 2
+    #: keep the trajectory as a results record keeps it and ``eval --plot`` draws it
+    #: (:func:`~roomba_bt.evaluate.paths.kept_path`: a few hundred points, not one every
+    #: eighth step), made in the worker: ``eval --plot`` held every point of every episode
+    #: in its parent until the end, about 100 KB an apartment dock episode
+    simplify_path: bool = False
     #: what the mission file may reach (its plugin files, other include folders), as the
     #: command line granted when the mission was checked before any episode
     permissions: Permissions = NO_PERMISSIONS
@@ -305,6 +311,19 @@ class EpisodeResult:
         :func:`_arrived`: each text its own copy, unpickled, held the same words once per
         episode."""
         return _arrived, tuple(getattr(self, f.name) for f in fields(self))
+
+
+def _trajectory(
+    spec: EpisodeSpec, trace: Sequence[Any], simulator: Simulator
+) -> tuple[tuple[float, float], ...]:
+    """The trace's points (m) and the last pose, as ``spec`` asks (none, all, or as drawn)."""
+    if spec.trace_every <= 0:
+        return ()
+    points = (
+        *((p.x / 1000.0, p.y / 1000.0) for p in trace),
+        (simulator.x / 1000.0, simulator.y / 1000.0),
+    )
+    return kept_path(points) if spec.simplify_path else points
 
 
 def _arrived(*values: Any) -> EpisodeResult:
@@ -749,12 +768,7 @@ def _measured(
         loops=simulator.loops,
         longest_stall_s=simulator.longest_stall,
         longest_trapped_s=simulator.longest_trapped,
-        trajectory=(
-            *((p.x / 1000.0, p.y / 1000.0) for p in trace),
-            (simulator.x / 1000.0, simulator.y / 1000.0),
-        )
-        if spec.trace_every > 0
-        else (),
+        trajectory=_trajectory(spec, trace, simulator),
         mission=spec.mission,
         world=world.name,
         params=spec.params,

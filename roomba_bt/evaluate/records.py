@@ -78,6 +78,8 @@ from typing import IO, Any, NoReturn
 
 from roomba_bt.evaluate.episode import Coverage, EpisodeResult
 from roomba_bt.evaluate.keys import KEY_PREFIX
+from roomba_bt.evaluate.paths import PATH_TOLERANCE_M as PATH_TOLERANCE_M  # re-exported
+from roomba_bt.evaluate.paths import kept_path as kept_path  # re-exported: callers name it here
 from roomba_bt.printable import escaped, shortened
 from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.recording import (
@@ -171,9 +173,6 @@ COVERAGE_COLUMNS: dict[str, tuple[str, Allowed]] = {
 PROVENANCE_COLUMNS = ("roomba_bt_version", "world_sha256", "sources", "plugins")
 #: the trajectory as a plot draws it (:func:`kept_path`), in an episode run for one
 PATH_COLUMN = "path"
-#: how far (m) a kept path may stray from the trajectory: under a pixel of ``eval --plot``'s
-#: figure (8 inches at 110 dpi for a room of 4 m or more: about 5 mm a pixel)
-PATH_TOLERANCE_M = 0.005
 #: the columns ``--reproducible`` leaves empty: measured on the wall clock, or naming a
 #: process, they differ on every run of the same episodes (whether a behaviour is found
 #: holding a tick, and for how long, is the host's: the watch looks on the wall clock)
@@ -220,47 +219,6 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
         out[PATH_COLUMN] = [[x, y] for x, y in kept_path(result.trajectory)]
     out.update((KEY_PREFIX + name, value) for name, value in result.keys)
     return out
-
-
-def kept_path(trajectory: Iterable[tuple[float, float]]) -> tuple[tuple[float, float], ...]:
-    """``trajectory`` (m) as a results record keeps it and ``eval --plot`` draws it: each
-    point to the mm, a point the same as the one before left out, then the points a straight
-    line between those kept passes within :data:`PATH_TOLERANCE_M` of left out
-    (Ramer-Douglas-Peucker, the farthest point kept first). A 20-minute episode's 40 000
-    points (one every two ticks) keep a few hundred, drawn the same. The same path given
-    again is given back as it is (the farthest point of a part is kept, and what it left out
-    is not there to be found again), so a record read back and written again, or drawn,
-    is the same path."""
-    points: list[tuple[float, float]] = []
-    for x, y in trajectory:
-        point = (round(x, 3), round(y, 3))
-        if not points or points[-1] != point:
-            points.append(point)
-    if len(points) < 3:
-        return tuple(points)
-    keep = [False] * len(points)
-    keep[0] = keep[-1] = True
-    parts = [(0, len(points) - 1)]
-    tolerance = PATH_TOLERANCE_M * PATH_TOLERANCE_M
-    while parts:
-        first, last = parts.pop()
-        (ax, ay), (bx, by) = points[first], points[last]
-        dx, dy = bx - ax, by - ay
-        chord = dx * dx + dy * dy
-        farthest, at = -1.0, -1
-        for i in range(first + 1, last):
-            px, py = points[i]
-            if chord == 0.0:  # a loop back to where the part began: from that point
-                far = (px - ax) ** 2 + (py - ay) ** 2
-            else:
-                cross = dx * (py - ay) - dy * (px - ax)
-                far = cross * cross / chord
-            if far > farthest:
-                farthest, at = far, i
-        if farthest > tolerance:
-            keep[at] = True
-            parts += [(first, at), (at, last)]
-    return tuple(point for point, kept in zip(points, keep, strict=True) if kept)
 
 
 def _path_from(raw: Any) -> tuple[tuple[float, float], ...]:

@@ -571,3 +571,34 @@ def test_results_from_worker_processes_share_their_words() -> None:
     assert len({id(r.mission) for r in results}) == 1
     assert len({id(r.world) for r in results}) == 1
     assert len({id(r.outcome) for r in results}) == 1
+
+
+@pytest.mark.extra("plot")
+def test_eval_plot_s_results_hold_their_paths_as_drawn_made_in_the_workers(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``eval --plot`` kept every trace point of every episode (one each 8 steps, about
+    100 KB an apartment dock episode) in its parent until the end, where the plot and the
+    records drew a few hundred of them: a 2 000-episode sweep held 200 MB for its picture.
+    The episodes run for a plot keep their path as drawn (``simplify_path``), in the worker."""
+    import roomba_bt.cli.eval_cmd as eval_cmd
+    from roomba_bt.cli import main
+    from roomba_bt.evaluate.records import kept_path
+
+    held: list[EpisodeResult] = []
+    statistics = eval_cmd.statistics
+
+    def noted(args: Any, chosen: Any, done: Any, world: str) -> Any:
+        held.extend(r for e in done for r in e.results)
+        return statistics(args, chosen, done, world)
+
+    monkeypatch.setattr(eval_cmd, "statistics", noted)
+    argv = ["eval", "dock", "--within", "1", "--timeout", "20s", "--runs", "2", "--jobs", "2",
+            "--no-progress", "--plot", str(tmp_path / "p.png")]  # fmt: skip
+    main(argv)
+    assert len(held) == 2 and all(len(r.trajectory) > 2 for r in held)
+    assert all(r.trajectory == kept_path(r.trajectory) for r in held)
+    spec = EpisodeSpec("dock", seed=0, timeout_s=20.0, within_m=1.0, time_limit="--timeout 20 s")
+    raw = run_episode(spec)  # the same episode, every point
+    assert held[0].outcome == raw.outcome and held[0].time_s == raw.time_s
+    assert len(held[0].trajectory) < len(raw.trajectory) / 3  # the same episode, every point
