@@ -46,6 +46,11 @@ def cursor_up(lines: int) -> str:
 #: always): a sweep of short episodes finishes hundreds a second
 REDRAW_S = 0.1
 
+#: The longest a log goes without a line of the bars (s): a tenth of a 100 000-episode
+#: sweep is half an hour, and a CI service that ends a job silent for 10 minutes (CircleCI's
+#: no_output_timeout) ended it; a reader of the log saw nothing move
+LOG_EVERY_S = 300.0
+
 #: The order of the progress bars' draws, across bars: :attr:`ProgressBar.drawn`.
 _DRAWS = itertools.count()
 
@@ -115,9 +120,9 @@ class ProgressBars:
     """Every variant's bar of one evaluation (``labels``, one a variant, and ``totals``,
     each one's episodes), drawn together: on a terminal a block of lines, one a variant,
     redrawn in place at most every ``interval_s`` (:data:`REDRAW_S`; at the first episode
-    and the last always);
-    into a log, a line at the first episode, at each tenth of the whole evaluation and at
-    the last, every variant's count on it. ``already``: per variant, the episodes of its
+    and the last always); into a log, a line at the first episode, at each tenth of the
+    whole evaluation, at the last, and after :data:`LOG_EVERY_S` without one, every
+    variant's count on it. ``already``: per variant, the episodes of its
     total finished before this run and how many of them succeeded (``--resume``'s, read
     back), counted from the start. :meth:`bar` is variant ``b``'s progress callback."""
 
@@ -146,6 +151,7 @@ class ProgressBars:
         self.started = time.perf_counter()
         self.last_drawn = -float("inf")
         self.tenth = -1  # the tenth of the whole a log's last line was written at
+        self.logged = 0.0  # and when (s since the start)
         self.open = 0  # the lines of the block on the terminal, the cursor on its last
         #: when the bars last drew (the order of every bar's draws) and whether that left
         #: the block open (:func:`end_bars`)
@@ -205,13 +211,14 @@ class ProgressBars:
             _OPEN.discard(self)
 
     def _write_line(self, elapsed: float, finished: bool) -> bool:
-        """Into a log, a line at the first episode, at each tenth of the whole and at the
-        last: whether one was written."""
+        """Into a log, a line at the first episode, at each tenth of the whole, at the last
+        and after :data:`LOG_EVERY_S` without one: whether one was written."""
         done, total = sum(self.done), sum(self.totals)
         tenth = done * 10 // max(total, 1)
-        if self.tenth >= 0 and tenth == self.tenth and not finished:
+        quiet = elapsed - self.logged >= LOG_EVERY_S
+        if self.tenth >= 0 and tenth == self.tenth and not finished and not quiet:
             return False
-        self.tenth = tenth
+        self.tenth, self.logged = tenth, elapsed
         lines = self._lines(elapsed, self.width)
         if len(lines) > 1:  # one line for all, the variants side by side
             eta = self._eta(elapsed, sum(self.ran), total - done)

@@ -157,3 +157,25 @@ def test_a_resumed_variant_yet_to_run_an_episode_says_no_eta() -> None:
     assert lines[1].endswith("] 4/10 ok 4 elapsed 3s ETA ?"), lines
     assert lines[2].endswith("] 4/4 ok 3 elapsed 3s ETA 0s"), lines
     assert log.getvalue().count("\n") == 1 and "13/24 ok 11" in log.getvalue()
+
+
+def test_a_log_gets_a_line_after_a_while_without_one(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Into a log, a line came only at each tenth of the whole: half an hour apart in a
+    100 000-episode sweep, and a CI service that ends a job silent for 10 minutes ended it.
+    A line also comes after ``LOG_EVERY_S`` without one (here 0: after each episode)."""
+    from roomba_bt.evaluate import progress
+    from roomba_bt.evaluate.episode import EpisodeResult
+
+    result = EpisodeResult(seed=5, outcome="success", reason="", time_s=1.0, wall_s=0.1, ticks=1,
+                           start=(0, 0, 0), end=(0, 0, 0), bumps=0, contact_steps=(),
+                           docked=False, charging=False, cliffs=0, fell=False, violations=0,
+                           loops=0.0, longest_stall_s=0.0)  # fmt: skip
+    counted = []
+    for every in (300.0, 0.0):
+        monkeypatch.setattr(progress, "LOG_EVERY_S", every)
+        log = io.StringIO()
+        bars = progress.ProgressBars(["a"], [1000], stream=log)
+        for _ in range(50):
+            bars.bar(0)(0, 0, result)
+        counted.append(log.getvalue().count("\n"))
+    assert counted == [1, 50]
