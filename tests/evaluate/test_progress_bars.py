@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main
+from roomba_bt.evaluate.episode import EpisodeResult
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 BUMP = str(MISSIONS / "bump-and-turn.yaml")
@@ -48,6 +49,14 @@ def screen(written: str) -> list[str]:
             lines[row] = line[:col] + token + line[col + len(token) :]
             col += len(token)
     return lines
+
+
+def _result(outcome: str) -> EpisodeResult:
+    """An episode's result as a bar reads it: its outcome (the rest does not matter)."""
+    return EpisodeResult(seed=1, outcome=outcome, reason="", time_s=1.0, wall_s=0.1, ticks=1,
+                         start=(0, 0, 0), end=(0, 0, 0), bumps=0, contact_steps=(),
+                         docked=False, charging=False, cliffs=0, fell=False, violations=0,
+                         loops=0.0, longest_stall_s=0.0)  # fmt: skip
 
 
 def _bars(lines: list[str]) -> list[str]:
@@ -116,14 +125,10 @@ def test_a_message_said_while_the_bars_are_drawn_takes_their_place_on_its_own_li
     last bar, and the next redraw wrote over it. The bars are taken away first, the message
     takes their place and they are drawn again below it."""
     from roomba_bt.evaluate import progress
-    from roomba_bt.evaluate.episode import EpisodeResult
 
     terminal = _Terminal()
     bars = progress.ProgressBars(["a", "b"], [4, 4], stream=terminal, interval_s=0.0)
-    result = EpisodeResult(seed=1, outcome="success", reason="", time_s=1.0, wall_s=0.1, ticks=1,
-                           start=(0, 0, 0), end=(0, 0, 0), bumps=0, contact_steps=(),
-                           docked=False, charging=False, cliffs=0, fell=False, violations=0,
-                           loops=0.0, longest_stall_s=0.0)  # fmt: skip
+    result = _result("success")
     bars.bar(0)(1, 4, result)
     bars.bar(1)(1, 4, result)
     import contextlib
@@ -142,15 +147,11 @@ def test_a_resumed_variant_yet_to_run_an_episode_says_no_eta() -> None:
     ``162/1000``: nothing of it had run to tell its pace. It says ``ETA ?`` until one has;
     a variant with none left says ``ETA 0s``."""
     from roomba_bt.evaluate import progress
-    from roomba_bt.evaluate.episode import EpisodeResult
 
     log = io.StringIO()
     bars = progress.ProgressBars(["a", "b", "c"], [10, 10, 4], stream=log,
                                  already=[(4, 4), (4, 4), (4, 3)])  # fmt: skip
-    result = EpisodeResult(seed=5, outcome="failure", reason="", time_s=1.0, wall_s=0.1, ticks=1,
-                           start=(0, 0, 0), end=(0, 0, 0), bumps=0, contact_steps=(),
-                           docked=False, charging=False, cliffs=0, fell=False, violations=0,
-                           loops=0.0, longest_stall_s=0.0)  # fmt: skip
+    result = _result("failure")
     bars.bar(0)(1, 6, result)
     lines = bars._lines(elapsed=3.0, width=10)
     assert lines[0].startswith("a [") and lines[0].endswith("] 5/10 ok 4 elapsed 3s ETA 15s")
@@ -164,12 +165,8 @@ def test_a_log_gets_a_line_after_a_while_without_one(monkeypatch: pytest.MonkeyP
     100 000-episode sweep, and a CI service that ends a job silent for 10 minutes ended it.
     A line also comes after ``LOG_EVERY_S`` without one (here 0: after each episode)."""
     from roomba_bt.evaluate import progress
-    from roomba_bt.evaluate.episode import EpisodeResult
 
-    result = EpisodeResult(seed=5, outcome="success", reason="", time_s=1.0, wall_s=0.1, ticks=1,
-                           start=(0, 0, 0), end=(0, 0, 0), bumps=0, contact_steps=(),
-                           docked=False, charging=False, cliffs=0, fell=False, violations=0,
-                           loops=0.0, longest_stall_s=0.0)  # fmt: skip
+    result = _result("success")
     counted = []
     for every in (300.0, 0.0):
         monkeypatch.setattr(progress, "LOG_EVERY_S", every)
