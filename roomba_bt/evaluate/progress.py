@@ -66,8 +66,11 @@ def bar_line(label: str, done: int, total: int, ok: int, elapsed: float, eta: fl
 
 
 def _on_a_terminal(stream: TextIO) -> bool:
+    """Whether ``stream`` is a terminal that takes the bars' codes: not one whose ``TERM`` is
+    ``dumb`` (an editor's shell buffer, some CI runners' pseudo-terminals), which showed
+    each ``ESC[K`` as text; it gets a log's lines."""
     isatty = getattr(stream, "isatty", None)
-    return bool(isatty()) if isatty is not None else False
+    return bool(isatty()) and os.environ.get("TERM") != "dumb" if isatty is not None else False
 
 
 def _columns(stream: TextIO) -> int:

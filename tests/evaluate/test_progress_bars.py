@@ -18,6 +18,12 @@ _AB = ["eval", BUMP, "--sweep", "duration=1s,2s", "--runs", "6", "--jobs", "1",
        "--wall-limit", "none", "--timeout", "10s"]  # fmt: skip
 
 
+@pytest.fixture(autouse=True)
+def _a_terminal_that_takes_codes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The bars write no code to a ``TERM=dumb`` terminal: a test's stand-in is none."""
+    monkeypatch.setenv("TERM", "xterm")
+
+
 class _Terminal(io.StringIO):
     def isatty(self) -> bool:
         return True
@@ -176,3 +182,19 @@ def test_a_log_gets_a_line_after_a_while_without_one(monkeypatch: pytest.MonkeyP
             bars.bar(0)(0, 0, result)
         counted.append(log.getvalue().count("\n"))
     assert counted == [1, 50]
+
+
+def test_a_dumb_terminal_gets_a_log_s_lines(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``TERM=dumb`` (an editor's shell buffer) shows ANSI codes as text: the bars wrote
+    ``ESC[K`` and carriage returns there. It gets a log's lines, no code."""
+    from roomba_bt.evaluate import progress
+
+    monkeypatch.setenv("TERM", "dumb")
+    terminal = _Terminal()
+    bars = progress.ProgressBars(["a", "b"], [3, 3], stream=terminal)
+    single = progress.ProgressBar(terminal, label="c ")
+    for b in (0, 1, 0, 1, 0, 1):
+        bars.bar(b)(0, 0, _result("success"))
+    single(1, 1, _result("success"))
+    assert "\x1b" not in terminal.getvalue() and "\r" not in terminal.getvalue()
+    assert terminal.getvalue().splitlines()[-2].endswith("a 3/3 ok 3, b 3/3 ok 3")
