@@ -312,6 +312,12 @@ class EpisodeResult:
         episode."""
         return _arrived, tuple(getattr(self, f.name) for f in fields(self))
 
+    def sharing_words(self) -> EpisodeResult:
+        """This result with its texts shared as an unpickled one's are (:func:`_arrived`):
+        one read back from a results file (``--resume``, ``--from``) is made of its line's
+        own strings, 1.5 KB a record, kept until the report."""
+        return _arrived(*(getattr(self, f.name) for f in fields(self)))
+
 
 def _trajectory(
     spec: EpisodeSpec, trace: Sequence[Any], simulator: Simulator

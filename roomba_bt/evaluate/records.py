@@ -534,7 +534,8 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
         for column, raw in record.items()
         if column.startswith(KEY_PREFIX)
     )
-    return EpisodeResult(**{**defaults, **{k: v for k, v in values.items() if k in known}})
+    read = EpisodeResult(**{**defaults, **{k: v for k, v in values.items() if k in known}})
+    return read.sharing_words()  # kept until the report: each word once, not once a line
 
 
 def _key_value(raw: Any) -> Any:
