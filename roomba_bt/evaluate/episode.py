@@ -23,7 +23,6 @@ import math
 import os
 import re
 import socket
-import sys
 import threading
 import time
 from collections.abc import Iterable, Iterator, Sequence
@@ -333,18 +332,27 @@ def _trajectory(
 
 
 def _arrived(*values: Any) -> EpisodeResult:
-    """An :class:`EpisodeResult` unpickled, its texts interned (``sys.intern``: one copy of
-    each in the process, freed with the last result that holds it) and its pairs of texts
-    too (``params``, ``falls``' causes)."""
+    """An :class:`EpisodeResult` unpickled, its texts shared with the results before it
+    (:func:`_one_copy`) and its pairs of texts too (``params``, ``falls``' causes)."""
     return EpisodeResult(*(_shared(value) for value in values))
 
 
 def _shared(value: Any) -> Any:
     if type(value) is str:
-        return sys.intern(value)
+        return _one_copy(value)
     if type(value) is tuple and value and all(type(item) is tuple for item in value):
         return tuple(tuple(_shared(part) for part in item) for item in value)
     return value
+
+
+@functools.lru_cache(maxsize=4096)
+def _one_copy(text: str) -> str:
+    """The first of the texts equal to ``text`` among the last 4 096 different ones met: a
+    sweep's repeated words (its mission, world, outcomes, reasons, worker) held once. Not
+    ``sys.intern``, whose strings the first 3.12 releases and the free-threaded build keep
+    for the process's life (CPython gh-113993): a text met once (an error's message, a key's
+    value) would stay after its sweep, in a program that runs many."""
+    return text
 
 
 class _MeasuredSimulator(Simulator):
