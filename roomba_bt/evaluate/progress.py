@@ -73,14 +73,15 @@ def _on_a_terminal(stream: TextIO) -> bool:
     return bool(isatty()) and os.environ.get("TERM") != "dumb" if isatty is not None else False
 
 
-def _columns(stream: TextIO) -> int:
+def _size(stream: TextIO) -> tuple[int, int]:
     """How many characters a line of ``stream``'s terminal holds (a longer one wraps, and a
-    redraw in place then writes over the wrong lines)."""
+    redraw in place then writes over the wrong lines), and how many lines it shows."""
     try:
-        columns = os.get_terminal_size(stream.fileno()).columns
+        columns, lines = os.get_terminal_size(stream.fileno())
     except (AttributeError, OSError, ValueError):  # no file behind it (a test's terminal)
-        columns = 0
-    return columns or shutil.get_terminal_size().columns  # 0: a pty never sized, COLUMNS or 80
+        columns = lines = 0
+    fallback = shutil.get_terminal_size()  # 0: a pty never sized, COLUMNS and LINES or 80x24
+    return columns or fallback.columns, lines or fallback.lines
 
 
 class ProgressBar:
@@ -200,11 +201,19 @@ class ProgressBars:
     def _draw_block(self, elapsed: float, finished: bool) -> None:
         """The block of bars written over the one drawn before (the cursor on its last
         line), each line cut to the terminal's width (a line that wrapped would take two,
-        and the next redraw would go up too few); ended with a newline at the last."""
-        columns = _columns(self.stream) - 1  # the last one left free: no wrap at its end
-        longest = max(len(line) for line in self._lines(elapsed, self.width))
-        width = max(5, self.width - max(0, longest - columns))  # a narrower bar first
-        lines = [line[:columns] + ERASE_TO_END for line in self._lines(elapsed, width)]
+        and the next redraw would go up too few); ended with a newline at the last. More
+        variants than the terminal has lines (a sweep of 30 values on 24): one line for all
+        (the cursor cannot go up past the screen's top to redraw the block)."""
+        columns, rows = _size(self.stream)
+        columns -= 1  # the last one left free: no wrap at its end
+        lines = self._lines(elapsed, self.width)
+        if len(lines) >= rows:
+            lines = [self._line_for_all(elapsed)]
+        else:
+            longest = max(len(line) for line in lines)
+            width = max(5, self.width - max(0, longest - columns))  # a narrower bar first
+            lines = self._lines(elapsed, width)
+        lines = [line[:columns] + ERASE_TO_END for line in lines]
         up = cursor_up(self.open - 1) if self.open else ""
         self.stream.write(up + "\n".join(lines) + ("\n" if finished else ""))
         self.open = 0 if finished else len(lines)
@@ -212,6 +221,15 @@ class ProgressBars:
             _OPEN.add(self)
         else:
             _OPEN.discard(self)
+
+    def _line_for_all(self, elapsed: float) -> str:
+        """One line, every variant's count on it: ``[###...] 200/2000 ok 190 elapsed 40s
+        ETA 360s: dock a 100/1000 ok 94, dock b 100/1000 ok 96``."""
+        done, total = sum(self.done), sum(self.totals)
+        eta = self._eta(elapsed, sum(self.ran), total - done)
+        line = bar_line("", done, total, sum(self.ok), elapsed, eta, self.width)
+        counts = zip(self.names, self.done, self.totals, self.ok, strict=True)
+        return f"{line}: " + ", ".join(f"{name} {d}/{t} ok {ok}" for name, d, t, ok in counts)
 
     def _write_line(self, elapsed: float, finished: bool) -> bool:
         """Into a log, a line at the first episode, at each tenth of the whole, at the last
@@ -223,13 +241,8 @@ class ProgressBars:
             return False
         self.tenth, self.logged = tenth, elapsed
         lines = self._lines(elapsed, self.width)
-        if len(lines) > 1:  # one line for all, the variants side by side
-            eta = self._eta(elapsed, sum(self.ran), total - done)
-            line = bar_line("", done, total, sum(self.ok), elapsed, eta, self.width)
-            counts = zip(self.names, self.done, self.totals, self.ok, strict=True)
-            said = ", ".join(f"{name} {d}/{t} ok {ok}" for name, d, t, ok in counts)
-            lines = [f"{line}: {said}"]
-        self.stream.write(lines[0] + "\n")
+        line = lines[0] if len(lines) == 1 else self._line_for_all(elapsed)
+        self.stream.write(line + "\n")
         return True
 
     def take_away(self) -> None:

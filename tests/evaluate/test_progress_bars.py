@@ -198,3 +198,25 @@ def test_a_dumb_terminal_gets_a_log_s_lines(monkeypatch: pytest.MonkeyPatch) -> 
     single(1, 1, _result("success"))
     assert "\x1b" not in terminal.getvalue() and "\r" not in terminal.getvalue()
     assert terminal.getvalue().splitlines()[-2].endswith("a 3/3 ok 3, b 3/3 ok 3")
+
+
+def test_more_variants_than_the_terminal_has_lines_share_one_line(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A sweep of more values than the terminal shows lines: the cursor cannot go up past
+    the screen's top, and each redraw of the block wrote a new one under the last. They
+    share one line then, every variant's count on it, redrawn in place."""
+    from roomba_bt.evaluate import progress
+
+    monkeypatch.setenv("LINES", "5")
+    monkeypatch.setenv("COLUMNS", "400")
+    terminal = _Terminal()
+    names = [f"v{i}" for i in range(6)]
+    bars = progress.ProgressBars(names, [2] * 6, stream=terminal, interval_s=0.0)
+    for _ in range(2):
+        for b in range(6):
+            bars.bar(b)(0, 0, _result("success"))
+    shown = [line for line in screen(terminal.getvalue()) if line]
+    assert len(shown) == 1, shown
+    assert shown[0].startswith("[") and " 12/12 ok 12 " in shown[0]
+    assert shown[0].endswith(", ".join(f"{name} 2/2 ok 2" for name in names))
