@@ -220,3 +220,21 @@ def test_more_variants_than_the_terminal_has_lines_share_one_line(
     assert len(shown) == 1, shown
     assert shown[0].startswith("[") and " 12/12 ok 12 " in shown[0]
     assert shown[0].endswith(", ".join(f"{name} 2/2 ok 2" for name in names))
+
+
+def test_a_run_on_dask_counts_its_finished_episodes_as_they_come() -> None:
+    """Each result on Dask told the bar how many had finished by counting them again over
+    the whole list (at 100 000 episodes, 5 billion looks in the submitting process). The
+    count is kept as they come: the list is never read through."""
+    from roomba_bt.evaluate.cluster import _Finished
+
+    class Unread(list):  # type: ignore[type-arg]
+        def __iter__(self):  # type: ignore[no-untyped-def]
+            raise AssertionError("the results were read through to count them")
+
+    told: list[tuple[int, int]] = []
+    finished = _Finished(Unread([None] * 4), lambda done, total, _: told.append((done, total)))
+    for i in (2, 0, 0, 3):  # the same episode twice (run again alone): counted once
+        finished(i, _result("success"))
+    finished(1, None)  # cancelled: not finished
+    assert told == [(1, 4), (2, 4), (2, 4), (3, 4)]
