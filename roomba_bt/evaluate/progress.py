@@ -3,15 +3,17 @@
 On a terminal the variants' bars are a block of lines, one a variant, redrawn in place (the
 cursor moved up to the block's first line, each line written over and erased to its end)::
 
-    dock -p turn_speed=90mm/s  [#########.....................] 312/1000 ok 301 elapsed 41s ETA 90s
-    dock -p turn_speed=200mm/s [#########.....................] 311/1000 ok 305 elapsed 41s ETA 91s
+    dock turn_speed=90mm/s  [#########.....................] 312/1000 ok 301 elapsed 41s ETA 90s
+    dock turn_speed=200mm/s [#########.....................] 311/1000 ok 305 elapsed 41s ETA 91s
 
-Into a file or a pipe (a CI log), no terminal code: a line after the first episode, at each
-tenth of the whole evaluation and after the last, every variant's count on it. Before, each
-variant had a bar of its own, each redrawn with a carriage return on the one line, so an A/B's
-two bars took turns there (a flicker no one could read), and a log got a line per variant and
-tenth. An evaluation resumed (``--resume``) counts the episodes read back: ``700/1000``
-going on to ``1000/1000``, not ``0/300``.
+Into a file or a pipe (a CI log), or a ``TERM=dumb`` terminal, no terminal code: a line after
+the first episode, at each tenth of the whole evaluation, after the last and after
+:data:`LOG_EVERY_S` without one, every variant's count on it (as a terminal shows them when
+it has fewer lines than there are variants). Before, each variant had a bar of its own, each
+redrawn with a carriage return on the one line, so an A/B's two bars took turns there (a
+flicker no one could read), and a log got a line per variant and tenth. An evaluation
+resumed (``--resume``) counts the episodes read back: ``700/1000`` going on to
+``1000/1000``, not ``0/300``.
 
 What is said on stderr while the bars are drawn (a worker's death) goes through
 :func:`say`: the block is erased first and drawn again below it, as ``tqdm.write`` does.
