@@ -276,7 +276,7 @@ _OPEN: set[ProgressBars] = set()
 def say(message: str) -> None:
     """``message`` on stderr, on a line of its own while bars are drawn: their block is
     erased first and drawn again under it at the next episode (a worker's death said while
-    the bars were drawn began mid-line, and the next redraw wrote over it)."""
+    the bars were drawn began mid-line, glued to the last bar's text)."""
     for bars in list(_OPEN):
         bars.take_away()
     print(message, file=sys.stderr)

@@ -127,8 +127,8 @@ def test_a_resumed_evaluation_s_bars_count_the_episodes_read_back(
 
 
 def test_a_message_said_while_the_bars_are_drawn_takes_their_place_on_its_own_line() -> None:
-    """A worker's death said on stderr while the bars were drawn began mid-line, after the
-    last bar, and the next redraw wrote over it. The bars are taken away first, the message
+    """A worker's death said on stderr while the bars were drawn began mid-line, glued to the
+    last bar's text. The bars are taken away first, the message
     takes their place and they are drawn again below it."""
     from roomba_bt.evaluate import progress
 
