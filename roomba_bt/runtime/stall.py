@@ -155,6 +155,11 @@ class StallRide:
         self._tripped = stalled
         if not self._quiet:
             self._say_trip(stalled, stalled.silent_for, at)
+        else:  # each one still, with -v: an operator tracing the link wants them all
+            log.debug(
+                "%s; waiting up to %g s for valid frames (counted: said once a minute)",
+                stalled, self.grace, extra={"mission_time": self._clock(stalled.silent_for)},
+            )  # fmt: skip
         return ()
 
     def _say_trip(self, stalled: StreamStalled, silent_for: float, at: float) -> None:
@@ -211,6 +216,10 @@ class StallRide:
             if not late.count:
                 self._late_since = said_at
             late.add(gap, halted)
+            log.debug(
+                "%s: valid frames are back after %.0f ms (counted: said once a minute)",
+                connection.name, gap * 1000, extra={"mission_time": self._clock(gap)},
+            )  # fmt: skip
             if back_at - said_at >= QUIET_S:
                 line = late.said(connection.name, back_at - self._late_since, goes_on)
                 log.warning("%s", line, extra={"mission_time": self._clock(gap)})

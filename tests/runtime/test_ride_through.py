@@ -340,3 +340,21 @@ def test_stalls_ridden_through_in_a_minute_are_summed_up_and_a_long_one_is_still
     assert "drive 0 sent in 1" in summed[0]
     # 2 stalls said in full, trip and return, and 1 line summing up 12 of the rest
     assert len(said) == 5, said
+
+
+def test_with_v_each_stall_ridden_through_is_said_at_debug(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Summed up at WARNING, every stall is still a line at DEBUG (``run -v``): someone tracing
+    a bad cable sees each trip and each return, with its own gap."""
+    caplog.set_level(logging.DEBUG, logger="roomba_bt.runtime.loop")
+    summary, _ = run(tmp_path, LatePatchesLink, 93.0, timeout=130.0)
+    records = [r for r in caplog.records if r.name == "roomba_bt.runtime.loop"]
+    counted = [r.getMessage() for r in records if "counted: said once a minute" in r.getMessage()]
+    assert all(r.levelno == logging.DEBUG for r in records if "counted:" in r.getMessage())
+    trips = [line for line in counted if "waiting up to 2 s for valid frames" in line]
+    backs = [line for line in counted if "valid frames are back after" in line]
+    # every trip but the first (the long one's is counted, then said at half its grace)
+    assert len(trips) == summary.stalls - 1, counted
+    # every return but those of the two stalls said in full
+    assert len(backs) == summary.stalls_ridden - 2, counted
