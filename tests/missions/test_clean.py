@@ -251,7 +251,7 @@ def test_clean_says_why_it_stopped_and_a_retried_cover_shows_no_old_failure(
 #: what clean.yaml says when cover's map still shows floor it found no way to
 FLOOR_LEFT = (
     "cleaning stopped: the floor is done by its map, but its map shows unswept floor it "
-    "found no way to (a door its map closed?): cover's message says how much"
+    "found no way to: cover's warning says where and what stopped it"
 )
 
 
@@ -262,9 +262,10 @@ def test_clean_says_in_its_summary_that_its_map_left_floor_it_found_no_way_to(
     warning in the log and cover's message in the final tree; the summary's ``mission
     said`` line read "cleaning stopped: the floor is done" (the apartment, 1.5 % encoder
     error: the bedroom never entered, session 38). Now cover writes ``unreached`` and the
-    mission says it there. Its map is made to show 2.5 m of such floor (a small room's
-    own map shows none)."""
-    monkeypatch.setattr(FloorMap, "unreached", lambda self: 25)
+    mission says it there. Its map is made to show 2.5 m of such floor 3 m ahead of its
+    start (a small room's own map shows none); cover's warning says where it is."""
+    left = [FloorMap.cell(3050.0, y * 100.0 + 50.0) for y in range(25)]
+    monkeypatch.setattr(FloorMap, "unreached_cells", lambda self: left)
     room = tmp_path / "small.yaml"
     room.write_text(
         "rooms: [[[0, 0], [2, 0], [2, 1.5], [0, 1.5]]]\n"
@@ -274,10 +275,12 @@ def test_clean_says_in_its_summary_that_its_map_left_floor_it_found_no_way_to(
     assert summary.outcome.value == "success", summary.reason
     assert summary.said == FLOOR_LEFT
     cover = next(n for n in compiled.root.iterate() if n.name.startswith("cover("))
-    assert cover.feedback_message.endswith(
-        "its map shows unswept floor along 2.5 m of the floor it swept that it found no way "
-        "to (a door its map closed?)"
-    )
+    assert re.search(
+        r"; its map shows unswept floor along 2\.5 m of the floor it swept that it found no "
+        r"way to, the nearest \d+\.\d m from where it stopped \(about 3\.0 m ahead and "
+        r"0\.1 m to the left of where it started\): \w",
+        cover.feedback_message,
+    ), cover.feedback_message
 
 
 def _stopped(messages: Iterable[str]) -> list[str]:
