@@ -73,6 +73,7 @@ from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.blackboard import run_board, write_key
 from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.docking.common import DockWatch
+from roomba_bt.behaviours.docking.escape import WAY_KEY, Way
 from roomba_bt.behaviours.driving import WHEEL
 from roomba_bt.behaviours.drops import DROP, DropEdge, KnownDrops
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
@@ -491,10 +492,13 @@ class Bearings:
         self._dock = DockWatch()
         #: where its centre has just been: how far it may back up (:mod:`.reversing`)
         self.trail = reversing.Trail()
+        #: its way in the odometry's frame, for the dock search after it (:data:`WAY_KEY`)
+        self.way = Way()
 
-    def integrate(self, odo: Odometry) -> Odometry:
+    def integrate(self, odo: Odometry, now: float) -> Odometry:
         """Its pose after this tick: the odometry's travel and turn since the last, from
-        its own (re-anchored) pose."""
+        its own (re-anchored) pose; a crumb of its :attr:`way` at ``now``."""
+        self.way.add(odo, now)
         pose, last = self.pose, self._odo
         distance, angle = odo.distance_mm - last.distance_mm, odo.angle_rad - last.angle_rad
         self._odo = odo
@@ -517,6 +521,7 @@ class Bearings:
             kept.resume(odo)
             return kept, True
         bearings = storage[name] = Bearings(FloorMap(), odo)
+        storage[run_board().name(WAY_KEY)] = bearings.way
         return bearings, False
 
     def resume(self, odo: Odometry) -> None:
@@ -793,7 +798,9 @@ class Cover(Action):
 
     def setup(self, **kwargs: Any) -> None:
         super().setup(**kwargs)  # a new run: its floor is not known yet
-        py_trees.blackboard.Blackboard.storage.pop(run_board().name(MAP_KEY), None)
+        storage = py_trees.blackboard.Blackboard.storage
+        storage.pop(run_board().name(MAP_KEY), None)
+        storage.pop(run_board().name(WAY_KEY), None)
         self._interrupted = False
 
     def start(self) -> None:
@@ -828,7 +835,7 @@ class Cover(Action):
         snap = self.snapshot
         frame = snap.frame
         bearings = self._bearings
-        bearings.integrate(snap.odometry)
+        bearings.integrate(snap.odometry, snap.time)
         bearings.observe(frame)  # a cliff is mapped in the tick it shows, in Passive too
         waiting = driving.held(self, 0.0 if frame.any_cliff else None)  # module doc: Safe
         if waiting is not None:

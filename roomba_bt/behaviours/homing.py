@@ -164,7 +164,7 @@ class HomeByMap(Action):
             # FAILURE was retried by clean.yaml's retry, and said "gave up after 5 attempts")
             self.feedback_message = "no map of cover's to go by: nothing to go back to"
             return Status.SUCCESS
-        bearings.integrate(snap.odometry)
+        bearings.integrate(snap.odometry, snap.time)
         bearings.observe(frame)  # what it meets is on the map for the next plan
         if bearings.sees_dock:  # this frame's, as observe read it
             return self._arrived("a dock beam seen")

@@ -89,6 +89,22 @@ def test_clean_takes_a_table_with_chairs_for_furniture_not_for_the_room(seed: in
     assert result.docked
 
 
+CHAIRS_APART = DINING.with_name("chairs-apart.yaml")
+
+
+def test_the_dock_search_after_cleaning_leaves_a_chair_the_way_the_robot_came_in() -> None:
+    """Six chairs a robot's width apart; this start's cleaning ended between two chairs'
+    legs, and with no dock beam seen while it cleaned the dock search started there. Its
+    trail began there too: trapped, its way out back the way it came led to where it had
+    started, and it bounced among the legs for its 10 minutes (the mission failed, not
+    home). Now the search's trail begins with the way ``cover`` kept (``WAY_KEY``)."""
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "clean.yaml"), str(CHAIRS_APART), seed=2, timeout_s=900.0)
+    )
+    assert result.outcome == "success", result.reason
+    assert result.docked and result.time_s < 400.0, result.time_s
+
+
 def test_clean_without_going_home_succeeds_and_without_a_dock_fails(tmp_path: Path) -> None:
     """``-p go_home=false`` stays where it stopped: a success. In a world with no dock the way
     home fails after its time limit: the floor was cleaned, but the robot is not home (its

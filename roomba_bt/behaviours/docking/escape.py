@@ -56,6 +56,29 @@ WAY_BUMPS = 3
 
 #: a crumb: where the robot was (mm, odometry frame) and when (s)
 Crumb = tuple[float, float, float]
+#: where a leaf that drives before the search keeps the robot's way for the run (a
+#: :class:`Way` on py_trees' blackboard: ``cover`` and ``home_by_map``); the search's trail
+#: begins with it, so the way into a trap the search starts in is known
+WAY_KEY = "/roomba/way"
+
+
+class Way:
+    """The robot's way as crumbs, one every :data:`CRUMB_MM` of path (odometry frame), kept
+    by a leaf that drives before the search (:data:`WAY_KEY`).
+
+    Why: ``cover`` ended between a chair's legs (chairs-apart.yaml, seeds 0 and 2); the
+    search, its trail begun there, found itself trapped, and its way out back the way it
+    came led to where it started, inside: it bounced among the legs for its 10 minutes."""
+
+    def __init__(self) -> None:
+        self.crumbs: deque[Crumb] = deque(maxlen=CRUMBS_KEPT)
+        self._next_at = 0.0
+
+    def add(self, odo: Odometry, now: float) -> None:
+        """A crumb where the robot is, when its path has grown by :data:`CRUMB_MM`."""
+        if odo.path_mm >= self._next_at:
+            self._next_at = odo.path_mm + CRUMB_MM
+            self.crumbs.append((odo.x_mm, odo.y_mm, now))
 
 
 class Trail:

@@ -25,9 +25,12 @@ import math
 from collections import deque
 from collections.abc import Callable
 from operator import itemgetter
+from typing import Any
 
+import py_trees
 from py_trees.common import Status
 
+from roomba_bt.behaviours.blackboard import run_board
 from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
     FROM_DOCK,
@@ -40,7 +43,7 @@ from roomba_bt.behaviours.docking.common import (
     declare_stage,
     hazard_of,
 )
-from roomba_bt.behaviours.docking.escape import CRUMB_MM, Crumb, Trail, WayOut
+from roomba_bt.behaviours.docking.escape import CRUMB_MM, WAY_KEY, Crumb, Trail, Way, WayOut
 from roomba_bt.behaviours.units import BOOL, DISTANCE, enum
 from roomba_bt.oi.bits import BUMP_BITS, LIGHT_BUMPER_AHEAD_BITS, LIGHT_BUMPER_BITS
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
@@ -260,7 +263,9 @@ class DockSearch(DockingAction):
     heading: two blocked headings chosen in turn), it follows the next obstacle it meets.
     Trapped (30 s within a 0.5 m circle, ten hazards met there: between a chair's legs), it
     goes back to the line it came in by and on along it through the trap, or back out the way
-    it came if that line is shut, by odometry (:mod:`.escape`), and searches on.
+    it came if that line is shut, by odometry (:mod:`.escape`), and searches on; the way a
+    leaf before it in the run kept (``cover``, ``home_by_map``: :data:`.escape.WAY_KEY`) is
+    the start of its own, so a trap it starts in has a way in.
     """
 
     stage = "search"
@@ -300,8 +305,16 @@ class DockSearch(DockingAction):
         # the rest is set before any tick reads it: by :meth:`start` (the parameters, the
         # heading), by :meth:`read` (the hazards)
 
+    def setup(self, **kwargs: Any) -> None:
+        super().setup(**kwargs)  # a new run: an earlier run's way is not this one's
+        py_trees.blackboard.Blackboard.storage.pop(run_board().name(WAY_KEY), None)
+
     def start(self) -> None:
         self.begin()
+        if not self._spun:  # the first start: the way here, where a leaf before kept it
+            way = py_trees.blackboard.Blackboard.storage.get(run_board().name(WAY_KEY))
+            if isinstance(way, Way) and not self._crumbs:
+                self._crumbs.extend(way.crumbs)  # a trap it starts in: the way in is known
         # spin once per search, not again on every retry after a cliff
         spin = self.value("spin_first") and not self._spun
         self._spun = True
