@@ -60,6 +60,20 @@ def test_few_hazards_a_short_stay_or_a_restart_is_no_trap() -> None:
     assert not restarted.met_hazard(odo, 39.0)
 
 
+def test_the_way_kept_before_the_search_leads_out_but_makes_no_stay() -> None:
+    """The search's trail begins with the way ``cover`` drove (``escape.Way``): crumbs from
+    minutes of cleaning, the odometry centimetres off since. Counted as a stay, they made
+    it trapped 20 s into the search, and each way back along them met a leg
+    (chairs-apart.yaml, seed 5: not home in the search's 10 minutes). Only its own crumbs
+    make a stay; the way kept before still leads out."""
+    trail = Trail()
+    odo = walk(trail, [(10.0 * (i % 5), 0.0) for i in range(40)])  # cover's, then its own
+    trail.own_from = 30.0
+    assert not any(hazards(trail, odo, [39.0] * (TRAPPED_HAZARDS + 1)))  # its own: 9 s
+    walk(trail, [(10.0 * (i % 5), 0.0) for i in range(31)], start_s=40.0)
+    assert hazards(trail, odo, [70.0] * TRAPPED_HAZARDS)[-1]  # 31 s of its own: a stay
+
+
 def test_a_stay_is_within_the_circle_all_the_time() -> None:
     """Ten hazards within 30 s, but ten seconds ago the robot was 40 cm away: no trap."""
     trail = Trail()

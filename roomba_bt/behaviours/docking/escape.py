@@ -94,6 +94,9 @@ class Trail:
         #: when the last :data:`TRAPPED_HAZARDS` hazards were met (s)
         self._hazards: deque[float] = deque(maxlen=TRAPPED_HAZARDS)
         self.centre: Point = (0.0, 0.0)
+        #: when its own crumbs begin: those before (a way kept before the search, :class:`Way`)
+        #: lead out of a trap but make no stay in one
+        self.own_from = -math.inf
 
     def restart(self) -> None:
         """A new count (a search started, or a way out driven): the hazards met before no
@@ -113,7 +116,10 @@ class Trail:
         stay: list[Crumb] = []
         for crumb in reversed(self.crumbs):
             crumb_x, crumb_y, then = crumb
-            if (crumb_x - x) ** 2 + (crumb_y - y) ** 2 > TRAPPED_RADIUS_MM**2:
+            if (
+                then < self.own_from
+                or (crumb_x - x) ** 2 + (crumb_y - y) ** 2 > TRAPPED_RADIUS_MM**2
+            ):
                 return False
             stay.append(crumb)
             if then <= since:

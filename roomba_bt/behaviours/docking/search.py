@@ -313,8 +313,9 @@ class DockSearch(DockingAction):
         self.begin()
         if not self._spun:  # the first start: the way here, where a leaf before kept it
             way = py_trees.blackboard.Blackboard.storage.get(run_board().name(WAY_KEY))
-            if isinstance(way, Way) and not self._crumbs:
+            if isinstance(way, Way) and way.crumbs and not self._crumbs:
                 self._crumbs.extend(way.crumbs)  # a trap it starts in: the way in is known
+                self.trail.own_from = math.nextafter(way.crumbs[-1][2], math.inf)
         # spin once per search, not again on every retry after a cliff
         spin = self.value("spin_first") and not self._spun
         self._spun = True
