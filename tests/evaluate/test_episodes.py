@@ -15,6 +15,10 @@ from roomba_bt.evaluate.episode import EpisodeResult, build_world, start_pose
 from roomba_bt.evaluate.parallel import ProgressBar, run_episodes
 from roomba_bt.evaluate.testing import assert_success_rate
 
+from .terminal import Terminal, a_terminal_that_takes_codes
+
+pytestmark = pytest.mark.usefixtures(a_terminal_that_takes_codes.__name__)
+
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 BUMP = str(MISSIONS / "bump-and-turn.yaml")
 
@@ -73,21 +77,10 @@ def test_progress_bar_counts_successes() -> None:
     assert "2/2 ok 2" in text and text.endswith("\n")
 
 
-@pytest.fixture(autouse=True)
-def _a_terminal_that_takes_codes(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The bars write no code to a ``TERM=dumb`` terminal: a test's stand-in is none."""
-    monkeypatch.setenv("TERM", "xterm")
-
-
-class _Terminal(io.StringIO):
-    def isatty(self) -> bool:
-        return True
-
-
 def test_the_bar_redraws_on_a_terminal_and_writes_each_tenth_into_a_log() -> None:
     """A CI log got a carriage-return redraw per episode."""
     result = run_episode(episode_specs(BUMP, runs=1, params=(("duration", "1s"),))[0])
-    log, terminal = io.StringIO(), _Terminal()
+    log, terminal = io.StringIO(), Terminal()
     for stream in (log, terminal):
         bar = ProgressBar(stream, width=10)
         for done in range(1, 51):
@@ -104,7 +97,7 @@ def test_a_redraw_on_a_terminal_erases_what_the_longer_line_before_left() -> Non
     ``my-dock``) left the longer one's last characters, ``ETA 99ss``. Each redraw ends by
     erasing the rest of the line; a log gets no terminal code."""
     result = run_episode(episode_specs(BUMP, runs=1, params=(("duration", "1s"),))[0])
-    log, terminal = io.StringIO(), _Terminal()
+    log, terminal = io.StringIO(), Terminal()
     for stream in (log, terminal):
         long, short = (
             ProgressBar(stream, width=10, label="my-dock "),
@@ -126,7 +119,7 @@ def test_a_bar_left_mid_line_by_an_interrupted_evaluation_is_ended_before_what_f
     from roomba_bt.evaluate.parallel import end_bars
 
     result = run_episode(episode_specs(BUMP, runs=1, params=(("duration", "1s"),))[0])
-    terminal, log = _Terminal(), io.StringIO()
+    terminal, log = Terminal(), io.StringIO()
     a, b = ProgressBar(terminal, label="a "), ProgressBar(terminal, label="b ")
     a(3, 10, result)
     b(3, 10, result)

@@ -12,21 +12,14 @@ import pytest
 from roomba_bt.cli import main
 from roomba_bt.evaluate.episode import EpisodeResult
 
+from .terminal import Terminal, a_terminal_that_takes_codes
+
+pytestmark = pytest.mark.usefixtures(a_terminal_that_takes_codes.__name__)
+
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 BUMP = str(MISSIONS / "bump-and-turn.yaml")
 _AB = ["eval", BUMP, "--sweep", "duration=1s,2s", "--runs", "6", "--jobs", "1",
        "--wall-limit", "none", "--timeout", "10s"]  # fmt: skip
-
-
-@pytest.fixture(autouse=True)
-def _a_terminal_that_takes_codes(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The bars write no code to a ``TERM=dumb`` terminal: a test's stand-in is none."""
-    monkeypatch.setenv("TERM", "xterm")
-
-
-class _Terminal(io.StringIO):
-    def isatty(self) -> bool:
-        return True
 
 
 def screen(written: str) -> list[str]:
@@ -75,7 +68,7 @@ def test_an_a_b_s_bars_each_keep_a_line_of_their_own_on_a_terminal(
     """The two variants' bars were redrawn with a carriage return on the one line, taking
     turns there (a flicker no one could read, and at the end one of them was left). Each now
     keeps a line, redrawn in place, both there after every episode and at the end."""
-    terminal = _Terminal()
+    terminal = Terminal()
     monkeypatch.setattr("sys.stderr", terminal)
     monkeypatch.setattr("roomba_bt.evaluate.progress.REDRAW_S", 0.0)  # each episode drawn
     assert main(_AB) == 0
@@ -132,7 +125,7 @@ def test_a_message_said_while_the_bars_are_drawn_takes_their_place_on_its_own_li
     takes their place and they are drawn again below it."""
     from roomba_bt.evaluate import progress
 
-    terminal = _Terminal()
+    terminal = Terminal()
     bars = progress.ProgressBars(["a", "b"], [4, 4], stream=terminal, interval_s=0.0)
     result = _result("success")
     bars.bar(0)(1, 4, result)
@@ -190,7 +183,7 @@ def test_a_dumb_terminal_gets_a_log_s_lines(monkeypatch: pytest.MonkeyPatch) -> 
     from roomba_bt.evaluate import progress
 
     monkeypatch.setenv("TERM", "dumb")
-    terminal = _Terminal()
+    terminal = Terminal()
     bars = progress.ProgressBars(["a", "b"], [3, 3], stream=terminal)
     single = progress.ProgressBar(terminal, label="c ")
     for b in (0, 1, 0, 1, 0, 1):
@@ -210,7 +203,7 @@ def test_more_variants_than_the_terminal_has_lines_share_one_line(
 
     monkeypatch.setenv("LINES", "5")
     monkeypatch.setenv("COLUMNS", "400")
-    terminal = _Terminal()
+    terminal = Terminal()
     names = [f"v{i}" for i in range(6)]
     bars = progress.ProgressBars(names, [2] * 6, stream=terminal, interval_s=0.0)
     for _ in range(2):
