@@ -637,12 +637,24 @@ def resume_stream() -> Command:
 
 
 _DAYS = ("sun", "mon", "tue", "wed", "thu", "fri", "sat")
+#: a day as written: its three letters or its whole English name, any case ("Monday" is
+#: "mon"; "monkey" is no day: it was Monday by its first three letters)
+_DAY_NAMES = {
+    **{day: day for day in _DAYS},
+    **{
+        name: name[:3]
+        for name in ("sunday", "monday", "tuesday", "wednesday", "thursday", "friday",
+                     "saturday")
+    },
+}  # fmt: skip
 
 
 def _day_name(command: str, day: object) -> str:
-    if not isinstance(day, str) or day.lower()[:3] not in _DAYS:
-        raise EncodeError(command, "day", f"one of {', '.join(_DAYS)}", day)
-    return day.lower()[:3]
+    name = _DAY_NAMES.get(day.lower()) if isinstance(day, str) else None
+    if name is None:
+        allowed = f"one of {', '.join(_DAYS)}, or a day's whole name (monday)"
+        raise EncodeError(command, "day", allowed, day)
+    return name
 
 
 def schedule(times: Mapping[str, tuple[int, int]]) -> Command:
@@ -655,6 +667,8 @@ def schedule(times: Mapping[str, tuple[int, int]]) -> Command:
     normal: dict[str, tuple[int, int]] = {}
     for day, at in times.items():
         name = _day_name("schedule", day)
+        if name in normal:  # "mon" and "Monday": one would have been kept without a word
+            raise EncodeError("schedule", "day", "each day once", f"{name} twice ({day!r})")
         if not (isinstance(at, tuple) and len(at) == 2):
             raise EncodeError("schedule", f"{name} time", "an (hour, minute) pair", at)
         normal[name] = at

@@ -150,6 +150,11 @@ EXPECTED: dict[int, list[Case]] = {
             [167, 40, 0, 0, 0, 0, 0, 0, 15, 0, 0, 0, 10, 36, 0, 0],
         ),
         ("spec: disable", lambda: c.schedule({}), [167] + [0] * 15),
+        (
+            "days by their whole names",
+            lambda: c.schedule({"Wednesday": (15, 0), "FRIDAY": (10, 36)}),
+            [167, 40, 0, 0, 0, 0, 0, 0, 15, 0, 0, 0, 10, 36, 0, 0],
+        ),
     ],
     168: [
         ("Wednesday 15:00 by name", lambda: c.set_day_time("wednesday", 15, 0), [168, 3, 15, 0]),

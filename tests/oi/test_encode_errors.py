@@ -171,6 +171,9 @@ HELPER_ERRORS: list[tuple[str, Callable[[], object], str]] = [
     ("query packet 59", lambda: c.query_list([59]), "packet_id"),
     ("sensors 105", lambda: c.sensors(105), "packet_id"),
     ("schedule day", lambda: c.schedule({"someday": (1, 0)}), "day"),
+    ("schedule day's first letters", lambda: c.schedule({"monkey": (1, 0)}), "day"),
+    ("schedule day twice", lambda: c.schedule({"mon": (1, 0), "Monday": (2, 0)}), "day"),
+    ("set_day_time day's first letters", lambda: c.set_day_time("wedge", 1, 0), "day"),
     ("schedule hour 24", lambda: c.schedule({"mon": (24, 0)}), "mon_hour"),
     ("schedule minute 60", lambda: c.schedule({"sun": (1, 60)}), "sun_minute"),
     ("schedule time shape", lambda: c.schedule({"sun": 10}), "sun time"),  # type: ignore[dict-item]
