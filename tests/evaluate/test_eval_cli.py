@@ -581,10 +581,9 @@ def test_an_interrupted_ab_compares_the_seeds_both_finished(
         assert "no comparison, no seed finished with both (interrupted)" in out
 
 
-def _eval_past_its_first_episode(out: Path, *options: str) -> tuple[subprocess.Popen[bytes], bytes]:
+def _eval_past_its_first_episode(out: Path, *options: str) -> subprocess.Popen[bytes]:
     """``roomba-bt eval`` of 200 dock episodes writing ``out``, in a session of its own, once
-    its progress bar says the first finished (read from its stderr, not a clock); what it
-    wrote to stderr meanwhile."""
+    its progress bar says the first finished (read from its stderr, not a clock)."""
     import os
 
     proc = subprocess.Popen(
