@@ -506,9 +506,17 @@ class Connection:
         :class:`StreamStalled` (see :meth:`check_stall` for riding it through; one whose
         ``mismatch`` is set, another model's frames, is certain at once: nothing to ride
         through, its fix worded for :attr:`profile_setting`).
+
+        ``timeout`` is 0 or more: pyserial's ``None`` (wait for ever) and a ``-1`` meant so
+        are refused (a -1 returned at once, and a program's loop over it spun the CPU).
         """
         if self.ending.closed:
             raise ConnectionClosed(self.name)
+        if not (isinstance(timeout, int | float) and timeout >= 0):  # NaN too
+            raise ValueError(
+                f"poll(timeout={timeout!r}): a timeout is 0 or more seconds (0: what is "
+                "there now); to wait for frames as they come, poll(0.1) in a loop"
+            )
         try:
             frames = self.poll_frames(timeout)
         except PortLost:

@@ -112,6 +112,21 @@ def test_a_closed_connection_says_it_is_closed_not_that_the_port_is_gone() -> No
             use()
 
 
+@pytest.mark.parametrize("timeout", [-1, -0.5, float("nan"), None])
+def test_poll_refuses_a_timeout_below_0_or_none(timeout: Any) -> None:
+    """poll(-1), as "wait for ever", returned at once, and a loop over it spun the CPU; None
+    (pyserial's "for ever") was a TypeError from inside the link."""
+    simulator = Simulator(parse_world(BOX, "<test>"), profile=CREATE2)
+    connection = Connection(SimLink(simulator), CREATE2)
+    connection.start("safe", (7, 35))
+    try:
+        with pytest.raises(ValueError, match=r"a timeout is 0 or more seconds"):
+            connection.poll(timeout)
+        assert connection.poll(0.05)  # and a timeout of 0 or more reads as before
+    finally:
+        connection.close()
+
+
 def test_open_takes_only_the_ois_rates_and_a_mode_prints_its_name() -> None:
     with pytest.raises(ValueError, match=r"baud 9999: the OI talks at 300, 600, .*, 115200"):
         Connection.open("loop://", baud=9999)
