@@ -269,7 +269,7 @@ class FloorMap:
         (session 38; 155 where it ended at 49.6 % of the floor). It cannot say a room
         was missed, only that its map has floor it found no way to; it said "(a door its
         map closed?)", a guess that sent a dining room's owner looking for a door
-        (session 44), where the floor lay past chair legs 1.5 m from the start."""
+        where the floor lay past chair legs 1.5 m from the start."""
         left = self.unreached_cells()
         if len(left) < UNREACHED_SAID:
             return ""
