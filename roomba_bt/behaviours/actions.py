@@ -14,7 +14,7 @@ import logging
 import math
 import re
 from collections.abc import Callable, Mapping
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 from py_trees.behaviour import Behaviour
@@ -73,6 +73,8 @@ log = logging.getLogger("roomba_bt.mission")
 _VELOCITY = COMMANDS_BY_NAME["drive"].args[0]
 _RADIUS = COMMANDS_BY_NAME["drive"].args[1]
 _LED_COLOR = COMMANDS_BY_NAME["leds"].args[1]
+_LED_INTENSITY = COMMANDS_BY_NAME["leds"].args[2]
+_MAIN_BRUSH_PWM, _SIDE_BRUSH_PWM, _VACUUM_PWM = COMMANDS_BY_NAME["pwm_motors"].args
 
 _RADIUS_WORDS: dict[str, int] = {
     "straight": int(Radius.STRAIGHT),
@@ -263,11 +265,12 @@ class Mode(Action):
     """Enter an OI mode (Start 128 for passive, Safe 131, Full 132) and wait for packet 35.
 
     Succeeds once the robot reports the mode; re-sends every 0.5 s; fails after ``timeout``.
-    Leaving Safe or Full for Passive while the run's last Motors command runs a brush or the
-    vacuum, it sends Motors 0 (``[138][0]``) before Start: the OI spec says only that Passive
-    cannot change the actuators' parameters, not that Start stops the motors (decided: stop
-    them while they can still be stopped). Not in its ``sends=``, which the compiler reads as
-    the modes it needs (Motors only in Safe/Full): a stop, as an action's ending halt is.
+    Leaving Safe or Full for Passive while the run's last Motors or PWM Motors command runs a
+    brush or the vacuum, it sends Motors 0 (``[138][0]``) before Start: the OI spec says only
+    that Passive cannot change the actuators' parameters, not that Start stops the motors
+    (decided: stop them while they can still be stopped). Not in its ``sends=``, which the
+    compiler reads as the modes it needs (Motors only in Safe/Full): a stop, as an action's
+    ending halt is.
     ``mode: passive`` in the Passive of a built-in cycle that may still drive (Clean, Seek
     Dock: the OI is in Passive while the firmware drives) ends it, Safe, drive 0, motors off,
     Start (:meth:`~roomba_bt.robot.interface.Outbox.end_cycle`): it sent nothing there, and
@@ -679,6 +682,55 @@ class SeekDock(Action):
 
 # --------------------------------------------------------------------------- actuators
 
+
+@dataclass(frozen=True, slots=True)
+class PercentOfByte:
+    """A byte the spec gives as a number (the power LED's intensity, a motor's duty cycle)
+    that a mission writes as a percent of its full value, ``highest``: ``percent x highest
+    / 100``, rounded. A bare number in the byte's range is most likely the spec's byte
+    written as it reads: its refusal says the percent that sends it, where the usual hint
+    (``write the unit: 128%``) led out of range."""
+
+    lowest: int
+    highest: int
+    #: what the spec calls the byte (``byte``, ``duty cycle``)
+    spec_word: str
+    #: the percents allowed and what they mean, said first in every refusal
+    allowed: str
+
+    def byte(self, percent: float) -> int:
+        """The byte sent for ``percent``: ``50%`` of the LED is 128, ``-100%`` of a brush
+        -127."""
+        return round(percent * self.highest / 100)
+
+    def parse(self, value: object) -> float:
+        """A percent, as the mission writes it; a bare number refused with its percent."""
+        if isinstance(value, bool):  # a switch's word (``vacuum: on``) where a share is
+            raise UnitError(
+                f"expected a percent {self.allowed}, got {described(value)}: write "
+                f"{'100%' if value else '0%'}"
+            )
+        said = f"expected a percent {self.allowed}, got {quoted(value)}"
+        try:
+            return float(PERCENT.parse(value))
+        except BareNumber as exc:
+            number = exc.value
+            if not (number == int(number) and self.lowest <= number <= self.highest):
+                raise UnitError(said) from None
+            percent = round(number * 100 / self.highest)
+            sent = self.byte(percent)
+            byte = f"{number:g} is {percent}%" + (f" (sent as {sent})" if sent != number else "")
+            percent_too = f"; or {number:g}% if that was meant" if abs(number) <= 100 else ""
+            raise UnitError(
+                f"{said}: the spec's {self.spec_word} {self.lowest}..{self.highest} is written "
+                f"as a percent here: {byte}{percent_too}"
+            ) from None
+
+    def value_type(self) -> ValueType:
+        """A percent (its schema, its unit) read by :meth:`parse`."""
+        return replace(PERCENT, parse=self.parse)
+
+
 #: ``motors``' switches: :func:`~roomba_bt.oi.bits.motor_bits`' keywords, brushes first
 _MOTORS = ("main_brush", "side_brush", "vacuum", "side_brush_clockwise", "main_brush_outward")
 #: the switches that run a motor (the others only say its direction)
@@ -691,11 +743,44 @@ def _switched_off(names: tuple[str, ...]) -> Callable[[Mapping[str, Any]], bool]
     return lambda params: all(params.get(name, False) is False for name in names)
 
 
+#: the brush of each direction switch of ``motors``: ``pwm_motors`` writes it as its sign
+_BRUSH_OF_DIRECTION = {
+    "side_brush_clockwise": "side_brush", "main_brush_outward": "main_brush",
+}  # fmt: skip
+
+
+def _motor_switch(name: str) -> ValueType:
+    """A switch of ``motors`` or ``vacuum`` (a bool, ``name`` its motor), whose refusal of a
+    percent points to ``pwm_motors`` (a direction switch to its brush's negative percent):
+    ``motors: {vacuum: 50%}`` was refused with "expected true or false" and no word of the
+    leaf that takes one."""
+    brush = _BRUSH_OF_DIRECTION.get(name)
+    motor, sign = (name, "") if brush is None else (brush, "-")
+
+    def parse(value: object) -> bool:
+        try:
+            return bool(BOOL.parse(value))
+        except UnitError as exc:
+            if not isinstance(value, str) or value.strip().startswith("@"):
+                raise
+            try:
+                PERCENT.parse(value)
+            except UnitError:
+                raise exc from None
+            raise UnitError(
+                f"{exc}: a motor's power is pwm_motors's (PWM Motors 144): "
+                f"`pwm_motors: {{{motor}: {sign}{value.strip()}}}`; motors switches it on at full "
+                "power or off"
+            ) from None
+
+    return replace(BOOL, parse=parse)
+
+
 @declare(
     "motors",
     kind="action",
     at_once=True,
-    params=tuple(Param(name, BOOL, default=False) for name in _MOTORS),
+    params=tuple(Param(name, _motor_switch(name), default=False) for name in _MOTORS),
     sends=opcodes("motors"),
     stops_only=_switched_off(_RUNNING),
 )
@@ -711,11 +796,12 @@ class Motors(Action):
     "vacuum",
     kind="action",
     at_once=True,
-    params=(Param("on", BOOL, required=True, doc="vacuum on or off (other motors go off)"),),
+    params=(Param("on", _motor_switch("vacuum"), required=True,
+                  doc="vacuum on or off (other motors go off)"),),
     sends=opcodes("motors"),
     primary="on",
     stops_only=_switched_off(("on",)),
-)
+)  # fmt: skip
 class Vacuum(Action):
     """Vacuum alone on or off (Motors 138, bit 1)."""
 
@@ -723,32 +809,77 @@ class Vacuum(Action):
         return self.send_going(oi.motors(motor_bits(vacuum=bool(self.value("on")))))
 
 
-def _intensity_byte(percent: float) -> int:
-    """The power LED's intensity byte (LEDs 139: 0 off .. 255 full) of a percent."""
-    return round(percent * 255 / 100)
+#: a brush's duty cycle (PWM Motors 144: -127..127, below 0 the other way) as a percent
+#: of 127: the spec's "128 * 25% = 32" is 32 here too, and 100% is the byte's 127
+_BRUSH_DUTY = PercentOfByte(
+    _MAIN_BRUSH_PWM.minimum,
+    _MAIN_BRUSH_PWM.maximum,
+    "duty cycle",
+    "-100..100% (0% off, 100% full, below 0% the other way)",
+)
+# one percent for both brushes: the table gives them one range
+assert (_SIDE_BRUSH_PWM.minimum, _SIDE_BRUSH_PWM.maximum) == (_BRUSH_DUTY.lowest, 127)
+#: the vacuum's (0..127: it runs one way only)
+_VACUUM_DUTY = PercentOfByte(
+    _VACUUM_PWM.minimum, _VACUUM_PWM.maximum, "duty cycle", "0..100% (0% off, 100% full)"
+)
+#: ``pwm_motors``' parameters, in the command's order, and each one's percent
+_DUTIES: dict[str, PercentOfByte] = {
+    "main_brush": _BRUSH_DUTY, "side_brush": _BRUSH_DUTY, "vacuum": _VACUUM_DUTY,
+}  # fmt: skip
 
 
-def _led_intensity(value: object) -> float:
-    """A percent, as every ``power_intensity`` is written. A bare number in a byte's range
-    is most likely the spec's byte (0..255) written as it reads: the hint says the percent
-    that sends it, where the usual hint (``write the unit: 128%``) led out of range."""
-    try:
-        return float(PERCENT.parse(value))
-    except BareNumber as exc:
-        number = exc.value
-        said = f"expected a percent 0..100% (0% off, 100% full), got {quoted(value)}"
-        if not (number == int(number) and 0 <= number <= 255):
-            raise UnitError(said) from None
-        percent = round(number * 100 / 255)
-        sent = _intensity_byte(percent)
-        byte = f"{number:g} is {percent}%" + (f" (sent as {sent})" if sent != number else "")
-        percent_too = f"; or {number:g}% if that was meant" if number <= 100 else ""
-        raise UnitError(
-            f"{said}: the spec's byte 0..255 is written as a percent here: {byte}{percent_too}"
-        ) from None
+def _duties_off(params: Mapping[str, Any]) -> bool:
+    """``pwm_motors``' ``stops_only`` (validate's, for Passive): each motor given a percent
+    whose duty cycle is 0, or left out (0% by default). A ``@key`` may be more at run time."""
+    return all(
+        isinstance(value := params.get(name, 0.0), int | float) and duty.byte(value) == 0
+        for name, duty in _DUTIES.items()
+    )
 
 
-LED_INTENSITY = replace(PERCENT, parse=_led_intensity)
+def _brush_param(name: str, signs: tuple[str, str]) -> Param:
+    """A brush's percent; ``signs``: the way it turns above 0% and below, as the spec says
+    them (positive is the cleaning direction), said after its value in the leaf's name."""
+    return Param(
+        name, _BRUSH_DUTY.value_type(), default="0%", minimum=-100, maximum=100, signs=signs,
+        doc=f"-100% .. 100% of full power; below 0% it turns {signs[1]}",
+    )  # fmt: skip
+
+
+@declare(
+    "pwm_motors",
+    kind="action",
+    at_once=True,
+    params=(
+        _brush_param("main_brush", ("inward", "outward")),
+        _brush_param("side_brush", ("counterclockwise", "clockwise")),
+        Param("vacuum", _VACUUM_DUTY.value_type(), default="0%", minimum=0, maximum=100,
+              doc="0% .. 100% of full power (it runs one way only)"),
+    ),
+    sends=opcodes("pwm_motors"),
+    stops_only=_duties_off,
+)  # fmt: skip
+class PwmMotors(Action):
+    """Run the cleaning motors at a part of their full power (PWM Motors 144
+    ``[144][main brush][side brush][vacuum]``, each a duty cycle: the percent of 127);
+    unnamed ones go off.
+
+    A gentler brush and a quieter vacuum than ``motors``' full power. The safe stop's and
+    ``stop``'s Motors 0 (``[138][0]``) switches them off as it does those ``motors`` ran:
+    both commands set the same three drivers (the 600 spec: with Motors "all motors will
+    run at maximum speed when enabled")."""
+
+    def update(self) -> Status:
+        duties = (duty.byte(float(self.value(name))) for name, duty in _DUTIES.items())
+        return self.send_going(oi.pwm_motors(*duties))
+
+
+#: the power LED's intensity (LEDs 139: 0 off .. 255 full), written as a percent
+_LED_BYTE = PercentOfByte(
+    _LED_INTENSITY.minimum, _LED_INTENSITY.maximum, "byte", "0..100% (0% off, 100% full)"
+)
+LED_INTENSITY = _LED_BYTE.value_type()
 
 
 #: the power LED's colours by name, as the byte LEDs (139) sends: "0 = green, 255 = red.
@@ -816,7 +947,7 @@ class Leds(Action):
 
     def update(self) -> Status:
         names = [n for n in LED_NAMES if self.value(n)]
-        intensity = _intensity_byte(float(self.value("power_intensity")))
+        intensity = _LED_BYTE.byte(float(self.value("power_intensity")))
         return self.send_accepted(
             oi.leds(led_bits(*names), int(self.value("power_color")), intensity)
         )
@@ -1047,6 +1178,6 @@ class Mark(Action):
 
 
 ACTIONS: tuple[type[Action], ...] = (
-    Mode, Drive, Turn, Backtrack, Stop, Clean, Spot, MaxClean, SeekDock, Motors, Vacuum, Leds, Song,
-    Play, Wait, Log, SetKey, Mark,
+    Mode, Drive, Turn, Backtrack, Stop, Clean, Spot, MaxClean, SeekDock, Motors, Vacuum, PwmMotors,
+    Leds, Song, Play, Wait, Log, SetKey, Mark,
 )  # fmt: skip

@@ -19,11 +19,13 @@ from roomba_bt.behaviours.declare import declare
 from roomba_bt.behaviours.units import ItemErrors
 from roomba_bt.oi.encode import (
     NAMED_NOTES,
+    Command,
     drive,
     drive_direct,
     drive_straight,
     motors,
     note_name,
+    pwm_motors,
     song,
     turns_wheels,
 )
@@ -353,6 +355,41 @@ def test_vacuum_alone(robot: StubRobot, make: Make) -> None:
     assert a.Vacuum.declaration.is_actuator
 
 
+@pytest.mark.parametrize(
+    ("params", "sent"),
+    [
+        # the spec's example, 128 x 25% = 32, the side brush the other way (-32: 0xE0)
+        ({"main_brush": 25.0, "side_brush": -25.0, "vacuum": 25.0}, [144, 32, 224, 32]),
+        # 100% is 127, the most the byte holds (128 x 100% does not fit); -100% is -127
+        ({"main_brush": -100.0, "side_brush": 100.0, "vacuum": 100.0}, [144, 129, 127, 127]),
+        ({"main_brush": 40.0, "side_brush": 30.0, "vacuum": 50.0}, [144, 51, 38, 64]),
+        ({"vacuum": 50.0}, [144, 0, 0, 64]),  # the motors left out go off
+        ({}, [144, 0, 0, 0]),
+    ],
+)
+def test_pwm_motors_sends_each_percent_as_the_spec_s_duty_cycle(
+    robot: StubRobot, make: Make, params: dict[str, float], sent: list[int]
+) -> None:
+    """PWM Motors (144): a duty cycle each, main brush, side brush, vacuum; no mission leaf
+    sent it until 0.2.0 (``motors`` runs each at full power or not at all)."""
+    assert tick(make(a.PwmMotors, **params)) is Status.SUCCESS
+    assert data(robot) == [sent]
+
+
+def test_pwm_motors_started_in_passive_fails_and_one_that_runs_nothing_succeeds(
+    make: Make,
+) -> None:
+    """Where the guard refuses PWM Motors (the robot fell to Passive), a duty cycle is not
+    set: FAILURE, said, nothing queued; all at 0% asks for what Passive has already."""
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    robot.set_frame({35: int(OIMode.PASSIVE)})
+    running = make(a.PwmMotors, robot=robot, side_brush=-20.0)
+    assert tick(running) is Status.FAILURE
+    assert "Passive" in running.feedback_message
+    assert tick(make(a.PwmMotors, robot=robot)) is Status.SUCCESS
+    assert robot.flush() == []
+
+
 def test_leds(robot: StubRobot, make: Make) -> None:
     tick(make(a.Leds, dock=True, power_color=255, power_intensity=100.0))
     assert data(robot) == [[139, 4, 255, 255]]
@@ -666,15 +703,23 @@ def test_what_declares_it_succeeds_at_once_succeeds_on_its_first_tick(make: Make
     assert not a.Wait.declaration.at_once and not a.Drive.declaration.at_once
 
 
-@pytest.mark.parametrize(("bits", "expected"), [(0b111, [[138, 0], [128]]), (0, [[128]])])
+@pytest.mark.parametrize(
+    ("last", "expected"),
+    [
+        (motors(0b111), [[138, 0], [128]]),
+        (motors(0), [[128]]),
+        (pwm_motors(0, -20, 40), [[138, 0], [128]]),  # a duty cycle: Motors 0 stops it too
+        (pwm_motors(0, 0, 0), [[128]]),
+    ],
+)
 def test_mode_passive_stops_the_motors_the_run_left_running_before_start(
-    make: Make, bits: int, expected: list[list[int]]
+    make: Make, last: Command, expected: list[list[int]]
 ) -> None:
     """Start (128) from Safe with the brushes on: Motors 0 first (the OI spec does not say
     Start stops them; before session 25 they were left to the firmware). Motors already off,
     only Start (the shipped missions' bytes are unchanged)."""
     robot = StubRobot(mode=OIMode.SAFE)
-    robot.outbox.send(motors(bits))
+    robot.outbox.send(last)
     robot.flush()
     behaviour = make(a.Mode, robot=robot, to="passive", timeout=2.0)
     robot.set_frame({35: int(OIMode.SAFE)})
