@@ -1,8 +1,11 @@
 """Power: the battery, the currents that drain it, and charging on the dock's contacts.
 
 When not charging, the battery gives 150 mA for the robot itself, 0.6 mA per mm/s of each
-wheel and 1.6 mA per PWM step of each brush and the vacuum (a stalled wheel's own current,
-packets 54 and 55, is 600 mA higher). On a powered dock, or with the wall charger plugged
+wheel and each cleaning motor's own current, in proportion to its duty cycle (0..127 of PWM
+Motors 144; Motors 138 runs one at 127): the main brush 2.4 mA a step (packet 56, about
+300 mA at full power), the side brush 0.8 mA (packet 57, about 100 mA), the vacuum 1.6 mA
+(in no packet; about 200 mA). A stalled wheel's own current, packets 54 and 55, is 600 mA
+higher. On a powered dock, or with the wall charger plugged
 in (a world's ``plug`` event), in Passive or Off it charges at 1500 mA, at 150 mA once 98 %
 full. Reported in packets 21 (charging state), 22 (voltage), 23 (current), 25 (charge), 26
 (capacity), 34 (charging sources: home base, internal charger), 54-57 (motor
@@ -36,6 +39,11 @@ from roomba_bt.sim.motion import Motion
 from roomba_bt.sim.state import STEP_SECONDS
 
 BATTERY_CAPACITY_MAH = 2696.0
+#: each cleaning motor's current (mA) per step of its duty cycle, as packets 56 and 57 report
+#: the brushes' and the battery gives all three: the main brush, the side brush, the vacuum
+#: (until 0.2.0 the battery gave 1.6 mA a step of each, less than packet 56 said the main
+#: brush alone drew when it ran without the side brush)
+MOTOR_MA_PER_STEP = (2.4, 0.8, 1.6)
 #: above this current (mA, charging fast) the battery's step runs every step (trickle switch)
 _FAST_CHARGE_MA = 200.0
 #: 1 mAh below the capacity (:meth:`Power._settle_charge`)
@@ -172,8 +180,10 @@ class Power(Motion):
             v[21] = 3 if full else 2
         else:
             wheels = abs(self.left_speed) + abs(self.right_speed)
-            brushes = abs(self.brush_pwm[0]) + abs(self.brush_pwm[1]) + abs(self.brush_pwm[2])
-            current = -(150.0 + 0.6 * wheels + 1.6 * brushes)
+            main, side, vacuum = self.brush_pwm
+            per_main, per_side, per_vacuum = MOTOR_MA_PER_STEP
+            brushes = per_main * abs(main) + per_side * abs(side) + per_vacuum * abs(vacuum)
+            current = -(150.0 + 0.6 * wheels + brushes)
             v[21] = 0
         self._current = current
         v[34] = (2 if on_dock else 0) | (1 if self.plugged_in else 0)  # home base, internal
@@ -181,8 +191,8 @@ class Power(Motion):
         left, right = self.left_speed, self.right_speed
         v[54] = trunc(0.6 * left) + (stall if left > 0 else -stall if left < 0 else 0)
         v[55] = trunc(0.6 * right) + (stall if right > 0 else -stall if right < 0 else 0)
-        v[56] = trunc(2.4 * abs(self.brush_pwm[0]))
-        v[57] = trunc(0.8 * abs(self.brush_pwm[1]))
+        v[56] = trunc(MOTOR_MA_PER_STEP[0] * abs(self.brush_pwm[0]))
+        v[57] = trunc(MOTOR_MA_PER_STEP[1] * abs(self.brush_pwm[1]))
         over = 0
         if self._stall_steps > 30:
             over |= (16 if left else 0) | (8 if right else 0)

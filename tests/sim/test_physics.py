@@ -188,6 +188,32 @@ robot: {start: {at: [0.5, 0.5], heading: 0}}
     assert stalled.overcurrents.left_wheel and stalled.overcurrents.right_wheel
 
 
+@pytest.mark.parametrize(
+    "command",
+    [C.pwm_motors(127, 0, 0), C.pwm_motors(0, -127, 0), C.pwm_motors(51, -38, 64),
+     C.pwm_motors(0, 0, 127), C.motors(motor_bits(main_brush=True, vacuum=True))],
+    ids=["main brush", "side brush reversed", "gentle", "vacuum", "motors: main and vacuum"],
+)  # fmt: skip
+def test_the_battery_gives_what_each_motor_draws_in_proportion_to_its_duty_cycle(
+    command: Command,
+) -> None:
+    """PWM Motors (144): the brushes' currents (56, 57) follow the duty cycle, whichever way
+    a brush turns, and the battery (23) gives the robot's 150 mA, them and the vacuum's
+    (in no packet). Until 0.2.0 it gave 1.6 mA a step of each motor: the main brush alone at
+    full power drew 304 mA by packet 56 from a battery that gave it 203."""
+    host = make(BIG, mode="full")
+    idle = host.query([23])[23]
+    host.send(command)
+    host.run(0.1)
+    now = host.query([23, 54, 55, 56, 57])
+    main, side, vacuum = host.sim.brush_pwm
+    assert (now[56], now[57]) == (math.trunc(2.4 * abs(main)), math.trunc(0.8 * abs(side)))
+    assert now[54] == now[55] == 0  # the wheels stand
+    assert idle == -150
+    assert now[23] == math.trunc(-(150 + 2.4 * abs(main) + 0.8 * abs(side) + 1.6 * vacuum))
+    assert -now[23] >= 150 + now[56] + now[57]
+
+
 def test_battery_drains_faster_while_moving() -> None:
     still = make(BIG, mode="full")
     moving = make(BIG, mode="full")
