@@ -63,6 +63,7 @@ def test_the_gentle_sweep_unwinds_a_jammed_main_brush(
     assert main([*argv, "--world", str(world), "--record", str(record)]) == 1
     out, err = capsys.readouterr()
     assert "mission said the main brush jammed: unwound, stopped" in out, out + err
+    assert "outcome      FAILURE (the main brush jammed: " in out
     lines = record.read_text().splitlines()[1:]
     sent = [bytes.fromhex(e["b"]) for e in map(json.loads, lines) if e.get("d") == "out"]
     pwm = [b for b in sent if b[0] == 144]
