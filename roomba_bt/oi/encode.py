@@ -82,6 +82,7 @@ __all__ = [
     "resume_stream",
     "safe",
     "schedule",
+    "schedule_times",
     "scheduling_leds",
     "seek_dock",
     "sensors",
@@ -677,6 +678,17 @@ def schedule(times: Mapping[str, tuple[int, int]]) -> Command:
         hour, minute = normal.get(day, (0, 0))
         args += (hour, minute)
     return encode(167, *args)
+
+
+def schedule_times(data: bytes | bytearray) -> dict[str, tuple[int, int]]:
+    """The robot's side of :func:`schedule`: the 15 data bytes of Schedule (167) as the days
+    it cleans on and their (hour, minute), Sunday first; ``{}`` for a schedule disabled.
+    A day whose bit is clear cleans at no time, whatever its bytes say::
+
+        [40][0][0][0][0][0][0][15][0][0][0][10][36][0][0]  ->  {"wed": (15, 0), "fri": (10, 36)}
+    """
+    days, times = data[0], data[1:]
+    return {day: (times[2 * i], times[2 * i + 1]) for i, day in enumerate(_DAYS) if days >> i & 1}
 
 
 def set_day_time(day: int | str, hour: int, minute: int) -> Command:

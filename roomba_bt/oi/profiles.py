@@ -24,6 +24,14 @@ A difference is a field here, never an ``if`` elsewhere. Each decision is explai
   button is an error at validate on a profile without it (``display_missing``,
   ``buttons_missing``); a plugin's bytes are still sent (the firmware takes them and shows
   nothing), and Digit LEDs Raw (163) keeps its warning on every profile.
+* ``keeps_schedule``: Schedule (167) and Set Day/Time (168) set a clock and a weekly
+  cleaning schedule that the robot keeps and its clock panel shows. Both specs list them
+  for every model, the 600 spec's Appendix A "to allow full control of Roomba 600's rich
+  user interface and scheduling functionality"; the Create 2's top has no clock, display or
+  Schedule button, and no packet reads either back, so what a Create 2 does with them is
+  written nowhere and nothing on it would show what was set. Decided: ``roomba-bt clock``
+  refuses the ``create2`` profile (docs/protocol.md, "The clock and the schedule"); the
+  opcode table keeps both commands on every profile, so a plugin's bytes still go out.
 * ``reports_mode_plus_one``: some 600-series firmware reports OI mode + 1 in packet 35.
 * ``sleeps_in_passive``: the robot sleeps after 5 minutes in Passive (keep-awake's default).
 * ``slow_baud_how`` / ``slow_baud_until``: how the robot comes to talk at 19200 and what
@@ -122,6 +130,8 @@ class RobotProfile:
     has_display: bool = True
     #: the buttons on its top, packet 18's names (the module docstring)
     buttons: tuple[str, ...] = BUTTON_NAMES
+    #: a clock and weekly schedule of its own that 167 and 168 set (the module docstring)
+    keeps_schedule: bool = True
     #: Passive sleeps after 5 minutes of inactivity (600 spec, "Passive Mode"); the 500 spec
     #: does not say, and is assumed to (a BRC pulse is harmless): the runtime keeps it awake.
     sleeps_in_passive: bool = True
@@ -215,6 +225,18 @@ class RobotProfile:
         return (
             f"the {self.title} ({self.name}) has no digit display or scheduling LEDs: they are "
             "the clock panel of the Roomba 500 and 600 series (roomba500, roomba600)"
+        )
+
+    def clock_missing(self) -> str | None:
+        """Why this robot keeps no clock or schedule that Set Day/Time (168) and Schedule
+        (167) would set, or None: what ``roomba-bt clock`` refuses with."""
+        if self.keeps_schedule:
+            return None
+        return (
+            f"the {self.title} ({self.name}) keeps no clock or cleaning schedule to set: its "
+            "top has no clock, display or Schedule button and no sensor packet reads them "
+            "back, so nothing would show what was set; Schedule (167) and Set Day/Time (168) "
+            "set the clock panel of the Roomba 500 and 600 series (roomba500, roomba600)"
         )
 
     def buttons_missing(self, names: Iterable[str]) -> str | None:
@@ -311,6 +333,7 @@ CREATE2 = RobotProfile(
     reports_mode_plus_one=False,
     has_display=False,
     buttons=("clean", "spot", "dock"),
+    keeps_schedule=False,
 )
 #: The Roomba 600 speaks the Create 2's OI; the differences are the mode + 1 firmware bug and
 #: the clock panel (display, scheduling LEDs, its buttons) of its scheduling models.
@@ -321,6 +344,7 @@ ROOMBA600 = replace(
     reports_mode_plus_one=True,
     has_display=True,
     buttons=BUTTON_NAMES,
+    keeps_schedule=True,
 )
 ROOMBA500 = RobotProfile(
     name="roomba500",

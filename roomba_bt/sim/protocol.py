@@ -31,6 +31,7 @@ from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec, Effect
 from roomba_bt.sim.cycles import BUTTON_CYCLES, CYCLES, BuiltinCycle
 from roomba_bt.sim.faults import HostLine
 from roomba_bt.sim.replies import StreamOutput
+from roomba_bt.sim.robot_clock import RobotClock, held_clock_buttons
 from roomba_bt.sim.state import TracePoint, Violation
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
@@ -81,8 +82,8 @@ class OIProtocol(StreamOutput):
     __slots__ = (
         "_buttons_until", "_commands", "_data_sizes", "_drive_modes", "_held_until", "_inbuf",
         "_last_activity", "_paused_at", "_rng", "_song_until", "_tails", "baud", "brc_low",
-        "brc_pulses", "builtin", "cycle_commands_pause", "day_time", "deaf", "digits",
-        "firmware", "heard", "host_line", "ignored_bytes", "leds", "paused_cycle", "schedule",
+        "brc_pulses", "builtin", "cycle_commands_pause", "deaf", "digits",
+        "firmware", "heard", "host_line", "ignored_bytes", "leds", "paused_cycle", "robot_clock",
         "scheduling_leds", "songs",
     )  # fmt: skip
 
@@ -93,8 +94,8 @@ class OIProtocol(StreamOutput):
         self.scheduling_leds: tuple[int, int] = (0, 0)
         self.digits: tuple[int, int, int, int] = (32, 32, 32, 32)
         self.songs: dict[int, tuple[tuple[int, int], ...]] = {}
-        self.schedule: bytes = bytes(15)
-        self.day_time: tuple[int, int, int] = (0, 0, 0)
+        #: what Set Day/Time (168) and Schedule (167) set (robot_clock.py)
+        self.robot_clock = RobotClock()
         self._song_until = 0.0
         self._buttons_until = 0.0
         #: the first of those two still to come while its packet shows (37 a song playing,
@@ -463,11 +464,24 @@ class OIProtocol(StreamOutput):
         buttons = self._buttons_until if v[18] else math.inf
         self._held_until = min(song, buttons)
 
-    def _on_schedule(self, args: bytes) -> None:
-        self.schedule = bytes(args)
 
-    def _on_day_time(self, args: bytes) -> None:
-        self.day_time = (args[0], args[1], args[2])
+def _takes_clock_command(robot: OIProtocol, name: str) -> bool:
+    """Whether the robot takes Schedule (167) or Set Day/Time (168) now: not while packet 18
+    shows the Clock or Schedule button pressed (robot_clock.py), said as event ``refused``."""
+    held = held_clock_buttons(robot.values[18] if robot.time < robot._buttons_until else 0)
+    if held:
+        robot._event("refused", f"{name} ignored: the {held} button is pressed")
+    return not held
+
+
+def _on_schedule(robot: OIProtocol, args: bytes) -> None:
+    if _takes_clock_command(robot, "schedule"):
+        robot.robot_clock.schedule = bytes(args)
+
+
+def _on_day_time(robot: OIProtocol, args: bytes) -> None:
+    if _takes_clock_command(robot, "set_day_time"):
+        robot.robot_clock.set(args, robot.time)
 
 
 def _cycle_starter(name: str) -> Callable[[OIProtocol, bytes], None]:
@@ -503,8 +517,8 @@ _HANDLERS_BY_NAME: dict[str, Callable[[OIProtocol, bytes], None]] = {
     "digit_leds_raw": OIProtocol._on_digits,
     "digit_leds_ascii": OIProtocol._on_digits,
     "buttons": OIProtocol._on_buttons,
-    "schedule": OIProtocol._on_schedule,
-    "set_day_time": OIProtocol._on_day_time,
+    "schedule": _on_schedule,
+    "set_day_time": _on_day_time,
     "stop": OIProtocol._on_stop,
 }
 _HANDLERS = {COMMANDS_BY_NAME[name].opcode: h for name, h in _HANDLERS_BY_NAME.items()}

@@ -5,11 +5,11 @@ from __future__ import annotations
 import pytest
 
 from roomba_bt.oi import commands as C
-from roomba_bt.oi.bits import led_bits
+from roomba_bt.oi.bits import button_bits, led_bits
 from roomba_bt.oi.encode import Note
 from roomba_bt.oi.frames import layout_for
 from roomba_bt.oi.packets import GROUPS, PACKETS, VALID_PACKET_IDS, data_size
-from roomba_bt.oi.profiles import PROFILES, RobotProfile
+from roomba_bt.oi.profiles import PROFILES, ROOMBA600, RobotProfile
 from roomba_bt.oi.stream import StreamParser
 
 from .helpers import Host, make
@@ -226,8 +226,58 @@ def test_leds_digits_scheduling_leds_schedule_and_clock_are_kept() -> None:
     assert host.sim.leds == (4, 0, 255)
     assert host.sim.digits == tuple(b"ABCD")
     assert host.sim.scheduling_leds == (3, 1)
-    assert host.sim.day_time == (3, 15, 30)
-    assert host.sim.schedule[0] == 8
+    assert host.sim.robot_clock.day_time == (3, 15, 30)
+    assert host.sim.robot_clock.schedule[0] == 8
+
+
+def test_the_clock_runs_on_from_the_time_it_was_set_and_the_week_wraps() -> None:
+    """The robot's clock keeps time after Set Day/Time (168): ``roomba-bt clock`` on the
+    simulator shows what it holds, as a 600's display would."""
+    host = make(profile=ROOMBA600)
+    assert host.sim.robot_clock.shows(host.sim.time) == (0, 0, 0)  # power-on: Sunday 00:00
+    host.send(C.set_day_time("sat", 23, 59))
+    assert host.sim.robot_clock.shows(host.sim.time) == (6, 23, 59)
+    host.run(59.0)
+    assert host.sim.robot_clock.shows(host.sim.time) == (6, 23, 59)  # whole minutes only
+    host.run(1.5)
+    assert host.sim.robot_clock.shows(host.sim.time) == (
+        0,
+        0,
+        0,
+    )  # Saturday 23:59 + 1 min: Sunday 00:00
+    host.send(C.schedule({"mon": (9, 30), "wed": (10, 0)}))
+    assert host.sim.robot_clock.cleans == {"mon": (9, 30), "wed": (10, 0)}
+    host.send(C.schedule({}))
+    assert host.sim.robot_clock.cleans == {}
+
+
+@pytest.mark.parametrize("button", ["clock", "schedule"])
+def test_schedule_and_day_time_are_ignored_while_the_clock_or_schedule_button_is_held(
+    button: str,
+) -> None:
+    """Both specs: "If Roomba's schedule or clock button is pressed, this command will be
+    ignored." The simulator took them whatever its buttons showed."""
+    host = make(profile=ROOMBA600)
+    host.send(C.buttons(button_bits(button)))  # held for the spec's 1/6 s
+    host.send(C.set_day_time("wed", 15, 30), C.schedule({"wed": (15, 0)}))
+    assert host.sim.robot_clock.day_time == (0, 0, 0)
+    assert host.sim.robot_clock.schedule == bytes(15)
+    refused = [e.detail for e in host.sim.events if e.kind == "refused"]
+    assert refused == [
+        f"set_day_time ignored: the {button} button is pressed",
+        f"schedule ignored: the {button} button is pressed",
+    ]
+    host.run(0.2)  # released
+    host.send(C.set_day_time("wed", 15, 30), C.schedule({"wed": (15, 0)}))
+    assert host.sim.robot_clock.day_time == (3, 15, 30)
+    assert host.sim.robot_clock.cleans == {"wed": (15, 0)}
+
+
+def test_another_button_held_does_not_stop_the_clock_being_set() -> None:
+    host = make(profile=ROOMBA600)
+    host.send(C.buttons(button_bits("dock", "minute", "hour", "day")))
+    host.send(C.set_day_time("fri", 8, 0))
+    assert host.sim.robot_clock.day_time == (5, 8, 0)
 
 
 def test_buttons_165_press_for_a_sixth_of_a_second() -> None:
