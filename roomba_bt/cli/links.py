@@ -1,5 +1,5 @@
-"""The far end of ``run`` and ``sensors``: a robot's serial port, or the built-in simulator
-when no ``--port`` is given.
+"""The far end of ``run``, ``sensors`` and ``clock``: a robot's serial port, or the built-in
+simulator when no ``--port`` is given.
 
 Either way the result is a :class:`~roomba_bt.transport.Transport`, and everything above it
 (connection, runner, display, record) is the same code. ``--fast`` uses
@@ -13,12 +13,13 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+from collections.abc import Callable
 from dataclasses import replace
 
 from roomba_bt.cli.profile_choice import AUTO_PROFILE, ProfileChoice, profile_said
 from roomba_bt.oi.identify import Identification
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.robot.connection import no_answer_causes, port_not_opened
+from roomba_bt.robot.connection import Connection, no_answer_causes, port_not_opened
 from roomba_bt.robot.discovery import OI_RATES, describe_silence, find_robot, identify_robot
 from roomba_bt.robot.errors import ConnectionFailed
 from roomba_bt.sim import Faults, RealtimeSimLink, SimLink, Simulator, World, load_world
@@ -174,3 +175,101 @@ def far_end(
     if simulator is None:
         raise ValueError("no --port and no simulator to talk to")
     return make_link(simulator, fast)
+
+
+#: A command's talk with the robot (:func:`talk_to_robot`): given the connection, made but not
+#: started (the command starts it in the mode, and with the stream, it needs), and the
+#: simulator at the far end (None on a port); returns the command's exit code.
+Session = Callable[[Connection, Simulator | None], int]
+
+
+def talk_to_robot(
+    args: argparse.Namespace,
+    command: str,
+    session: Session,
+    *,
+    refuse: Callable[[RobotProfile, int], str | None] | None = None,
+) -> int:
+    """``roomba-bt COMMAND``'s one connection to the robot on ``--port`` or the simulator
+    (``sensors``, ``clock``), its exit code: the model chosen (``--profile``, its setting,
+    ``auto`` identified on the port), the rate (``--baud auto`` found), ``refuse(profile,
+    baud)``'s usage error if it has one (exit 2: nothing sent, unless ``auto`` had to ask
+    the robot first), the simulator (``--world``), and the :class:`Connection` handed to
+    ``session`` in a ``with``, so that every ending, an exception or a signal too, stops the
+    robot and leaves it in Passive. A wrong profile (the robot's frames are another
+    model's) is exit 2, as ``run`` says it; a port or a robot that fails, exit 3."""
+    from roomba_bt.cli.arguments import baud_warning
+    from roomba_bt.cli.profile_choice import chosen_profile
+    from roomba_bt.oi.profiles import get_profile
+    from roomba_bt.robot.errors import LinkDown
+    from roomba_bt.robot.safety import sigterm_raises
+    from roomba_bt.runtime.summary import ExitCode, Outcome
+
+    problem = chosen_profile(args, command)  # the current directory's project's
+    if problem is not None:
+        print(f"roomba-bt {command}: {problem}", file=sys.stderr)
+        return ExitCode.INVALID
+    try:
+        opened = auto_profile(args, command)
+    except ConnectionFailed as exc:
+        print(f"roomba-bt: {exc}", file=sys.stderr)
+        return ExitCode.CONNECTION
+    profile = get_profile(args.profile)
+    warned = baud_warning(args.baud, profile, simulated=not args.port)
+    if warned is not None:
+        print(f"roomba-bt {command}: {warned}", file=sys.stderr)
+    try:
+        made = _connection(args, command, profile, opened, refuse)
+        if isinstance(made, int):
+            return made
+        connection, simulator = made
+        with sigterm_raises(), connection:
+            return session(connection, simulator)
+    except LinkDown as exc:
+        if exc.mismatch is not None:  # another model's frames: a setting, as run says it
+            print(f"roomba-bt: {Outcome.WRONG_PROFILE.value}: {exc}", file=sys.stderr)
+            return Outcome.WRONG_PROFILE.exit_code
+        print(f"roomba-bt: {exc}", file=sys.stderr)
+        return ExitCode.CONNECTION
+    except ConnectionFailed as exc:
+        print(f"roomba-bt: {exc}", file=sys.stderr)
+        return ExitCode.CONNECTION
+    # a Ctrl-C or a signal goes on to main, which says "roomba-bt: interrupted" (by what) and
+    # exits 130, as every command
+
+
+def _connection(
+    args: argparse.Namespace,
+    command: str,
+    profile: RobotProfile,
+    opened: SerialTransport | None,
+    refuse: Callable[[RobotProfile, int], str | None] | None,
+) -> tuple[Connection, Simulator | None] | int:
+    """:func:`talk_to_robot`'s connection, not started, and its simulator (None on a port);
+    or the exit code of a usage error, said (the port ``--baud auto`` or ``auto`` opened
+    closed)."""
+    from roomba_bt.cli.profile_choice import profile_setting
+    from roomba_bt.cli.worlds_cmd import world_error_text
+    from roomba_bt.runtime.summary import ExitCode
+    from roomba_bt.sim import WorldError
+
+    if args.baud is None:  # --baud auto
+        args.baud, opened = auto_baud(args.port, profile)
+    refused = None if refuse is None else refuse(profile, args.baud)
+    if refused is not None:
+        if opened is not None:
+            opened.close()
+        print(f"roomba-bt {command}: {refused}", file=sys.stderr)
+        return ExitCode.INVALID
+    simulator = None
+    if not args.port:
+        try:
+            simulator = make_simulator(args.world, profile, 0)
+        except WorldError as exc:
+            print(world_error_text(exc, command), file=sys.stderr)
+            return ExitCode.INVALID
+    link = far_end(args.port, args.baud, simulator, opened=opened)
+    connection = Connection(link, profile, baud=args.baud)
+    connection.profile_setting = profile_setting(args)  # a wrong profile's fix
+    connection.waiter = f"roomba-bt {command}"  # a lost stream's grace: no run waited it
+    return connection, simulator

@@ -11,21 +11,19 @@ from typing import TYPE_CHECKING, Any
 from roomba_bt.cli.arguments import (
     add_command,
     add_far_end_options,
-    baud_warning,
     count,
     refresh_rate,
 )
 from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.packets import PACKETS
-from roomba_bt.oi.profiles import RobotProfile, get_profile
+from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import stream_budget
-from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, ExitCode, Outcome
+from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
     from roomba_bt.robot.connection import Connection
-    from roomba_bt.transport import Transport
 
 #: The groups tried, most packets first: the first whose stream frame fits the baud rate's
 #: 15 ms budget is the one a stream could carry. Group 100 (every packet, 80 data bytes, an
@@ -117,82 +115,33 @@ def _show(value: object) -> str:
 
 
 def sensors_command(args: argparse.Namespace) -> int:
-    from roomba_bt.cli.links import auto_baud, auto_profile, far_end, make_simulator
-    from roomba_bt.cli.profile_choice import chosen_profile
-    from roomba_bt.robot.errors import ConnectionFailed, LinkDown
-    from roomba_bt.sim import WorldError
+    from roomba_bt.cli.links import talk_to_robot
 
-    problem = chosen_profile(args, "sensors")  # the current directory's project's
-    if problem is not None:
-        print(f"roomba-bt sensors: {problem}", file=sys.stderr)
-        return ExitCode.INVALID
-    try:
-        opened = auto_profile(args, "sensors")
-    except ConnectionFailed as exc:
-        print(f"roomba-bt: {exc}", file=sys.stderr)
-        return ExitCode.CONNECTION
-    profile = get_profile(args.profile)
-    warned = baud_warning(args.baud, profile, simulated=not args.port)
-    if warned is not None:
-        print(f"roomba-bt sensors: {warned}", file=sys.stderr)
-    try:
-        if args.baud is None:  # --baud auto
-            args.baud, opened = auto_baud(args.port, profile)
-        group = group_for(args.baud)
-        if group is None:
-            if opened is not None:
-                opened.close()
-            print(
-                f"roomba-bt sensors: --baud {args.baud}: no sensor stream fits in 15 ms at this "
-                f"rate (at most {stream_budget(args.baud)} bytes a frame); allowed: 9600 or more",
-                file=sys.stderr,
-            )
-            return ExitCode.INVALID
-        simulator = None
-        if not args.port:
-            try:
-                simulator = make_simulator(args.world, profile, 0)
-            except WorldError as exc:
-                from roomba_bt.cli.worlds_cmd import world_error_text
-
-                print(world_error_text(exc, "sensors"), file=sys.stderr)
-                return ExitCode.INVALID
-        link = far_end(args.port, args.baud, simulator, opened=opened)
-        _show_live(link, profile, args, group == ALL_SENSORS)
-    except LinkDown as exc:
-        if exc.mismatch is not None:  # another model's frames: a setting, as run says it
-            print(f"roomba-bt: {Outcome.WRONG_PROFILE.value}: {exc}", file=sys.stderr)
-            return Outcome.WRONG_PROFILE.exit_code
-        print(f"roomba-bt: {exc}", file=sys.stderr)
-        return ExitCode.CONNECTION
-    except ConnectionFailed as exc:
-        print(f"roomba-bt: {exc}", file=sys.stderr)
-        return ExitCode.CONNECTION
-    # a Ctrl-C or a signal goes on to main, which says "roomba-bt: interrupted" (by what) and
-    # exits 130, as every command: caught here it ended the tables without a word
-    return ExitCode.OK
+    return talk_to_robot(args, "sensors", lambda connection, _: _show_live(connection, args),
+                         refuse=_no_stream_fits)  # fmt: skip
 
 
-def _show_live(
-    link: Transport, profile: RobotProfile, args: argparse.Namespace, streamed: bool
-) -> None:
+def _no_stream_fits(profile: RobotProfile, baud: int) -> str | None:
+    """Why ``sensors`` cannot show a table at ``baud``: not even group 1 fits 15 ms."""
+    if group_for(baud) is not None:
+        return None
+    return (
+        f"--baud {baud}: no sensor stream fits in 15 ms at this rate (at most "
+        f"{stream_budget(baud)} bytes a frame); allowed: 9600 or more"
+    )
+
+
+def _show_live(connection: Connection, args: argparse.Namespace) -> int:
     """The table of every packet, ``args.rate`` times a second, ``args.count`` times (0:
-    until interrupted), from the stream (``streamed``) or else a Query List each; the robot
-    is left in Passive."""
-    from roomba_bt.cli.profile_choice import profile_setting
-    from roomba_bt.robot.connection import Connection
-    from roomba_bt.robot.safety import sigterm_raises
-
-    connection = Connection(link, profile, baud=args.baud)
-    connection.profile_setting = profile_setting(args)  # a wrong profile's fix
-    connection.waiter = "roomba-bt sensors"  # a lost stream's grace: no run waited it
-    with sigterm_raises(), connection:
-        if streamed:
-            connection.start("passive", (ALL_SENSORS,))
-            _show_streamed(connection, profile, args)
-        else:
-            connection.start("passive")  # no stream: a reply has no header to tell it apart
-            _show_queried(connection, profile, args)
+    until interrupted), from the stream where the whole of it fits the rate, else a Query
+    List each; the robot is left in Passive (the caller's ``with``)."""
+    if group_for(args.baud) == ALL_SENSORS:
+        connection.start("passive", (ALL_SENSORS,))
+        _show_streamed(connection, connection.profile, args)
+    else:
+        connection.start("passive")  # no stream: a reply has no header to tell it apart
+        _show_queried(connection, connection.profile, args)
+    return ExitCode.OK
 
 
 def _print_table(connection: Connection, profile: RobotProfile, frame: SensorFrame) -> None:
