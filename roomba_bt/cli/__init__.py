@@ -43,6 +43,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "roomba_bt.cli.sim_cmd",
     "roomba_bt.cli.worlds_cmd",
     "roomba_bt.cli.sensors_cmd",
+    "roomba_bt.cli.clock_cmd",
     "roomba_bt.cli.doctor_cmd",
     "roomba_bt.cli.eval_cmd",
     "roomba_bt.cli.monitor_cmd",

@@ -276,6 +276,17 @@ def button_bits(*buttons: str) -> int:
     return _flags("buttons", "button_bits", buttons, BUTTON_NAMES)
 
 
+#: the buttons whose press makes the robot ignore Schedule (167) and Set Day/Time (168): both
+#: specs, "If Roomba's schedule or clock button is pressed, this command will be ignored"
+CLOCK_BUTTONS: tuple[str, ...] = ("clock", "schedule")
+
+
+def held_clock_buttons(pressed: int) -> str:
+    """Which of :data:`CLOCK_BUTTONS` packet 18's ``pressed`` bits hold, said (``"clock"``,
+    ``"clock and schedule"``), or "" for neither."""
+    return " and ".join(name for name in CLOCK_BUTTONS if pressed & button_bits(name))
+
+
 def motor_bits(
     *,
     side_brush: bool = False,

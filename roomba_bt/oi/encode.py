@@ -57,6 +57,7 @@ __all__ = [
     "clean",
     "command_size",
     "control",
+    "day_number",
     "decode_command",
     "digit_leds_ascii",
     "digit_leds_raw",
@@ -691,10 +692,17 @@ def schedule_times(data: bytes | bytearray) -> dict[str, tuple[int, int]]:
     return {day: (times[2 * i], times[2 * i + 1]) for i, day in enumerate(_DAYS) if days >> i & 1}
 
 
+def day_number(day: str, command: str = "set_day_time") -> int:
+    """A day as written, its three letters or its whole English name in any case, as the OI
+    numbers it: ``day_number("Wednesday") == 3`` (0 Sunday .. 6 Saturday). Anything else
+    is an :class:`EncodeError` of ``command`` saying what is allowed."""
+    return _DAYS.index(_day_name(command, day))
+
+
 def set_day_time(day: int | str, hour: int, minute: int) -> Command:
     """Set Day/Time (168): ``set_day_time("wed", 15, 0) -> [168][3][15][0]``."""
     if isinstance(day, str):
-        day = _DAYS.index(_day_name("set_day_time", day))
+        day = day_number(day)
     return encode(168, day, hour, minute)
 
 

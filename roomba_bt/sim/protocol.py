@@ -23,7 +23,7 @@ import math
 import random
 from collections.abc import Callable
 
-from roomba_bt.oi.bits import PRESS_SECONDS, WHEEL_DROP_BITS, button_bits
+from roomba_bt.oi.bits import PRESS_SECONDS, WHEEL_DROP_BITS, button_bits, held_clock_buttons
 from roomba_bt.oi.encode import BAUD_RATES
 from roomba_bt.oi.identify import parse_firmware
 from roomba_bt.oi.modes import OIMode
@@ -31,7 +31,7 @@ from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec, Effect
 from roomba_bt.sim.cycles import BUTTON_CYCLES, CYCLES, BuiltinCycle
 from roomba_bt.sim.faults import HostLine
 from roomba_bt.sim.replies import StreamOutput
-from roomba_bt.sim.robot_clock import RobotClock, held_clock_buttons
+from roomba_bt.sim.robot_clock import RobotClock
 from roomba_bt.sim.state import TracePoint, Violation
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
@@ -467,7 +467,7 @@ class OIProtocol(StreamOutput):
 
 def _takes_clock_command(robot: OIProtocol, name: str) -> bool:
     """Whether the robot takes Schedule (167) or Set Day/Time (168) now: not while packet 18
-    shows the Clock or Schedule button pressed (robot_clock.py), said as event ``refused``."""
+    shows the Clock or Schedule button pressed (both specs), said as event ``refused``."""
     held = held_clock_buttons(robot.values[18] if robot.time < robot._buttons_until else 0)
     if held:
         robot._event("refused", f"{name} ignored: the {held} button is pressed")

@@ -1,5 +1,5 @@
 """The robot's own clock and weekly cleaning schedule: what Set Day/Time (168) and Schedule
-(167) set, and the buttons that make the robot ignore both.
+(167) set.
 
 No sensor packet reports either (both specs), so the host never reads them back; the
 simulator keeps them so that a test or ``roomba-bt clock`` can see what a robot would hold::
@@ -8,7 +8,8 @@ simulator keeps them so that a test or ``roomba-bt clock`` can see what a robot 
     [167][days][sun h][sun m] ... [sat h][sat m]
          days: bit 0 Sunday .. bit 6 Saturday; a day whose bit is clear cleans at no time
 
-Both specs: "If Roomba's schedule or clock button is pressed, this command will be ignored."
+Both specs: "If Roomba's schedule or clock button is pressed, this command will be ignored"
+(``oi.bits.held_clock_buttons``, which the protocol asks).
 Not on the step's path: an object with its own state, as the timeline is (state.py).
 """
 
@@ -16,18 +17,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from roomba_bt.oi.bits import button_bits
 from roomba_bt.oi.encode import schedule_times
 
-#: the buttons whose press makes the robot ignore Schedule (167) and Set Day/Time (168)
-CLOCK_BUTTONS: tuple[str, ...] = ("clock", "schedule")
 _WEEK_MINUTES = 7 * 24 * 60
-
-
-def held_clock_buttons(pressed: int) -> str:
-    """Which of :data:`CLOCK_BUTTONS` packet 18's ``pressed`` bits hold, said (``"clock"``,
-    ``"clock and schedule"``), or "" for neither."""
-    return " and ".join(name for name in CLOCK_BUTTONS if pressed & button_bits(name))
 
 
 @dataclass(slots=True)

@@ -1,0 +1,240 @@
+"""``roomba-bt clock``: set the robot's own clock and weekly cleaning schedule, or clear it.
+
+Two commands of the OI do it, in Passive, Safe or Full, changing no mode::
+
+    Set Day/Time (168)  [168][day][hour][minute]                  day 0 Sunday .. 6 Saturday
+    Schedule (167)      [167][days][sun h][sun m] ... [sat h][sat m]   days: bit 0 Sunday
+
+No sensor packet reports either, so on a robot the command says what it sent, and what the
+robot's buttons showed (it ignores both while its Clock or Schedule button is pressed); on
+the simulator it reads back what the simulated robot holds. The Create 2 is refused:
+``RobotProfile.clock_missing`` (docs/protocol.md, "The clock and the schedule"). The robot is
+left in Passive on every ending (``talk_to_robot``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import re
+import sys
+from typing import TYPE_CHECKING, Any
+
+from roomba_bt.cli.arguments import add_command, add_far_end_options
+from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
+
+if TYPE_CHECKING:
+    from roomba_bt.oi.encode import Command
+    from roomba_bt.oi.profiles import RobotProfile
+    from roomba_bt.robot.connection import Connection
+    from roomba_bt.sim import Simulator
+
+#: the days as a message names them, the OI's order (0 Sunday)
+DAY_TITLES = ("Sunday", "Monday", "Tuesday", "Wednesday", "Thursday", "Friday", "Saturday")
+_TIME = re.compile(r"(?P<hour>\d{1,2}):(?P<minute>\d{2})")
+TIME_ALLOWED = "a 24-hour time HH:MM, 00:00 to 23:59 (the OI takes hours 0-23, minutes 0-59)"
+DAY_ALLOWED = "sun, mon, tue, wed, thu, fri, sat, or a day's whole name (monday), any case"
+SCHEDULE_ALLOWED = (
+    'days and 24-hour times, comma-separated: "mon 09:30, wed 10:00" (each day at most '
+    "once; --clear-schedule for none)"
+)
+
+
+def register(sub: Any) -> None:
+    parser = add_command(
+        sub,
+        "clock",
+        clock_command,
+        f"""set the robot's clock and weekly cleaning schedule (Roomba 500 and 600)
+
+        Set the robot's day and time (Set Day/Time, 168) from this computer's clock
+        (--set-now) or as given (--day, --time), and its weekly cleaning schedule
+        (Schedule, 167: --schedule "mon 09:30, wed 10:00") or clear it (--clear-schedule).
+        Without any of them, say what can be known: no sensor packet reports the clock or
+        the schedule, so on a robot only whether its Clock or Schedule button is pressed
+        (the robot ignores both commands while one is); the simulator (no --port) shows
+        what it holds. The robot is left in Passive. The Create 2 (the default profile)
+        keeps no schedule and is refused: give --profile roomba600 or roomba500. Exit
+        codes: 0 done, 2 invalid option or a profile without a clock (nothing sent), 3
+        connection failure or the Clock or Schedule button pressed (nothing sent),
+        {INTERNAL_ERROR_SAID}, 130 interrupted.
+        """,
+    )
+    add_far_end_options(
+        parser,
+        port_help="serial device or URL; default: the built-in simulator",
+        world_help="simulator world (without --port)",
+    )
+    when = parser.add_mutually_exclusive_group()
+    when.add_argument(
+        "--set-now", action="store_true",
+        help="set the day and time from this computer's local time, to the nearest minute",
+    )  # fmt: skip
+    when.add_argument("--day", type=weekday, help="the day to set (with --time): mon, Monday, ...")
+    parser.add_argument("--time", type=time_of_day, help="the time to set (with --day): HH:MM")
+    weekly = parser.add_mutually_exclusive_group()
+    weekly.add_argument(
+        "--schedule", type=weekly_schedule, metavar="'DAY HH:MM, ...'",
+        help='clean on these days at these times: "mon 09:30, wed 10:00"; other days not',
+    )  # fmt: skip
+    weekly.add_argument(
+        "--clear-schedule", action="store_true", help="no scheduled cleaning (all 0s)"
+    )
+
+
+def weekday(text: str) -> int:
+    """``--day``: a day as the OI numbers it (0 Sunday)."""
+    from roomba_bt.oi.encode import day_number
+    from roomba_bt.oi.errors import EncodeError
+
+    try:
+        return day_number(text.strip())
+    except EncodeError:
+        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {DAY_ALLOWED}") from None
+
+
+def time_of_day(text: str) -> tuple[int, int]:
+    """``--time``: a 24-hour ``HH:MM`` as (hour, minute)."""
+    found = _TIME.fullmatch(text.strip())
+    if found is None or int(found["hour"]) > 23 or int(found["minute"]) > 59:
+        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {TIME_ALLOWED}")
+    return int(found["hour"]), int(found["minute"])
+
+
+def weekly_schedule(text: str) -> dict[str, tuple[int, int]]:
+    """``--schedule``: ``"mon 09:30, wed 10:00"`` as ``{"mon": (9, 30), "wed": (10, 0)}``;
+    the entry at fault named by its place and text."""
+    from roomba_bt.oi.bits import WEEKDAYS
+
+    times: dict[str, tuple[int, int]] = {}
+    for place, entry in enumerate(text.split(","), 1):
+        words = entry.split()
+        said = f"entry {place}, {entry.strip()!r}"
+        if len(words) != 2:
+            raise argparse.ArgumentTypeError(
+                f"{said}: found {len(words)} word(s); allowed: {SCHEDULE_ALLOWED}"
+            )
+        try:
+            day = WEEKDAYS[weekday(words[0])]
+            at = time_of_day(words[1])
+        except argparse.ArgumentTypeError as exc:
+            raise argparse.ArgumentTypeError(f"{said}: {exc}") from None
+        if day in times:
+            raise argparse.ArgumentTypeError(
+                f"{said}: {DAY_TITLES[WEEKDAYS.index(day)]} a second time; allowed: "
+                f"{SCHEDULE_ALLOWED}"
+            )
+        times[day] = at
+    return times
+
+
+def host_now() -> datetime.datetime:
+    """This computer's local time (a test's stand-in replaces it)."""
+    return datetime.datetime.now()
+
+
+def nearest_minute(now: datetime.datetime) -> tuple[int, int, int]:
+    """``now`` as the OI's day (0 Sunday), hour and minute, to the nearest minute: the OI
+    takes no seconds, so 21:35:50 is sent as 21:36 (10 s ahead, not 50 s behind)."""
+    rounded = (now + datetime.timedelta(seconds=30)).replace(second=0, microsecond=0)
+    return rounded.isoweekday() % 7, rounded.hour, rounded.minute
+
+
+def clock_said(day: int, hour: int, minute: int) -> str:
+    return f"{DAY_TITLES[day]} {hour:02d}:{minute:02d}"
+
+
+def schedule_said(times: dict[str, tuple[int, int]]) -> str:
+    """``Mon 09:30, Wed 10:00`` (Sunday first), or that nothing is scheduled."""
+    from roomba_bt.oi.bits import WEEKDAYS
+
+    if not times:
+        return "none (no scheduled cleaning)"
+    return ", ".join(
+        f"{day.title()} {times[day][0]:02d}:{times[day][1]:02d}" for day in WEEKDAYS if day in times
+    )
+
+
+def _commands(args: argparse.Namespace) -> list[tuple[str, Command]]:
+    """What to send, in order (the clock first), each with what it sets, said."""
+    from roomba_bt.oi import commands
+
+    sent: list[tuple[str, Command]] = []
+    if args.set_now:
+        day, hour, minute = nearest_minute(host_now())
+        sent.append((f"clock     {clock_said(day, hour, minute)}",
+                     commands.set_day_time(day, hour, minute)))  # fmt: skip
+    elif args.day is not None:
+        sent.append((f"clock     {clock_said(args.day, *args.time)}",
+                     commands.set_day_time(args.day, *args.time)))  # fmt: skip
+    if args.schedule is not None or args.clear_schedule:
+        times = args.schedule or {}
+        sent.append((f"schedule  {schedule_said(times)}", commands.schedule(times)))
+    return sent
+
+
+def clock_command(args: argparse.Namespace) -> int:
+    from roomba_bt.cli.links import talk_to_robot
+
+    if (args.day is None) != (args.time is None):
+        given, missing = ("--day", "--time") if args.time is None else ("--time", "--day")
+        print(f"roomba-bt clock: {given} needs {missing} too (the OI sets a day and a time "
+              "together: --day wed --time 15:30), or --set-now", file=sys.stderr)  # fmt: skip
+        return ExitCode.INVALID
+    to_send = _commands(args)
+
+    def session(connection: Connection, simulator: Simulator | None) -> int:
+        return _set(connection, simulator, to_send)
+
+    return talk_to_robot(args, "clock", session, refuse=_without_clock)
+
+
+def _without_clock(profile: RobotProfile, baud: int) -> str | None:
+    """The refusal of a model that keeps no clock, with the fix."""
+    missing = profile.clock_missing()
+    if missing is None:
+        return None
+    return f"{missing}: give --profile roomba600 (or roomba500) if your robot is one"
+
+
+def _set(
+    connection: Connection, simulator: Simulator | None, to_send: list[tuple[str, Command]]
+) -> int:
+    """Start in Passive, look at the Clock and Schedule buttons, send ``to_send``, and say
+    what was sent and, on the simulator, what it holds now."""
+    from roomba_bt.oi.bits import held_clock_buttons
+    from roomba_bt.oi.packets import packet_ids
+    from roomba_bt.robot.errors import ConnectionFailed
+
+    connection.start("passive")
+    frame = connection.query(packet_ids("buttons"))
+    if frame is None:
+        raise ConnectionFailed(connection.name, "no reply to a Query List (149) of its buttons")
+    held = held_clock_buttons(frame[18])
+    print(f"{connection.name}  ({connection.profile.title}), {connection.mode.label}")
+    if held and to_send:
+        print(f"roomba-bt clock: the robot's {held} button is pressed, and while it is the "
+              "robot ignores Set Day/Time (168) and Schedule (167) (both OI specs); nothing "
+              "was sent: release it and run this again", file=sys.stderr)  # fmt: skip
+        return ExitCode.CONNECTION
+    if to_send:
+        connection.send_many(command for _, command in to_send)
+        for said, command in to_send:
+            print(f"sent {said}   [{' '.join(str(b) for b in command.data)}]")
+    if simulator is not None:
+        print(
+            f"the simulator's clock     {clock_said(*simulator.robot_clock.shows(simulator.time))}"
+        )
+        print(f"the simulator's schedule  {schedule_said(simulator.robot_clock.cleans)}")
+    elif not to_send:
+        pressed = (
+            f"its {held} button is pressed"
+            if held
+            else "its Clock and Schedule buttons are not pressed"
+        )
+        print(
+            "the robot reports neither its clock nor its schedule (no sensor packet carries "
+            f"them; its display shows the clock); {pressed}. Set them with --set-now or "
+            '--day/--time, and --schedule "mon 09:30, ..." or --clear-schedule'
+        )
+    return ExitCode.OK
