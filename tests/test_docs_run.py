@@ -498,6 +498,8 @@ class Quoted:
 QUOTED = [
     Quoted("docs/robot.md", "roomba-bt run: ROOMBA_BT_PROFILE=", "roomba-bt run dock --fast", 2,
            env=(("ROOMBA_BT_PROFILE", "roomba560"),)),
+    Quoted("docs/robot.md", "roomba-bt clock: the iRobot Create 2", "roomba-bt clock --set-now",
+           2),
     Quoted("docs/ci.md", "roomba-bt eval: w1.yaml: failed --strict",
            "roomba-bt eval w1.yaml --strict --runs 1", 7,
            files=W1),
@@ -560,6 +562,8 @@ QUOTED = [
 #: broken plugin installed): the test that makes the line holds the page to it with
 #: ``quoted.assert_quoted`` (the page, how the quote begins: the test named).
 QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
+    ("docs/robot.md", "roomba-bt clock: the robot's clock button is pressed"): "tests/cli/"
+    "test_clock_cmd.py::test_a_clock_button_held_sends_nothing_and_says_why",
     ("docs/runtime.md", "replay: interrupted at mission time"): "tests/cli/"
     "test_replay_interrupted.py::test_a_replay_interrupted_exits_130_and_judges_no_bytes",
     ("docs/runtime.md", "roomba-bt: SIGINT came while Python ran"): "tests/cli/test_entry.py::"

@@ -358,3 +358,17 @@ def test_every_command_function_says_what_it_sends() -> None:
         and not (function.__doc__ or "").strip()
     ]
     assert bare == []
+
+
+def test_schedule_times_reads_a_schedule_back_and_skips_days_whose_bit_is_clear() -> None:
+    """The robot's side of ``schedule``: the simulator and ``roomba-bt clock`` read a
+    Schedule (167)'s bytes with it. A day's hour and minute without its bit clean at no
+    time (the days byte says which days clean)."""
+    times = {"sun": (7, 0), "wed": (15, 0), "fri": (10, 36)}
+    assert c.schedule_times(c.schedule(times).data[1:]) == times
+    assert c.schedule_times(bytes([40, 0, 0, 9, 30, 0, 0, 15, 0, 0, 0, 10, 36, 0, 0])) == {
+        "wed": (15, 0),
+        "fri": (10, 36),
+    }  # Monday's 09:30 has no bit: not a day it cleans
+    assert c.schedule_times(bytes(15)) == {}
+    assert c.day_number("Saturday") == 6 and c.day_number("SUN") == 0
