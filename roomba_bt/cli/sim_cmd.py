@@ -115,6 +115,12 @@ def run_sim(args: argparse.Namespace) -> int:
         f"wheels {simulator.requested_left:.0f}/{simulator.requested_right:.0f} mm/s",
         file=sys.stderr,
     )
+    if simulator.robot_clock.touched:  # what a client set, which no packet reads back
+        from roomba_bt.cli.clock_cmd import clock_said, schedule_said
+
+        held = simulator.robot_clock
+        print(f"roomba-bt sim: the robot's clock reads {clock_said(*held.shows(simulator.time))}"
+              f", its schedule {schedule_said(held.cleans)}", file=sys.stderr)  # fmt: skip
     from roomba_bt.sim.narrate import after_the_cut, what_the_line_did
 
     line = what_the_line_did(simulator)

@@ -476,7 +476,7 @@ def _takes_clock_command(robot: OIProtocol, name: str) -> bool:
 
 def _on_schedule(robot: OIProtocol, args: bytes) -> None:
     if _takes_clock_command(robot, "schedule"):
-        robot.robot_clock.schedule = bytes(args)
+        robot.robot_clock.set_schedule(args)
 
 
 def _on_day_time(robot: OIProtocol, args: bytes) -> None:

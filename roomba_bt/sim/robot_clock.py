@@ -32,11 +32,19 @@ class RobotClock:
     day_time: tuple[int, int, int] = (0, 0, 0)
     set_at: float = 0.0
     schedule: bytes = bytes(15)
+    #: whether a host set either since power-on (``sim``'s summary says what it holds)
+    touched: bool = False
 
     def set(self, data: bytes, now: float) -> None:
         """Set Day/Time (168)'s three data bytes, taken at ``now``."""
         self.day_time = (data[0], data[1], data[2])
         self.set_at = now
+        self.touched = True
+
+    def set_schedule(self, data: bytes) -> None:
+        """Schedule (167)'s fifteen data bytes, taken."""
+        self.schedule = bytes(data)
+        self.touched = True
 
     def shows(self, now: float) -> tuple[int, int, int]:
         """The day (0 Sunday), hour and minute the clock reads at ``now``: the time set, run

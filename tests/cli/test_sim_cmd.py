@@ -81,3 +81,28 @@ def test_sim_refuses_an_empty_battery(capsys: pytest.CaptureFixture[str]) -> Non
         main(["sim", "--pty", "--battery", "0"])
     assert exited.value.code == 2
     assert "an empty battery switches the simulated robot off" in capsys.readouterr().err
+
+
+def test_the_served_simulator_says_the_clock_and_schedule_a_client_set(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No packet reads the clock back, so a client's own Set Day/Time (168) and Schedule
+    (167) on a pty were seen nowhere but ``--log``: the summary says what the robot holds,
+    its clock run on by the simulated time, and says nothing of a clock nobody set."""
+    from roomba_bt.oi import commands
+
+    sent = commands.set_day_time("fri", 8, 59).data + commands.schedule({"tue": (9, 30)}).data
+
+    def serve(simulator: Simulator, endpoint: object, duration: object, **_: object) -> None:
+        endpoint.close()  # type: ignore[attr-defined]
+        simulator.receive(commands.start().data + sent)
+        for _ in range(4000):  # a minute of robot time
+            simulator.step()
+
+    monkeypatch.setattr(sim_cmd, "_serve_until_stopped", serve)
+    assert main(["sim", "--pty", "--profile", "roomba600"]) == 0
+    said = capsys.readouterr().err
+    assert "roomba-bt sim: the robot's clock reads Friday 09:00, its schedule Tue 09:30" in said
+    sent = b""
+    assert main(["sim", "--pty", "--profile", "roomba600"]) == 0
+    assert "clock" not in capsys.readouterr().err
