@@ -564,6 +564,8 @@ QUOTED = [
 QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     ("docs/robot.md", "roomba-bt clock: the robot's clock button is pressed"): "tests/cli/"
     "test_clock_cmd.py::test_a_clock_button_held_sends_nothing_and_says_why",
+    ("docs/simulator.md", "roomba-bt sim: the robot's clock reads"): "tests/cli/"
+    "test_sim_cmd.py::test_the_served_simulator_says_the_clock_and_schedule_a_client_set",
     ("docs/runtime.md", "replay: interrupted at mission time"): "tests/cli/"
     "test_replay_interrupted.py::test_a_replay_interrupted_exits_130_and_judges_no_bytes",
     ("docs/runtime.md", "roomba-bt: SIGINT came while Python ran"): "tests/cli/test_entry.py::"
