@@ -91,12 +91,14 @@ def test_the_create2_is_refused_before_anything_is_sent(
     assert simulators == []  # nothing made, nothing sent
 
 
-def test_the_create2_refused_on_a_port_sends_nothing(capsys: pytest.CaptureFixture[str]) -> None:
-    from roomba_bt.oi.profiles import CREATE2
-
-    with sim_pty_server(CREATE2, "--log") as port:
-        assert main(["clock", "--port", port, "--profile", "create2", "--set-now"]) == 2
-    assert "keeps no clock" in capsys.readouterr().err
+def test_the_create2_is_refused_on_a_port_before_it_is_opened(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The refusal comes before the port is opened: a port that is none is never tried."""
+    missing = tmp_path / "ttyNONE"
+    assert main(["clock", "--port", str(missing), "--profile", "create2", "--set-now"]) == 2
+    err = capsys.readouterr().err
+    assert "keeps no clock" in err and "could not open" not in err
 
 
 def test_set_over_a_pty_as_on_a_robot(capsys: pytest.CaptureFixture[str]) -> None:
