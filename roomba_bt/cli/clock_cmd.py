@@ -45,7 +45,7 @@ def register(sub: Any) -> None:
         sub,
         "clock",
         clock_command,
-        f"""set the robot's clock and weekly cleaning schedule (Roomba 500 and 600)
+        f"""set a Roomba 500/600's clock and weekly cleaning schedule
 
         Set the robot's day and time (Set Day/Time, 168) from this computer's clock
         (--set-now) or as given (--day, --time), and its weekly cleaning schedule
