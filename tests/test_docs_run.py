@@ -564,6 +564,8 @@ QUOTED = [
 QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     ("docs/robot.md", "roomba-bt clock: the robot's clock button is pressed"): "tests/cli/"
     "test_clock_cmd.py::test_a_clock_button_held_sends_nothing_and_says_why",
+    ("docs/robot.md", "weekly.yaml:3:11: found"): "tests/cli/"
+    "test_clock_cmd.py::test_the_schedule_file_fault_docs_quote",
     ("docs/simulator.md", "roomba-bt sim: the robot's clock reads"): "tests/cli/"
     "test_sim_cmd.py::test_the_served_simulator_says_the_clock_and_schedule_a_client_set",
     ("docs/runtime.md", "replay: interrupted at mission time"): "tests/cli/"

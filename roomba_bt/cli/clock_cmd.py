@@ -18,6 +18,7 @@ import argparse
 import datetime
 import re
 import sys
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import add_command, add_far_end_options
@@ -49,7 +50,8 @@ def register(sub: Any) -> None:
 
         Set the robot's day and time (Set Day/Time, 168) from this computer's clock
         (--set-now) or as given (--day, --time), and its weekly cleaning schedule
-        (Schedule, 167: --schedule "mon 09:30, wed 10:00") or clear it (--clear-schedule).
+        (Schedule, 167: --schedule "mon 09:30, wed 10:00", or a YAML file of days and times,
+        --schedule-file) or clear it (--clear-schedule).
         Without any of them, say what can be known: no sensor packet reports the clock or
         the schedule, so on a robot only whether its Clock or Schedule button is pressed
         (the robot ignores both commands while one is); the simulator (no --port) shows
@@ -78,6 +80,10 @@ def register(sub: Any) -> None:
         help='clean on these days at these times: "mon 09:30, wed 10:00"; other days not',
     )  # fmt: skip
     weekly.add_argument(
+        "--schedule-file", type=Path, metavar="FILE",
+        help="the same from a YAML file of days and times (mon: 09:30, one a line)",
+    )  # fmt: skip
+    weekly.add_argument(
         "--clear-schedule", action="store_true", help="no scheduled cleaning (all 0s)"
     )
 
@@ -104,8 +110,6 @@ def time_of_day(text: str) -> tuple[int, int]:
 def weekly_schedule(text: str) -> dict[str, tuple[int, int]]:
     """``--schedule``: ``"mon 09:30, wed 10:00"`` as ``{"mon": (9, 30), "wed": (10, 0)}``;
     the entry at fault named by its place and text."""
-    from roomba_bt.oi.bits import WEEKDAYS
-
     times: dict[str, tuple[int, int]] = {}
     for place, entry in enumerate(text.split(","), 1):
         words = entry.split()
@@ -115,16 +119,93 @@ def weekly_schedule(text: str) -> dict[str, tuple[int, int]]:
                 f"{said}: found {len(words)} word(s); allowed: {SCHEDULE_ALLOWED}"
             )
         try:
-            day = WEEKDAYS[weekday(words[0])]
-            at = time_of_day(words[1])
+            _add_day(times, words[0], words[1])
         except argparse.ArgumentTypeError as exc:
             raise argparse.ArgumentTypeError(f"{said}: {exc}") from None
-        if day in times:
-            raise argparse.ArgumentTypeError(
-                f"{said}: {DAY_TITLES[WEEKDAYS.index(day)]} a second time; allowed: "
-                f"{SCHEDULE_ALLOWED}"
-            )
-        times[day] = at
+    return times
+
+
+def _add_day(times: dict[str, tuple[int, int]], day_text: str, time_text: str) -> None:
+    """One day of a schedule and its time, as written, added to ``times``; a day given a
+    second time, or a day or time that is none, is an ArgumentTypeError saying so."""
+    day = _day_once(times, day_text)
+    times[day] = time_of_day(time_text)
+
+
+def _day_once(times: dict[str, tuple[int, int]], day_text: str) -> str:
+    """``day_text``'s day (``mon``), refused if it is none or ``times`` holds it already."""
+    from roomba_bt.oi.bits import WEEKDAYS
+
+    day = WEEKDAYS[weekday(day_text)]
+    if day in times:
+        raise argparse.ArgumentTypeError(
+            f"{DAY_TITLES[WEEKDAYS.index(day)]} a second time; allowed: each day at most once"
+        )
+    return day
+
+
+class ScheduleFileError(ValueError):
+    """What is wrong with a ``--schedule-file``: at ``file:line:col`` when ``placed``."""
+
+    def __init__(self, message: str, placed: bool) -> None:
+        super().__init__(message)
+        self.placed = placed
+
+
+def schedule_file(path: Path) -> dict[str, tuple[int, int]]:
+    """``--schedule-file``: a YAML mapping of days to 24-hour times, one a line::
+
+        # the robot cleans on Monday at 09:30 and on Thursday at 18:00
+        mon: 09:30
+        thursday: "18:00"
+
+    as :func:`weekly_schedule`'s dict (an empty mapping, ``{}``: no scheduled cleaning; an
+    empty file is refused, as a file cut short may be); :class:`ScheduleFileError` says what
+    is wrong, at ``file:line:col`` where it has a place. A file with no day among its keys
+    is said not to be a schedule, quoting none of it (a path may name any file)."""
+    import yaml
+
+    from roomba_bt import yamlsource
+    from roomba_bt.oi.bits import WEEKDAYS
+
+    shown = f"--schedule-file {yamlsource.quoted(str(path))}"
+    try:
+        root = yamlsource.compose(yamlsource.read_text(path))
+    except OSError as exc:
+        raise ScheduleFileError(f"{shown}: {exc.strerror or exc}", False) from None
+    except (UnicodeDecodeError, yamlsource.FileTooLarge) as exc:
+        raise ScheduleFileError(f"{shown}: not a schedule file ({exc})", False) from None
+    except yaml.YAMLError as exc:
+        line, column = yamlsource.error_position(exc) or (1, 1)
+        problem = getattr(exc, "problem", None) or exc
+        raise ScheduleFileError(f"{path}:{line}:{column}: {problem}", True) from None
+    if root is None:
+        raise ScheduleFileError(
+            f"{shown}: the file holds no days; allowed: days and their times (mon: 09:30), "
+            "or {} for no scheduled cleaning (--clear-schedule)", False,
+        )  # fmt: skip
+    if isinstance(root, yaml.MappingNode) and not root.value:
+        return {}
+    days = (*WEEKDAYS, *(title.lower() for title in DAY_TITLES))
+    if not isinstance(root, yaml.MappingNode) or not yamlsource.holds_some_of(root, days):
+        raise ScheduleFileError(
+            f"{shown}: not a schedule file: expected a mapping of days to 24-hour times, one "
+            "a line (mon: 09:30)", False,
+        )  # fmt: skip
+    times: dict[str, tuple[int, int]] = {}
+    for key, value in root.value:
+        at = key  # the node a problem is said at: the day's, or its time's
+        try:
+            if not isinstance(key, yaml.ScalarNode) or not isinstance(value, yaml.ScalarNode):
+                raise argparse.ArgumentTypeError(
+                    "found a list or a mapping; allowed: a day and its 24-hour time (mon: 09:30)"
+                )
+            day = _day_once(times, key.value)
+            at = value
+            times[day] = time_of_day(value.value)
+        except argparse.ArgumentTypeError as exc:
+            line, column = yamlsource.position(at)
+            raise ScheduleFileError(f"{path}:{line}:{column}: {exc}", True) from None
     return times
 
 
@@ -168,7 +249,7 @@ def _commands(args: argparse.Namespace) -> list[tuple[str, Command]]:
         sent.append((f"clock     {clock_said(args.day, *args.time)}",
                      commands.set_day_time(args.day, *args.time)))  # fmt: skip
     if args.schedule is not None or args.clear_schedule:
-        times = args.schedule or {}
+        times: dict[str, tuple[int, int]] = args.schedule or {}
         sent.append((f"schedule  {schedule_said(times)}", commands.schedule(times)))
     return sent
 
@@ -181,6 +262,13 @@ def clock_command(args: argparse.Namespace) -> int:
         print(f"roomba-bt clock: {given} needs {missing} too (the OI sets a day and a time "
               "together: --day wed --time 15:30), or --set-now", file=sys.stderr)  # fmt: skip
         return ExitCode.INVALID
+    if args.schedule_file is not None:
+        try:
+            args.schedule = schedule_file(args.schedule_file)
+        except ScheduleFileError as exc:
+            print(exc if exc.placed else f"roomba-bt clock: {exc}", file=sys.stderr)
+            return ExitCode.INVALID
+        args.clear_schedule = not args.schedule
     to_send = _commands(args)
 
     def session(connection: Connection, simulator: Simulator | None) -> int:

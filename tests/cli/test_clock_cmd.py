@@ -185,3 +185,65 @@ def test_a_port_that_cannot_be_opened_is_exit_3(
                  "--set-now"])  # fmt: skip
     assert code == 3
     assert "could not open the port" in capsys.readouterr().err
+
+
+def test_a_schedule_file_is_read_as_the_option_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], simulators: list[Simulator]
+) -> None:
+    """Days to 24-hour times, one a line; an unquoted 09:30 is the text written (YAML 1.1
+    would read 9:30 as the number 570), and {} clears the schedule."""
+    weekly = tmp_path / "weekly.yaml"
+    weekly.write_text("# the robot's week\nmon: 9:30\nThursday: '18:00'\n")
+    assert main(["clock", "--profile", "roomba600", "--schedule-file", str(weekly)]) == 0
+    assert "the simulator's schedule  Mon 09:30, Thu 18:00" in capsys.readouterr().out
+    weekly.write_text("{}\n")
+    assert main(["clock", "--profile", "roomba600", "--schedule-file", str(weekly)]) == 0
+    assert "sent schedule  none (no scheduled cleaning)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("mon: 09:30\nwed: 25:00\n", "s.yaml:2:6: found '25:00'; allowed: a 24-hour time"),
+        ("mon: 09:30\nMonday: 10:00\n",
+         "s.yaml:2:1: Monday a second time; allowed: each day at most once"),
+        ("funday: 09:30\nmon: 10:00\n", "s.yaml:1:1: found 'funday'; allowed: sun, mon,"),
+        ("mon: [09:30]\n", "s.yaml:1:1: found a list or a mapping; allowed: a day and its"),
+        ("mon: 09:30\n  wed: 1\n", "s.yaml:2:6: mapping values are not allowed in this context"),
+        ("", "roomba-bt clock: --schedule-file 's.yaml': the file holds no days"),
+        ("root:x:0:0:root:/root:/bin/bash\n",
+         "roomba-bt clock: --schedule-file 's.yaml': not a schedule file: expected a mapping"),
+    ],
+)  # fmt: skip
+def test_a_schedule_file_s_faults_are_said_at_their_line_and_column(
+    text: str,
+    said: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    simulators: list[Simulator],
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    Path("s.yaml").write_text(text)
+    assert main(["clock", "--profile", "roomba600", "--schedule-file", "s.yaml"]) == 2
+    err = capsys.readouterr().err
+    assert said in err
+    assert "root:/root" not in err  # another kind of file: none of it quoted
+    assert simulators == []  # nothing started
+
+
+def test_a_schedule_file_that_is_not_there_is_a_usage_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    missing = tmp_path / "nope.yaml"
+    assert main(["clock", "--profile", "roomba600", "--schedule-file", str(missing)]) == 2
+    assert "No such file or directory" in capsys.readouterr().err
+
+
+def test_the_schedule_file_fault_docs_quote(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    Path("weekly.yaml").write_text("# weekly\nmon: 9:30\nthursday: 25:00\n")
+    assert main(["clock", "--profile", "roomba600", "--schedule-file", "weekly.yaml"]) == 2
+    assert_quoted("docs/robot.md", "weekly.yaml:3:11: found", capsys.readouterr().err)
