@@ -277,7 +277,7 @@ def clock_command(args: argparse.Namespace) -> int:
     return talk_to_robot(args, "clock", session, refuse=_without_clock)
 
 
-def _without_clock(profile: RobotProfile, baud: int) -> str | None:
+def _without_clock(profile: RobotProfile, baud: int | None) -> str | None:
     """The refusal of a model that keeps no clock, with the fix."""
     missing = profile.clock_missing()
     if missing is None:

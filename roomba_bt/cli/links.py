@@ -188,15 +188,16 @@ def talk_to_robot(
     command: str,
     session: Session,
     *,
-    refuse: Callable[[RobotProfile, int], str | None] | None = None,
+    refuse: Callable[[RobotProfile, int | None], str | None] | None = None,
 ) -> int:
     """``roomba-bt COMMAND``'s one connection to the robot on ``--port`` or the simulator
     (``sensors``, ``clock``), its exit code: the model chosen (``--profile``, its setting,
-    ``auto`` identified on the port), the rate (``--baud auto`` found), ``refuse(profile,
-    baud)``'s usage error if it has one (exit 2: nothing sent, unless ``auto`` had to ask
-    the robot first), the simulator (``--world``), and the :class:`Connection` handed to
-    ``session`` in a ``with``, so that every ending, an exception or a signal too, stops the
-    robot and leaves it in Passive. A wrong profile (the robot's frames are another
+    ``auto`` identified on the port), ``refuse(profile, baud)``'s usage error if it has one
+    (exit 2: nothing sent, unless ``auto`` had to ask the robot first; asked before
+    ``--baud auto`` probes the port, with None, and again with the rate found), the
+    simulator (``--world``), and the :class:`Connection` handed to ``session`` in a
+    ``with``, so that every ending, an exception or a signal too, stops the robot and leaves
+    it in Passive. A wrong profile (the robot's frames are another
     model's) is exit 2, as ``run`` says it; a port or a robot that fails, exit 3."""
     from roomba_bt.cli.arguments import baud_warning
     from roomba_bt.cli.profile_choice import chosen_profile
@@ -243,7 +244,7 @@ def _connection(
     command: str,
     profile: RobotProfile,
     opened: SerialTransport | None,
-    refuse: Callable[[RobotProfile, int], str | None] | None,
+    refuse: Callable[[RobotProfile, int | None], str | None] | None,
 ) -> tuple[Connection, Simulator | None] | int:
     """:func:`talk_to_robot`'s connection, not started, and its simulator (None on a port);
     or the exit code of a usage error, said (the port ``--baud auto`` or ``auto`` opened
@@ -253,9 +254,10 @@ def _connection(
     from roomba_bt.runtime.summary import ExitCode
     from roomba_bt.sim import WorldError
 
-    if args.baud is None:  # --baud auto
+    refused = None if refuse is None else refuse(profile, args.baud)  # before any probe
+    if refused is None and args.baud is None:  # --baud auto: the rate found, checked too
         args.baud, opened = auto_baud(args.port, profile)
-    refused = None if refuse is None else refuse(profile, args.baud)
+        refused = None if refuse is None else refuse(profile, args.baud)
     if refused is not None:
         if opened is not None:
             opened.close()

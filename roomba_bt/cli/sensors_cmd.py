@@ -121,9 +121,10 @@ def sensors_command(args: argparse.Namespace) -> int:
                          refuse=_no_stream_fits)  # fmt: skip
 
 
-def _no_stream_fits(profile: RobotProfile, baud: int) -> str | None:
-    """Why ``sensors`` cannot show a table at ``baud``: not even group 1 fits 15 ms."""
-    if group_for(baud) is not None:
+def _no_stream_fits(profile: RobotProfile, baud: int | None) -> str | None:
+    """Why ``sensors`` cannot show a table at ``baud``: not even group 1 fits 15 ms (None,
+    ``--baud auto`` before its probe: any rate it finds carries one)."""
+    if baud is None or group_for(baud) is not None:
         return None
     return (
         f"--baud {baud}: no sensor stream fits in 15 ms at this rate (at most "

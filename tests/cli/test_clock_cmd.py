@@ -247,3 +247,16 @@ def test_the_schedule_file_fault_docs_quote(
     Path("weekly.yaml").write_text("# weekly\nmon: 9:30\nthursday: 25:00\n")
     assert main(["clock", "--profile", "roomba600", "--schedule-file", "weekly.yaml"]) == 2
     assert_quoted("docs/robot.md", "weekly.yaml:3:11: found", capsys.readouterr().err)
+
+
+def test_the_create2_is_refused_before_baud_auto_probes_the_port(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--baud auto`` opens the port and may pulse BRC to find the rate: a model the
+    command refuses whatever the rate is refused first (it opened the port, and said exit
+    3 of a port that is none, for a command that could never have run)."""
+    missing = tmp_path / "ttyNONE"
+    code = main(["clock", "--port", str(missing), "--profile", "create2", "--baud", "auto",
+                 "--set-now"])  # fmt: skip
+    assert code == 2
+    assert "keeps no clock" in capsys.readouterr().err
