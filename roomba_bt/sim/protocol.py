@@ -140,6 +140,17 @@ class OIProtocol(StreamOutput):
         #: where the wheel commands are accepted (drives_wheels: the three are actuators)
         self._drive_modes = self._commands[_DRIVE].modes
 
+    @property
+    def day_time(self) -> tuple[int, int, int]:
+        """Set Day/Time (168)'s day, hour and minute as last taken, as 0.2.0 kept them
+        (the clock as it runs on: ``robot_clock.shows(time)``)."""
+        return self.robot_clock.day_time
+
+    @property
+    def schedule(self) -> bytes:
+        """Schedule (167)'s data bytes as last taken, as 0.2.0 kept them."""
+        return self.robot_clock.schedule
+
     # ------------------------------------------------------------------ host -> robot
     def receive(self, data: bytes | bytearray) -> None:
         """Take bytes from the host. A command whose data bytes have not all arrived waits

@@ -228,6 +228,7 @@ def test_leds_digits_scheduling_leds_schedule_and_clock_are_kept() -> None:
     assert host.sim.scheduling_leds == (3, 1)
     assert host.sim.robot_clock.day_time == (3, 15, 30)
     assert host.sim.robot_clock.schedule[0] == 8
+    assert host.sim.day_time == (3, 15, 30) and host.sim.schedule[0] == 8  # 0.2.0's names
 
 
 def test_the_clock_runs_on_from_the_time_it_was_set_and_the_week_wraps() -> None:
