@@ -274,15 +274,30 @@ def clock_command(args: argparse.Namespace) -> int:
     def session(connection: Connection, simulator: Simulator | None) -> int:
         return _set(connection, simulator, to_send)
 
-    return talk_to_robot(args, "clock", session, refuse=_without_clock)
+    def refuse(profile: RobotProfile, baud: int | None) -> str | None:
+        return without_clock(profile, args)
+
+    return talk_to_robot(args, "clock", session, refuse=refuse)
 
 
-def _without_clock(profile: RobotProfile, baud: int | None) -> str | None:
-    """The refusal of a model that keeps no clock, with the fix."""
+def without_clock(profile: RobotProfile, args: argparse.Namespace) -> str | None:
+    """The refusal of a model that keeps no clock, with the fix made where the model was
+    named (``ROOMBA_BT_PROFILE=create2`` was told to give --profile, which fixed one
+    command and not the next): the flag, the variable or the project file's line."""
+    from roomba_bt.cli.profile_choice import profile_setting
+    from roomba_bt.project import PROFILE_KEY
+
     missing = profile.clock_missing()
     if missing is None:
         return None
-    return f"{missing}: give --profile roomba600 (or roomba500) if your robot is one"
+    setting = profile_setting(args)
+    if setting is None or setting.startswith("-"):
+        fix = "give --profile roomba600 (or roomba500)"
+    elif setting.isidentifier():
+        fix = f"set {setting}=roomba600 (or roomba500), or give --profile roomba600"
+    else:
+        fix = f'set {PROFILE_KEY} = "roomba600" (or "roomba500") at {setting}'
+    return f"{missing}: {fix} if your robot is one"
 
 
 def _set(

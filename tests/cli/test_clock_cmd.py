@@ -260,3 +260,19 @@ def test_the_create2_is_refused_before_baud_auto_probes_the_port(
                  "--set-now"])  # fmt: skip
     assert code == 2
     assert "keeps no clock" in capsys.readouterr().err
+
+
+def test_the_create2_s_refusal_says_the_fix_where_the_model_was_named(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A Create 2 named by ROOMBA_BT_PROFILE or the project file was told to give
+    --profile, which fixed this one command and not the next."""
+    monkeypatch.setenv("ROOMBA_BT_PROFILE", "create2")
+    assert main(["clock"]) == 2
+    assert "set ROOMBA_BT_PROFILE=roomba600 (or roomba500)" in capsys.readouterr().err
+    monkeypatch.delenv("ROOMBA_BT_PROFILE")
+    monkeypatch.chdir(tmp_path)
+    Path("pyproject.toml").write_text('[tool.roomba-bt]\nprofile = "create2"\n')
+    assert main(["clock"]) == 2
+    err = capsys.readouterr().err
+    assert f'set profile = "roomba600" (or "roomba500") at {tmp_path / "pyproject.toml"}:2' in err
