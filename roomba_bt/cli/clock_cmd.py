@@ -59,7 +59,8 @@ def register(sub: Any) -> None:
         keeps no schedule and is refused: give --profile roomba600 or roomba500. Exit
         codes: 0 done, 2 invalid option or a profile without a clock (nothing sent), 3
         connection failure or the Clock or Schedule button pressed (nothing sent),
-        {INTERNAL_ERROR_SAID}, 130 interrupted.
+        {INTERNAL_ERROR_SAID}, 130 interrupted. More: roomba-bt docs robot, "The robot's
+        clock and weekly schedule".
         """,
     )
     add_far_end_options(
