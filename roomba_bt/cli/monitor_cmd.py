@@ -433,8 +433,7 @@ class LiveMonitor:
             # last one): the banner says it, and the robot panel shows it in place of the
             # last tick's Safe, wheels turning and brushes on
             ending = Ending.of(summary)
-            after = f"final mode {ending.mode}; safe stop {ending.safe_stop}"
-            self.feed.end(f"{ending.outcome} ({after})", ending)
+            self.feed.end(ending.banner(), ending)
         self._done.set()
         logging.getLogger("roomba_bt").removeHandler(self._handler)
         for thread in self._threads:

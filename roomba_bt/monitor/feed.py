@@ -244,17 +244,38 @@ class Ending(NamedTuple):
     #: a stop not known to have arrived, as the final mode says it (``the stop was not
     #: delivered``, ``the stop unconfirmed``: :meth:`RunSummary.stop_said`)
     stop_said: str = "the stop was not delivered"
+    #: the connection's words of a stop not known delivered, its advice left out (what the
+    #: robot was last seen doing, why the stop did not reach it), or ""
+    robot: str = ""
+    #: what to do about the robot that stop left (the summary's ``stop_advice``), or ""
+    advice: str = ""
 
     @classmethod
     def of(cls, summary: RunSummary) -> Ending:
         reason = f": {summary.reason}" if summary.reason else ""
+        advice = summary.stop_advice
         return cls(
             mode=summary.final_mode_text(),
             stopped=summary.left_stopped,
             safe_stop=summary.safe_stop,
             outcome=f"{summary.outcome.value}{reason}",
             stop_said=summary.stop_said(),
+            robot=summary.stop_report.removesuffix(f": {advice}" if advice else ""),
+            advice=advice,
         )
+
+    def banner(self) -> str:
+        """What the page's banner says after "the run ended: ": how it ended, then the final
+        mode and the safe stop as the summary says them; a stop the connection said not
+        delivered in three lines, each said once: what happened, where the robot was left,
+        what to do. That banner was the summary's words run together: the final mode (``last
+        seen in Safe, the stop was not delivered``), the safe stop's headline (``NOT
+        DELIVERED``) and its report (``last seen in Safe ...; the stop was not delivered:
+        ...``) over five lines of a laptop's window, the advice at their end."""
+        if self.stopped or not self.robot:
+            return f"{self.outcome} (final mode {self.mode}; safe stop {self.safe_stop})"
+        lines = [self.outcome, f"the robot: {self.robot}"]
+        return "\n".join([*lines, self.advice] if self.advice else lines)
 
     def as_json(self) -> dict[str, Any]:
         return self._asdict()

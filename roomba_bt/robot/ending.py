@@ -506,6 +506,7 @@ class SafeStop:
         self.wake: KeepAwake | None = None
         self.safe_stopped: bool | None = None
         self.stop_report: str | None = None
+        self.stop_advice = ""  # the report's what to do, or "" (:func:`gone_advice`)
         self.unheard: str | None = None
         self.confirm: Callable[[], bool] | None = None
         self.closed = False
@@ -854,10 +855,9 @@ class SafeStop:
         else:
             report = last_seen_words(mode, (wheels, stopped_by), self._seen is not None, still)
             report += f"; {why}"
-        if self._gone and not idle:
-            reach = link_of(writer.link.name).reach
-            report += ": " + (reach if still else PORT_GONE_ADVICE.format(reach=reach))
-        self._gone = False
+        self.stop_advice = gone_advice(self, idle, still)
+        if self.stop_advice:
+            report += f": {self.stop_advice}"
         if report != self.stop_report:  # close() tries once more: said once, not twice
             log.log(level, "%s: %s", self.writer.link.name, report)
         self.stop_report = report
@@ -885,6 +885,19 @@ class SafeStop:
         if self.safe_stopped is None:
             self.safe_stopped = stopped
         return stopped
+
+
+def gone_advice(ending: SafeStop, idle: bool, still: str) -> str:
+    """What to do about the robot a stop not delivered left, its port gone (the report's
+    tail; "" for any other stop, or a robot the run set nothing going): the port's way back,
+    with :data:`PORT_GONE_ADVICE` first unless its frames showed it ``still``. Kept apart
+    (:attr:`SafeStop.stop_advice`) for the monitor's banner, which says it on a line of its
+    own after where the robot was left. A part of :meth:`SafeStop._undelivered`."""
+    gone, ending._gone = ending._gone, False
+    if not gone or idle:
+        return ""
+    reach = link_of(ending.writer.link.name).reach
+    return reach if still else PORT_GONE_ADVICE.format(reach=reach)
 
 
 def fell_asleep(ending: SafeStop, why: str) -> None:

@@ -556,6 +556,8 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
         summary.safe_stop = said + (report or "the stop sequence could not be written")
         summary.stop_delivered = False
         summary.set_nothing_going = getattr(ending, "nothing_set_going", False)
+        summary.stop_report = report or ""
+        summary.stop_advice = getattr(ending, "stop_advice", "") if report else ""
         summary.asleep_stopped = getattr(ending, "asleep_stopped", False)
         summary.seen_stopped = getattr(ending, "seen_still", False)
         note_undelivered_stop(summary)

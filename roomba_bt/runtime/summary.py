@@ -405,6 +405,13 @@ class RunSummary:
     #: False when the stop could not reach the robot: the final mode is then only the last
     #: one seen, and says so
     stop_delivered: bool = True
+    #: the connection's words of a stop not known delivered (what the robot was last seen
+    #: doing, why the stop did not reach it, :attr:`stop_advice`), or "": :attr:`safe_stop`
+    #: is them after its headline (``NOT DELIVERED:``, ``seen stopped;``)
+    stop_report: str = ""
+    #: what to do about the robot that stop left (the port gone: pick it up or press its
+    #: Clean or power button; then doctor): the tail of :attr:`stop_report`, or ""
+    stop_advice: str = ""
     #: False when no robot answered (no valid frame, no reply; noise is none): its mode is
     #: then not known at all
     robot_answered: bool = True

@@ -476,6 +476,46 @@ tree:
 FULL_DRIVE = SAFE_DRIVE.replace("mode: safe", "mode: full")
 
 
+def test_the_banner_of_a_run_whose_link_was_lost_says_each_thing_once() -> None:
+    """A run's link lost (the simulator's port gone, as a cable pulled) while it drove: the
+    page's banner ran the summary's words together over five lines of a laptop's window,
+    ``last seen in Safe`` twice, ``the stop was not delivered`` three times (the final mode,
+    the safe stop's ``NOT DELIVERED`` and its report), the advice at the end. It says what
+    happened, where the robot was left and what to do, a line each."""
+    from roomba_bt.cli import build_parser
+    from roomba_bt.cli.monitor_cmd import LiveMonitor, MonitorOptions
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.stack import RunStack
+    from roomba_bt.sim import Faults, SimLink, Simulator, load_world
+
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, Faults(disconnect_at=1.0))
+    stack = RunStack(mission, SimLink(simulator), profile=CREATE2, timeout_s=60.0)
+    try:
+        summary = stack.run(raise_interrupts=False)
+    finally:
+        stack.close()
+    assert summary.safe_stop.startswith("NOT DELIVERED: last seen in Safe"), summary.safe_stop
+    options = MonitorOptions.from_args(build_parser().parse_args(["run", str(SHUTTLE)]))
+    monitor = LiveMonitor(options, mission, simulator=None, packets=(), loader=load_mission)
+    monitor.finish(summary)
+    assert monitor.feed.finished is not None
+    happened, robot, to_do = monitor.feed.finished.split("\n")
+    assert happened == f"connection lost: {summary.reason}"
+    assert robot.startswith("the robot: last seen in Safe at "), robot  # its wheels
+    assert robot.endswith("; the stop was not delivered: the port is gone"), robot
+    assert to_do == (
+        "the robot may still be moving: pick it up or press its Clean or power button; "
+        "reseat the cable, then roomba-bt doctor --port sim://empty-room"
+    )
+    said = monitor.feed.finished
+    assert said.count("last seen") == said.count("not delivered") == 1, said
+    ending = monitor.feed.ending  # the robot panel's words, as before
+    assert ending is not None
+    assert ending.mode == "unknown: last seen in Safe, the stop was not delivered"
+
+
 @pytest.mark.parametrize("strict", [True, False], ids=["strict", "not-strict"])
 def test_a_reload_with_compile_time_warnings_is_refused_under_strict(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], strict: bool
