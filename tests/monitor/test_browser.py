@@ -591,7 +591,7 @@ def test_a_run_s_label_leads_the_tab_s_title_and_the_header(page: Any) -> None:
 #: the deepest RUNNING node's row (the leaf at work), null when none runs: a JS expression
 DEEPEST_RUNNING_ROW = """(() => {
   const rows = Array.from(document.querySelectorAll('.node[data-status="R"]'));
-  const depth = (row) => parseFloat(row.style.paddingLeft);
+  const depth = (row) => Number(row.dataset.depth);
   return rows.length ? rows.reduce((a, b) => (depth(b) > depth(a) ? b : a)) : null;
 })()"""
 #: the deepest RUNNING node's name, and whether it is inside the tree panel's visible box
@@ -629,6 +629,50 @@ def test_a_big_tree_stays_readable_and_its_running_node_in_view(page: Any) -> No
         assert page.eval_on_selector("#tree", "el => el.scrollTop") == 0
     finally:
         run.finish()
+
+
+#: each row shown whose status ends right of the tree's panel (its name, by how many px)
+STATUSES_OFF_THE_PANEL = """() => {
+  const box = document.getElementById('tree').getBoundingClientRect();
+  return [...document.querySelectorAll('.node')].filter(row => !row.hidden)
+    .map(row => [row.dataset.name,
+                 row.querySelector('.st').getBoundingClientRect().right - box.right])
+    .filter(([, past]) => past > 0.5);
+}"""
+
+
+@pytest.mark.usefixtures("clean_blackboard")  # the cover's map left there: other tests saw it
+@pytest.mark.parametrize("width", [1400, 800, 390])
+def test_a_long_name_keeps_its_status_in_the_panel_and_says_itself_whole(
+    browser: Any, width: int
+) -> None:
+    """The clean mission's leaves with their parameters (``cover(speed=300 mm/s, edge_time=
+    3min, ...)``, its ``log(message=...)``) pushed their status off the tree panel's right
+    edge, past a horizontal scroll: in a laptop's window the log's, in a narrower one (the
+    robot's panel beside the tree) or on a phone most of the deep rows'. A name is cut with
+    an ellipsis and its status stays in the panel; the whole name is its title (a mouse's
+    hover), and shown wrapped while it has the keyboard's focus."""
+    context = browser.new_context(viewport={"width": width, "height": 800})
+    page = context.new_page()
+    run = start_live_run(MISSIONS_DIR / "clean.yaml")
+    try:
+        page.goto(run.url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        page.click("#follow")  # the view left where the test puts it
+        page.eval_on_selector("#tree", "el => { el.scrollTop = 0; el.scrollLeft = 0; }")
+        assert page.evaluate(STATUSES_OFF_THE_PANEL) == []
+        log = page.locator('.node[data-name^="log"] .name').first
+        label = log.text_content()
+        assert label is not None and label.startswith('log(message="cleaning stopped:'), label
+        assert log.get_attribute("title") == label
+        cut = "el => el.scrollWidth > el.clientWidth"
+        assert log.evaluate(cut)  # shown cut short
+        log.focus()
+        assert not log.evaluate(cut)  # shown whole, wrapped, while focused
+        assert page.evaluate(STATUSES_OFF_THE_PANEL) == []
+    finally:
+        run.finish()
+        context.close()
 
 
 def test_a_page_left_open_does_not_take_the_next_run_served_on_its_port(page: Any) -> None:

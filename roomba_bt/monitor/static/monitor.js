@@ -146,8 +146,8 @@ function buildTree(nodes) {
   for (const n of nodes) {
     const row = document.createElement("div");
     row.className = "node";
-    row.dataset.node = n.i; row.dataset.name = n.name; row.dataset.status = "I";
-    row.style.paddingLeft = (n.depth * 2.2) + "em";
+    row.dataset.node = n.i; row.dataset.name = n.name; row.dataset.status = "I"; row.dataset.depth = n.depth;
+    row.style.paddingLeft = `calc(${n.depth} * var(--indent))`;  // narrower on a phone (CSS)
     const toggle = document.createElement("span");
     toggle.className = "toggle";
     toggle.textContent = n.children.length ? "▾" : "";
@@ -163,6 +163,7 @@ function buildTree(nodes) {
     }
     const kind = document.createElement("span"); kind.className = "kind"; kind.textContent = SYMBOL[n.kind] || "-->";
     const name = document.createElement("span"); name.className = "name"; name.textContent = n.label || n.name;
+    name.title = name.textContent;  // the whole of a name cut short to keep its status in view
     // reached by Tab, its menu opened by Enter or Space: the breakpoints and forces were a
     // mouse's or a finger's only
     name.tabIndex = 0; name.setAttribute("role", "button"); name.setAttribute("aria-haspopup", "true");
