@@ -814,6 +814,13 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     ("docs/monitor.md", "monitor: ended by SIGTERM"): (
         "tests/monitor/test_cli.py::test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c"
     ),
+    ("docs/monitor.md", "monitor: long.jsonl: interrupted"): (
+        "tests/monitor/test_cli.py::test_a_signal_while_the_record_is_read_ends_monitor_without_a_page"
+    ),
+    ("docs/monitor.md", "roomba-bt: interrupted"): (
+        "tests/monitor/test_cli.py::test_a_ctrl_c_python_dropped_as_the_mission_loads_ends_monitor"
+        "_without_a_page"
+    ),
     ("docs/monitor.md", "monitor: http://127.0.0.1:8765/"): (
         "tests/monitor/test_cli.py::test_the_url_is_said_once_the_robot_s_port_is_open_with_"
         "the_mission_and_robot"

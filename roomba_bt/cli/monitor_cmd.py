@@ -24,6 +24,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from roomba_bt.cli import raise_lost_interrupt
 from roomba_bt.cli.arguments import (
     add_command,
     add_param_option,
@@ -34,7 +35,7 @@ from roomba_bt.cli.arguments import (
 from roomba_bt.monitor import INSTALL_HINT, server_available
 from roomba_bt.monitor.address import DEFAULT_HOST, lan_addresses, parse_address
 from roomba_bt.printable import name_shown
-from roomba_bt.runtime.summary import ExitCode
+from roomba_bt.runtime.summary import ExitCode, Outcome
 
 if TYPE_CHECKING:  # loaded when a world is drawn
     from roomba_bt.sim.world import World
@@ -635,6 +636,10 @@ def reading_notice(path: str) -> str | None:
     )
 
 
+#: how often a record's page looks for a Ctrl-C Python dropped (:func:`_serve_record`)
+DROPPED_LOOK_S = 0.25
+
+
 def _usage_error(message: str) -> int:
     """``roomba-bt monitor: MESSAGE``, exit 2: the command named, as every command's usage
     errors name theirs (run_cmd._error)."""
@@ -699,6 +704,7 @@ def monitor_command(args: argparse.Namespace) -> int:
     recorded = load_recorded(args)
     if isinstance(recorded, int):
         return recorded
+    raise_lost_interrupt(args)  # one Python dropped as the mission's plugins imported
     record, mission, profile, baud, packets = recorded
     if window[0] > record.last_t:
         return _usage_error(f"--from {args.window_from}: the record ends at {record.last_t:.2f} s")
@@ -709,19 +715,32 @@ def monitor_command(args: argparse.Namespace) -> int:
         for line in (text, *changed_since(record.header, mission.files, mission.root, record.path)):
             print(f"monitor: {args.record}: {line}", file=sys.stderr)
 
-    feed, _ = replay_into_feed(
+    feed, summary = replay_into_feed(
         record, mission, profile, packets, baud, args.record,
         progress=replay_progress("monitor", record), diverged_at=diverged_at, window=window,
     )  # fmt: skip
+    if summary.outcome is Outcome.INTERRUPTED:  # a signal's, as `replay` says it: no page
+        print(
+            f"monitor: {args.record}: interrupted ({summary.reason}) at mission time "
+            f"{summary.mission_time_s:.3f} s of {record.last_t:.3f} s, as it was read: no page "
+            "served",
+            file=sys.stderr,
+        )
+        return ExitCode.INTERRUPTED
     _draw_recorded_world(feed, record, mission, args.record, chosen)
-    return _serve_record(feed, host, port, args.record)
+    return _serve_record(feed, host, port, args)
 
 
-def _serve_record(feed: Any, host: str, port: int, path: str) -> int:
+def _serve_record(feed: Any, host: str, port: int, args: argparse.Namespace) -> int:
     """The page of a replayed record, until Ctrl-C or SIGTERM (exit 0); a port that cannot be
-    served is exit 2."""
+    served is exit 2. A Ctrl-C whose interrupt Python dropped (a finalizer or weakref callback
+    ran as it came: ``roomba-bt: SIGINT came while Python ran ...``) ends it too, before the
+    page is served (exit 130) or at the next look, four times a second, once it is: it was
+    served until a second Ctrl-C."""
     from roomba_bt.monitor.server import MonitorServer
 
+    raise_lost_interrupt(args)  # one Python dropped as the record was replayed: no page
+    path = args.record
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)
     try:
         url = server.start()
@@ -736,7 +755,8 @@ def _serve_record(feed: Any, host: str, port: int, path: str) -> int:
     print(f"monitor: {url}  (Ctrl-C ends)", flush=True)
     say_where(host, url, "it listens")
     try:
-        ended.wait()
+        while not ended.wait(DROPPED_LOOK_S):
+            raise_lost_interrupt(args)  # ends it as Ctrl-C does
         print("monitor: ended by SIGTERM", flush=True)
     except KeyboardInterrupt:
         pass

@@ -88,7 +88,10 @@ def replay_into_feed(
         # the tick guard's: shown as the run had it (the end note: below, with the end)
         if not isinstance(note.get("tick"), int) and ENDED not in note:
             feed.event("force" if "force" in note else "note", _note_text(note), t)
-    difference = diverged(summary, transport) if lost is None else None
+    # a Ctrl-C or SIGTERM while the record was read cut the replay short: its safe stop is
+    # no difference from the record (the command ends there: monitor_cmd)
+    cut_short = summary.outcome is Outcome.INTERRUPTED
+    difference = diverged(summary, transport) if lost is None and not cut_short else None
     if difference is not None and diverged_at is not None:
         diverged_at(difference)
     finished = how_the_replay_ended(record, summary, difference, feed, transport.ended_early, lost)

@@ -21,10 +21,11 @@ from typing import TYPE_CHECKING, Any
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 from runtime.test_terminate_never_returns import HANG_ON_STOP, MISSION, WAIT_LINE
-from waits import HANG_S, joined  # tests/waits.py: a hang's bound
+from waits import HANG_S, joined, lines  # tests/waits.py: a hang's bound
 
 from roomba_bt.cli import main
 from roomba_bt.runtime import ending
+from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:  # the server needs the monitor extra, which each test checks for first
     from roomba_bt.monitor.server import MonitorServer
@@ -738,6 +739,102 @@ def test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c(
     assert "monitor: ended by SIGTERM" in out
     assert err == "", err
     assert_quoted("docs/monitor.md", "monitor: ended by SIGTERM", out)
+
+
+#: a plugin whose condition, on the first tick it is checked, sends its own process the signal
+#: ROOMBA_BT_TEST_SIGNAL names (a Ctrl-C or SIGTERM as the record is replayed), or nothing
+_SIGNALLING_PLUGIN = """\
+import os, signal
+from roomba_bt.behaviours import Condition, declare
+@declare("s45_signaller", kind="condition", reads=(27,))
+class Signaller(Condition):
+    \"\"\"True; its first check sends the signal the environment names.\"\"\"
+    def check(self, snapshot):
+        name = os.environ.pop("ROOMBA_BT_TEST_SIGNAL", "")
+        if name:
+            os.kill(os.getpid(), getattr(signal, name))
+        return True
+"""
+
+#: Safe, the signalling plugin's condition, a wait, Passive
+_SIGNALLED = (
+    "mission: signalled\nplugins: [./signal.py]\ntree:\n  sequence:\n    - mode: safe\n"
+    "    - s45_signaller\n    - wait: 0.3s\n    - mode: passive\n"
+)
+
+
+def _record_view(
+    child: Callable[[Sequence[str]], subprocess.Popen[str]], *argv: str
+) -> tuple[int, list[str], str]:
+    """``roomba-bt monitor ARGV... --monitor 0`` as the process: its exit code, its stdout
+    up to its URL (or all of it, where none comes) and its stderr. One that serves is ended
+    by SIGTERM."""
+    proc = child([sys.executable, "-m", "roomba_bt", "monitor", *argv, "--monitor", "0"])
+    assert proc.stdout is not None
+    out = lines(proc.stdout, lambda line: line.startswith("monitor: http"), "its URL or end")
+    if out and out[-1].startswith("monitor: http"):  # served: ended, as a user would
+        proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=HANG_S)
+    return proc.returncode, out, err
+
+
+@pytest.mark.parametrize("signame", ["SIGINT", "SIGTERM"])
+def test_a_signal_while_the_record_is_read_ends_monitor_without_a_page(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    child: Callable[[Sequence[str]], subprocess.Popen[str]],
+    signame: str,
+) -> None:
+    """A Ctrl-C (or SIGTERM) while ``roomba-bt monitor`` replayed a long record cut the
+    replay short, said its safe stop as a difference (``replay diverged from the record at
+    t=267.16 s: expected Drive (137) ..., sent Motors (138) 8a 00``) and served the page of
+    what was read until a second Ctrl-C. It ends the command, exit 130, in ``replay``'s
+    words, and no page is served."""
+    (tmp_path / "signal.py").write_text(_SIGNALLING_PLUGIN)
+    mission = tmp_path / "signalled.yaml"
+    mission.write_text(_SIGNALLED)
+    record = tmp_path / "run.jsonl"
+    ran = ["run", str(mission), "--fast", "--display", "none", "--allow-plugin-files"]
+    assert main([*ran, "--record", str(record)]) == 0
+    monkeypatch.setenv("ROOMBA_BT_TEST_SIGNAL", signame)
+    code, out, err = _record_view(child, str(record), "--allow-plugin-files")
+    assert not any(line.startswith("monitor: http") for line in out), out
+    assert code == ExitCode.INTERRUPTED, (out, err)
+    assert "diverged" not in err, err
+    said = f"monitor: {record}: interrupted ({'SIGTERM' if signame == 'SIGTERM' else 'Ctrl-C'}"
+    assert said in err, err
+    assert "as it was read: no page served" in err, err
+    if signame == "SIGINT":
+        names = {str(record): "long.jsonl"}
+        assert_quoted(
+            "docs/monitor.md", "monitor: long.jsonl: interrupted", err, numbers=True, names=names
+        )
+
+
+def test_a_ctrl_c_python_dropped_as_the_mission_loads_ends_monitor_without_a_page(
+    tmp_path: Path, child: Callable[[Sequence[str]], subprocess.Popen[str]]
+) -> None:
+    """A Ctrl-C whose interrupt Python dropped (its handler ran in a weakref callback, as
+    importlib's module locks run one while a mission's plugin imports): ``roomba-bt
+    monitor`` said it would be "raised again at the next check", replayed the record and
+    served its page until a second Ctrl-C. It ends the command there, exit 130."""
+    from cli.test_entry import _DROPPING_PLUGIN  # tests/cli: the callback that drops it
+
+    tree = "tree:\n  sequence:\n    - mode: safe\n    - wait: 0.1s\n    - mode: passive\n"
+    (tmp_path / "plain.yaml").write_text(f"mission: m\n{tree}")
+    (tmp_path / "drop.py").write_text(_DROPPING_PLUGIN)
+    (tmp_path / "drop.yaml").write_text(f"mission: m\nplugins: [./drop.py]\n{tree}")
+    record = tmp_path / "run.jsonl"
+    ran = ["run", str(tmp_path / "plain.yaml"), "--fast", "--display", "none"]
+    assert main([*ran, "--record", str(record)]) == 0
+    code, out, err = _record_view(
+        child, str(record), "--mission", str(tmp_path / "drop.yaml"), "--allow-plugin-files"
+    )
+    assert "the import went on\n" in out  # the interrupt was dropped, as in the field
+    assert not any(line.startswith("monitor: http") for line in out), out
+    assert code == ExitCode.INTERRUPTED, (out, err)
+    assert err.splitlines()[-1] == "roomba-bt: interrupted", err
+    assert_quoted("docs/monitor.md", "roomba-bt: interrupted", err)
 
 
 @pytest.mark.parametrize("level", [logging.INFO, logging.DEBUG], ids=["default", "-v"])
