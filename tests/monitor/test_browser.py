@@ -631,6 +631,47 @@ def test_a_big_tree_stays_readable_and_its_running_node_in_view(page: Any) -> No
         run.finish()
 
 
+#: the focused element's text, whether it is inside the tree panel's visible box, and the tick
+FOCUSED_IN_VIEW = """() => {
+  const el = document.activeElement, box = document.getElementById('tree').getBoundingClientRect();
+  const at = el.getBoundingClientRect();
+  return [el.textContent, at.top >= box.top - 1 && at.bottom <= box.bottom + 1,
+          Number(document.getElementById('tick').textContent)];
+}"""
+
+
+@pytest.mark.usefixtures("clean_blackboard")  # the cover's map left there: other tests saw it
+def test_a_node_reached_by_tab_stays_in_view_as_the_run_goes_on(page: Any) -> None:
+    """A keyboard's reader Tabbed to a node far from the running one (the clean mission's
+    docking leaves, at the tree's end): the browser scrolled it into view, then *follow* pulled
+    the view back to the running node at the next update, the focused name (whose menu Enter
+    opens) out of sight. Tab onto a node turns *follow* off, as the wheel does; a click on a
+    node leaves it on."""
+    run = start_live_run(MISSIONS_DIR / "clean.yaml")
+    try:
+        page.goto(run.url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        page.locator(".node .name").first.click()  # its menu: follow stays on
+        page.wait_for_selector("#node-menu:not([hidden])", timeout=WAIT_MS)
+        assert page.get_attribute("#follow", "aria-pressed") == "true"
+        page.keyboard.press("Escape")  # the menu closed, the focus back on the root's name
+        last = page.locator(".node .name").last
+        for _ in range(page.locator(".node .name, .node .toggle[role=button]").count() + 20):
+            page.keyboard.press("Tab")
+            if last.evaluate("el => el === document.activeElement"):
+                break
+        name, shown, tick = page.evaluate(FOCUSED_IN_VIEW)
+        assert name == last.text_content() and shown, (name, shown)
+        page.wait_for_function(  # updates came (40 ticks): follow had pulled the view away
+            f"Number(document.getElementById('tick').textContent) > {tick + 40}",
+            timeout=WAIT_MS,
+        )
+        assert page.evaluate(FOCUSED_IN_VIEW)[:2] == [name, True]
+        assert page.get_attribute("#follow", "aria-pressed") == "false"
+    finally:
+        run.finish()
+
+
 #: each row shown whose status ends right of the tree's panel (its name, by how many px)
 STATUSES_OFF_THE_PANEL = """() => {
   const box = document.getElementById('tree').getBoundingClientRect();

@@ -951,6 +951,9 @@ $("follow").onclick = () => setFollow(!view.follow);
 // reading elsewhere in the tree (the wheel, a finger): following would pull the view back
 $("tree").addEventListener("wheel", () => setFollow(false), { passive: true });
 $("tree").addEventListener("touchmove", () => setFollow(false), { passive: true });
+// and the keyboard's Tab onto a node (not a click's focus): following pulled the view back
+// to the running node, and the focused name, whose menu Enter opens, out of sight
+$("tree").addEventListener("focusin", (ev) => { if (ev.target.matches(":focus-visible")) setFollow(false); });
 $("zoom-in").onclick = () => zoom(1);
 $("zoom-out").onclick = () => zoom(-1);
 $("expand").onclick = () => { view.collapsed.clear(); applyCollapse(); };
