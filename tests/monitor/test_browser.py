@@ -241,6 +241,35 @@ def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, child: Child)
     assert "Traceback" not in err
 
 
+def test_the_end_of_a_run_whose_link_was_lost_says_each_thing_once(
+    page: Any, child: Child, served_sim: Callable[..., Any]
+) -> None:
+    """The simulator killed under a run (its TCP bridge gone, as a robot's Wi-Fi one): the
+    page's banner ran the summary's final mode and safe stop together, five lines saying the
+    stop was not delivered three times, and the robot panel's title said the final mode the
+    row under it says. The banner says what happened, where the robot was left and what to
+    do, a line each; the title says the stop was not delivered, once."""
+    sim = served_sim("--tcp", "127.0.0.1:0")
+    proc = child([*monitored_run(SHUTTLE), "--port", sim.address])
+    page.goto(_url_from(proc))
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    sim.proc.kill()  # the link lost while the shuttle drives
+    sim.proc.communicate(timeout=HANG_S)
+    _, err = proc.communicate(timeout=HANG_S)
+    assert proc.returncode == 8, err
+    page.wait_for_selector('#link:text("ended")', timeout=WAIT_MS)
+    happened, robot, to_do = page.inner_text("#banner").split("\n")
+    assert happened.startswith(f"the run ended: connection lost: {sim.address}: the port is gone")
+    assert robot.startswith("the robot: last seen in Safe"), robot
+    assert "the stop was not delivered" in robot and "final mode" not in robot, robot
+    assert to_do.startswith("the robot may still be moving: pick it up"), to_do
+    title = page.inner_text("#robot-panel h2").lower()  # CSS caps
+    assert title == "robot: last seen before the run ended (the stop was not delivered)", title
+    assert page.inner_text("#robot tr:first-child td:nth-child(2)") == (
+        "unknown: last seen in Safe, the stop was not delivered"
+    )
+
+
 def _url_from(proc: subprocess.Popen[str]) -> str:
     assert proc.stdout is not None
     said = lines(proc.stdout, lambda line: line.startswith("monitor: "), "the monitor's URL")

@@ -713,7 +713,7 @@ function robotTitle() {
   const ended = view.shownEnded;
   if (ended) {
     title = ended.stopped ? `Robot after the run ended: stopped, ${ended.mode}`
-      : `Robot: last seen before the run ended (final mode ${ended.mode})`;
+      : `Robot: last seen before the run ended (${ended.stop_said})`;  // its mode: the row below
   }
   else if (view.finished && (view.live || view.shownTick >= view.window[1])) {
     // a record without its run's end (a killed run's) has no end to show: the server says so
