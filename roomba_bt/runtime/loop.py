@@ -535,7 +535,7 @@ class MissionRunner(BaseHandle):
     def _finish(
         self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
     ) -> None:
-        summary.ended_at = ended_at(self, summary.ended_at)  # for the record's end note
+        run_over(self)  # where it ended, for the record's end note; the stalls not yet said
         guard, limit = cast(InterruptGuard, self._guard), tree_stop_limit(self.wall_limit_s)
         self.tree_as_left = tree_left(self, summary.exception)  # before the stop: INVALID
         first = self._ending.end_tree(self.mission.root, self.tick_guard, guard, raised_in, limit)
@@ -846,6 +846,16 @@ def ending_interrupt(
     if late is not None:
         note_late_interrupt(summary, late, guard.late_during)
     return late
+
+
+def run_over(runner: MissionRunner) -> None:
+    """The run's end, before anything is stopped: where it ended, for the record's end note
+    (``RunSummary.ended_at``), and its ride's stalls not yet said (:meth:`StallRide.run_ended
+    <roomba_bt.runtime.stall.StallRide.run_ended>`; one whose silence ended the run is its
+    reason). A function, not a method: the class's size."""
+    summary = runner.summary
+    summary.ended_at = ended_at(runner, summary.ended_at)
+    runner.ride.run_ended(summary.outcome in (Outcome.CONNECTION_LOST, Outcome.NO_CONNECTION))
 
 
 def run_ended_by(

@@ -59,27 +59,33 @@ class LateFrames:
     def __init__(self) -> None:
         self.count = 0
         self.longest = 0.0
+        #: the mission time the longest began at (its last valid frame's; None: before the
+        #: first tick)
+        self.longest_at: float | None = None
         self.halts = 0
 
-    def add(self, gap: float, halted: bool) -> None:
+    def add(self, gap: float, halted: bool, began_at: float | None) -> None:
         self.count += 1
-        self.longest = max(self.longest, gap)
+        if gap > self.longest:
+            self.longest, self.longest_at = gap, began_at
         self.halts += halted
 
-    def said(self, name: str, since: float, goes_on: str) -> str:
+    def said(self, name: str, since: float, goes_on: str, when: str = "once a minute") -> str:
         """The line: ``frames were late 21 more times in the last 5 min 2 s (longest 421
-        ms), each back within the grace: ...``."""
+        ms, from t=12.345), each back within the grace: ...``; ``when``: when such a line is
+        said (once a minute; at the run's end, the stalls counted since the last)."""
         sent = (
             f"drive 0 sent in {self.halts} (the robot stopped until the frames came back)"
             if self.halts
             else "the robot was not driving (nothing sent)"
         )
+        at = "" if self.longest_at is None else f", from t={self.longest_at:.3f}"
         return (
             f"{name}: frames were late {self.count} more "
             f"{'time' if self.count == 1 else 'times'} in the last {duration_words(since)} "
-            f"(longest {self.longest * 1000:.0f} ms), each back within the grace: {sent}; "
-            f"{goes_on} (a busy computer or link; said once a minute, the summary's stalls "
-            "line counts them all)"
+            f"(longest {self.longest * 1000:.0f} ms{at}), each back within the grace: {sent}; "
+            f"{goes_on} (a busy computer or link; said {when}, the summary's stalls line "
+            "counts them all)"
         )
 
 
@@ -215,7 +221,7 @@ class StallRide:
             late = self._late
             if not late.count:
                 self._late_since = said_at
-            late.add(gap, halted)
+            late.add(gap, halted, self._clock(0.0))
             log.debug(
                 "%s: valid frames are back after %.0f ms (counted: said once a minute)",
                 connection.name, gap * 1000, extra={"mission_time": self._clock(gap)},
@@ -231,6 +237,29 @@ class StallRide:
             goes_on, "; stalls in the next minute are counted, and said once a minute",
             extra={"mission_time": self._clock(gap)},
         )  # fmt: skip
+
+    def run_ended(self, lost: bool) -> None:
+        """At the run's end: the stalls counted and not yet said (a run that ended within a
+        minute of the last line said none of them, and the summary's stalls line has their
+        count, not the longest), then a stall still open, how long and from where, unless
+        its silence ended the run (``lost``: the run's reason says it)."""
+        late, stall = self._late, self.stall
+        if not late.count and stall is None:
+            return
+        name = self.connection.name
+        now = self.connection.link.transport.now()
+        if late.count:
+            went_on = "the mission went on"
+            line = late.said(name, now - self._late_since, went_on, "at the run's end")
+            log.warning("%s", line, extra={"mission_time": self._clock(0.0)})
+            self._late = LateFrames()
+        if stall is not None and self._backlog_read_at is None and not lost:
+            log.warning(
+                "%s: the run ended in a stall: no valid frame for its last %.0f ms (since "
+                "t=%.3f)%s", name, (now - stall[2]) * 1000, self._clock(0.0) or 0.0,
+                "; the watchdog had sent drive 0" if stall[1] else "",
+                extra={"mission_time": self._clock(now - stall[2])},
+            )  # fmt: skip
 
     def _backlog_read(self, batch: Sequence[SensorFrame], read_at: float) -> None:
         """While the stall's backlog is read: once a batch comes spaced as the stream is (half

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import logging
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -334,12 +335,81 @@ def test_stalls_ridden_through_in_a_minute_are_summed_up_and_a_long_one_is_still
     assert "still none" not in tripped[0]
     assert re.search(r"still none 10\d\d ms after the last \(half the grace\)", tripped[1])
     summed = [line for line in said if "frames were late" in line]
-    assert len(summed) == 1, said  # once a minute, not at each (the rest in the summary)
-    assert re.search(r"late 1[1-3] more times in the last 1 min( \d+ s)? \(longest 3\d\d ms\)",
-                     summed[0]), summed  # fmt: skip
+    # once a minute, not at each, and those counted since at the run's end
+    assert len(summed) == 2, said
+    assert re.search(r"late 1[1-3] more times in the last 1 min( \d+ s)? \(longest 3\d\d ms, "
+                     r"from t=\d+\.\d{3}\)", summed[0]), summed  # fmt: skip
     assert "drive 0 sent in 1" in summed[0]
-    # 2 stalls said in full, trip and return, and 1 line summing up 12 of the rest
-    assert len(said) == 5, said
+    assert "said once a minute" in summed[0] and "said at the run's end" in summed[1]
+    # 2 stalls said in full, trip and return, 1 line summing up 12 of the rest, 1 the others
+    assert len(said) == 6, said
+
+
+def test_stalls_counted_and_not_yet_said_are_said_at_the_run_s_end(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A run that ended within a minute of its first stall said only that one: the others
+    were counted for a line a minute later that never came, and the summary's stalls line
+    has their count, not the longest gap nor where it was (5 % of the robot's bytes lost:
+    23 stalls, 1 line). Said at the run's end, with the longest and where it began."""
+    caplog.set_level(logging.WARNING, logger="roomba_bt.runtime.loop")
+    summary, _ = run(tmp_path, LatePatchesLink, 1000.0, timeout=17.0)
+    assert summary.outcome is Outcome.TIMEOUT, summary.reason
+    assert summary.stalls == summary.stalls_ridden == 4  # at 1, 6, 11 and 16 s
+    said = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.runtime.loop"]
+    [summed] = [line for line in said if "frames were late" in line]
+    assert re.search(
+        r"late 3 more times in the last 1\d s \(longest 3\d\d ms, from t=(5|10|15)\.\d{3}\), "
+        r"each back within the grace: drive 0 sent in 3 .*said at the run's end",
+        summed,
+    ), summed
+
+
+class StopsInAStall(BadPatchLink):
+    """Silent from 3 s of simulated time on; the program stops the run 0.5 s into it (a
+    Ctrl-C, the monitor's stop, a wall-clock limit: the run ends before its grace does)."""
+
+    stop: Callable[[], None] = staticmethod(lambda: None)
+
+    def __init__(self, simulator: Simulator) -> None:
+        super().__init__(simulator, 3.0, 100.0, "silent")
+
+    def read(self, timeout: float) -> bytes:
+        if self.simulator.time >= 3.5:
+            self.stop()
+        return super().read(timeout)
+
+
+def test_a_run_that_ends_in_a_stall_says_how_long_and_since_when(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A stall still open when the run ended (stopped within its grace) was said nowhere but
+    as one more stall than those ridden through in the summary's count."""
+    caplog.set_level(logging.WARNING, logger="roomba_bt.runtime.loop")
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN)
+    link = StopsInAStall(Simulator(load_world("empty-room"), CREATE2, 0))
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
+    link.stop = stack.runner.request_stop
+    summary = stack.run()
+    assert summary.outcome is Outcome.INTERRUPTED, summary.reason
+    assert (summary.stalls, summary.stalls_ridden) == (1, 0)
+    said = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.runtime.loop"]
+    [ended] = [line for line in said if "the run ended in a stall" in line]
+    assert re.search(
+        r"no valid frame for its last 5\d\d ms \(since t=2\.9\d\d\); the watchdog had sent "
+        r"drive 0",
+        ended,
+    ), ended
+
+
+def test_a_stall_that_ends_the_run_is_not_said_again_as_one_the_run_ended_in(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.WARNING, logger="roomba_bt.runtime.loop")
+    summary, _ = run(tmp_path, BadPatchLink, 1.0, 10.0, "silent", timeout=8.0)
+    assert summary.outcome is Outcome.CONNECTION_LOST  # its reason says the stall
+    assert not [r for r in caplog.records if "the run ended in a stall" in r.getMessage()]
 
 
 def test_with_v_each_stall_ridden_through_is_said_at_debug(
