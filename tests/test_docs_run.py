@@ -568,6 +568,11 @@ QUOTED_ELSEWHERE: dict[tuple[str, str], str] = {
     "test_clock_cmd.py::test_the_schedule_file_fault_docs_quote",
     ("docs/simulator.md", "roomba-bt sim: the robot's clock reads"): "tests/cli/"
     "test_sim_cmd.py::test_the_served_simulator_says_the_clock_and_schedule_a_client_set",
+    **{
+        ("docs/doctor.md", start): "tests/cli/test_sensors_cmd.py::test_sensors_on_a_cable_"
+        "losing_bytes_says_what_it_lost_as_run_s_summary_does"
+        for start in ("roomba-bt sensors: frames", "roomba-bt sensors: link")
+    },
     ("docs/runtime.md", "replay: interrupted at mission time"): "tests/cli/"
     "test_replay_interrupted.py::test_a_replay_interrupted_exits_130_and_judges_no_bytes",
     ("docs/runtime.md", "roomba-bt: SIGINT came while Python ran"): "tests/cli/test_entry.py::"

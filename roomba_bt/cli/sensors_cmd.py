@@ -179,7 +179,50 @@ def _show_queried(connection: Connection, profile: RobotProfile, args: argparse.
 
 def _show_streamed(connection: Connection, profile: RobotProfile, args: argparse.Namespace) -> None:
     """The newest frame of the stream when a table is due; a watchdog trip is ridden through
-    as ``run`` does."""
+    as ``run`` does; at the end what the line lost, if anything (:func:`_say_the_link`)."""
+    tally = _FramesTally()
+    try:
+        _stream_tables(connection, profile, args, tally)
+    finally:  # done, a Ctrl-C, the stream lost: what the line lost, as run's summary says it
+        _say_the_link(connection, tally)
+
+
+class _FramesTally:
+    """The stream's frames read and the robot's 15 ms slots they spanned, on the run's
+    schedule (:class:`~roomba_bt.runtime.schedule.SlotSchedule`): a slot with no frame read
+    is a frame the line lost."""
+
+    def __init__(self) -> None:
+        from roomba_bt.runtime.schedule import SlotSchedule
+
+        self.schedule = SlotSchedule()
+        self.read = 0
+        self.spanned = 0
+
+    def add(self, count: int, arrival: float) -> None:
+        self.read += count
+        # (the first batch is one slot on the schedule however many frames it holds)
+        self.spanned += max(count, self.schedule.slots(count, arrival))
+
+
+def _say_the_link(connection: Connection, tally: _FramesTally) -> None:
+    """The run summary's ``frames`` and ``link`` lines on stderr, for a line that lost or
+    garbled any of the robot's bytes (a cable that broke a third of the frames showed its
+    tables and exit 0, saying nothing: each table is the newest whole frame, and one came)."""
+    from roomba_bt.runtime.summary import RunSummary, link_lines
+
+    summary = RunSummary("sensors", robot=connection.name)
+    summary.take_counters(connection.counters)
+    summary.ticks, summary.frames_lost = tally.read, tally.spanned - tally.read
+    for line in link_lines(summary, "each table showed the robot as the last whole frame had it"):
+        print(f"roomba-bt sensors: {line}", file=sys.stderr)
+
+
+def _stream_tables(
+    connection: Connection, profile: RobotProfile, args: argparse.Namespace,
+    tally: _FramesTally,
+) -> None:  # fmt: skip
+    """:func:`_show_streamed`'s loop, each batch of frames counted in ``tally``."""
     from roomba_bt.robot.errors import StreamStalled
 
     shown = 0
@@ -189,6 +232,8 @@ def _show_streamed(connection: Connection, profile: RobotProfile, args: argparse
     while args.count == 0 or shown < args.count:
         try:
             frames = connection.poll(0.1)
+            if frames:
+                tally.add(len(frames), frames[-1].time)
         except StreamStalled as stalled:  # a flaky line is what one looks at it for
             if stalled.mismatch is not None:  # another model's frames: certain now
                 raise

@@ -912,15 +912,34 @@ def _slowest_said(summary: RunSummary) -> str:
     return f" in {summary.slowest_in}" if summary.slowest_in else ""
 
 
-def _link_verdict(summary: RunSummary) -> str:
+def _link_verdict(summary: RunSummary, late: str = "the tree saw the robot late") -> str:
     """A line that lost :data:`POOR_LINK` or more of the robot's frames, over a run long
     enough to tell (:data:`LINK_VERDICT_SLOTS`), said as such: the run may end well on
-    it, the tree seeing the robot late. "" for a line that did not."""
+    it, ``late`` (the tree seeing the robot late; ``sensors``' tables). "" for a line that
+    did not."""
     sent = summary.ticks + summary.stale_frames_dropped + summary.frames_lost
     if sent < LINK_VERDICT_SLOTS or summary.frames_lost < POOR_LINK * sent:
         return ""
     return (
         f"poor: {100 * summary.frames_lost / sent:.0f} % of the robot's frames lost "
-        f"({summary.frames_lost} of {sent}), {summary.checksum_failures} checksum failures: the "
-        f"tree saw the robot late; {_check_the_line(summary)} (roomba-bt doctor)"
+        f"({summary.frames_lost} of {sent}), {summary.checksum_failures} checksum failures: "
+        f"{late}; {_check_the_line(summary)} (roomba-bt doctor)"
     )
+
+
+def link_lines(summary: RunSummary, late: str) -> list[str]:
+    """What a command that reads the stream without a tree (``roomba-bt sensors``) says of
+    its line, as a run's summary does: its ``frames`` line, less what only a tree has (stale
+    frames, unconfirmed hazards), and its ``link`` line (``late``: what the loss made of
+    the command's output); none for a line that lost and garbled nothing (``ticks``: the
+    frames read)."""
+    if not (summary.frames_lost or summary.checksum_failures or summary.skipped_bytes
+            or summary.implausible_frames):  # fmt: skip
+        return []
+    frames = (
+        f"frames       {summary.ticks} read, {summary.frames_lost} lost, "
+        f"{summary.checksum_failures} checksum failures, {summary.implausible_frames} out of "
+        f"range, {summary.skipped_bytes} bytes skipped"
+    )
+    link = _link_verdict(summary, late)
+    return [frames, *([f"link         {link}"] if link else [])]

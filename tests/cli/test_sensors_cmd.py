@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
+from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 from robot.sim_backend import sim_pty_server  # tests/robot: the simulator on a pty
 
 from roomba_bt.cli import main
@@ -10,6 +13,7 @@ from roomba_bt.cli.sensors_cmd import group_for
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.stream import stream_budget
+from roomba_bt.transport.link_kind import link_of
 
 
 @pytest.mark.parametrize("rate", sorted(BAUD_CODES))
@@ -173,3 +177,31 @@ def test_a_robot_at_another_rate_is_said_at_the_rate_sensors_opened_it_at_not_a_
         "the robot answers at 19200 baud, not at the 115200 roomba-bt sensors opened it at:" in err
     )
     assert "the run" not in err, err
+
+
+def test_sensors_on_a_cable_losing_bytes_says_what_it_lost_as_run_s_summary_does(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``sensors`` on a cable that lost 1 % of the robot's bytes (more than half of its
+    84-byte frames broken) showed its tables and exited 0 without a word of it: each table is
+    the newest whole frame, and one came. At its end, the run summary's ``frames`` and
+    ``link`` lines; nothing on a clean line."""
+    from roomba_bt.oi.profiles import CREATE2
+
+    with sim_pty_server(CREATE2, "--byte-drop-rate", "0.01", "--seed", "3") as port:
+        code = main(["sensors", "--port", port, "--count", "150", "--rate", "66"])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    said = re.search(
+        r"roomba-bt sensors: frames +(\d+) read, (\d+) lost, (\d+) checksum failures, 0 out of "
+        r"range, (\d+) bytes skipped", err
+    )  # fmt: skip
+    assert said is not None, err
+    read, lost, checksums, skipped = map(int, said.groups())
+    assert read >= 150 and lost > 0.3 * (read + lost) and checksums > 0 and skipped > 0
+    assert re.search(r"roomba-bt sensors: link +poor: \d+ % of the robot's frames lost", err), err
+    cable = {link_of(port).check: "check the cable and its adapter"}  # the page's: a cable
+    assert_quoted("docs/doctor.md", "roomba-bt sensors: frames", err, numbers=True)
+    assert_quoted("docs/doctor.md", "roomba-bt sensors: link", err, numbers=True, names=cable)
+    assert main(["sensors", "--count", "3"]) == 0  # the built-in simulator: a clean line
+    assert "frames" not in capsys.readouterr().err
