@@ -37,7 +37,9 @@ class StreamClock:
     :class:`StallRide`, which says when the next gap is a stall ridden through or a blocked
     tick's, not frames nobody read; frames lost and unread gaps are counted in ``summary``."""
 
-    __slots__ = ("_connection", "_ride", "_summary", "held_slots", "schedule", "tick")
+    __slots__ = (
+        "_connection", "_ride", "_summary", "_unread_open", "held_slots", "schedule", "tick",
+    )  # fmt: skip
 
     def __init__(self, ride: StallRide, summary: RunSummary, connection: Connection) -> None:
         self._ride = ride
@@ -51,6 +53,9 @@ class StreamClock:
         self.tick = -1
         #: the slots that passed while the monitor held the run paused (``clock_held``)
         self.held_slots = 0
+        #: the schedule's last restart was a gap nobody read (not a stall ridden through):
+        #: the frames its run counts lost are the host's (``frames_lost_unread``)
+        self._unread_open = False
 
     def slots_spanned(self, count: int, arrival: float) -> int:
         """The slots a batch of ``count`` frames spans by the schedule (the first frame:
@@ -65,6 +70,9 @@ class StreamClock:
         restart = gap >= UNREAD_GAP_SECONDS or ride.gap_explained
         unread = gap >= UNREAD_GAP_SECONDS and not ride.gap_explained
         blocked, ride.gap_explained, ride.blocked = ride.blocked, False, None
+        if restart:
+            self._unread_open = unread
+        restart_lost = schedule.restart_lost
         slots = schedule.late_batch(count, arrival, self.tick, restart)
         if unread:
             # stamped with the batch's time, the gap's end, when it is said: the run's clock
@@ -74,6 +82,8 @@ class StreamClock:
             unread_gap(self._summary, self._connection.name, gap, blocked, at)
         if slots > count:
             self._summary.frames_lost += slots - count
+            if self._unread_open:  # the port's buffer full while nothing read it
+                self._summary.frames_lost_unread += schedule.restart_lost - restart_lost
         return slots
 
 

@@ -97,7 +97,7 @@ class SlotSchedule:
     __slots__ = (
         "_known", "_reach", "_run_batches", "_run_began", "_run_first", "_run_last", "_run_late",
         "_run_least", "_run_most", "_run_restart", "_run_tick",
-        "due", "spread", "tick",
+        "due", "restart_lost", "spread", "tick",
     )  # fmt: skip
 
     def __init__(self, stepped: bool = False) -> None:
@@ -128,6 +128,9 @@ class SlotSchedule:
         #: batches decays it a frame's share a batch: at 45 % of the frames lost, the
         #: prompt count of lost frames stopped once it had)
         self._known = False
+        #: the frames lost counted by runs that began at a gap or a stall ridden through,
+        #: all told (the run's clock tells the gaps nobody read from the stalls)
+        self.restart_lost = 0
 
     def run_window(self) -> float:
         """How long a run of late batches lasts before it is counted as frames lost: a
@@ -181,6 +184,7 @@ class SlotSchedule:
                 # gap's lateness is no jitter for the link's reach either
                 if self._run_restart:
                     shift, self._run_most = least, late - least
+                    self.restart_lost += lost
                 else:
                     shift = lost * SLOT_SECONDS
                     self._run_most -= shift

@@ -97,6 +97,10 @@ SAFE, START = bytes(opcodes("safe")), bytes(opcodes("start"))
 class TapLink(SimLink):
     """A SimLink that keeps every chunk written and read, with the simulated time."""
 
+    #: the bytes the port's buffer holds while nothing reads it (a freeze's): those the
+    #: robot sent past them are lost (None: it holds every one)
+    buffer: int | None = None
+
     def __init__(
         self,
         simulator: Simulator,
@@ -135,6 +139,8 @@ class TapLink(SimLink):
                 self.simulator.step()
                 data += self.simulator.read()
             self.freeze = None
+            if self.buffer is not None:  # what the port's full buffer dropped meanwhile
+                data = data[: self.buffer]
         if data and self.burst > 1:
             for _ in range(self.burst - 1):
                 self.simulator.step()

@@ -11,13 +11,17 @@ import py_trees
 import pytest
 from quoted import assert_quoted  # tests/quoted.py: the docs' quotes
 
+from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import motor_bits
+from roomba_bt.oi.frames import SLOT_SECONDS, stream_frame_size
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.oi.stream import StreamParser
 from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
-from roomba_bt.sim import Faults
+from roomba_bt.sim import Faults, Simulator, load_world
 
 from .simrun import (
     DRIVE_TO_WALL,
@@ -25,6 +29,7 @@ from .simrun import (
     LEDGE,
     SPIN,
     RunMission,
+    TapLink,
     over_the_edge,
 )
 
@@ -335,6 +340,35 @@ def test_a_gap_nobody_read_is_counted_and_said(
     assert_quoted("docs/runtime.md", "unread 1 gap(s)", str(summary), numbers=True)  # 4 s there
     assert "no frame was read for 2.5" in caplog.text
     assert summary.mission_time_s == pytest.approx(4.0, abs=0.05)  # the slots still count
+
+
+def test_frames_a_full_buffer_dropped_in_a_gap_nobody_read_are_not_the_line_s(
+    tmp_path: Path,
+) -> None:
+    """A run stopped 45 s (SIGSTOP, a laptop's lid) on a pty: the port's buffer held 10 s of
+    the robot's frames and dropped the rest, and the summary said ``link poor: 73 % of the
+    robot's frames lost (2309 of 3163) ... check the cable``, of a line that lost nothing.
+    Those frames are counted lost (mission time is the robot's) and said in the unread
+    line, as the computer's; the link line judges the line's alone."""
+    path = tmp_path / "spin.yaml"
+    path.write_text(SPIN)
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0), freeze=(1.0, 20.0))
+    link.buffer = 8192
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2,
+                     timeout_s=30.0)  # fmt: skip
+    summary = stack.run()
+    assert summary.outcome is Outcome.TIMEOUT
+    assert summary.unread_gaps == 1 and summary.stalls == 0
+    lost, held = summary.frames_lost, 8192 // stream_frame_size(stack.runner.packets)
+    assert lost == pytest.approx(20.0 / SLOT_SECONDS - held, abs=3)
+    assert summary.mission_time_s == pytest.approx(30.0, abs=0.1)  # the robot's time
+    said = str(summary)
+    assert "link " not in said, said
+    assert 0 <= lost - summary.frames_lost_unread <= 1  # (and the frame the buffer cut short)
+    assert (
+        f"; {summary.frames_lost_unread} of the frames lost were lost in them (the port's "
+        "buffer full" in said
+    )
 
 
 def test_a_gap_under_a_second_is_not_said(run_mission: RunMission) -> None:
