@@ -30,7 +30,7 @@ bunched behind it. The rule (docs/runtime.md, "The stream is the clock"):
   as a backlog, over several reads (a TCP bridge, a pty relay, a host that was stopped): each
   is a slot, none lost. The gap opens a run as a late batch does, and what the backlog leaves
   short once it is read (the next batch half a slot after the one before; on a jittery link,
-  the run's window, or after a stall under a second, eight batches none of which came
+  the run's window, or after a stall under a second, three batches none of which came
   earlier than the first back) is counted; the schedule then moves on to the run's least
   late batch (the stream may have come back at another phase), and what the later batches
   lack past it goes on as a run: frames lost since the gap, as on a noisy cable, where 45 %
@@ -72,6 +72,12 @@ COUNT_LATE = 2 / 3 * SLOT_SECONDS
 #: once, not after its window
 PROMPT_BATCHES = 8
 PROMPT_MARGIN = 0.2 * SLOT_SECONDS
+#: ... or this many, the first and two more, when none came earlier than the first by more
+#: than the link's jitter and the margin (a backlog read faster than the stream falls by half
+#: a slot or more a batch: past that within two). Eight waited half a second at 5 % of the
+#: robot's bytes lost (77 % of the frames broken: a batch every 4 slots), the run that went
+#: on after each count waited for the next stall, and a `wait: 10s` ended up to 1.1 s late
+PROMPT_STEADY_BATCHES = 3
 #: ... on a link whose jitter reaches less than this (0.8 slot): its least lateness over
 #: those batches is then a whole number of slots lost and less jitter than the count's
 #: COUNT_LATE
@@ -166,7 +172,7 @@ class SlotSchedule:
         # half a slot goes on with it, and it is counted by what its batches all lack
         running = self._run_tick == tick
         lost = 0
-        if late >= (LOST_LATE if calm or running else JITTER_LATE):
+        if late >= (LOST_LATE if calm or running else self._opens_at()):
             if calm and not restart and not running:
                 lost = int((late - LOST_LATE) / SLOT_SECONDS) + 1
             else:
@@ -196,8 +202,12 @@ class SlotSchedule:
                 # (its last batch this one: the one before the stall kept, the gap to each
                 # batch after grew past a second, said as one nobody read, 5 % of the bytes)
                 self._run_began, self._run_last, self._run_least = arrival, arrival, rest
+                self._run_first = rest  # (the first of the run that goes on: this batch)
                 self._run_late, self._run_restart, self._run_batches = rest, False, 1
-                self.due = on_time + shift
+                # a batch earlier than the schedule moved on moves it back, as on time (left
+                # a ms or two late, it read the next lost frame 12.8 ms late, under a run's
+                # 0.9 slot: jitter, whose spread then stopped every prompt count for 10 s)
+                self.due = arrival if rest < DRIFT else on_time + shift
                 return count + lost
         on_time += lost * SLOT_SECONDS
         late -= lost * SLOT_SECONDS
@@ -207,10 +217,20 @@ class SlotSchedule:
             self.spread = late if late > spread else spread - SPREAD_DECAY
         return count + lost
 
+    def _opens_at(self) -> float:
+        """How late a batch opens a run of late batches on a jittery link: 0.9 slot
+        (:data:`JITTER_LATE`), or less once the link's jitter is known, past what it reaches
+        by :data:`PROMPT_MARGIN` (a lost frame read 13.4 ms late, under 0.9 slot, was taken
+        for jitter, and the spread it made stopped every prompt count for 10 s)."""
+        if not self._known:
+            return JITTER_LATE
+        return min(JITTER_LATE, max(LOST_LATE, self.spread, self._reach) + PROMPT_MARGIN)
+
     def _beyond_jitter(self) -> bool:
         """Whether the run's batches have all come later than the link's jitter reaches
         (:attr:`spread`, and the runs before: :attr:`_reach`) by :data:`PROMPT_MARGIN`, for
-        :data:`PROMPT_BATCHES` batches: frames lost, told without waiting for the window
+        :data:`PROMPT_BATCHES` batches, or :data:`PROMPT_STEADY_BATCHES` when none came earlier
+        than the first by more than that jitter: frames lost, told without waiting for the window
         (jitter holds back a few frames, never every one beyond its reach). Only on a link
         whose jitter is known (it showed more than :data:`START_SPREAD`, its spread at the
         start, once: past its first half second) and under :data:`PROMPT_REACH`:
@@ -223,11 +243,13 @@ class SlotSchedule:
         jitter = max(self.spread, self._reach)
         known = self._known = self._known or jitter > START_SPREAD
         first = self._run_first
+        steady = self._run_least >= first - jitter - PROMPT_MARGIN  # no batch came earlier
         if self._run_restart:  # a stall under a second, and no backlog: no batch came
-            beyond = first < LOST_WINDOW and self._run_least >= first - jitter - PROMPT_MARGIN
+            beyond = first < LOST_WINDOW and steady
         else:
             beyond = self._run_least >= jitter + PROMPT_MARGIN
-        return self._run_batches >= PROMPT_BATCHES and known and jitter < PROMPT_REACH and beyond
+        needed = PROMPT_STEADY_BATCHES if steady else PROMPT_BATCHES
+        return self._run_batches >= needed and known and jitter < PROMPT_REACH and beyond
 
     def _run_on(
         self, count: int, arrival: float, tick: int, late: float, restart: bool, calm: bool

@@ -9,7 +9,7 @@ from collections.abc import Iterable
 import pytest
 
 from roomba_bt.oi.stream import StreamParser
-from roomba_bt.runtime.schedule import PROMPT_BATCHES, SlotSchedule
+from roomba_bt.runtime.schedule import PROMPT_BATCHES, PROMPT_STEADY_BATCHES, SlotSchedule
 from roomba_bt.sim import Faults
 
 from .simrun import RunMission
@@ -125,12 +125,13 @@ def test_real_gaps_are_counted_through_jitter() -> None:
     slots = slots_of(jittered((k for k in range(6000) if k not in lost), 0.010, seed=2))
     assert sum(slots) == 6000  # every slot the robot sent, the lost ones too
     # counted once the frames after the gap have all come later than the jitter reaches, for
-    # eight batches (it was once they had all come late for a second and more, 1.3 s): a
-    # lost frame delays every one after it, jitter only those around it
+    # three batches none earlier than the first (it was once they had all come late for a
+    # second and more, 1.3 s; then eight batches, 0.12 s): a lost frame delays every one
+    # after it, jitter only those around it
     assert [n for n in slots if n > 1] == [3, 4, 2, 2]
     counted = [i for i, n in enumerate(slots) if n > 1]
     assert [i - gap for i, gap in zip(counted, (17, 398, 994, 4993), strict=True)] == [
-        pytest.approx(PROMPT_BATCHES, abs=2)
+        pytest.approx(PROMPT_STEADY_BATCHES, abs=1)
     ] * 4
 
 
@@ -292,7 +293,7 @@ def test_a_short_stall_with_no_backlog_is_counted_as_promptly_as_a_lost_frame() 
     # ten frames broken in a row (150 ms: the watchdog tripped, the run rode it through) and
     # none after: the frames back come spaced as the stream is, none earlier than the first,
     # so no backlog; the stall was counted a window later (1.2 s, 76 batches), the mission
-    # clock 150 ms behind the robot's meanwhile
+    # clock 150 ms behind the robot's meanwhile; then eight batches later, now three
     sent = [k for k in range(1000) if not 200 <= k < 210]
     schedule = SlotSchedule()
     before, counted = 0.0, []
@@ -302,7 +303,7 @@ def test_a_short_stall_with_no_backlog_is_counted_as_promptly_as_a_lost_frame() 
         before = arrival
         if slots > count:
             counted.append((i, slots - count))
-    assert counted == [(200 + PROMPT_BATCHES - 1, 10)]
+    assert counted == [(200 + PROMPT_STEADY_BATCHES - 1, 10)]
 
 
 def test_a_third_of_the_frames_lost_for_a_minute_keeps_the_clock_within_a_few_frames() -> None:
