@@ -156,6 +156,10 @@ class PluginError:
     #: loaded: a half-loaded plugin, whose loaded behaviours missions use; "" when none of
     #: it loaded
     refused: str = ""
+    #: the installed package (:func:`package_name` of its distribution) the error is of;
+    #: "" for a plugin file's: ``package:name`` of a broken package says why it names
+    #: nothing (:meth:`Registry.why_unknown`), not that no such package is installed
+    package: str = ""
 
     def __str__(self) -> str:
         return f"plugin {self.plugin}: {self.cause}"
@@ -422,11 +426,18 @@ class Registry:
                 or _missing_module(ep, exc)
                 or _import_failed(exc, _package_of(ep), _origin(ep))
             )
-            self._errors.append(PluginError(_origin(ep), failed, imported=False, names=(ep.name,)))
+            self._errors.append(
+                PluginError(
+                    _origin(ep), failed, imported=False, names=(ep.name,), package=_package(ep)
+                )
+            )
             return []
+        since = len(self._errors)
         registered = self.register_provider(
             provider, _origin(ep, named=False), said_as=_origin(ep), entry=ep
         )
+        package = _package(ep)  # its errors are its package's (why_unknown)
+        self._errors[since:] = [replace(e, package=package) for e in self._errors[since:]]
         for declaration in registered:
             self._unnamed[declaration.name] = ep
         return registered
@@ -525,6 +536,7 @@ class Registry:
         other._packages = {package: dict(held) for package, held in self._packages.items()}
         other._package_of = dict(self._package_of)
         other.absent = self.absent
+        other._group = self._group  # loaded already: named only by why_unknown
         return other
 
     def expecting(self, absent: Iterable[str]) -> Registry:
@@ -612,7 +624,22 @@ class Registry:
             near = closest(name, builtins)
             return f"{CORE_PACKAGE} has no built-in behaviour {name!r}{near}"
         held = self._packages.get(package)
+        broken = [e for e in self._errors if e.package == package and e.loses_behaviours]
+        named = [e for e in broken if name in e.names]
+        if named:  # installed, and broken: its error, not "no such package"
+            return f"package {package!r} did not load {name!r}: {named[0]}"
+        unimported = [e for e in broken if not e.imported]
+        if unimported:  # which behaviours it has is not known
+            return f"package {package!r} did not load (none of its behaviours): {unimported[0]}"
         if held is None:
+            if self._group is not None and _installed_without_entry_point(written):
+                return (
+                    f"package {written!r} is installed but has no entry point in the group "
+                    f"{self._group}, so none of its behaviours is found: add "
+                    f'[project.entry-points."{self._group}"] to its pyproject.toml (a line '
+                    'NAME = "its_module") and install it again (roomba-bt docs plugins, '
+                    '"Package it")'
+                )
             installed = ", ".join(sorted(self._packages)) or "none"
             return (
                 f"no installed plugin package is called {written!r} (installed: {installed}; "
@@ -700,6 +727,19 @@ def _package(ep: EntryPoint) -> str:
         return package_name(ep.name)
     stem = getattr(ep.dist, "_normalized_name", None)
     return package_name(stem if isinstance(stem, str) else ep.dist.name)
+
+
+def _installed_without_entry_point(name: str) -> bool:
+    """Whether a distribution of this name is installed (it has no entry point of the
+    group, or :meth:`Registry.why_unknown` would have found it): a plugin whose author
+    left out its entry point, not a package that is missing."""
+    from importlib.metadata import PackageNotFoundError, distribution
+
+    try:
+        distribution(name)
+    except (PackageNotFoundError, ValueError):
+        return False
+    return True
 
 
 def _count(n: int) -> str:

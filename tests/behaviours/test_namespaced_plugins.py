@@ -173,3 +173,72 @@ def test_behaviours_and_the_schema_know_the_qualified_spellings(registry: Regist
     defs = mission_schema(registry)["$defs"]
     assert {"bt-ns-alpha:sense", "bt-ns-beta:sense", "bt-ns-beta:retry"} <= set(defs)
     assert "roomba-bt:drive" in defs and "sense" not in defs
+
+
+#: a plugin half loaded: ``fine`` registers, ``wrong``'s default is out of its range
+HALF = (
+    "from roomba_bt.behaviours import INT, Condition, Param, declare\n\n\n"
+    '@declare("fine", kind="condition")\nclass Fine(Condition):\n'
+    '    """Fine."""\n\n    def check(self, snapshot):\n        return True\n\n\n'
+    '@declare("wrong", kind="condition", params=(Param("n", INT, default=9, maximum=3),))\n'
+    'class Wrong(Condition):\n    """Wrong."""\n\n    def check(self, snapshot):\n'
+    "        return True\n"
+)
+
+
+@pytest.fixture
+def broken(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Registry:
+    """Three installed packages a plugin's author breaks: one that raises on import, one
+    with a class refused for its declaration, one installed with no entry point at all."""
+    registry = installed_registry(
+        tmp_path,
+        monkeypatch,
+        ("bt-ns-raises", "bt_ns_raises_plugin", 'raise RuntimeError("no calibration file")\n'),
+        ("bt-ns-half", "bt_ns_half_plugin", HALF),
+    )
+    info = tmp_path / "site" / "bt_ns_bare-1.0.dist-info"  # pip's, with no entry_points.txt
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: bt-ns-bare\nVersion: 1.0\n")
+    return registry
+
+
+@pytest.mark.parametrize(
+    ("word", "said"),
+    [
+        (
+            "bt-ns-raises:sense",
+            "package 'bt-ns-raises' did not load (none of its behaviours): plugin "
+            "'bt_ns_raises_plugin' "
+            "(bt_ns_raises_plugin, from bt-ns-raises): failed to import: RuntimeError: no "
+            "calibration file",
+        ),
+        (
+            "bt-ns-half:wrong",
+            "package 'bt-ns-half' did not load 'wrong': plugin 'bt_ns_half_plugin' "
+            "(bt_ns_half_plugin, from bt-ns-half): Wrong (",
+        ),
+        (
+            "bt-ns-bare:sense",
+            "package 'bt-ns-bare' is installed but has no entry point in the group "
+            "roomba_bt.behaviours, so none of its behaviours is found: add [project.entry-"
+            'points."roomba_bt.behaviours"] to its pyproject.toml',
+        ),
+    ],
+)
+def test_a_qualified_name_of_an_installed_broken_plugin_says_why_it_names_nothing(
+    tmp_path: Path, broken: Registry, word: str, said: str
+) -> None:
+    """A plugin's author who breaks the package met `no installed plugin package is called
+    'bt-ns-raises' (installed: none ...)` for a package installed whose import raised, or
+    that had no entry point, and `package 'bt-ns-half' has no behaviour 'wrong' (it has:
+    fine)` for a class refused: the package is installed, and the error is its own."""
+    _, [error] = _compile(tmp_path, broken, f"    - {word}\n")
+    assert error.message.startswith(f"unknown node {word!r}: {said}"), error.message
+    assert "no installed plugin package" not in error.message
+
+
+def test_a_qualified_name_a_half_loaded_plugin_has_still_compiles(
+    tmp_path: Path, broken: Registry
+) -> None:
+    mission, errors = _compile(tmp_path, broken, "    - bt-ns-half:fine\n")
+    assert mission is not None and not [e for e in errors if e.severity == "error"]
