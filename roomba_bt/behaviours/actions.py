@@ -87,8 +87,17 @@ assert tuple(_RADIUS_WORDS) == RADIUS_WORDS
 def _parse_notes(value: object) -> tuple[tuple[int, int], ...]:
     """``["C4 250ms", "rest 125ms", "A#4 1s"]`` -> ((60, 16), (0, 8), (70, 64)). Every bad
     note is said (:class:`ItemErrors`: a mission says each at the note's own place)."""
-    if not isinstance(value, list) or not value:
-        raise UnitError('expected a list of notes such as ["C4 250ms", "rest 125ms"]')
+    if not isinstance(value, list):
+        one = f": write it as a list, [{quoted(value)}]" if isinstance(value, str) else ""
+        raise UnitError(
+            'expected a list of notes such as ["C4 250ms", "rest 125ms"], got '
+            f"{described(value)}{one}"
+        )
+    if not value:  # a list, though "expected a list" said it was not one
+        raise UnitError(
+            f"a song has {SONG_LENGTH.minimum} to {SONG_LENGTH.maximum} notes, got none (an "
+            'empty list): give at least one, such as ["C4 250ms"]'
+        )
     notes: list[tuple[int, int]] = []
     problems: list[tuple[int, str]] = []
     for index, item in enumerate(value):
