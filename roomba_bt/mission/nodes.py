@@ -497,8 +497,10 @@ class NodeParser:
             if pname in sub.broken:
                 continue
             if pname not in sub.params:
+                # one declared wrongly is still declared: it was "known: none" beside it
+                declared = [*sub.params, *sorted(sub.broken)]
                 self.ctx.error(
-                    pkloc.at(f"subtree {name!r}: " + unknown("parameter", pname, list(sub.params)))
+                    pkloc.at(f"subtree {name!r}: " + unknown("parameter", pname, declared))
                 )
                 continue
             vtype = sub.params[pname][0]
