@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import gc
 import itertools
+import os
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
@@ -384,7 +385,9 @@ def load_mission(
     (``"dok"``: did you mean 'dock'?). ``profile``: the model it is compiled for, ``CREATE2``
     unless given, never ``ROOMBA_BT_PROFILE`` or the project file's (the command line's;
     ``roomba_bt.configured_profile(path)`` reads them for a program that wants them)."""
-    if isinstance(path, str) and "\n" in path:  # text, not a name: said so, not escaped back
+    # text, not a name: said so, not escaped back; a file whose name holds a newline is a
+    # file (roomba-bt run refused one that validate and show read)
+    if isinstance(path, str) and "\n" in path and not os.path.isfile(path):
         raise MissionError([Diagnostic(
             "load_mission", 1, 1,
             "load_mission takes a mission file's path or a shipped mission's name, and this "

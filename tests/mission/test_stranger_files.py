@@ -60,6 +60,20 @@ def test_a_newline_in_a_file_name_cannot_fake_a_line_of_validate(
     assert lines[1] == "evil.yaml: ok\\x0az.yaml: ok, with warnings"
 
 
+def test_run_reads_a_file_whose_name_holds_a_newline_as_validate_and_show_do(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``validate`` and ``show`` read it; ``run`` refused it with load_mission's word for
+    YAML text given as a path ("load_mission:1:1: ... compile YAML text with
+    load_mission_text"), a message for a program, exit 2."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "new\nline.yaml").write_text("tree: {wait: 1s}\n")
+    assert main(["run", "new\nline.yaml", "--fast", "--display", "none"]) == 0
+    out, err = capsys.readouterr()
+    assert "load_mission" not in out + err
+    assert "mission      new\\x0aline\n" in out
+
+
 def test_show_escapes_control_characters_a_command_line_text_brings_into_the_tree(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
