@@ -26,7 +26,16 @@ from roomba_bt.behaviours.language import (
 from roomba_bt.behaviours.units import ValueType, list_of
 from roomba_bt.mission.leaves import written_text
 from roomba_bt.mission.plan import Node
-from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text, sequence
+from roomba_bt.mission.source import (
+    Bad,
+    Loc,
+    empty_name,
+    kind_of,
+    mapping,
+    plain,
+    scalar_text,
+    sequence,
+)
 from roomba_bt.mission.ticks import at_once
 from roomba_bt.mission.values import (
     ESCAPE_HINT,
@@ -73,6 +82,8 @@ def option_value(
         warn_escaped(ctx, written, node, loc, None, f"{kind.word}.{param.name}")
         if uses_parameter:
             options[_PARAMETER_IN_NAME] = loc
+        if param.name == "name" and not text.strip():  # as the name: modifier's
+            ctx.error(loc.at(empty_name(f"{kind.word}.name", text, kind.word)))
         return text
     if param.type is CHILD_NAMES:
         names = plain(node, loc)

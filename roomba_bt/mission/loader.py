@@ -87,6 +87,7 @@ from roomba_bt.mission.source import (
     Loc,
     compose,
     compose_text,
+    empty_name,
     kind_of,
     loc_of,
     mapping,
@@ -205,6 +206,25 @@ def _literal_section(ctx: Context, sections: dict[str, tuple[yaml.Node, Loc, Loc
     if "literal" in sections:
         node, _, vloc = sections["literal"]
         read_literal(ctx, node, vloc)
+
+
+def _names_written(
+    ctx: Context, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]
+) -> tuple[str, str]:
+    """``mission:`` (the file's stem if absent, or if it names nothing: an error) and
+    ``description:`` as written."""
+    found = {"mission": path.stem, "description": ""}
+    for key in found:
+        if key in sections:
+            node, _, vloc = sections[key]
+            try:
+                found[key] = scalar_text(node, vloc, key)
+            except Bad as bad:
+                ctx.report(bad)
+    if not found["mission"].strip():  # show's first line and the summary said nothing
+        ctx.error(sections["mission"][2].at(empty_name("mission", found["mission"], path.stem)))
+        found["mission"] = path.stem
+    return found["mission"], found["description"]
 
 
 class Loader:
@@ -373,15 +393,7 @@ class Loader:
         self, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]
     ) -> tuple[str, str]:
         """``mission:`` (the file's stem if absent) and ``description:`` as written."""
-        found = {"mission": path.stem, "description": ""}
-        for key in found:
-            if key in sections:
-                node, _, vloc = sections[key]
-                try:
-                    found[key] = scalar_text(node, vloc, key)
-                except Bad as bad:
-                    self.ctx.report(bad)
-        return found["mission"], found["description"]
+        return _names_written(self.ctx, path, sections)
 
     def _file_sections(self, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]) -> None:
         """plugins, include, blackboard, subtrees: what an included file contributes too."""

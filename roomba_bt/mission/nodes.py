@@ -27,7 +27,15 @@ from roomba_bt.mission.leaves import parse_leaf, written_text
 from roomba_bt.mission.own_keys import OwnKeys
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import library_defining
-from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text
+from roomba_bt.mission.source import (
+    Bad,
+    Loc,
+    empty_name,
+    kind_of,
+    mapping,
+    plain,
+    scalar_text,
+)
 from roomba_bt.mission.values import (
     UNKNOWN,
     Bound,
@@ -241,6 +249,8 @@ class NodeParser:
             written = scalar_text(mods["name"][0], name_loc, "name")
             name, uses_parameter = name_text(written, name_loc, env)
             warn_escaped(self.ctx, written, mods["name"][0], name_loc, None, "name")
+            if not name.strip():  # the log said "t=1.005 INFO roomba_bt.run:  -> SUCCESS"
+                self.ctx.error(name_loc.at(empty_name("name", name, built.name)))
             built.parameter_in_name = name_loc if uses_parameter else None
             if name != built.name:
                 built.label, built.name = built.name, name

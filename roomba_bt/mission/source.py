@@ -401,6 +401,17 @@ def sequence(node: yaml.Node, loc: Loc, what: str) -> list[tuple[yaml.Node, Loc]
     return [(item, loc.child(item, f"[{i}]")) for i, item in enumerate(node.value)]
 
 
+def empty_name(what: str, written: str, instead: str) -> str:
+    """The error of a ``mission:`` or ``name:`` with no name in it (``""``, ``"  "``): the
+    summary, the log and the trees showed nothing where the name goes (``mission      ``,
+    ``roomba_bt.run:  -> SUCCESS``), and two such nodes could not be told apart."""
+    found = "an empty text" if not written else f"only spaces ({written!r})"
+    return (
+        f"{what}: found {found}, no name; allowed: a name (not spaces alone), or no "
+        f"{what.rpartition('.')[2]}: at all, and it is named {instead!r}"
+    )
+
+
 def scalar_text(node: yaml.Node, loc: Loc, what: str) -> str:
     value = plain(node, loc)
     if not isinstance(value, str):
