@@ -633,10 +633,10 @@ def bind_parameters(
     declared: dict[str, tuple[ValueType, Loc]] = {}
     broken: set[str] = set()  # declared wrongly: reported once, not at each use nor -p
     wording = ctx.wording  # how the caller sets a parameter
-    written: list[str] = []  # every name declared, a wrongly declared one too
+    names: list[str] = []  # every name declared, a wrongly declared one too
     if section is not None:
         items = _parameter_entries(ctx, section, env, broken)
-        written = [name for name, *_ in items]
+        names = [name for name, *_ in items]
         for name, value, key_loc, vloc in items:
             try:
                 vtype, default, has_default, _ = param_decl(ctx, value, vloc, name, key_loc)
@@ -668,7 +668,7 @@ def bind_parameters(
             )
     for name, text in overrides.items():
         if name not in broken:
-            _bind_override(ctx, name, text, declared, env, root, written)
+            _bind_override(ctx, name, text, declared, env, root, names)
     return env
 
 
@@ -679,10 +679,10 @@ def _bind_override(
     declared: Mapping[str, tuple[ValueType, Loc]],
     env: dict[str, Bound],
     root: Loc,
-    written: list[str],
+    names: list[str],
 ) -> None:
     """One value the caller set (``-p name=text``, ``params=``) bound in ``env``, or said
-    wrong: a name the mission does not declare (``written``: every name it declares, one
+    wrong: a name the mission does not declare (``names``: every name it declares, one
     declared wrongly too, which ``declared`` leaves out: "declares: none" was said of a
     mission whose one parameter had a bad default), a value its type refuses."""
     wording = ctx.wording
@@ -690,8 +690,8 @@ def _bind_override(
         ctx.error(
             root.at(
                 f"unknown parameter {name!r} {wording.set_by_for(name)}"
-                f"{closest(name, written)}; "
-                f"the mission declares: {', '.join(written) or 'none'}"
+                f"{closest(name, names)}; "
+                f"the mission declares: {', '.join(names) or 'none'}"
             )
         )
         return
