@@ -98,6 +98,7 @@ if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts fas
     from roomba_bt.evaluate import EvaluationError
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, MissionNotCompiled
     from roomba_bt.evaluate.parallel import Engine, Evaluation, Interruption, Progress
+    from roomba_bt.evaluate.plan import EpisodePlan
     from roomba_bt.evaluate.records import PartialResults
     from roomba_bt.mission import Diagnostic, Permissions
     from roomba_bt.sim.world import World
@@ -401,7 +402,7 @@ def eval_command(args: argparse.Namespace) -> int:
     if interruption is not None:
         return _stopped(args, done, evaluated, interruption)
     if args.plot:
-        traced = _paths_read_back(args, evaluated, resumed.read_back(planned), engine)
+        traced = _paths_read_back(args, evaluated, resumed.read_back(), engine)
         if isinstance(traced, int):
             return traced
         plotted = _plot(args.plot, world, traced)
@@ -493,7 +494,7 @@ def _paths_read_back(
     return replace(evaluated, done=done)
 
 
-def _engine(args: argparse.Namespace, batches: list[list[EpisodeSpec]]) -> Engine:
+def _engine(args: argparse.Namespace, batches: Sequence[Sequence[EpisodeSpec]]) -> Engine:
     """Where the episodes run, as the options say (checked before: each limit a number or
     None), with no more workers than episodes (a local Dask cluster would start each one's
     process); more local processes than cores warned about."""
@@ -510,7 +511,7 @@ def _engine(args: argparse.Namespace, batches: list[list[EpisodeSpec]]) -> Engin
 
 
 def _resumed(
-    args: argparse.Namespace, chosen: list[Variant], planned: list[list[EpisodeSpec]], world: World
+    args: argparse.Namespace, chosen: list[Variant], planned: list[EpisodePlan], world: World
 ) -> Resumed | int:
     """The episodes ``--out`` holds that ``--resume`` keeps, and those left to run
     (:mod:`roomba_bt.cli.eval_resume`); exit 2 when ``--out`` holds episodes and neither
@@ -679,10 +680,11 @@ def worker_wait(args: argparse.Namespace) -> float | str | None:
     return limit_seconds(args.worker_wait, "--worker-wait")
 
 
-def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpec]], World] | int:
-    """The variants and their episodes; each mission and the world checked once, here,
-    before any worker starts. An exit code on a problem (said on stderr)."""
-    from roomba_bt.evaluate import EvaluationError, episode_specs
+def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[EpisodePlan], World] | int:
+    """The variants and their episodes (a plan each: its specs are made as they are run);
+    each mission and the world checked once, here, before any worker starts. An exit code
+    on a problem (said on stderr)."""
+    from roomba_bt.evaluate import EvaluationError, episode_plan
     from roomba_bt.evaluate.episode import build_world, start_pose
 
     params = parse_params(args.param)
@@ -698,7 +700,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
     if isinstance(chosen, str):
         return refused(chosen, args)
     batches = [
-        episode_specs(
+        episode_plan(
             v.mission,
             world=args.world,
             runs=args.runs,
@@ -720,8 +722,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         for v in chosen
     ]
     if args.seeds is not None:  # --seeds: the same specs, each on its seed of the list
-        batches = [[replace(s, seed=one) for s, one in zip(b, args.seeds, strict=True)]
-                   for b in batches]  # fmt: skip
+        batches = [replace(batch, seeds=args.seeds) for batch in batches]
     missions = _compiled(args, chosen)
     if isinstance(missions, int):
         return missions
@@ -827,8 +828,8 @@ def _reading_keys(
     args: argparse.Namespace,
     chosen: list[Variant],
     missions: list[Any],
-    batches: list[list[EpisodeSpec]],
-) -> list[list[EpisodeSpec]]:
+    batches: list[EpisodePlan],
+) -> list[EpisodePlan]:
     """The episodes, each reading the ``--key`` values at its end, once every variant's
     mission can report each one (``evaluate.keys.key_problem``: declared under its
     ``blackboard:``, not a record named whole nor a mark; else EvaluationError, before any
@@ -845,7 +846,7 @@ def _reading_keys(
         args.key_units[name] = key_unit(name, missions[0].blackboard_keys)
     if not args.key:
         return batches
-    return [[replace(spec, keys=tuple(args.key)) for spec in batch] for batch in batches]
+    return [batch.with_fields(keys=tuple(args.key)) for batch in batches]
 
 
 def made_by(
@@ -933,7 +934,7 @@ def _partial(args: argparse.Namespace) -> PartialResults | int | None:
 def _run(
     args: argparse.Namespace,
     chosen: list[Variant],
-    batches: list[list[EpisodeSpec]],
+    batches: Sequence[Sequence[EpisodeSpec]],
     engine: Engine,
     partial: PartialResults | None = None,
     earlier: Sequence[Sequence[EpisodeResult]] = (),

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -25,6 +25,7 @@ from roomba_bt.runtime.claimed import IN_USE, held_by_a_writer
 if TYPE_CHECKING:
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
     from roomba_bt.evaluate.parallel import Evaluation
+    from roomba_bt.evaluate.plan import EpisodePlan
     from roomba_bt.evaluate.records import CutShort, PartialResults
     from roomba_bt.sim.world import World
 
@@ -60,10 +61,10 @@ class Resumed:
 
     #: per variant, the episodes read back, in the plan's order
     earlier: list[list[EpisodeResult]]
-    #: per variant, the specs of the episodes not in the file, in the plan's order
-    todo: list[list[EpisodeSpec]]
-    #: per variant, each seed's place in the plan
-    places: list[dict[int, int]]
+    #: per variant, the episodes not in the file, in the plan's order
+    todo: list[EpisodePlan]
+    #: per variant, every episode of the evaluation (each seed's place: ``place``)
+    planned: list[EpisodePlan]
     #: a line each, the records found cut short at the end of a file and dropped
     #: (:class:`~roomba_bt.evaluate.records.CutShort`): what became of their episodes
     cut_said: list[str] = field(default_factory=list)
@@ -82,23 +83,34 @@ class Resumed:
             for result in results:
                 partial.add(result)
 
-    def read_back(self, planned: list[list[EpisodeSpec]]) -> list[list[EpisodeSpec]]:
+    def read_back(self) -> list[list[EpisodeSpec]]:
         """Per variant, the specs of the episodes read back without a path (in the plan's
         order): what ``--plot`` runs again for their paths. A record written under
         ``--plot`` keeps its path (``records.kept_path``) and is drawn from it: a resumed
         sweep ran every finished episode again to draw it."""
         return [
-            [batch[places[result.seed]] for result in earlier if not result.trajectory]
-            for batch, earlier, places in zip(planned, self.earlier, self.places, strict=True)
+            [batch[_placed(batch, result)] for result in earlier if not result.trajectory]
+            for batch, earlier in zip(self.planned, self.earlier, strict=True)
         ]
 
     def merged(self, done: list[Evaluation]) -> list[Evaluation]:
         """Each variant's episodes, those read back and those run now, in the plan's order
         (the order an uninterrupted run writes them in)."""
         return [
-            replace(e, results=sorted([*earlier, *e.results], key=lambda r: places[r.seed]))
-            for e, earlier, places in zip(done, self.earlier, self.places, strict=True)
+            replace(e, results=sorted([*earlier, *e.results], key=_in_order_of(batch)))
+            for e, earlier, batch in zip(done, self.earlier, self.planned, strict=True)
         ]
+
+
+def _placed(plan: EpisodePlan, result: EpisodeResult) -> int:
+    """Where ``result``'s episode is in ``plan``, which holds it (checked as it was read)."""
+    place = plan.place(result.seed)
+    assert place is not None, result.seed
+    return place
+
+
+def _in_order_of(plan: EpisodePlan) -> Callable[[EpisodeResult], int]:
+    return lambda result: _placed(plan, result)
 
 
 def partial_path(out: str) -> Path:
@@ -161,13 +173,12 @@ def refused_over(args: argparse.Namespace) -> str | None:
 def resume(
     args: argparse.Namespace,
     chosen: list[Any],
-    batches: list[list[EpisodeSpec]],
+    batches: list[EpisodePlan],
     world: World,
 ) -> Resumed:
     """``--out``'s episodes (and its partial file's) that this evaluation would run, checked
     against it, and the specs left to run; with neither ``--resume`` nor a file, every spec.
     ResumeError naming the file, line and what differs when a record was made otherwise."""
-    places = [{spec.seed: i for i, spec in enumerate(batch)} for batch in batches]
     found: list[dict[int, EpisodeResult]] = [{} for _ in batches]
     cut: list[CutShort] = []
     read_from: list[str] = []
@@ -183,7 +194,7 @@ def resume(
                     raise ResumeError(f"{where}: {named} is no variant of this "
                                       "evaluation (its missions, -p, --sweep or --variant "
                                       f"differ){_runs_instead(result, chosen)}")  # fmt: skip
-                spec_at = places[index].get(result.seed)
+                spec_at = batches[index].place(result.seed)
                 if spec_at is None:
                     raise ResumeError(f"{where}: seed {result.seed} of {named} is not "
                                       "among this evaluation's seeds (--seed, --runs or "
@@ -193,21 +204,18 @@ def resume(
                 kept = found[index].setdefault(result.seed, result)  # --out's, then the partial's
                 if kept is result and str(path) not in read_from:
                     read_from.append(str(path))
-    pairs = list(zip(found, places, strict=True))
-    earlier = [sorted(held.values(), key=lambda r: place[r.seed]) for held, place in pairs]
-    todo = [
-        [s for s in batch if s.seed not in held]
-        for batch, (held, _) in zip(batches, pairs, strict=True)
-    ]
-    cut_said = [_cut_said(one, chosen, found, places) for one in cut]
-    return Resumed(earlier, todo, places, cut_said, read_from)
+    pairs = list(zip(found, batches, strict=True))
+    earlier = [sorted(held.values(), key=_in_order_of(batch)) for held, batch in pairs]
+    todo = [batch.without(held) for held, batch in pairs]
+    cut_said = [_cut_said(one, chosen, found, batches) for one in cut]
+    return Resumed(earlier, todo, batches, cut_said, read_from)
 
 
 def _cut_said(
     cut: CutShort,
     chosen: list[Any],
     found: list[dict[int, EpisodeResult]],
-    places: list[dict[int, int]],
+    planned: Sequence[EpisodePlan],
 ) -> str:
     """The line that says a record cut short at a file's end was dropped, and what becomes
     of its episode: it runs again (the usual case: a sweep killed as it wrote it), or the
@@ -215,9 +223,9 @@ def _cut_said(
     mine = [i for i, v in enumerate(chosen) if cut.mission in (None, v.mission)]
     if cut.seed is None:  # the episodes no record holds run: it is among them, if any
         then = "cut before its seed, its episode runs again unless another record holds it"
-    elif not any(cut.seed in places[i] for i in mine):
+    elif all(planned[i].place(cut.seed) is None for i in mine):
         then = "its seed is not among this evaluation's"
-    elif all(cut.seed in found[i] for i in mine if cut.seed in places[i]):
+    elif all(cut.seed in found[i] for i in mine if planned[i].place(cut.seed) is not None):
         then = "its episode is read back from the other file"
     else:
         then = "the episode runs again"

@@ -27,7 +27,22 @@ from roomba_bt.evaluate.episode import (
     run_episode,
 )
 from roomba_bt.evaluate.parallel import ProgressBar, run_episodes
+from roomba_bt.evaluate.plan import EpisodePlan
 from roomba_bt.evaluate.stats import Summary, percentile, summarize, wilson_interval
+
+
+def episode_plan(
+    mission: str,
+    *,
+    world: str = "empty-room",
+    runs: int = 20,
+    seed: int = 0,
+    **fields: object,
+) -> EpisodePlan:
+    """``runs`` episodes with seeds ``seed``, ``seed + 1``, ...; other fields as given: each
+    one's spec made as it is taken (:class:`~roomba_bt.evaluate.plan.EpisodePlan`)."""
+    template = EpisodeSpec(mission, world, seed, **fields)  # type: ignore[arg-type]
+    return EpisodePlan(template, range(seed, seed + runs))
 
 
 def episode_specs(
@@ -38,19 +53,18 @@ def episode_specs(
     seed: int = 0,
     **fields: object,
 ) -> list[EpisodeSpec]:
-    """``runs`` specs with seeds ``seed``, ``seed + 1``, ...; other fields as given."""
-    return [
-        EpisodeSpec(mission, world, seed + i, **fields)  # type: ignore[arg-type]
-        for i in range(runs)
-    ]
+    """:func:`episode_plan`'s specs, made now, in a list."""
+    return list(episode_plan(mission, world=world, runs=runs, seed=seed, **fields))
 
 
 __all__ = [
+    "EpisodePlan",
     "EpisodeResult",
     "EpisodeSpec",
     "EvaluationError",
     "ProgressBar",
     "Summary",
+    "episode_plan",
     "episode_specs",
     "percentile",
     "run_episode",

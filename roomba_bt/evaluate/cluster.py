@@ -34,9 +34,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from roomba_bt.evaluate.episode import (
+    Bundles,
     EpisodeResult,
     EpisodeSpec,
-    all_self_contained,
     died_result,
     hung_result,
     run_episode,
@@ -464,12 +464,16 @@ class WorkerWatch:
 
     It also ends the gathering (:meth:`gathering`) once the client has closed, having
     failed to reconnect to a scheduler that was lost: a result Dask was fetching when its
-    scheduler died never completes its ``as_completed``, which then waited for ever."""
+    scheduler died never completes its ``as_completed``, which then waited for ever. What
+    it last heard of the cluster's worker threads (:attr:`threads`) says how many episodes
+    :class:`_Submitted` keeps on it."""
 
     def __init__(self, client: Any, limit_s: float | None) -> None:
         self.client = client
         self.limit_s = limit_s
         self.expired = ""
+        #: the cluster's worker threads, as last heard (0: none, or no answer)
+        self.threads = 0
         self._guarded: list[Any] = []
         self._completing: Any = None
         #: the client has closed: it lost its scheduler and could not reconnect
@@ -480,6 +484,7 @@ class WorkerWatch:
                                         daemon=True)  # fmt: skip
 
     def __enter__(self) -> WorkerWatch:
+        self.threads = self._threads()
         self._thread.start()
         return self
 
@@ -489,8 +494,10 @@ class WorkerWatch:
             self._thread.join()
 
     def guard(self, futures: Iterable[Any]) -> None:
-        """Cancel ``futures`` too if the watch expires (at once if it has)."""
+        """Cancel ``futures`` too if the watch expires (at once if it has); those guarded
+        before that are done are let go."""
         with self._lock:
+            self._guarded = [f for f in self._guarded if not f.done()]
             self._guarded.extend(futures)
             if self.expired:
                 self.client.cancel(self._guarded)
@@ -513,9 +520,9 @@ class WorkerWatch:
                 self._completing.clear()
         return True
 
-    def _workers(self) -> int:
+    def _threads(self) -> int:
         with contextlib.suppress(Exception):  # no answer: no worker the evaluation can use
-            return len(self.client.nthreads())
+            return sum(self.client.nthreads().values())
         return 0
 
     def _watch(self) -> None:
@@ -525,7 +532,8 @@ class WorkerWatch:
             now = time.monotonic()
             if self._end_the_gathering_if_closed():
                 return
-            if self.limit_s is None or self._workers():
+            self.threads = self._threads()
+            if self.limit_s is None or self.threads:
                 seen = now
             elif now - seen >= self.limit_s:
                 address = _scheduler_address(self.client)
@@ -598,32 +606,35 @@ def run_on_client(
     scheduler says which of them a dead worker held): futures kept to the end made the
     scheduler compute again what a dead worker had finished, and the count missed those.
     An episode Dask gave up on (its workers kept dying) runs again alone once the others
-    are done (:func:`_alone`): DIED if it kills its workers again; it ended the evaluation."""
+    are done (:func:`_alone`): DIED if it kills its workers again; it ended the evaluation.
+
+    A few episodes per worker thread are on the cluster at a time (:class:`_Submitted`),
+    the next sent as each result comes: every one sent at once held 1.4 GB in this process
+    at 100 000 episodes (its futures, the scheduler's tasks, the specs with their missions'
+    texts), and the local cluster's scheduler, busy with them, was taken for lost before
+    the first result."""
     total = len(specs)
-    batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many evaluations
     address = _scheduler_address(client)  # a client that lost its scheduler forgets it
-    travelling = all_self_contained(specs)
-    futures = _submitted(client, travelling, wall_limit_s, batch)
     finished = _Finished([None] * total, progress)
     results = finished.results
     gathered = _Gathered()
     interrupt: KeyboardInterrupt | None = None
 
     with WorkerWatch(client, worker_wait_s) as watch:
-        watch.guard(futures.values())
+        sent = _Submitted(client, watch, specs, wall_limit_s)
         try:
-            given_up = _gather(client, watch, specs, futures, gathered, finished)
+            given_up = _gather(client, watch, specs, sent, gathered, finished)
             for i, first in sorted(given_up.items()):
                 if gathered.cancelled_because:  # the scheduler is gone: nothing runs alone
                     break
-                key = f"episode-{batch}-{i}-alone"
-                finished(i, _alone(client, watch, travelling[i], wall_limit_s, key, first,
-                                   gathered, seeds_said(specs, [i])))  # fmt: skip
+                key = f"{sent.key(i)}-alone"
+                finished(i, _alone(client, watch, sent.bundled(specs[i]), wall_limit_s, key,
+                                   first, gathered, seeds_said(specs, [i])))  # fmt: skip
         except KeyboardInterrupt as exc:
             interrupt = exc
-            client.cancel([f for f in futures.values() if not f.done()])
+            client.cancel([f for f in sent.pending.values() if not f.done()])
     gathered.rerun += _release_noting_reruns(
-        client, [*gathered.futures, *futures.values()], gathered.asks_scheduler
+        client, [*gathered.futures, *sent.pending.values()], gathered.asks_scheduler
     )
     retried = _say_reruns(specs, gathered.rerun)
     if watch.expired:
@@ -656,17 +667,55 @@ class _Finished:
             self.progress(self.done, len(self.results), result)
 
 
-def _submitted(
-    client: Any, specs: Sequence[EpisodeSpec], wall_limit_s: float | None, batch: str
-) -> dict[str, Any]:
-    """A future of each episode on the cluster, by its key ``episode-BATCH-i`` (``i``: its
-    spec's index, which :func:`_gather` reads back)."""
-    return {
-        f"episode-{batch}-{i}": client.submit(
-            run_on_worker, spec, wall_limit_s, key=f"episode-{batch}-{i}", pure=False
-        )
-        for i, spec in enumerate(specs)
-    }
+#: How many episodes are on the cluster at a time per worker thread (and with no worker
+#: yet, as for one): enough that a worker finds its next one queued when it ends one,
+#: whatever the round trip of its result and the next submission.
+IN_FLIGHT_PER_THREAD = 4
+
+
+class _Submitted:
+    """The episodes on the cluster, sent a window at a time: each a future of
+    :func:`run_on_worker` on its spec made :func:`~roomba_bt.evaluate.episode.self_contained`
+    as it is sent, keyed ``episode-BATCH-i`` (``i``: its spec's index, :func:`_index_of`),
+    at most :data:`IN_FLIGHT_PER_THREAD` per worker thread of the cluster
+    (:attr:`WorkerWatch.threads`) pending; each guarded by ``watch``."""
+
+    def __init__(
+        self, client: Any, watch: WorkerWatch, specs: Sequence[EpisodeSpec],
+        wall_limit_s: float | None,
+    ) -> None:  # fmt: skip
+        self.client = client
+        self.watch = watch
+        self.specs = specs
+        self.wall_limit_s = wall_limit_s
+        self.batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many
+        self.bundled = Bundles()
+        self.pending: dict[str, Any] = {}
+        self.sent = 0
+
+    def key(self, index: int) -> str:
+        return f"episode-{self.batch}-{index}"
+
+    def more(self, completing: Any) -> None:
+        """The next episodes sent, and added to ``completing`` (Dask's ``as_completed``),
+        until the window is full or every one is sent."""
+        window = IN_FLIGHT_PER_THREAD * max(1, self.watch.threads)
+        new = []
+        while len(self.pending) < window and self.sent < len(self.specs):
+            i, key = self.sent, self.key(self.sent)
+            future = self.client.submit(run_on_worker, self.bundled(self.specs[i]),
+                                        self.wall_limit_s, key=key, pure=False)  # fmt: skip
+            self.pending[key] = future
+            new.append(future)
+            self.sent += 1
+        self.watch.guard(new)
+        for future in new:
+            completing.add(future)
+
+
+def _index_of(key: str) -> int:
+    """The spec index of the episode keyed ``episode-BATCH-i`` (or ``...-i-alone``)."""
+    return int(key.split("-")[2])
 
 
 @dataclass
@@ -699,37 +748,41 @@ def _gather(
     client: Any,
     watch: WorkerWatch,
     specs: Sequence[EpisodeSpec],
-    futures: dict[str, Any],
+    sent: _Submitted,
     gathered: _Gathered,
     finished: Callable[[int, EpisodeResult], None],
 ) -> dict[int, BaseException]:
-    """Each of ``futures`` (by key ``...-i`` for ``specs[i]``) as it completes, its result to
-    ``finished``, gathered on the client's event loop (not one blocking round trip from this
-    thread each); each moved from ``futures`` to ``gathered`` and released there in batches
-    of :data:`RELEASE_EVERY`. A cancelled one (a :class:`WorkerWatch` found no worker, the
-    scheduler was lost) has no result: why is noted (:meth:`_Gathered.cancelled`); ``watch``
-    ends the gathering if the client closes (:meth:`WorkerWatch.gathering`). The episodes
-    Dask gave up on, by spec index: their errors (:func:`_killed_worker`)."""
+    """Each episode sent (``sent``, by key ``...-i`` for ``specs[i]``) as it completes, its
+    result to ``finished``, gathered on the client's event loop (not one blocking round
+    trip from this thread each), the next episodes sent in its place; each moved from
+    ``sent.pending`` to ``gathered`` and released there in batches of
+    :data:`RELEASE_EVERY`. A cancelled one (a :class:`WorkerWatch` found no worker, the
+    scheduler was lost) has no result: why is noted (:meth:`_Gathered.cancelled`), and no
+    more are sent; ``watch`` ends the gathering if the client closes
+    (:meth:`WorkerWatch.gathering`). The episodes Dask gave up on, by spec index: their
+    errors (:func:`_killed_worker`)."""
     distributed = _import_distributed()
-    index = {key: i for i, key in enumerate(futures)}
     given_up: dict[int, BaseException] = {}
-    completing = distributed.as_completed(
-        list(futures.values()), with_results=True, raise_errors=False
-    )
+    completing = distributed.as_completed(with_results=True, raise_errors=False)
     watch.gathering(completing)
+    sent.more(completing)
+    cancelled = False
     for future, result in completing:
         status = future.status  # before the release below, which marks it cancelled
-        gathered.futures.append(futures.pop(future.key))
+        gathered.futures.append(sent.pending.pop(future.key))
         if len(gathered.futures) >= RELEASE_EVERY:
             gathered.rerun += _release_noting_reruns(client, gathered.futures,
                                                      gathered.asks_scheduler)  # fmt: skip
-        i = index[future.key]
+        i = _index_of(future.key)
         if status == "error":  # (type, exception, traceback)
             given_up[i] = _killed_worker(specs[i], result[1], seeds_said(specs, [i]))
         elif status == "cancelled":  # its result is Dask's FutureCancelledError
             gathered.cancelled(result)
+            cancelled = True
         else:
             finished(i, result)
+        if not (cancelled or watch.expired or watch.closed):
+            sent.more(completing)
     return given_up
 
 
@@ -825,7 +878,7 @@ def _seeds_of(specs: Sequence[EpisodeSpec], keys: list[str], shown: int = 10) ->
     """The seeds of the episodes keyed ``episode-BATCH-i`` (or ``...-i-alone``), the first
     ``shown`` of them, in order, each with its variant in an A/B (:func:`seeds_said`: they
     read ``75, 75``, one seed for two episodes)."""
-    return seeds_said(specs, sorted({int(key.split("-")[2]) for key in keys}), shown)
+    return seeds_said(specs, sorted({_index_of(key) for key in keys}), shown)
 
 
 def warm_up(client: Any) -> None:

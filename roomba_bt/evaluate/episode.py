@@ -153,31 +153,40 @@ class EpisodeSpec:
 def self_contained(spec: EpisodeSpec) -> EpisodeSpec:
     """``spec`` carrying the texts it needs, so that any machine can run it (a Dask worker
     with no shared file system); the episode is the same one."""
-    return all_self_contained([spec])[0]
+    return Bundles()(spec)
 
 
 def all_self_contained(specs: Iterable[EpisodeSpec]) -> list[EpisodeSpec]:
     """Each of ``specs`` made :func:`self_contained`, each distinct mission and world file
-    read once. An evaluation's episodes share one mission: bundling it again for each one
-    parsed its YAML 48 times for 48 episodes, most of the submitting process's CPU on a Dask
-    run, taken from the workers on a 2-core machine. Read once, every episode also carries
-    the same bytes even if the file is saved while they are submitted."""
-    missions: dict[str, MissionSources] = {}
-    worlds: dict[str, tuple[str, str] | None] = {}
-    out = []
-    for spec in specs:
+    read once (:class:`Bundles`)."""
+    bundled = Bundles()
+    return [bundled(spec) for spec in specs]
+
+
+class Bundles:
+    """Specs made :func:`self_contained` one at a time, as they are sent, each distinct
+    mission and world file read once. An evaluation's episodes share one mission: bundling
+    it again for each one parsed its YAML 48 times for 48 episodes, most of the submitting
+    process's CPU on a Dask run, taken from the workers on a 2-core machine. Read once,
+    every episode also carries the same bytes even if the file is saved while they are
+    submitted."""
+
+    def __init__(self) -> None:
+        self._missions: dict[str, MissionSources] = {}
+        self._worlds: dict[str, tuple[str, str] | None] = {}
+
+    def __call__(self, spec: EpisodeSpec) -> EpisodeSpec:
         sources = spec.sources
         if sources is None:
-            if spec.mission not in missions:
-                missions[spec.mission] = bundle_mission(spec.mission)
-            sources = missions[spec.mission]
+            if spec.mission not in self._missions:
+                self._missions[spec.mission] = bundle_mission(spec.mission)
+            sources = self._missions[spec.mission]
         world_file = spec.world_file
         if world_file is None:
-            if spec.world not in worlds:
-                worlds[spec.world] = bundle_world(spec.world)
-            world_file = worlds[spec.world]
-        out.append(replace(spec, sources=sources, world_file=world_file))
-    return out
+            if spec.world not in self._worlds:
+                self._worlds[spec.world] = bundle_world(spec.world)
+            world_file = self._worlds[spec.world]
+        return replace(spec, sources=sources, world_file=world_file)
 
 
 @dataclass(frozen=True)

@@ -546,6 +546,31 @@ class TestOnOneLocalCluster:
         assert all(r is not None for r in results)
         assert _episodes([r for r in results if r is not None]) == one_job[:4]
 
+    def test_a_few_episodes_per_worker_are_on_the_cluster_at_a_time(
+        self, local_client: Any, one_job: list[EpisodeResult], monkeypatch: pytest.MonkeyPatch
+    ) -> None:
+        """Every episode was submitted before the first result: 100 000 held 1.4 GB in the
+        submitting process, and the local scheduler, busy with them, was taken for lost
+        before any finished. A window of ``IN_FLIGHT_PER_THREAD`` per worker thread is on
+        the cluster (1 each here: 2 of the 8), refilled as results come; the same
+        results."""
+        monkeypatch.setattr(cluster, "IN_FLIGHT_PER_THREAD", 1, raising=False)
+        submit = local_client.submit
+        sent: list[str] = []
+        in_flight: list[int] = []
+
+        def counted(*args: Any, **kwargs: Any) -> Any:
+            sent.append(kwargs["key"])
+            return submit(*args, **kwargs)
+
+        def progress(done: int, total: int, result: EpisodeResult) -> None:
+            in_flight.append(len(sent) - done + 1)  # this one's result is in
+
+        monkeypatch.setattr(local_client, "submit", counted)
+        results, retried, _ = run_on_client(local_client, SPECS, progress)
+        assert len(sent) == len(SPECS) and max(in_flight) <= 2, in_flight
+        assert _episodes([r for r in results if r is not None]) == one_job and retried == 0
+
     def test_results_are_released_as_they_are_gathered(
         self, local_client: Any, one_job: list[EpisodeResult], monkeypatch: pytest.MonkeyPatch
     ) -> None:

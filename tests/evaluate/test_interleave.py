@@ -86,11 +86,11 @@ def test_nothing_to_run_starts_no_pool(jobs: int) -> None:
     assert [(e.results, e.interrupted) for e in done] == [([], False), ([], False)]
 
 
-def test_the_bars_callback_keeps_little_per_episode_and_lets_go_as_results_come() -> None:
+def test_the_bars_callback_keeps_nothing_per_episode() -> None:
     """To find each result's variant, the callback kept a deque per episode (760 bytes,
-    held to the end of the run): 76 MB at 100 000 episodes. It keeps each episode's variant
-    alone (about 100 bytes with its key), and lets go of the key when its result comes (the
-    dictionary's table stays, as Python's do)."""
+    held to the end of the run): 76 MB at 100 000 episodes; then each episode's batch by its
+    key, 10 MB. A result's variant names its batch: what it keeps is the same for 4000
+    episodes as for 4, and stays so as their results come."""
     import dataclasses
     import tracemalloc
 
@@ -124,8 +124,41 @@ def test_the_bars_callback_keeps_little_per_episode_and_lets_go_as_results_come(
     finally:
         tracemalloc.stop()
     assert counted == [2000, 2000]
-    assert held / len(work.specs) < 300, held / len(work.specs)  # 900 bytes before
-    assert left < held * 0.8, (held, left)
+    assert held < 4000, held  # 400 000 bytes before
+    assert left < 4000, left
+
+
+@pytest.mark.parametrize("sizes", [(3, 3), (3, 1), (1, 4, 2), (0, 2), (2, 0, 2), (5,)])
+def test_each_place_is_that_of_the_spec_taken_by_seed(sizes: tuple[int, ...]) -> None:
+    """Batches of any sizes: the specs in the order A1 B1 C1 A2 C2 ..., a shorter batch left
+    out once it is done, each found in its batch at its place."""
+    batches = [[f"{'ABC'[b]}{i + 1}" for i in range(n)] for b, n in enumerate(sizes)]
+    order = [(b, i) for i in range(max(sizes)) for b, n in enumerate(sizes) if i < n]
+    work = Interleaved.of(batches)  # type: ignore[arg-type]
+    assert [work.place(i) for i in range(len(work.specs))] == order
+    assert list(work.specs) == [batches[b][i] for b, i in order]
+    assert [work.specs[i] for i in range(len(order))] == list(work.specs)
+
+
+def test_the_interleaved_plans_of_a_million_episodes_are_made_as_they_are_taken() -> None:
+    """A sweep's specs were made before the first episode ran, every one (``eval --runs
+    100000``: about 100 MB held before the first result), and put in one list again by
+    seed. A plan makes each as it is taken: its last is found in a two-variant
+    million-episode sweep with almost nothing held."""
+    import tracemalloc
+
+    from roomba_bt.evaluate import episode_plan
+
+    tracemalloc.start()
+    try:
+        plans = [episode_plan(BUMP, runs=1_000_000, params=(("duration", d),)) for d in "12"]
+        work = Interleaved.of(plans)
+        last = work.specs[len(work.specs) - 1]
+        held = tracemalloc.get_traced_memory()[0]
+    finally:
+        tracemalloc.stop()
+    assert (last.seed, last.params) == (999_999, (("duration", "2"),))
+    assert held < 100_000, held
 
 
 def test_a_batch_given_twice_has_each_result_counted_on_its_own_bar_in_turn() -> None:
