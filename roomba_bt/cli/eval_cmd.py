@@ -304,18 +304,16 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
     sets = _variant_sets(args, params)
     if isinstance(sets, str):
         return sets
-    from roomba_bt.mission.shipped import mission_label
+    from roomba_bt.evaluate.interleave import variant_label
 
     out = []
     for mission in args.missions:
         for extra, given_as in sets:
             merged = {**params, **extra}
-            kept = [f"-p {k}={v}" for k, v in params.items() if k not in extra]
             path = getattr(args, "mission_paths", {}).get(mission, mission)
             name = results_name(mission, path)
             # a shipped mission as --from labels its records: dock, however it was named
-            shown = mission_label(name)
-            label = " ".join([shown, *kept, *(f"-p {k}={v}" for k, v in extra.items())])
+            label = variant_label(name, params.items(), extra.items())
             out.append(Variant(label, name, tuple(sorted(merged.items())), path,
                                tuple(extra.items()), given_as))  # fmt: skip
     if len({v.label for v in out}) < len(out):
@@ -944,7 +942,7 @@ def _run(
     ``partial`` as it finishes; an exit code when the cluster is not there."""
     from roomba_bt.evaluate.cluster import ClusterUnavailableError, SchedulerUnreachableError
     from roomba_bt.evaluate.episode import MissionNotCompiled
-    from roomba_bt.evaluate.parallel import evaluate, variant_said
+    from roomba_bt.evaluate.parallel import evaluate
     from roomba_bt.evaluate.progress import ProgressBars
 
     bars = None
@@ -952,7 +950,7 @@ def _run(
         already = [(len(e), sum(r.succeeded for r in e)) for e in earlier]
         already = already or [(0, 0)] * len(chosen)
         bars = ProgressBars(
-            [variant_said(str(v.path), v.params) for v in chosen],
+            [v.label for v in chosen],
             [done + len(batch) for (done, _), batch in zip(already, batches, strict=True)],
             already=already,
         )
@@ -960,7 +958,7 @@ def _run(
     progress = shown if partial is None else [_recorded(partial, bar) for bar in shown]
     try:
         try:
-            return evaluate(batches, engine, progress)
+            return evaluate(batches, engine, progress, [v.label for v in chosen])
         finally:
             if bars is not None:
                 bars.end()  # before what is said next, an error's words too

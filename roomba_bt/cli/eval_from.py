@@ -180,10 +180,10 @@ def _left_out(cut: list[CutShort]) -> None:
 def _label(mission: str, params: tuple[tuple[str, str], ...]) -> str:
     """A variant's label as ``eval`` gave it when it ran: a shipped mission by its name
     (``dock``: it said ``roomba-bt:dock.yaml``, the records' name, where the run said
-    ``dock``), then its parameters."""
-    from roomba_bt.mission.shipped import mission_label
+    ``dock``), then its parameters (:func:`~roomba_bt.evaluate.interleave.variant_label`)."""
+    from roomba_bt.evaluate.interleave import variant_label
 
-    return " ".join([mission_label(mission), *(f"-p {name}={value}" for name, value in params)])
+    return variant_label(mission, params)
 
 
 def _profile_said(results: list[EpisodeResult], given: str | None) -> str:

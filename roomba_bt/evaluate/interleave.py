@@ -13,12 +13,13 @@ from __future__ import annotations
 
 from bisect import bisect_right
 from collections import deque
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import overload
 
 from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
 from roomba_bt.evaluate.plan import EpisodePlan
+from roomba_bt.mission.shipped import mission_label
 
 Progress = Callable[[int, int, EpisodeResult], None]
 
@@ -45,8 +46,11 @@ class InterleavedSpecs(Sequence[EpisodeSpec]):
     it is asked for: a list of them all held every spec of a 100 000-episode sweep before
     the first ran, and a list of their places a tuple each."""
 
-    def __init__(self, batches: Sequence[Sequence[EpisodeSpec]]) -> None:
+    def __init__(
+        self, batches: Sequence[Sequence[EpisodeSpec]], labels: Sequence[str] = ()
+    ) -> None:
         self.batches = batches
+        self.labels = labels
         sizes = [len(batch) for batch in batches]
         # the rows are cut where a batch ends: between two such cuts, the batches still
         # going give one spec each a row
@@ -71,6 +75,16 @@ class InterleavedSpecs(Sequence[EpisodeSpec]):
         stretch = self._stretches[bisect_right(self._starts, index) - 1]
         row, column = divmod(index - stretch.start, len(stretch.batches))
         return stretch.batches[column], stretch.first + row
+
+    def label(self, index: int) -> str:
+        """The ``index``-th spec's variant as the report names it: its batch's label, given
+        by the evaluation (``eval``'s, with the ``-p`` base first), else made from the spec
+        (:func:`variant_label`)."""
+        batch, at = self.place(index)
+        if self.labels:
+            return self.labels[batch]
+        spec = self.batches[batch][at]
+        return variant_label(spec.mission, spec.params)
 
     @overload
     def __getitem__(self, index: int) -> EpisodeSpec: ...
@@ -101,8 +115,12 @@ class Interleaved:
     sizes: list[int]
 
     @classmethod
-    def of(cls, batches: Sequence[Sequence[EpisodeSpec]]) -> Interleaved:
-        return cls(InterleavedSpecs(batches), [len(batch) for batch in batches])
+    def of(
+        cls, batches: Sequence[Sequence[EpisodeSpec]], labels: Sequence[str] = ()
+    ) -> Interleaved:
+        """``batches`` interleaved, each labelled as ``labels`` says (none: each spec's
+        variant made from it, :func:`variant_label`)."""
+        return cls(InterleavedSpecs(batches, labels), [len(batch) for batch in batches])
 
     def place(self, index: int) -> tuple[int, int]:
         return self.specs.place(index)
@@ -164,6 +182,22 @@ def _variants_of(batch: Sequence[EpisodeSpec]) -> set[_Variant]:
     if isinstance(batch, InterleavedSpecs):
         return {variant for one in batch.batches for variant in _variants_of(one)}
     return {(spec.mission, tuple(spec.params)) for spec in batch}
+
+
+def variant_label(
+    mission: str, params: Iterable[tuple[str, str]], own: Iterable[tuple[str, str]] = ()
+) -> str:
+    """A variant as the report, its progress bar and the lines about its seeds name it: the
+    mission as a report labels it (a shipped one by its name, ``dock``:
+    :func:`~roomba_bt.mission.shipped.mission_label`), then each parameter that applied as
+    ``-p`` gives it, those of ``params`` that its ``own`` (a ``--sweep`` value, a
+    ``--variant`` set) do not override first, then its own: ``dock -p
+    search_speed=250mm/s -p turn_speed=90mm/s``. The bar said ``dock
+    search_speed=250mm/s turn_speed=90mm/s``, in another order and form than the report
+    under it."""
+    mine = dict(own)
+    applied = [*((k, v) for k, v in params if k not in mine), *mine.items()]
+    return " ".join([mission_label(mission), *(f"-p {k}={v}" for k, v in applied)])
 
 
 def variant_count(specs: Sequence[EpisodeSpec]) -> int:

@@ -29,7 +29,6 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from multiprocessing.context import BaseContext
 from multiprocessing.process import BaseProcess
-from pathlib import PurePath
 from types import FrameType
 from typing import Any, cast
 
@@ -41,12 +40,16 @@ from roomba_bt.evaluate.episode import (
     hung_result,
     run_episode,
 )
-from roomba_bt.evaluate.interleave import Interleaved, variant_count
+from roomba_bt.evaluate.interleave import (
+    Interleaved,
+    InterleavedSpecs,
+    variant_count,
+    variant_label,
+)
 from roomba_bt.evaluate.interleave import Progress as Progress  # re-exported: callers name it here
 from roomba_bt.evaluate.progress import ProgressBar as ProgressBar  # re-exported, as Progress
 from roomba_bt.evaluate.progress import end_bars as end_bars
 from roomba_bt.evaluate.progress import say
-from roomba_bt.mission.shipped import SHIPPED_PREFIX
 from roomba_bt.runtime.ending import threads_left
 
 #: How many times a local evaluation starts its workers again after one died with no episode
@@ -221,26 +224,22 @@ def _blame(
 def seeds_said(specs: Sequence[EpisodeSpec], indices: Sequence[int], shown: int = 10) -> str:
     """The seeds of ``specs[i]`` for each of ``indices`` (the first ``shown``), each with its
     variant when ``specs`` hold several (an A/B runs every seed once per variant: its seeds
-    read ``28, 28``, the same episode twice to a reader): ``28 (dock), 28 (my-dock)``."""
+    read ``28, 28``, the same episode twice to a reader): ``28 (dock), 28 (my-dock.yaml)``,
+    each variant as the report labels it (:func:`~roomba_bt.evaluate.interleave.variant_label`)."""
     several = variant_count(specs) > 1
-    seeds = [_seed_said(specs[i], several) for i in indices]
+    seeds = [_seed_said(specs, i, several) for i in indices]
     more = f" and {len(seeds) - shown} more" if len(seeds) > shown else ""
     return ", ".join(seeds[:shown]) + more
 
 
-def _seed_said(spec: EpisodeSpec, variant: bool) -> str:
-    """``spec``'s seed, with its variant as the progress bar labels it when ``variant``."""
+def _seed_said(specs: Sequence[EpisodeSpec], index: int, variant: bool) -> str:
+    """``specs[index]``'s seed, with its variant as the report labels it when ``variant``."""
+    spec = specs[index]
     if not variant:
         return str(spec.seed)
-    return f"{spec.seed} ({variant_said(spec.mission, spec.params)})"
-
-
-def variant_said(mission: str, params: Sequence[tuple[str, Any]]) -> str:
-    """A variant in a few words, as its progress bar labels it and its seeds are said:
-    the mission file's stem (a shipped one's name) and each parameter it sets,
-    ``dock turn_speed=90mm/s``."""
-    name = PurePath(mission.removeprefix(SHIPPED_PREFIX)).stem
-    return " ".join([name, *(f"{key}={value}" for key, value in params)])
+    if isinstance(specs, InterleavedSpecs):
+        return f"{spec.seed} ({specs.label(index)})"
+    return f"{spec.seed} ({variant_label(spec.mission, spec.params)})"
 
 
 @dataclass(frozen=True)
@@ -674,6 +673,7 @@ def evaluate(
     batches: Sequence[Sequence[EpisodeSpec]],
     engine: Engine = Engine(),
     progress: Sequence[Progress | None] | None = None,
+    labels: Sequence[str] = (),
 ) -> list[Evaluation]:
     """Run each batch on ``engine``, the batches' episodes taken by seed (A1 B1 A2 B2 ...:
     :class:`~roomba_bt.evaluate.interleave.Interleaved`, so that an interrupted A/B still
@@ -682,8 +682,10 @@ def evaluate(
     a signal stops the run (each batch ``interrupted``, with its :class:`Interruption` and
     what finished), as do local workers that keep dying (:class:`WorkersLostError`) and a
     Dask cluster lost (no worker, no scheduler). The episodes run again after a worker was
-    lost are counted once, on the first batch's: they ran in one pool."""
-    work = Interleaved.of(batches)
+    lost are counted once, on the first batch's: they ran in one pool. ``labels``: each
+    batch's variant as the report names it, which the lines about its seeds say (none:
+    made from its specs, :func:`~roomba_bt.evaluate.interleave.variant_label`)."""
+    work = Interleaved.of(batches, labels)
     bar = work.progress(progress or [None] * len(batches))
     results: dict[int, EpisodeResult] = {}
     retried, interruption = 0, None

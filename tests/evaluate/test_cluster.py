@@ -166,7 +166,7 @@ def test_the_seeds_run_again_are_named_from_their_keys(capsys: pytest.CaptureFix
     # an A/B: seed 100 of each variant, each said with its variant (it read "100" once)
     ab = [specs[0], dataclasses.replace(specs[0], params=(("turn_speed", "90mm/s"),))]
     assert cluster._seeds_of(ab, ["episode-0a1b2c-1", "episode-0a1b2c-0"]) == (
-        "100 (dock), 100 (dock turn_speed=90mm/s)"
+        f"100 ({SPECS[0].mission}), 100 ({SPECS[0].mission} -p turn_speed=90mm/s)"
     )
     assert cluster._say_reruns(specs, keys[:2]) == 2
     err = capsys.readouterr().err
@@ -752,7 +752,8 @@ def test_an_episode_whose_dask_workers_kept_dying_is_said_with_its_variant(
 ) -> None:
     """In an A/B every seed is two episodes: the lines of one whose Dask workers died (run
     again alone, recorded as DIED) said ``seed 3`` of either; the evaluation says each as
-    :func:`~roomba_bt.evaluate.parallel.seeds_said` does, ``3 (dock turn_speed=90mm/s)``."""
+    :func:`~roomba_bt.evaluate.parallel.seeds_said` does, ``3 (dock.yaml -p
+    turn_speed=90mm/s)``: its variant as the report labels it."""
     from distributed.scheduler import KilledWorker
 
     from roomba_bt.evaluate.parallel import seeds_said
@@ -763,7 +764,7 @@ def test_an_episode_whose_dask_workers_kept_dying_is_said_with_its_variant(
     assert cluster._killed_worker(ab[1], first, said) is first
     died = cluster.died_on_workers(ab[1], first, first, said)
     err = capsys.readouterr().err
-    assert said == f"{SPECS[0].seed} (dock turn_speed=90mm/s)"
+    assert said == f"{SPECS[0].seed} ({SPECS[0].mission} -p turn_speed=90mm/s)"
     assert f"seed {said}: 1 Dask worker(s) died running it or with it queued" in err
     assert f"seed {said} killed its workers again, alone: recorded as DIED" in err
     assert died.outcome == "died"

@@ -38,7 +38,7 @@ def test_the_progress_label_of_a_mission_without_parameters_is_its_name_once_spa
     no parameter it read ``bump-and-turn  [...`` (an empty parameter text between two)."""
     assert main(["eval", BUMP, "--runs", "1", "--timeout", "1s"]) == 0
     err = capsys.readouterr().err
-    assert err.startswith("bump-and-turn [") and "  [" not in err
+    assert err.startswith(f"{BUMP} [") and "  [" not in err
 
 
 @pytest.mark.extra("plot")
@@ -374,6 +374,23 @@ def test_a_variant_s_label_has_the_p_base_it_ran_with(
     assert f"variant      {BUMP} -p duration=1s\nmission " in capsys.readouterr().out
 
 
+def test_the_progress_bars_label_each_variant_as_the_report_does(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The bar said ``bump-and-turn duration=1s speed=300mm/s`` (the file's stem, the
+    parameters sorted, no ``-p``) over a report that said ``.../bump-and-turn.yaml -p
+    speed=300mm/s -p duration=1s``: one variant in two forms and orders. Both are made by
+    one function now."""
+    argv = ["eval", BUMP, "--runs", "1", "-p", "speed=300mm/s", "--sweep", "duration=1s,2s"]
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    labels = [line.removeprefix("variant      ") for line in out.splitlines()
+              if line.startswith("variant ")]  # fmt: skip
+    assert labels == [f"{BUMP} -p speed=300mm/s -p duration={d}" for d in ("1s", "2s")]
+    log = err.splitlines()[-1]  # into a pipe: a line with every variant's count
+    assert all(f"{label} 1/1 ok" in log for label in labels), log
+
+
 @pytest.mark.parametrize(
     ("variants", "said"),
     [
@@ -565,7 +582,7 @@ def test_an_interrupted_ab_compares_the_seeds_both_finished(
     import roomba_bt.evaluate.parallel as parallel
     from roomba_bt.evaluate.parallel import Evaluation
 
-    def interrupted_in_b(batches: list, engine: object, progress: object) -> list:  # type: ignore[type-arg]
+    def interrupted_in_b(batches: list, engine: object, *_: object) -> list:  # type: ignore[type-arg]
         a = parallel.run_episodes(batches[0])
         return [Evaluation(a), Evaluation(parallel.run_episodes(batches[1][:b_finished]), 0, True)]
 
@@ -1151,7 +1168,7 @@ def test_a_sweep_of_a_hundred_thousand_episodes_holds_little_before_the_first_ru
     held: list[int] = []
     seeds: list[list[int]] = []
 
-    def at_the_engine(batches, engine, progress):  # type: ignore[no-untyped-def]
+    def at_the_engine(batches, engine, progress, labels):  # type: ignore[no-untyped-def]
         held.append(tracemalloc.get_traced_memory()[0])
         seeds.append([len(batch) for batch in batches] + [batches[-1][-1].seed])
         stopped = parallel.Interruption("SIGINT", "by Ctrl-C (SIGINT)")

@@ -74,9 +74,9 @@ def test_an_a_b_s_bars_each_keep_a_line_of_their_own_on_a_terminal(
     assert main(_AB) == 0
     written = terminal.getvalue().split("variant ")[0]  # the bars, before the report
     shown = _bars(screen(written))
-    assert [line.split()[:2] for line in shown] == [
-        ["bump-and-turn", "duration=1s"],
-        ["bump-and-turn", "duration=2s"],
+    assert [line.split()[:3] for line in shown] == [
+        [BUMP, "-p", "duration=1s"],
+        [BUMP, "-p", "duration=2s"],
     ], shown
     assert all(" 6/6 ok " in line for line in shown), shown
     # after each episode, not only at the end: the screen holds both bars, one above the other
@@ -97,8 +97,8 @@ def test_an_a_b_s_progress_in_a_log_is_a_few_lines_without_terminal_codes(
     lines = [line for line in err.splitlines() if " ok " in line and "] " in line]
     assert 2 <= len(lines) <= 12, lines
     assert lines[-1].startswith("[#") and " 20/20 ok " in lines[-1]
-    assert "bump-and-turn duration=1s 10/10 ok" in lines[-1]
-    assert "bump-and-turn duration=2s 10/10 ok" in lines[-1]
+    assert f"{BUMP} -p duration=1s 10/10 ok" in lines[-1]
+    assert f"{BUMP} -p duration=2s 10/10 ok" in lines[-1]
 
 
 def test_a_resumed_evaluation_s_bars_count_the_episodes_read_back(

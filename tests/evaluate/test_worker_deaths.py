@@ -156,7 +156,7 @@ def test_the_seeds_said_of_a_dead_worker_in_an_a_b_name_their_variants(
     """An A/B runs each seed once per variant: a worker killed from outside in a sweep of
     dock against my-dock was said as ``seed(s) 28, 28 were running``, the same seed twice
     with nothing to tell which episode was which. Each is said with its variant, as its
-    progress bar is labelled: ``3 (once)``, ``3 (once-b)``."""
+    progress bar and the report label it: ``3 (.../once.yaml)``, ``3 (.../once-b.yaml)``."""
     marker = tmp_path / "killed"
     once = f"if _seed() == 3 and not os.path.exists({str(marker)!r}):"
     kill = f"open({str(marker)!r}, 'w').close(); os.kill(os.getpid(), 9)"
@@ -172,7 +172,8 @@ def test_the_seeds_said_of_a_dead_worker_in_an_a_b_name_their_variants(
     err = capsys.readouterr().err
     assert code == 0, err
     said = [line for line in err.splitlines() if "a worker process died" in line]
-    assert len(said) == 1 and re.search(r"seed\(s\) (\d \(once(-b)?\), )*3 \(once(-b)?\)", said[0])
+    variant = r"\(\S*/once(-b)?\.yaml\)"
+    assert len(said) == 1 and re.search(rf"seed\(s\) (\d {variant}, )*3 {variant}", said[0])
     assert re.search(r"seed\(s\) [\d, ]+ (were|ran)", err) is None, err
 
 
