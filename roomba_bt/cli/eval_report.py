@@ -183,6 +183,9 @@ def print_report(
     for c in evaluated.comparisons:
         print(c)
         print()
+    faults = faults_said(conditions)
+    if faults:
+        print(f"faults       {faults}")
     interruption = interruption_of(done)
     if interruption is not None:
         print(escaped(f"interrupted  {interruption.said}; {finished_said(done, evaluated)}",
@@ -190,6 +193,21 @@ def print_report(
     if not args.reproducible and engine:  # which ran them, and what was lost: not the results
         retried = sum(e.retried for e in done)
         print(f"engine       {engine}; {retried} episode(s) run again after a worker was lost")
+
+
+def faults_said(conditions: dict[str, Any] | None) -> str:
+    """What went wrong on purpose in every episode, as the command line gave it
+    (``--byte-drop-rate 0.01 --odometry-error 0.02``), for the text report: only ``--json``
+    said it, and a report of 60 % docked read as the mission's own; "" when nothing was
+    set (or the records read do not say, ``eval --from``)."""
+    if conditions is None:
+        return ""
+    given = list(conditions.get("faults") or [])
+    if conditions.get("odometry_error"):
+        given.append(f"--odometry-error {conditions['odometry_error']:g}")
+    if not given:
+        return ""
+    return f"{' '.join(given)} (in every episode, each drawing from its own seed)"
 
 
 def _json_report(

@@ -309,6 +309,10 @@ class EpisodeResult:
     #: ``--reproducible``), so that ``eval --from`` and ``--resume`` say it again
     slowest_in: str = field(default="", compare=False)
     slowest_tick_s: float = field(default=0.0, compare=False)
+    #: the robot's 15 ms sensor frames the run never read (the run summary's ``frames ...
+    #: lost``): what the line's faults (``--byte-drop-rate``, ``--stream-gap-at``...) cost the
+    #: tree, which the report said nowhere
+    frames_lost: int = 0
 
     @property
     def succeeded(self) -> bool:
@@ -810,6 +814,7 @@ def _measured(
         profile=spec.profile,
         slowest_in=_named_as_given(spec, summary.slowest_in),
         slowest_tick_s=summary.max_tick_s if summary.slowest_in else 0.0,
+        frames_lost=summary.frames_lost,
     )
 
 

@@ -46,7 +46,8 @@ its author on stderr, which the summary says again. ``undeclared_like`` holds, o
 ``undeclared_keys``, each that may be a misspelling of a key the mission declares, with that
 key (``{"dirt_levl": "dirt_level"}``; its JSON text in CSV; empty or absent: none, or a file
 written before it was recorded): the summary's `` (did you mean 'dirt_level'?)``, as ``run``
-says it.
+says it. ``frames_lost`` counts the robot's sensor frames the run never read (the line's
+faults; absent from files written before it was recorded: 0).
 
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
@@ -146,6 +147,7 @@ COLUMNS: dict[str, tuple[str, str, Allowed]] = {
     "slowest_tick_in": ("slowest_in", "str?", None),
     "refused_actions": ("refused_actions", "refused", None),
     "undeclared_like": ("undeclared_like", "like", None),
+    "frames_lost": ("frames_lost", "int?", AT_LEAST_0),
 }
 
 #: the coverage columns (empty when the episode did not clean): name -> (Coverage field,
@@ -331,6 +333,7 @@ def _sample(record: dict[str, Any], point: Any) -> tuple[float, float]:
 #: the same, as text)
 _EXPECTED = {
     "str": "a string", "str?": "a string or null", "int": "a whole number",
+    "int?": "a whole number or null",
     "float": "a finite number", "float?": "a finite number or null",
     "bool": "true or false (True or False in CSV)",
     "outcome": "the outcome's word in capitals (SUCCESS, FAILURE, TIMEOUT, ...)",
@@ -354,6 +357,7 @@ _NONE = type(None)
 #: summarised as "median nan s")
 _JSON_TYPES: dict[str, frozenset[type]] = {
     "str": frozenset({str}), "str?": frozenset({str, _NONE}), "int": frozenset({int}),
+    "int?": frozenset({int, _NONE}),
     "float": _NUMBER, "float?": _NUMBER | {_NONE}, "0": _NUMBER, "1": _NUMBER, "2": _NUMBER,
     "bool": frozenset({bool}), "outcome": frozenset({str}), "params": frozenset({dict}),
     "falls total": frozenset({int, _NONE}), "hazard falls": frozenset({int, _NONE}),
@@ -494,10 +498,11 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
     a bad value."""
     values: dict[str, Any] = {"start": [0.0] * 3, "end": [0.0] * 3}
     for column, (name, kind, allowed) in COLUMNS.items():
-        if kind == "float?":  # a column later versions added: absent from older files
+        if kind in ("float?", "int?"):  # a column later versions added: absent from older files
             raw = record.get(column)
+            number: Callable[[Any], float] = _finite if kind == "float?" else int
             try:
-                values[name] = 0.0 if raw is None or raw == "" else _finite(raw)
+                values[name] = number(0) if raw is None or raw == "" else number(raw)
             except (TypeError, ValueError):
                 _bad(column, kind, raw)
             _within(column, kind, allowed, values[name], raw)

@@ -156,6 +156,11 @@ class Summary:
     #: off (:attr:`EpisodeResult.longest_trapped_s`), and how many spent TRAPPED_S or more
     longest_trapped_s: float = 0.0
     trapped: int = 0
+    #: the robot's sensor frames the episodes lost on the line, summed
+    #: (:attr:`EpisodeResult.frames_lost`), and in how many episodes: said when there were
+    #: any (the line's faults, ``eval --byte-drop-rate``...), which only the records held
+    frames_lost: int = 0
+    episodes_with_frames_lost: int = 0
     #: how the successful episodes ended in the mission's own words (:attr:`EpisodeResult.said`),
     #: the commonest first: a patrol's "laps done" and "docked on a low battery" are both a
     #: success, and the rate alone mixed them
@@ -195,6 +200,7 @@ class Summary:
             f"brushes on or off; longest {self.longest_trapped_s:.0f} s)",
             *([f"falls        {self.falls_text()}"] if self.hazard_falls else []),
             *([f"charger      {self.charger_text()}"] if self.charger_arrivals else []),
+            *([f"frames       {self.frames_text()}"] if self.frames_lost else []),
             f"simulated    {self.simulated_s:.0f} s of mission time"
             + (
                 f"{self._cpu_said()}; {self.wall_s:.1f} s of wall-clock time summed over the "
@@ -326,6 +332,15 @@ class Summary:
             said: {"min": lo, "median": median, "max": hi} for (said, _), (lo, median, hi) in pairs
         }
 
+    def frames_text(self) -> str:
+        """``37 lost in 4 of 4 episodes (9.2 per episode; the robot's 15 ms sensor frames
+        the run never read)``."""
+        return (
+            f"{self.frames_lost} lost in {self.episodes_with_frames_lost} of {self.runs} "
+            f"episodes ({self.frames_lost / self.runs:.1f} per episode; the robot's 15 ms "
+            "sensor frames the run never read)"
+        )
+
     def to_dict(self) -> dict[str, object]:
         """The summary for scripts (``eval --json``): rates as fractions, times in seconds;
         ``rate`` and ``interval`` null when no episode finished."""
@@ -353,6 +368,8 @@ class Summary:
             "episodes_with_hazard_falls": self.episodes_with_hazard_falls,
             "charger_arrivals": self.charger_arrivals,
             "episodes_with_charger_arrivals": self.episodes_with_charger_arrivals,
+            "frames_lost": self.frames_lost,
+            "episodes_with_frames_lost": self.episodes_with_frames_lost,
             "wall_time": self.wall_s if self.timings else None,
             "cpu_time": self.cpu_s if self.timings else None,
             # mission time per CPU second of the episodes that measured it (not
@@ -475,6 +492,8 @@ def summarize(
         slow_ticks=tuple((where, slowest, n) for where, (slowest, n) in slow.items()),
         longest_trapped_s=max((r.longest_trapped_s for r in results), default=0.0),
         trapped=sum(1 for r in results if r.longest_trapped_s >= TRAPPED_S),
+        frames_lost=sum(r.frames_lost for r in results),
+        episodes_with_frames_lost=sum(1 for r in results if r.frames_lost),
         endings=endings,
         ending_distances=tuple(
             _distances([r.distance_m for r in ok if r.said == said]) for said, _ in endings

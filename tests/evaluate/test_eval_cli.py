@@ -1185,3 +1185,27 @@ def test_a_sweep_of_a_hundred_thousand_episodes_holds_little_before_the_first_ru
     capsys.readouterr()
     assert seeds[1] == [100_000, 100_000, 100_004]
     assert held[1] < held[0] + 1_000_000, held  # 73 MB more before
+
+
+def test_the_text_report_says_the_faults_and_the_frames_they_lost(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--byte-drop-rate`` and the like were said only in ``--json``'s conditions, and the
+    frames the line lost nowhere: a report of a bad cable read as the mission's own. The
+    text says both (the frames per variant, read back from the records too); a run without
+    a fault says neither."""
+    out_file = tmp_path / "r.csv"
+    argv = ["eval", "dock", "--runs", "2", "--within", "1.5", "--no-progress"]
+    assert main([*argv, "--byte-drop-rate", "0.01", "--odometry-error", "0.02",
+                 "--out", str(out_file)]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    faults = ("faults       --byte-drop-rate 0.01 --odometry-error 0.02 (in every episode, each "
+              "drawing from its own seed)\n")  # fmt: skip
+    assert faults in out
+    frames = [line for line in out.splitlines() if line.startswith("frames ")]
+    assert len(frames) == 1 and " lost in 2 of 2 episodes (" in frames[0], out
+    assert main(["eval", "--from", str(out_file)]) == 0
+    assert frames[0] in capsys.readouterr().out.splitlines()
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "faults " not in out and "frames " not in out
