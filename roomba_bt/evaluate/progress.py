@@ -122,6 +122,17 @@ class ProgressBar:
         self.stream.flush()
 
 
+def _label_cut(label: str, cut: int) -> str:
+    """``label`` (padded, ending in a space) ``cut`` characters shorter, its start left out
+    (``...`` in its place): a variant's label names the mission as given, often a long path,
+    and its parameters last, which tell one variant's bar from the next; cut at its end,
+    the line lost its count and ETA on a narrow terminal. At least its last ten kept."""
+    if cut <= 0:
+        return label
+    keep = max(10, len(label) - cut - 3)
+    return label if keep + 3 >= len(label) else "..." + label[-keep:]
+
+
 class ProgressBars:
     """Every variant's bar of one evaluation (``labels``, one a variant, and ``totals``,
     each one's episodes), drawn together: on a terminal a block of lines, one a variant,
@@ -180,9 +191,12 @@ class ProgressBars:
             return 0.0
         return elapsed / ran * left if ran else None
 
-    def _lines(self, elapsed: float, width: int) -> list[str]:
+    def _lines(self, elapsed: float, width: int, cut: int = 0) -> list[str]:
+        """Each variant's bar line, ``width`` wide, each label ``cut`` characters shorter
+        (:func:`_label_cut`)."""
         return [
-            bar_line(label, done, total, ok, elapsed, self._eta(elapsed, ran, total - done), width)
+            bar_line(_label_cut(label, cut), done, total, ok, elapsed,
+                     self._eta(elapsed, ran, total - done), width)
             for label, done, total, ok, ran in zip(self.labels, self.done, self.totals, self.ok,
                                                    self.ran, strict=True)
         ]  # fmt: skip
@@ -214,7 +228,8 @@ class ProgressBars:
         else:
             longest = max(len(line) for line in lines)
             width = max(5, self.width - max(0, longest - columns))  # a narrower bar first
-            lines = self._lines(elapsed, width)
+            over = longest - (self.width - width) - columns  # then shorter labels
+            lines = self._lines(elapsed, width, max(0, over))
         lines = [line[:columns] + ERASE_TO_END for line in lines]
         up = cursor_up(self.open - 1) if self.open else ""
         self.stream.write(up + "\n".join(lines) + ("\n" if finished else ""))

@@ -71,14 +71,19 @@ def test_an_a_b_s_bars_each_keep_a_line_of_their_own_on_a_terminal(
     terminal = Terminal()
     monkeypatch.setattr("sys.stderr", terminal)
     monkeypatch.setattr("roomba_bt.evaluate.progress.REDRAW_S", 0.0)  # each episode drawn
+    monkeypatch.setenv("COLUMNS", "80")  # the terminal's size (it has no file to ask)
+    monkeypatch.setenv("LINES", "24")
     assert main(_AB) == 0
     written = terminal.getvalue().split("variant ")[0]  # the bars, before the report
     shown = _bars(screen(written))
-    assert [line.split()[:3] for line in shown] == [
-        [BUMP, "-p", "duration=1s"],
-        [BUMP, "-p", "duration=2s"],
+    assert [line.split(" [")[0].split()[-2:] for line in shown] == [
+        ["-p", "duration=1s"],
+        ["-p", "duration=2s"],
     ], shown
     assert all(" 6/6 ok " in line for line in shown), shown
+    # the label is the report's, the mission's whole path: on this 80-column terminal its
+    # start is left out, not the count and ETA at the line's end
+    assert all(line.startswith("...") and line.endswith(" ETA 0s") for line in shown), shown
     # after each episode, not only at the end: the screen holds both bars, one above the other
     cut = [m.end() for m in re.finditer(re.escape("\x1b[K"), written)]
     for end in cut[1::2]:
