@@ -698,8 +698,12 @@ class _Submitted:
 
     def more(self, completing: Any) -> None:
         """The next episodes sent, and added to ``completing`` (Dask's ``as_completed``),
-        until the window is full or every one is sent."""
+        until the window is full or every one is sent; once half of it has come back, not
+        at each result: each submission is a message to the scheduler, and half a window
+        at a time sends fewer while each worker still has the next one queued."""
         window = IN_FLIGHT_PER_THREAD * max(1, self.watch.threads)
+        if self.sent and len(self.pending) > window // 2:
+            return
         new = []
         while len(self.pending) < window and self.sent < len(self.specs):
             i, key = self.sent, self.key(self.sent)
