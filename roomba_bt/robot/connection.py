@@ -638,7 +638,7 @@ class Connection:
         motors off with it if a brush or the vacuum runs (a run riding the stall through
         gives both their commands back once frames return: runtime/stall.py); True if it
         was sent."""
-        return self.writer.halt(motors=True)
+        return self.writer.halt(motors=True, by="the watchdog's drive 0")
 
     # ------------------------------------------------------------------ the bump reflex
     def hold_forward(self) -> None:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.encode import STRAIGHT_RADII, Command
+from roomba_bt.oi.encode import STRAIGHT_RADII, Command, turns_wheels
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.odometry import encoder_delta
@@ -51,7 +51,7 @@ from roomba_bt.robot.modes import OffsetDetector
 from roomba_bt.robot.safety import ENDING_SIGNALS
 from roomba_bt.robot.wake import KeepAwake
 from roomba_bt.robot.wall_bound import WallBound, bounded
-from roomba_bt.robot.writer import CommandWriter
+from roomba_bt.robot.writer import CommandWriter, OwnHalt
 from roomba_bt.transport.link_kind import link_of
 
 log = logging.getLogger(__name__)
@@ -510,11 +510,11 @@ class SafeStop:
         self.unheard: str | None = None
         self.confirm: Callable[[], bool] | None = None
         self.closed = False
-        #: the mode, the last wheel command and what stopped the wheels before the stop was
-        #: written, and what its frames showed of it stopped ("" for nothing:
-        #: :func:`seen_stopped`): what is said of a stop that did not arrive
-        self._before: tuple[OIMode, Command | None, str, str] = (
-            writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by, ""
+        #: what is said of a stop that did not arrive, taken before it was written
+        #: (:func:`before_stop`: the mode, the wheels, what the frames showed of them)
+        self._before: tuple[OIMode, Command | None, str, str, str] = (
+            writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by, "",
+            describe_activity(writer.last_wheels, writer.wheels_stopped_by),
         )  # fmt: skip
         #: the mode packet 35 read in frames that came after a stop (it was not heard)
         self._seen: OIMode | None = None
@@ -606,8 +606,7 @@ class SafeStop:
         # once more after a stop not delivered (close()'s), nothing heard since: what was
         # seen before that one (it moved the model on to Passive without the robot)
         if self.safe_stopped is not False or link.index != self._unseen_from:
-            before = (writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by)
-            self._before = (*before, seen_stopped(self))
+            self._before = before_stop(self)
             self._seen = None
         self._unproven = None
         # before the stream's first frame the wait is the stream request's way to the robot
@@ -813,8 +812,8 @@ class SafeStop:
         return self._seen if self._seen is not None else self._before[0]
 
     def activity(self) -> str:
-        """What the last wheel command written had the robot doing (:func:`describe_activity`)."""
-        return describe_activity(self.writer.last_wheels, self.writer.wheels_stopped_by)
+        """What the robot's wheels were last told, in words (:func:`wheels_words`)."""
+        return wheels_words(self, unheard_halt(self))
 
     def _port_gone(self) -> str:
         """Why a stop to a port that failed was not delivered. A far end that closed the
@@ -837,7 +836,7 @@ class SafeStop:
         doing before the stop was written (the mode and the wheels the model held then, not
         the Passive and drive 0 of the stop itself); False (what :meth:`stop` returns)."""
         writer = self.writer
-        mode, wheels, stopped_by, still = self._before
+        mode, wheels, _, still, activity = self._before
         # never told to move and seen in Passive, or never seen at all: nothing was left
         # driving (``sensors``, ``doctor``); the summary or the error says the port's fate
         if self._seen is not None:  # in the frames after the stop: what the robot is in
@@ -853,7 +852,7 @@ class SafeStop:
         if not heard:  # nothing was ever seen of it
             report = why
         else:
-            report = last_seen_words(mode, (wheels, stopped_by), self._seen is not None, still)
+            report = last_seen_words(mode, activity, self._seen is not None, still)
             report += f"; {why}"
         self.stop_advice = gone_advice(self, idle, still)
         if self.stop_advice:
@@ -948,19 +947,66 @@ def seen_stopped(ending: SafeStop) -> str:
     return SEEN_STOPPED if still else ""
 
 
-def last_seen_words(
-    mode: OIMode, wheels: tuple[Command | None, str], after_stop: bool, still: str
-) -> str:
-    """What a stop not delivered says the robot was last seen doing: in ``mode`` with
-    ``wheels`` (the last wheel command and what stopped them: :func:`describe_activity`),
-    ``after_stop`` in frames that came after the stop, or ``still``, what its frames showed
-    of it stopped (:func:`seen_stopped`). A part of :meth:`SafeStop._undelivered`."""
-    activity = describe_activity(*wheels)
+def last_seen_words(mode: OIMode, activity: str, after_stop: bool, still: str) -> str:
+    """What a stop not delivered says the robot was last seen doing: in ``mode``,
+    ``activity`` (its wheels: :func:`wheels_words`), ``after_stop`` in frames that came after
+    the stop, or ``still``, what its frames showed of it stopped (:func:`seen_stopped`). A
+    part of :meth:`SafeStop._undelivered`."""
     if after_stop:
         return f"last seen in {mode.label} (the last wheel command written: {activity})"
     if still:  # the pause's stop, seen taken: nothing to pick up
         return still
     return f"last seen in {mode.label} {activity}"
+
+
+def unheard_halt(ending: SafeStop) -> OwnHalt | None:
+    """The session's own drive 0 (``CommandWriter.own_halt``: the watchdog's, the tick
+    guard's, the bump reflex's) if it is still the last wheel command written, the one
+    before it turned the wheels, and no frame sent after the robot could have heard it shows
+    them stopped (its requested speeds, packet 39 or 41/42, at 0: one frame's encoders show
+    nothing of it); else None. A Wi-Fi bridge that dropped mid-run: the watchdog tripped,
+    wrote its drive 0 into the dying socket, then the port was found gone, and the report
+    said "last seen in Safe stopped" of a robot last seen driving at 326 mm/s."""
+    writer = ending.writer
+    own = writer.own_halt
+    if own is None or own.writes != writer.wheel_writes or writer.last_wheels is None:
+        return None
+    if own.before is None or not turns_wheels(own.before):
+        return None  # the wheels stood before it: stopped either way
+    link = writer.link
+    frame = link.frame
+    period = stream_period(link.stream_ids, writer.baud)
+    if frame is not None and link.arrival > own.at + ending.in_flight(period):
+        shown = [pid for pid in (_VELOCITY, _LEFT_VELOCITY, _RIGHT_VELOCITY) if pid in frame]
+        if (_VELOCITY in shown or len(shown) >= 2) and not any(frame[pid] for pid in shown):
+            return None  # a frame after it shows the wheels asked to stand: it was heard
+    return own
+
+
+def before_stop(ending: SafeStop) -> tuple[OIMode, Command | None, str, str, str]:
+    """What is said of a stop that did not arrive, taken before it is written (the stop moves
+    the model on): the mode, the wheel command the robot obeys as far as is known (the one
+    before the session's own drive 0 no frame showed heard: :func:`unheard_halt`), what
+    stopped the wheels, what its frames showed of it stopped (:func:`seen_stopped`), and its
+    wheels in words (:func:`wheels_words`). A part of :meth:`SafeStop._stop`."""
+    writer = ending.writer
+    unheard = unheard_halt(ending)
+    wheels = writer.last_wheels if unheard is None else unheard.before
+    return (
+        writer.modes.mode, wheels, writer.wheels_stopped_by, seen_stopped(ending),
+        wheels_words(ending, unheard),
+    )  # fmt: skip
+
+
+def wheels_words(ending: SafeStop, unheard: OwnHalt | None) -> str:
+    """What the robot's wheels were last told, in words (:func:`describe_activity`); after
+    the session's own drive 0 no frame showed heard (``unheard``: :func:`unheard_halt`), the
+    command before it, and that drive 0 said unconfirmed: ``spinning left at 100 mm/s (then
+    the watchdog's drive 0, which no frame showed heard)``."""
+    writer = ending.writer
+    if unheard is None:
+        return describe_activity(writer.last_wheels, writer.wheels_stopped_by)
+    return f"{describe_activity(unheard.before)} (then {unheard.by}, which no frame showed heard)"
 
 
 def asked_after(ending: SafeStop, unconfirmed: str) -> str | None:

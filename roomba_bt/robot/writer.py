@@ -21,9 +21,11 @@ that may drive in Passive.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from typing import NamedTuple
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_RATES, Command
@@ -61,6 +63,19 @@ RECENT_COMMANDS = 8
 #: one. (A Stream or Query List whose count byte came whole may wait for up to 255 ids: not
 #: covered.)
 RESYNC_ZEROS = bytes(35)
+
+
+class OwnHalt(NamedTuple):
+    """A drive 0 the session wrote on its own (:meth:`CommandWriter.own_stop`): ``writes``,
+    :attr:`~CommandWriter.wheel_writes` once it was written (still the count: no wheel
+    command since); ``before``, the wheel command the robot obeys if it never heard it;
+    ``at``, when it was written (link clock); ``by``, the drive 0 as said (``the watchdog's
+    drive 0``)."""
+
+    writes: int
+    before: Command | None
+    at: float
+    by: str
 
 
 class CommandWriter:
@@ -137,6 +152,10 @@ class CommandWriter:
         #: the Reset (7) or Stop (173) written last: the OI is off and streams nothing more,
         #: so a run that sees it ends (runtime/loop.py); None before any
         self.silenced_by: Command | None = None
+        #: the last drive 0 the session wrote on its own (the watchdog's, the tick guard's,
+        #: the bump reflex's: :meth:`own_stop`), or None: what the end's report reads, so
+        #: that a watchdog's drive 0 written into a dying bridge is not said as "stopped"
+        self.own_halt: OwnHalt | None = None
 
     def send(self, command: Command) -> None:
         """Guard, then write ``command``'s bytes, then update the mode model.
@@ -158,7 +177,7 @@ class CommandWriter:
         refused: list[Exception] = []
         batch = bytearray(prefix)
         # the model follows what was written: if the batch never leaves, it is put back
-        saved = self.modes.snapshot(), self.last_wheels, self.last_motors
+        saved = self.modes.snapshot(), self.last_wheels, self.last_motors, self.wheel_writes
         try:
             for command in commands:
                 try:
@@ -172,7 +191,7 @@ class CommandWriter:
                     self.link.write(bytes(batch))
                 except PortLost:
                     self.modes.restore(saved[0])
-                    self.last_wheels, self.last_motors = saved[1], saved[2]
+                    self.last_wheels, self.last_motors, self.wheel_writes = saved[1:]
                     raise
         if refused:
             for extra in refused[1:]:
@@ -314,7 +333,7 @@ class CommandWriter:
             return True
         return self.robot_cycle is not None and not on_home_base(frame)
 
-    def halt(self, motors: bool = False) -> bool:
+    def halt(self, motors: bool = False, by: str = "") -> bool:
         """Drive 0 if the model says the robot may be driving; True once it was written at
         the robot's rate (:meth:`at_robot_rate`) and has left the port (drained: a rate
         change right after it, a listen at another rate, re-clocked it, and the robot heard
@@ -322,15 +341,40 @@ class CommandWriter:
         action, and the tick guard's. ``motors`` (the watchdog's): motors off in the same
         write when a brush or the vacuum runs (:meth:`motors_running`), as the tick guard
         does: a stream that stalled left the brushes and vacuum running on the spot while
-        the wheels stood."""
+        the wheels stood. ``by``: whose drive 0 it is when not the caller's own
+        (:meth:`own_stop`)."""
         if self.modes.mode not in DRIVING_MODES:
             return False
-        if motors and self.motors_running():
-            self.send_many((oi.halt(), oi.motors_off()))
-        else:
-            self.send(oi.halt())
+        with self.own_stop(by):
+            if motors and self.motors_running():
+                self.send_many((oi.halt(), oi.motors_off()))
+            else:
+                self.send(oi.halt())
         self.link.drain_output()
         return True
+
+    @property
+    def wheels_before_own_halt(self) -> Command | None:
+        """The wheel command written before the session's own drive 0 when that is still the
+        last one written (:attr:`own_halt`), else :attr:`last_wheels`: what the robot obeys
+        if that drive 0 never reached it."""
+        own = self.own_halt
+        if own is not None and own.writes == self.wheel_writes and self.last_wheels is not None:
+            return own.before
+        return self.last_wheels
+
+    @contextlib.contextmanager
+    def own_stop(self, by: str) -> Iterator[None]:
+        """The drive 0 written in it is the session's own (``by``, as said: ``the watchdog's
+        drive 0``, ``the tick guard's drive 0``), not its caller's command: kept as
+        :attr:`own_halt` with the wheel command it replaced (two in a row keep the first's),
+        for the end's report. "" for a caller's own halt (``Connection.halt()``): nothing
+        kept."""
+        before, writes = self.wheels_before_own_halt, self.wheel_writes
+        yield
+        wheels = self.last_wheels
+        if by and self.wheel_writes != writes and wheels is not None and not any(wheels.args):
+            self.own_halt = OwnHalt(self.wheel_writes, before, self.last_command_at, by)
 
     def motors_running(self) -> bool:
         """The last Motors command written runs a brush or the vacuum, in a mode where the
@@ -361,7 +405,8 @@ class CommandWriter:
         self.forward_held = True
         wheels = self.last_wheels
         if wheels is not None and drives_forward(wheels) and self.modes.mode in DRIVING_MODES:
-            self.send(oi.halt())
+            with self.own_stop("the bump reflex's drive 0"):
+                self.send(oi.halt())
             self.held_wheels = wheels
 
     def hold_motion(self, held: Callable[[Command], None] | None) -> None:

@@ -165,13 +165,19 @@ def cycle_said(connection: Connection) -> str:
     return f"the robot's {running.spec.title} ({running.spec.opcode}) cycle"
 
 
+#: the guard's drive 0 as the end's report says it (``CommandWriter.own_stop``)
+TICK_GUARD = "the tick guard's drive 0"
+
+
 def halt_blocked(connection: Connection) -> bool:
     """The guard's act on a tick that blocks: drive 0, and motors off in the same write if a
-    brush or the vacuum runs (:func:`stop_first`); True if motors off was sent."""
-    if motors_running(connection):
-        connection.send_many(stop_first())
-        return True
-    connection.halt()
+    brush or the vacuum runs (:func:`stop_first`); True if motors off was sent. The guard's
+    own drive 0 (``CommandWriter.own_stop``): a port lost after it is not said "stopped"."""
+    with connection.writer.own_stop(TICK_GUARD):
+        if motors_running(connection):
+            connection.send_many(stop_first())
+            return True
+        connection.halt()
     return False
 
 
@@ -189,7 +195,8 @@ def _send_stop_first(connection: Connection, motors_on: bool = False) -> bool:
     if not motors and not wheels_moving(connection):
         return False
     try:
-        connection.send_many(stop_first())
+        with connection.writer.own_stop("the drive 0 before the tree's stop"):
+            connection.send_many(stop_first())
     except Exception as exc:
         log.debug("drive 0 before the tree's stop not sent: %s", exc)
         return False
@@ -455,10 +462,11 @@ class RecordedTickGuard:
             now = index()
             act, still = _this_tick(acts, now), _this_tick(stills, now)
             if act is not None:  # the stop replaces a still note of the same tick, as live
-                if act.get("motors"):
-                    self.connection.send_many(stop_first())
-                else:
-                    self.connection.halt()
+                with self.connection.writer.own_stop(TICK_GUARD):
+                    if act.get("motors"):
+                        self.connection.send_many(stop_first())
+                    else:
+                        self.connection.halt()
                 slow(float(act["tick_guard"]), str(act.get("where", "")), True, "")
             elif still is not None:
                 cycle = str(still.get("cycle") or "a built-in cycle") if CYCLE_NOTE in still else ""

@@ -497,9 +497,10 @@ def test_a_stop_after_the_robot_fell_silent_is_unconfirmed() -> None:
     assert stalled == 1
     assert connection.safe_stop() is False
     report = connection.stop_report or ""
-    assert report.startswith(  # "stopped": the watchdog's drive 0, the last command written
-        "last seen in Safe stopped; the stop was written but is unconfirmed: the robot had "
-        "sent no valid frame for 1."
+    assert report.startswith(  # the watchdog's drive 0, no frame since: not said "stopped"
+        "last seen in Safe spinning left at 100 mm/s (then the watchdog's drive 0, which no "
+        "frame showed heard); the stop was written but is unconfirmed: the robot had sent no "
+        "valid frame for 1."
     ), report
 
 
@@ -624,3 +625,92 @@ def test_a_stop_whose_waits_never_end_on_the_link_clock_is_given_up_in_wall_time
     assert "the stop was written but is unconfirmed: " in report, report
     assert "the safe stop's wait for the robot was given up after 0.2 s of wall time" in report
     assert link.link.simulator.requested_left == 0  # written, and heard by the robot
+
+
+class Stallable(Pullable):
+    """A pullable link whose stream can go quiet first (``stalled``: reads bring nothing,
+    the port still open), as a Wi-Fi bridge that is dropping does."""
+
+    stalled = False
+
+    def read(self, timeout: float) -> bytes:
+        data = self.link.read(timeout)
+        return b"" if self.stalled else data
+
+
+def tripped_then_pulled(packets: tuple[int, ...] = PACKETS) -> tuple[Connection, Stallable]:
+    """Driving at 200 mm/s in Safe, the stream then quiet until the watchdog writes its drive
+    0, then the port gone: a bridge that dropped mid-run."""
+    link = Stallable(SimLink(Simulator(parse_world(BOX, "<test>"), profile=CREATE2), "sim://"))
+    connection = Connection(link, CREATE2)
+    connection.start("safe", packets)
+    connection.send_many([oi.drive(200, 32767)])
+    frames_for(connection, 10)
+    link.stalled = True
+    with pytest.raises(StreamStalled) as stalled:
+        for _ in range(100):
+            connection.poll(0.05)
+    assert stalled.value.halted  # the watchdog's drive 0 went out
+    return connection, link
+
+
+#: what an undelivered stop says of a robot whose last wheel command before the watchdog's
+#: drive 0 drove it at 200 mm/s, no frame since
+WATCHDOG_UNHEARD = (
+    "last seen in Safe at 200 mm/s (then the watchdog's drive 0, which no frame showed "
+    "heard); the stop was not delivered: the port is gone: the robot may still be "
+    "moving: pick it up or press its Clean or power button; reseat the cable, then roomba-bt "
+    "doctor --port sim://box"
+)
+
+
+def test_the_watchdog_s_drive_0_no_frame_showed_heard_is_not_said_stopped() -> None:
+    """A Wi-Fi bridge dropped mid-run: the watchdog tripped and wrote its drive 0 into the
+    dying socket, then the port was found gone. The report named that drive 0, the last
+    wheel command written, and said "last seen in Safe stopped" of a robot last seen
+    driving: it names the command before it, and the drive 0 as unconfirmed."""
+    connection, link = tripped_then_pulled()
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert connection.stop_report == WATCHDOG_UNHEARD
+    assert connection.activity() == (
+        "at 200 mm/s (then the watchdog's drive 0, which no frame showed heard)"
+    )
+    assert undelivered_said(connection) == "NOT DELIVERED: "
+
+
+def test_the_watchdog_s_drive_0_a_frame_showed_taken_is_said_stopped() -> None:
+    """Frames back after the watchdog's drive 0, showing the requested wheel speeds at 0
+    (packets 41/42): it was heard, and the robot is said stopped; without them (the
+    encoders alone, one frame) nothing shows it heard."""
+    connection, link = tripped_then_pulled((*PACKETS, 41, 42))
+    link.stalled = False
+    frames_for(connection, 10)
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert str(connection.stop_report).startswith("last seen in Safe stopped; ")
+    connection, link = tripped_then_pulled()
+    link.stalled = False
+    frames_for(connection, 10)
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert connection.stop_report == WATCHDOG_UNHEARD
+
+
+def test_a_wheel_command_after_the_watchdog_s_drive_0_is_said_as_itself() -> None:
+    """The program's own commands after the watchdog's drive 0 stand as written: its own
+    drive 0 is said stopped, its own drive at its speed."""
+    connection, link = tripped_then_pulled()
+    link.stalled = False
+    frames_for(connection, 3)
+    connection.send_many([oi.halt()])
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert str(connection.stop_report).startswith("last seen in Safe stopped; ")
+    connection, link = tripped_then_pulled()
+    link.stalled = False
+    frames_for(connection, 3)
+    connection.send_many([oi.drive(100, 32767)])
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert str(connection.stop_report).startswith("last seen in Safe at 100 mm/s; ")

@@ -428,3 +428,43 @@ def test_with_v_each_stall_ridden_through_is_said_at_debug(
     assert len(trips) == summary.stalls - 1, counted
     # every return but those of the two stalls said in full
     assert len(backs) == summary.stalls_ridden - 2, counted
+
+
+class DroppingBridgeLink(BadPatchLink):
+    """A Wi-Fi bridge that drops mid-run: silent from ``start`` to ``end`` (a stall ridden
+    through), silent again from ``quiet`` (the watchdog's drive 0 written into it), and gone
+    from ``gone`` (reads and writes fail)."""
+
+    def __init__(self, simulator: Simulator, quiet: float, gone: float) -> None:
+        super().__init__(simulator, 1.0, 1.3, "silent")
+        self.quiet, self.gone = quiet, gone
+
+    def read(self, timeout: float) -> bytes:
+        data = super().read(timeout)
+        if self.simulator.time >= self.gone:
+            raise ConnectionError("the bridge is gone")
+        return b"" if self.simulator.time >= self.quiet else data
+
+    def write(self, data: bytes) -> None:
+        if self.simulator.time >= self.gone:
+            raise ConnectionError("the bridge is gone")
+        super().write(data)
+
+
+def test_a_bridge_lost_after_the_watchdog_s_drive_0_is_not_said_stopped(
+    tmp_path: Path,
+) -> None:
+    """A stall ridden through (the spin sent again), then the bridge quiet, the watchdog's
+    drive 0 written into it, then gone: the summary said "NOT DELIVERED: last seen in Safe
+    stopped" of a robot last seen spinning, the drive 0 the last wheel command written and no
+    frame after it. It names the spin, and the drive 0 unconfirmed."""
+    summary, link = run(tmp_path, DroppingBridgeLink, 2.0, 2.2)
+    assert summary.outcome is Outcome.CONNECTION_LOST, summary.reason
+    assert summary.stalls == 2 and summary.stalls_ridden == 1
+    assert [b for t, b in link.writes if t > 1.9] == [HALT]  # the watchdog's, the last one
+    assert summary.safe_stop.startswith(
+        "NOT DELIVERED: last seen in Safe spinning left at 100 mm/s (then the watchdog's drive "
+        "0, which no frame showed heard); the stop was not delivered: the port is gone: the "
+        "robot may still be moving: pick it up"
+    ), summary.safe_stop
+    assert summary.stop_report == summary.safe_stop.removeprefix("NOT DELIVERED: ")

@@ -109,22 +109,25 @@ class SilentThenCtrlC(SimLink):
 
 
 @pytest.mark.parametrize(
-    ("after", "said"),
+    ("after", "halt", "said"),
     [
         # the watchdog not yet tripped; the port read once more for what waited unread
         # before the stop was written (one 15 ms step of this link's clock)
-        (0.05, "for 0.07 s before it, and none after it"),
-        (0.5, "for 0.51 s before it"),  # tripped: its drive 0 sent, the grace not yet out
+        (0.05, "the drive 0 before the tree's stop", "for 0.07 s before it, and none after it"),
+        # tripped: its drive 0 sent, the grace not yet out
+        (0.5, "the watchdog's drive 0", "for 0.51 s before it"),
     ],
 )
 def test_ctrl_c_after_the_robot_fell_silent_is_no_confirmed_stop(
-    tmp_path: Path, after: float, said: str
+    tmp_path: Path, after: float, halt: str, said: str
 ) -> None:
     """Ctrl-C 0.05 s into a silence (the watchdog's 0.1 s not yet out): the summary said
     ``safe stop sent ...``, ``final mode Passive``, of a robot nothing was heard from after
     the stop, nor for 0.05 s before it. Half a second into it the stop was unconfirmed, but
     ``final mode`` read ``last seen in Passive``: the model after the stop written, not the
-    Safe the robot was last seen in."""
+    Safe the robot was last seen in. The run's own drive 0 before the stop (the watchdog's,
+    the one before the tree's stop), no frame after it, was said ``stopped``: the spin is
+    named, that drive 0 unconfirmed."""
     path = tmp_path / "m.yaml"
     path.write_text(SPIN_A_WHILE)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
@@ -135,7 +138,8 @@ def test_ctrl_c_after_the_robot_fell_silent_is_no_confirmed_stop(
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
     assert summary.stalls == (after > 0.1)
     assert summary.safe_stop == (
-        "NOT DELIVERED: last seen in Safe stopped; the stop was written but is unconfirmed: "
-        f"the robot had sent no valid frame {said}"
+        f"NOT DELIVERED: last seen in Safe spinning left at 100 mm/s (then {halt}, which no "
+        "frame showed heard); the stop was written but is unconfirmed: the robot had sent no "
+        f"valid frame {said}"
     )
     assert "final mode   unknown: last seen in Safe, the stop was not delivered" in str(summary)
