@@ -933,11 +933,8 @@ def seen_stopped(ending: SafeStop) -> str:
     ):
         return ""  # a command may have come after it: what it did is not seen
     if OI_MODE_PACKET not in frame:  # the wheels' speeds alone, where the frame shows them
-        shown = [pid for pid in (_VELOCITY, _LEFT_VELOCITY, _RIGHT_VELOCITY) if pid in frame]
-        wheels_shown = _VELOCITY in shown or len(shown) >= 2  # 39, or 41 and 42
         stopped = describe_activity(wheels) == "stopped" and writer.modes.mode is OIMode.PASSIVE
-        still = wheels_shown and stopped and not any(frame[pid] for pid in shown)
-        return SEEN_STOPPED_UNMODED if still else ""
+        return SEEN_STOPPED_UNMODED if stopped and asked_to_stand(frame) else ""
     if writer.modes.detector.interpret(frame[OI_MODE_PACKET]) is not OIMode.PASSIVE:
         return ""
     if _LEFT_VELOCITY in frame and _RIGHT_VELOCITY in frame:
@@ -975,12 +972,17 @@ def unheard_halt(ending: SafeStop) -> OwnHalt | None:
         return None  # the wheels stood before it: stopped either way
     link = writer.link
     frame = link.frame
-    period = stream_period(link.stream_ids, writer.baud)
-    if frame is not None and link.arrival > own.at + ending.in_flight(period):
-        shown = [pid for pid in (_VELOCITY, _LEFT_VELOCITY, _RIGHT_VELOCITY) if pid in frame]
-        if (_VELOCITY in shown or len(shown) >= 2) and not any(frame[pid] for pid in shown):
-            return None  # a frame after it shows the wheels asked to stand: it was heard
+    after = own.at + ending.in_flight(stream_period(link.stream_ids, writer.baud))
+    if frame is not None and link.arrival > after and asked_to_stand(frame):
+        return None  # a frame sent after it shows the wheels asked to stand: it was heard
     return own
+
+
+def asked_to_stand(frame: SensorFrame) -> bool:
+    """Whether ``frame`` shows the wheel speeds the robot was last asked for (packet 39,
+    Drive's; or 41 and 42, Drive Direct's), all at 0."""
+    shown = [pid for pid in (_VELOCITY, _LEFT_VELOCITY, _RIGHT_VELOCITY) if pid in frame]
+    return (_VELOCITY in shown or len(shown) >= 2) and not any(frame[pid] for pid in shown)
 
 
 def before_stop(ending: SafeStop) -> tuple[OIMode, Command | None, str, str, str]:
