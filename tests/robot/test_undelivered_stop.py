@@ -22,6 +22,7 @@ from roomba_bt.robot.errors import DEFAULT_WATCHDOG, PortLost, StreamStalled
 from roomba_bt.robot.link import LinkStatus
 from roomba_bt.runtime.ending import mode_of, stop_robot, undelivered_said
 from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.runtime.tick_guard import halt_blocked
 from roomba_bt.sim import Faults, SimLink, Simulator, parse_world
 
 BOX = """
@@ -714,3 +715,25 @@ def test_a_wheel_command_after_the_watchdog_s_drive_0_is_said_as_itself() -> Non
     link.pulled = True
     assert connection.safe_stop() is False
     assert str(connection.stop_report).startswith("last seen in Safe at 100 mm/s; ")
+
+
+@pytest.mark.parametrize(
+    ("own_stop", "said"),
+    [
+        (lambda c: c.hold_forward(), "the bump reflex's drive 0"),
+        (halt_blocked, "the tick guard's drive 0"),
+    ],
+    ids=["bump reflex", "tick guard"],
+)
+def test_the_run_s_other_own_drive_0s_no_frame_showed_heard_are_not_said_stopped(
+    own_stop: Callable[[Connection], object], said: str
+) -> None:
+    """The bump reflex's hold and the tick guard's stop write a drive 0 of the run's own, as
+    the watchdog does: the port gone right after, the robot was said stopped."""
+    connection, link = driving()
+    own_stop(connection)
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert str(connection.stop_report).startswith(
+        f"last seen in Safe at 200 mm/s (then {said}, which no frame showed heard); "
+    )
