@@ -13,6 +13,7 @@ import pytest
 from waits import HANG_S  # tests/waits.py: a hang's bound
 
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
@@ -680,41 +681,31 @@ def test_the_watchdog_s_drive_0_no_frame_showed_heard_is_not_said_stopped() -> N
     assert undelivered_said(connection) == "NOT DELIVERED: "
 
 
-def test_the_watchdog_s_drive_0_a_frame_showed_taken_is_said_stopped() -> None:
-    """Frames back after the watchdog's drive 0, showing the requested wheel speeds at 0
-    (packets 41/42): it was heard, and the robot is said stopped; without them (the
-    encoders alone, one frame) nothing shows it heard."""
-    connection, link = tripped_then_pulled((*PACKETS, 41, 42))
+@pytest.mark.parametrize(
+    ("packets", "then", "said"),
+    [
+        ((*PACKETS, 41, 42), None, "last seen in Safe stopped; "),
+        (PACKETS, None, WATCHDOG_UNHEARD),
+        (PACKETS, oi.halt(), "last seen in Safe stopped; "),
+        (PACKETS, oi.drive(100, 32767), "last seen in Safe at 100 mm/s; "),
+    ],
+    ids=["requested speeds at 0", "encoders alone", "its own drive 0", "its own drive"],
+)
+def test_frames_or_a_command_after_the_watchdog_s_drive_0(
+    packets: tuple[int, ...], then: Command | None, said: str
+) -> None:
+    """Frames back after the watchdog's drive 0 showing the requested wheel speeds at 0
+    (packets 41/42): it was heard, and the robot is said stopped; the encoders alone (one
+    frame) show nothing of it. The program's own wheel command after it stands as written:
+    its own drive 0 is said stopped, its own drive at its speed."""
+    connection, link = tripped_then_pulled(packets)
     link.stalled = False
     frames_for(connection, 10)
+    if then is not None:
+        connection.send_many([then])
     link.pulled = True
     assert connection.safe_stop() is False
-    assert str(connection.stop_report).startswith("last seen in Safe stopped; ")
-    connection, link = tripped_then_pulled()
-    link.stalled = False
-    frames_for(connection, 10)
-    link.pulled = True
-    assert connection.safe_stop() is False
-    assert connection.stop_report == WATCHDOG_UNHEARD
-
-
-def test_a_wheel_command_after_the_watchdog_s_drive_0_is_said_as_itself() -> None:
-    """The program's own commands after the watchdog's drive 0 stand as written: its own
-    drive 0 is said stopped, its own drive at its speed."""
-    connection, link = tripped_then_pulled()
-    link.stalled = False
-    frames_for(connection, 3)
-    connection.send_many([oi.halt()])
-    link.pulled = True
-    assert connection.safe_stop() is False
-    assert str(connection.stop_report).startswith("last seen in Safe stopped; ")
-    connection, link = tripped_then_pulled()
-    link.stalled = False
-    frames_for(connection, 3)
-    connection.send_many([oi.drive(100, 32767)])
-    link.pulled = True
-    assert connection.safe_stop() is False
-    assert str(connection.stop_report).startswith("last seen in Safe at 100 mm/s; ")
+    assert str(connection.stop_report).startswith(said)
 
 
 @pytest.mark.parametrize(
