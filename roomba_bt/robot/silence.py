@@ -414,7 +414,7 @@ def follow_baud(connection: Connection) -> BaudChanged | None:
                 link.set_baud(rate)  # the link's parser starts again at the new rate
                 connection.baud = rate
             _confirm_at(connection, rate)
-            halted = connection.halt()
+            halted = connection.writer.halt(by="the drive 0 at the rate followed")
             return BaudChanged(
                 connection.name, rate, was, garbage_s, garbage_bytes, halted=halted,
                 user=connection.waiter,

@@ -386,7 +386,11 @@ def test_a_stop_at_a_followed_rate_the_robot_does_not_answer_is_unconfirmed(
     )
     assert "the robot now talks at another baud rate: 19200" in summary.reason
     assert not summary.stop_delivered
-    assert summary.safe_stop.startswith("NOT DELIVERED"), summary.safe_stop
+    # the drive 0s at either rate went unheard: it spins on, and is not said "stopped"
+    assert summary.safe_stop.startswith(
+        "NOT DELIVERED: last seen in Safe spinning left at 100 mm/s (then the drive 0 at the "
+        "rate followed, which no frame showed heard); "
+    ), summary.safe_stop
     assert "unconfirmed: the port followed the robot to 19200 baud" in summary.safe_stop
     assert summary.final_mode_text().startswith("unknown"), summary.final_mode_text()
     assert simulator.mode is not OIMode.PASSIVE, "it never heard the stop"
