@@ -854,7 +854,8 @@ class SafeStop:
         else:
             report = last_seen_words(mode, activity, self._seen is not None, still)
             report += f"; {why}"
-        self.stop_advice = gone_advice(self, idle, still)
+        gone, self._gone = self._gone, False
+        self.stop_advice = gone_advice(self.writer.link.name, gone, idle, still)
         if self.stop_advice:
             report += f": {self.stop_advice}"
         if report != self.stop_report:  # close() tries once more: said once, not twice
@@ -886,16 +887,16 @@ class SafeStop:
         return stopped
 
 
-def gone_advice(ending: SafeStop, idle: bool, still: str) -> str:
-    """What to do about the robot a stop not delivered left, its port gone (the report's
-    tail; "" for any other stop, or a robot the run set nothing going): the port's way back,
-    with :data:`PORT_GONE_ADVICE` first unless its frames showed it ``still``. Kept apart
-    (:attr:`SafeStop.stop_advice`) for the monitor's banner, which says it on a line of its
-    own after where the robot was left. A part of :meth:`SafeStop._undelivered`."""
-    gone, ending._gone = ending._gone, False
+def gone_advice(port: str, gone: bool, idle: bool, still: str) -> str:
+    """What to do about the robot a stop not delivered left on ``port``, that port ``gone``
+    (the report's tail; "" for any other stop, or a robot the run set nothing going): the
+    port's way back, with :data:`PORT_GONE_ADVICE` first unless its frames showed it
+    ``still``. Kept apart (:attr:`SafeStop.stop_advice`) for the monitor's banner, which
+    says it on a line of its own after where the robot was left. A part of
+    :meth:`SafeStop._undelivered`."""
     if not gone or idle:
         return ""
-    reach = link_of(ending.writer.link.name).reach
+    reach = link_of(port).reach
     return reach if still else PORT_GONE_ADVICE.format(reach=reach)
 
 

@@ -475,24 +475,22 @@ class OIProtocol(StreamOutput):
         buttons = self._buttons_until if v[18] else math.inf
         self._held_until = min(song, buttons)
 
+    def _takes_clock_command(self, name: str) -> bool:
+        """Whether the robot takes Schedule (167) or Set Day/Time (168) now: not while packet
+        18 shows the Clock or Schedule button pressed (both specs), said as event
+        ``refused``."""
+        held = held_clock_buttons(self.values[18] if self.time < self._buttons_until else 0)
+        if held:
+            self._event("refused", f"{name} ignored: the {held} button is pressed")
+        return not held
 
-def _takes_clock_command(robot: OIProtocol, name: str) -> bool:
-    """Whether the robot takes Schedule (167) or Set Day/Time (168) now: not while packet 18
-    shows the Clock or Schedule button pressed (both specs), said as event ``refused``."""
-    held = held_clock_buttons(robot.values[18] if robot.time < robot._buttons_until else 0)
-    if held:
-        robot._event("refused", f"{name} ignored: the {held} button is pressed")
-    return not held
+    def _on_schedule(self, args: bytes) -> None:
+        if self._takes_clock_command("schedule"):
+            self.robot_clock.set_schedule(args)
 
-
-def _on_schedule(robot: OIProtocol, args: bytes) -> None:
-    if _takes_clock_command(robot, "schedule"):
-        robot.robot_clock.set_schedule(args)
-
-
-def _on_day_time(robot: OIProtocol, args: bytes) -> None:
-    if _takes_clock_command(robot, "set_day_time"):
-        robot.robot_clock.set(args, robot.time)
+    def _on_day_time(self, args: bytes) -> None:
+        if self._takes_clock_command("set_day_time"):
+            self.robot_clock.set(args, self.time)
 
 
 def _cycle_starter(name: str) -> Callable[[OIProtocol, bytes], None]:
@@ -528,8 +526,8 @@ _HANDLERS_BY_NAME: dict[str, Callable[[OIProtocol, bytes], None]] = {
     "digit_leds_raw": OIProtocol._on_digits,
     "digit_leds_ascii": OIProtocol._on_digits,
     "buttons": OIProtocol._on_buttons,
-    "schedule": _on_schedule,
-    "set_day_time": _on_day_time,
+    "schedule": OIProtocol._on_schedule,
+    "set_day_time": OIProtocol._on_day_time,
     "stop": OIProtocol._on_stop,
 }
 _HANDLERS = {COMMANDS_BY_NAME[name].opcode: h for name, h in _HANDLERS_BY_NAME.items()}
