@@ -389,6 +389,6 @@ class Motion(Sensing):
         self._body_changed()
         self.left_speed = self.right_speed = 0.0
         self._power_due = True
-        self._event("fell", "drove off a drop")
+        self.event("fell", "drove off a drop")
         self._geometry_dirty = True
         self._sense()

@@ -160,7 +160,7 @@ class OIProtocol(StreamOutput):
         if self.host_line is not None:
             data, what = self.host_line.passed(data)
             if what:
-                self._event("line", what)
+                self.event("line", what)
             if not data:
                 return
         self._last_activity = self.time
@@ -268,7 +268,7 @@ class OIProtocol(StreamOutput):
         # the mode, and the wheels and brushes its callers stopped, draw other currents
         self._power_due = True
         if mode is not self.mode:
-            self._event("mode", f"{self.mode.label}->{mode.label} ({cause})")
+            self.event("mode", f"{self.mode.label}->{mode.label} ({cause})")
             self.mode = mode
             if self.keeps_trace:
                 self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, mode))
@@ -328,7 +328,7 @@ class OIProtocol(StreamOutput):
             ):
                 self.asleep = self.deaf = False
                 self._set_mode(OIMode.PASSIVE, "BRC pulse")
-                self._event("wake", "BRC pulse")
+                self.event("wake", "BRC pulse")
         self.brc_low = low
 
     def fall_asleep(self, cause: str) -> None:
@@ -366,12 +366,12 @@ class OIProtocol(StreamOutput):
         self._command_mode(spec)  # Passive; clears both
         if running is not None:
             self.paused_cycle, self._paused_at = running, self.time
-            self._event("builtin", f"{running.name} paused ({spec.name})")
+            self.event("builtin", f"{running.name} paused ({spec.name})")
         elif paused is not None and paused.name == spec.name:
             paused.started += self.time - self._paused_at
             self._settle_far()
             self.builtin = paused
-            self._event("builtin", f"{paused.name} resumed")
+            self.event("builtin", f"{paused.name} resumed")
         else:
             _HANDLERS[spec.opcode](self, b"")
 
@@ -386,7 +386,7 @@ class OIProtocol(StreamOutput):
         self.asleep = True
         self.deaf = deaf
         self._end_stream()
-        self._event("sleep", cause)
+        self.event("sleep", cause)
 
     # ------------------------------------------------------------------ command handlers
     def _on_reset(self, args: bytes) -> None:
@@ -433,7 +433,7 @@ class OIProtocol(StreamOutput):
         if song is None:
             return
         if self.values[37] and self.time < self._song_until:
-            self._event("refused", f"play {args[0]} ignored: song {self.values[36]} still playing")
+            self.event("refused", f"play {args[0]} ignored: song {self.values[36]} still playing")
             return
         self.values[36] = args[0]
         self.values[37] = 1
@@ -448,7 +448,7 @@ class OIProtocol(StreamOutput):
         it: pressed as Buttons (165) presses it. A button this robot's top lacks (the clock
         panel's on a Create 2) is said as event ``refused`` and presses nothing."""
         if name not in self.profile.buttons:
-            self._event("refused", f"press {name}: the {self.profile.title} has no {name} button")
+            self.event("refused", f"press {name}: the {self.profile.title} has no {name} button")
             return
         self._press(button_bits(name))
 
@@ -475,22 +475,24 @@ class OIProtocol(StreamOutput):
         buttons = self._buttons_until if v[18] else math.inf
         self._held_until = min(song, buttons)
 
-    def _takes_clock_command(self, name: str) -> bool:
-        """Whether the robot takes Schedule (167) or Set Day/Time (168) now: not while packet
-        18 shows the Clock or Schedule button pressed (both specs), said as event
-        ``refused``."""
-        held = held_clock_buttons(self.values[18] if self.time < self._buttons_until else 0)
-        if held:
-            self._event("refused", f"{name} ignored: the {held} button is pressed")
-        return not held
 
-    def _on_schedule(self, args: bytes) -> None:
-        if self._takes_clock_command("schedule"):
-            self.robot_clock.set_schedule(args)
+def _takes_clock_command(robot: OIProtocol, name: str) -> bool:
+    """Whether the robot takes Schedule (167) or Set Day/Time (168) now: not while packet 18
+    shows the Clock or Schedule button pressed (both specs), said as event ``refused``."""
+    held = held_clock_buttons(robot.values[18])  # cleared at the release (_release_held)
+    if held:
+        robot.event("refused", f"{name} ignored: the {held} button is pressed")
+    return not held
 
-    def _on_day_time(self, args: bytes) -> None:
-        if self._takes_clock_command("set_day_time"):
-            self.robot_clock.set(args, self.time)
+
+def _on_schedule(robot: OIProtocol, args: bytes) -> None:
+    if _takes_clock_command(robot, "schedule"):
+        robot.robot_clock.set_schedule(args)
+
+
+def _on_day_time(robot: OIProtocol, args: bytes) -> None:
+    if _takes_clock_command(robot, "set_day_time"):
+        robot.robot_clock.set(args, robot.time)
 
 
 def _cycle_starter(name: str) -> Callable[[OIProtocol, bytes], None]:
@@ -499,7 +501,7 @@ def _cycle_starter(name: str) -> Callable[[OIProtocol, bytes], None]:
     def start(robot: OIProtocol, args: bytes) -> None:
         robot._settle_far()  # a cycle reads the far sensors every step, from its first
         robot.builtin = cycle(name, robot.time, robot._rng)
-        robot._event("builtin", name)
+        robot.event("builtin", name)
 
     return start
 
@@ -526,8 +528,8 @@ _HANDLERS_BY_NAME: dict[str, Callable[[OIProtocol, bytes], None]] = {
     "digit_leds_raw": OIProtocol._on_digits,
     "digit_leds_ascii": OIProtocol._on_digits,
     "buttons": OIProtocol._on_buttons,
-    "schedule": OIProtocol._on_schedule,
-    "set_day_time": OIProtocol._on_day_time,
+    "schedule": _on_schedule,
+    "set_day_time": _on_day_time,
     "stop": OIProtocol._on_stop,
 }
 _HANDLERS = {COMMANDS_BY_NAME[name].opcode: h for name, h in _HANDLERS_BY_NAME.items()}

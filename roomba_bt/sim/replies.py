@@ -191,7 +191,7 @@ class StreamOutput(Power):
             # Neither spec says what the robot does with a list whose frame cannot be
             # framed (n-bytes is one byte); the simulator refuses it and keeps what it had.
             why = f"stream of {payload} bytes (n-bytes is one byte: at most 255)"
-            self._event("refused", why)
+            self.event("refused", why)
             return
         self._stream_ids = ids
         self._stream = _Packer(ids, self.profile, True, bool(self.faults.noise)) if ids else None

@@ -280,7 +280,7 @@ class Simulator(OIProtocol):
             doing = f"its own {self.builtin.name} cycle"
         else:
             doing = "wheels not driven"
-        self._event("disconnect", f"link lost in {self.mode.label}, {doing}")
+        self.event("disconnect", f"link lost in {self.mode.label}, {doing}")
 
     def _timed_fault(self) -> None:
         """The one-off faults due now (``Faults.reset_at``, ``stream_stop_at``, ``sleep_at``,
@@ -298,7 +298,7 @@ class Simulator(OIProtocol):
             if kind.startswith("sleep") and not self._may_sleep(kind):
                 waits_for_passive = True
                 continue
-            self._event("fault", kind)
+            self.event("fault", kind)
             if kind == "reset":  # as Reset (7) does: the mode it leads to, then the banner
                 spec = COMMANDS[opcodes("reset")[0]]
                 if spec.leads_to is not None:
@@ -316,7 +316,7 @@ class Simulator(OIProtocol):
             elif kind == "baud change":
                 to = self.faults.baud_change_to
                 self.baud = to if to is not None else 19200 if self.baud == 115200 else 115200
-                self._event("baud", f"now {self.baud}")
+                self.event("baud", f"now {self.baud}")
             else:
                 self._end_stream()
         if waits_for_passive:  # looked at again next step: it sleeps once in Passive
@@ -347,7 +347,7 @@ class Simulator(OIProtocol):
     def _world_events(self, timeline: Timeline) -> None:
         """The timeline's events due now: marked, and their effects on the body."""
         for kind, detail in timeline.advance(self.time):
-            self._event(kind, detail)
+            self.event(kind, detail)
         for button in timeline.pressed:
             self.press_button(button)
         effects = timeline.effects()
@@ -371,4 +371,4 @@ class Simulator(OIProtocol):
     def _end_builtin(self, cycle: BuiltinCycle) -> None:
         """A built-in cycle ended by itself (the event says why); the robot stays in Passive."""
         self.builtin = None
-        self._event("builtin", cycle.ended or "")
+        self.event("builtin", cycle.ended or "")

@@ -456,7 +456,7 @@ class Sensing(RobotState):
         if docked != self.docked:
             self.docked = docked
             self._power_due = True  # the contacts may charge (power.py)
-            self._event("docked" if docked else "undocked", "")
+            self.event("docked" if docked else "undocked", "")
             self._check_safety()
 
     def _settle_far(self) -> None:
@@ -611,9 +611,9 @@ class Sensing(RobotState):
     def _bumps_changed(self, bumps: int) -> None:
         """Packet 7 changed: mark a new bump and a new wheel drop."""
         if bumps & BUMP_BITS and not self._prev_bumps & BUMP_BITS:
-            self._event("bump", _BUMP_SIDES[bumps & BUMP_BITS])
+            self.event("bump", _BUMP_SIDES[bumps & BUMP_BITS])
         if bumps & WHEEL_DROP_BITS and not self._prev_bumps & WHEEL_DROP_BITS:
-            self._event("wheel_drop", "")
+            self.event("wheel_drop", "")
         self._prev_bumps = bumps
         self._check_safety()
 
@@ -645,7 +645,7 @@ class Sensing(RobotState):
             v[9 + i] = hit
             v[28 + i] = CLIFF_DROP_SIGNAL if hit else CLIFF_FLOOR_SIGNAL
         if cliffs and not self._prev_cliffs:
-            self._event("cliff", f"{cliffs:04b}")
+            self.event("cliff", f"{cliffs:04b}")
         self._prev_cliffs = cliffs
         self._check_safety()
 

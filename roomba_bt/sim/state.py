@@ -187,6 +187,6 @@ class RobotState:
     def pose(self) -> Pose:
         return Pose(self.x, self.y, self.theta)
 
-    def _event(self, kind: str, detail: str) -> None:
+    def event(self, kind: str, detail: str) -> None:
         """Mark ``kind`` at the robot's place now (events are rare: not for the hot path)."""
         self.events.append(SimEvent(self.time, kind, detail, self.x, self.y))
