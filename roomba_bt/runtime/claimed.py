@@ -76,8 +76,8 @@ class ClaimedFile:
         record is emptied (``run --require-record``, whose header is ``size`` bytes or fewer):
         they are written after its end and cut off again, the file as it was either way, and
         the disk's refusal (a full disk, a quota, a file size limit: an OSError) raised before
-        anything of it is lost. Emptied first, an earlier record was gone when the header
-        then failed and the run refused to start (session 36). Nothing for a file this claim
+        anything of it is lost. Emptied first, an earlier record would be gone when the header
+        then failed and the run refused to start. Nothing for a file this claim
         made or one that is empty (nothing to lose) or a device (never emptied)."""
         held = os.fstat(self._fd)
         if self._handed or not stat.S_ISREG(held.st_mode) or held.st_size == 0:

@@ -66,17 +66,17 @@ STOPPING_THE_TREE = (
     "the run is ending: {wheels}; its tree is being stopped (each running behaviour's "
     "terminate(), for at most {limit}), the safe stop after it"
 )
-#: How long the run's end waits for its tree's stop (decided, session 36): a plugin's
-#: ``terminate()`` that never returned held the run's end for ever, so the robot was left in
-#: Safe with its stream going, no summary was printed and no signal ended the process (each
-#: was held for the stop to end). Past this the end goes on without it: the safe stop, the
+#: How long the run's end waits for its tree's stop: unbounded, a plugin's ``terminate()``
+#: that never returns would hold the run's end for ever, the robot left in Safe with its
+#: stream going, no summary printed and no signal ending the process (each held for the stop
+#: to end). Past this the end goes on without it: the safe stop, the
 #: summary (HUNG, the terminate and its line named), the exit code. A few seconds: a
 #: terminate that closes a file or a socket has ample time, an operator's Ctrl-C meanwhile
 #: waits no longer; ``run --wall-limit`` below it caps it (:func:`tree_stop_limit`).
 TREE_STOP_LIMIT_S = 5.0
 #: ... and while the nodes' ``shutdown()`` runs, waited for as long at most (the same
-#: bound, decided, session 36: a ``shutdown()`` that never returned hung the process as a
-#: ``terminate()`` did, after the safe stop but before the summary and the exit code)
+#: bound: a ``shutdown()`` that never returns would hang the process as a ``terminate()``
+#: would, after the safe stop but before the summary and the exit code)
 SHUTTING_DOWN = "the robot is stopped; the behaviours' shutdown() is under way"
 #: how a HUNG run's reason begins when a ``terminate()`` or a ``shutdown()`` never returned
 #: (``eval``'s closing line words a HUNG episode from it: ``cli/eval_report.py``)
@@ -577,9 +577,8 @@ def undelivered_said(connection: object) -> str:
     one seen stopped that then fell asleep (a long pause: asleep, it does not move), and
     one whose frames, sent after every command written, showed it stopped, whatever kept
     the stop from it then (a cable pulled while the monitor held the run paused: the
-    pause's own stop seen taken; ``robot.ending.seen_stopped``). The command line's
-    internal-error line said ``NOT DELIVERED:`` of them all; the summary, of the last too
-    (session 38's decision, until session 40)."""
+    pause's own stop seen taken; ``robot.ending.seen_stopped``). One function for both
+    lines, so that the command line and the summary never word one stop differently."""
     ending = getattr(connection, "ending", None)
     if getattr(ending, "nothing_set_going", False):
         return "nothing this run set going; "

@@ -19,7 +19,7 @@ later on an overnight patrol. When the stream carries the buttons (packet 18: a 
 reads them), the look comes every :data:`BUTTON_LOOK_S` too, for the buttons alone: a Clean,
 Spot or Dock button pressed in Passive starts the robot's own cycle (the OI spec), and the
 run ends at the press. A cycle shorter than the looks need to tell it from a hand, ended by
-the tree's own ``mode: safe`` (maker finding 3, session 32: 0.61 m driven, nothing said), is
+the tree's own ``mode: safe`` (else a cycle that drove 0.61 m would go unsaid), is
 judged as the run's Safe, Full or Stop is written (:meth:`RobotCycleWatch.leaving_passive`).
 """
 
@@ -275,8 +275,8 @@ class RobotCycleWatch:
     def end_run(self, root: py_trees.behaviour.Behaviour, button: str | None = None) -> None:
         """A look found a cycle of the robot's own (``button``: the one seen pressed, which
         starts it; None: the wheels drove on): the run ends here, FAILURE (exit 1), its
-        reason saying so and what the tree was doing (``root``'s running leaf). Decided
-        (session 31): the tree took the robot for idle in Passive, where the run can stop no
+        reason saying so and what the tree was doing (``root``'s running leaf). Ended, not
+        ridden: the tree took the robot for idle in Passive, where the run can stop no
         cycle (drive 0 is refused there; Safe ends the cycle, but would take the robot from
         under the tree); its safe stop ends it with Safe first."""
         summary = self.summary
@@ -297,8 +297,8 @@ class RobotCycleWatch:
         is being written (the mode model already moved; the writer's cycle state not yet):
         from a Passive with no cycle of the run's, what the robot drove there by itself
         since the last look is judged now, as at the run's end (:meth:`_judged`), and said
-        with the command as what ended it. A cycle two seconds long, ended by the mission's
-        own ``mode: safe`` between two looks, was said nowhere (maker finding 3)."""
+        with the command as what ended it, so that a cycle two seconds long, ended by the
+        mission's own ``mode: safe`` between two looks, is said too."""
         in_passive, self._in_passive = self._in_passive, False
         writer = self.connection.writer
         if not in_passive or writer.builtin_may_run or writer.robot_cycle is not None:
@@ -441,10 +441,10 @@ def say_waits_past_sleep(mission: object, connection: Connection) -> None:
     longer than the 5 minutes the robot sleeps after there
     (:attr:`~roomba_bt.mission.build.CompiledMission.waits_past_sleep`), when keep-awake
     cannot keep it awake on this connection: off, no modem line, or (known at its first
-    pulse) a port that cannot drive the lines. Session 37's stranger ran ``patrol -p
-    charge_for=10min`` on a pty: it docked, slept 5 minutes into the charge wait, and the
-    run ended "the robot fell asleep" (exit 8), with only keep-awake's own line at the
-    start ("Passive sleeps after 5 min"), which named no wait."""
+    pulse) a port that cannot drive the lines. Without it, ``patrol -p charge_for=10min``
+    on a pty docks, sleeps 5 minutes into the charge wait and ends "the robot fell asleep"
+    (exit 8), with only keep-awake's own line at the start ("Passive sleeps after 5 min"),
+    which names no wait."""
     waits: tuple[str, ...] = getattr(mission, "waits_past_sleep", ())
     if not waits:
         return

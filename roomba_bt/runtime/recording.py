@@ -35,19 +35,19 @@ writes the tick up to there (:meth:`ReplayTransport.interrupt_at`).
 
 The header names the roomba-bt release that made the record (``roomba_bt_version``), the
 SHA-256 of each file its mission was compiled from (``sources``) and each installed plugin
-its tree used, with its version and its modules' digest (``plugins``, since session 29;
+its tree used, with its version and its modules' digest (``plugins``;
 ``runtime/provenance.py``): a replay says in one line when it ran on other files or plugins,
-and one that differs names each changed since. A record made before has none of them. The
-header's ``mission`` names a shipped mission as an include does (``roomba-bt:dock.yaml``, since
-session 29; a path in the installation that made it before), any other by its path from the
-record's folder where the two share a folder below the root (``relative_to``: ``record``; since
-session 29, so that a record committed beside its missions replays in every checkout: its
-absolute path is in ``mission_path``, for the reader), else by its absolute path. The
-simulator's options (``simulator``) and the run's (``options``) say how to make it again;
+and one that differs names each changed since. An older record may have none of them. The
+header's ``mission`` names a shipped mission as an include does (``roomba-bt:dock.yaml``; an
+older record, a path in the installation that made it), any other by its path from the
+record's folder where the two share a folder below the root (``relative_to``: ``record``, so
+that a record committed beside its missions replays in every checkout: its absolute path
+is in ``mission_path``, for the reader), else by its absolute path. The simulator's
+options (``simulator``) and the run's (``options``) say how to make it again;
 ``run --reproducible`` leaves out ``started`` (unless ``SOURCE_DATE_EPOCH`` gives it) and
 ``mission_path``, which change on every run with nothing changed.
 
-``"stop_listened": true`` in the header (:data:`STOP_LISTENED`, since session 33) says the
+``"stop_listened": true`` in the header (:data:`STOP_LISTENED`) says the
 run's safe stop was listened and asked after (the wall clock; the simulator's line losing
 bytes): its replay does the same on the recorded bytes (docs/runtime.md, Replaying a stop that
 needed more than one try). A record without it is replayed without listening, as before.
@@ -169,10 +169,9 @@ SIMULATOR = "simulator"
 RUN_OPTIONS = "options"
 
 #: header key, ``"stop"`` where the recorded run ended its stop in Off (``end_in="stop"``,
-#: ``run --end-in stop``: Stop (173) for Start); absent for Start, as in a record made
-#: before (session 41). Its replay ends so too (:func:`recorded_end_in`): it ended with
-#: Start, and such a record's last byte was its first difference ("expected Stop (173) ad,
-#: sent Start (128) 80", exit 1)
+#: ``run --end-in stop``: Stop (173) for Start); absent for Start, as in an older record.
+#: Its replay ends so too (:func:`recorded_end_in`): ended with Start, such a record's last
+#: byte would be its first difference ("expected Stop (173) ad, sent Start (128) 80", exit 1)
 END_IN = "end_in"
 
 
@@ -287,9 +286,9 @@ class _CompressedLines:
 
     Whole whatever signal comes: ``GzipFile.write`` writes the compressed text to the file
     and only then counts it into the CRC-32 and length of gzip's trailer, and a run's
-    signal handler raised wherever the main thread was: between the two, it left a
-    trailer that did not match the text (``gzip -t``: crc error; replay refused the whole
-    record: 3 of 17 SIGTERM'd ``--fast`` records, session 35). So gzip is called only
+    signal handler raises wherever the main thread is: between the two, it leaves a
+    trailer that does not match the text (``gzip -t``: crc error; replay refuses the whole
+    record: 3 of 17 SIGTERM'd ``--fast`` records were so). So gzip is called only
     within :data:`~roomba_bt.robot.safety.interrupts_deferred`, where the interrupt waits
     for the call to end; and the lines are gathered here, not in a ``TextIOWrapper``, which
     drops what it had gathered when the write it hands them to raises (an interrupt at
@@ -865,11 +864,11 @@ WRITTEN = "written"
 #: What ``replay`` says of a record whose end note's :data:`WRITTEN` counts more than its run
 #: wrote before a stop asked for in a stall, or a Ctrl-C or signal that came inside a tick
 #: before a stop that was asked after (``{noted}``, ``{before}``; ``{more}`` the
-#: difference): until session 39's fix (2e6d3655) the count was the link's at the stop,
-#: moved on at the end by what the link alone wrote since, so the Query List that asks
-#: after a stop not confirmed (written past the link, after the stop) was among it. Its
-#: replay waited for bytes that came after the stop and said "first difference ... expected
-#: Drive (137) 89 00 00 00 00, sent nothing", exit 1, of a faithful record
+#: difference): an older release's count was the link's at the stop, moved on at the end by
+#: what the link alone wrote since, so the Query List that asks after a stop not confirmed
+#: (written past the link, after the stop) was among it. Its replay would wait for bytes
+#: that came after the stop and say "first difference ... expected Drive (137) 89 00 00 00
+#: 00, sent nothing", exit 1, of a faithful record
 MISCOUNT = (
     "the end note counts {noted} bytes written when the recorded run was stopped, {more} more "
     "than the {before} it wrote before its stop: a known miscount of records made by a "
@@ -959,8 +958,8 @@ def _up_to_damage(
 ) -> Iterator[tuple[int, str, bool, int]]:
     """``lines``, up to a gzip trailer that does not match them (:class:`TornTrailer`), said
     once in a warning: the record is read and replayed up to there, each line checked as
-    any record's (decided, session 35: such a record, every line readable, was refused
-    whole, exit 2; a run ended by a signal inside a gzip write left one before then).
+    any record's, not refused whole (exit 2): every line of such a record is readable (an
+    older release's run ended by a signal inside a gzip write leaves one).
     Compressed data that does not decompress is still refused, its line named: what it
     decompresses to past the damage cannot be trusted."""
     try:
@@ -1918,10 +1917,10 @@ class ReplayTransport:
         on a loaded machine; the real-time simulator catches up at a write, as the robot's
         world goes on) stamped the command later than the frame, and the mode model times
         each mode command by that stamp (``ModeModel.apply``: packet 35 may show the old mode
-        for ``settle`` s after it). The replay wrote it at the frame's time: the frames that
-        had queued meanwhile, still in Passive after a cliff, came past that window and were
-        taken for a second fall, and the tree, in Safe live, starved there (run1.jsonl of
-        session 27: ``expected Motors (138) 8a 07, sent nothing`` at 75.36 s of 92.6 s).
+        for ``settle`` s after it). Written at the frame's time, the frames that had queued
+        meanwhile, still in Passive after a cliff, would come past that window and be taken
+        for a second fall, and the tree, in Safe live, would starve there (``expected Motors
+        (138) 8a 07, sent nothing`` at 75.36 s of a 92.6 s record).
 
         The jump goes no further than the robot's next recorded chunk, which the replay has
         still to give: the frames in between are not skipped (an early write, which would

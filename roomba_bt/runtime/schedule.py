@@ -55,8 +55,8 @@ JITTER_LATE = 0.9 * SLOT_SECONDS
 #: On a jittery link, a run of late batches is counted once it has lasted this long (a second,
 #: and longer on a link whose frames spread wider: :func:`run_window`): a lost frame delays
 #: every frame after it for good, a late one only those bunched behind it, and over a second
-#: or more some frame comes on time. Three late batches in a row (the rule until session 32)
-#: counted 11-43 frames "lost" in 10 s through a WiFi bridge that lost none
+#: or more some frame comes on time. A shorter rule, three late batches in a row, counts
+#: 11-43 frames "lost" in 10 s through a WiFi bridge that loses none
 LOST_WINDOW = 1.0
 #: ... longer by this many seconds per second of the link's :attr:`SlotSchedule.spread`
 #: (0-80 ms of jitter: 5.8 s; the least lateness of a second of it reached 24 ms in 1 %)

@@ -523,10 +523,10 @@ class RecordedEnd(InnerGate):
     ended from outside its tree (:data:`~roomba_bt.runtime.recording.ENDED_FROM_OUTSIDE`: the
     monitor's stop, Ctrl-C, its time limit), before or after the tree's tick on that frame,
     as live; ``inner``: the monitor's replay of the operator's acts, asked first (live, a
-    frame's acts were done before its stop). Without it the replay ticked the tree on past
-    the run's end, and its next command, where the record holds the safe stop, was the
-    replay's first difference (run1.jsonl of session 27: ``expected Drive (137) 89 00 00 00
-    00, sent Drive Direct ...`` at its last bytes)."""
+    frame's acts were done before its stop). Without it the replay ticks the tree on past
+    the run's end, and its next command, where the record holds the safe stop, is the
+    replay's first difference (``expected Drive (137) 89 00 00 00 00, sent Drive Direct
+    ...`` at its last bytes)."""
 
     def __init__(
         self,

@@ -36,12 +36,12 @@ ASLEEP_STOPPED = "asleep and stopped"
 #: failed while the stop was listened after) to a robot whose frames, sent after every
 #: command written, showed it stopped (its requested wheel speeds at 0 / packet 35 reading
 #: Passive, no brush nor the vacuum left running, no built-in cycle): nothing was written
-#: since that could set it going (decided, session 40; "NOT DELIVERED:" until then: the
-#: capitals are for a robot that may be moving)
+#: since that could set it going (not "NOT DELIVERED:": the capitals are for a robot that
+#: may be moving)
 SEEN_STOPPED_FIRST = "seen stopped"
 #: What ``final mode`` adds after a mode the run's stream never showed: packet 35 not in it
 #: (a program's own packet list), the mode is only what the run wrote, the mode model's
-#: (decided, session 40: it read as if the robot had shown it)
+#: (without it, the mode reads as if the robot had shown it)
 MODEL_ONLY = " (not in the stream: the run's own model)"
 
 #: ``run --tick-limit`` default, seconds (runtime/tick_guard.py): 17 stream slots; at
@@ -126,8 +126,8 @@ class Outcome(Enum):
     #: the robot's frames show another model than the profile's (the robot layer's
     #: ``mismatch``) before the run wrote anything of the mission: nothing moved, and a
     #: retry fails the same way until the setting is fixed, so exit 2, a mistake in the
-    #: command line. It was exit 8, "the link was lost after the run started: a person looks
-    #: first" (session 37). Found after a command of the mission, it stays CONNECTION_LOST
+    #: command line, not exit 8, "the link was lost after the run started: a person looks
+    #: first". Found after a command of the mission, it stays CONNECTION_LOST
     WRONG_PROFILE = "wrong profile"
     ERROR = "error"
     #: the run ran past its wall-clock limit (``run --wall-limit``, an ``eval`` episode's):
@@ -344,7 +344,7 @@ class RunSummary:
     #: passes of a program's loop over ``stack.ticks()`` (its body, between two ticks: the
     #: program's own time, not the tree's) that ran over ``--tick-limit``, and of those the
     #: ones the guard stopped the robot in; none of them is among the ticks' counts above
-    #: (until session 40 they were, said as the tree's "slow tick(s)")
+    #: (counted there, they would be said as the tree's "slow tick(s)")
     loop_slow: int = 0
     loop_halts: int = 0
     commands_written: int = 0
