@@ -34,8 +34,8 @@ drop_current_folder()  # before any module not loaded yet: ``python -m`` added t
 
 # typing's TYPE_CHECKING without typing (3 to 30 ms, as loaded a machine is) or the lazy
 # names' module: every ``roomba-bt`` command imports this package before its entry point
-# (roomba_bt/_entry.py) can take the signals, and each millisecond here was one more in which
-# a script's ``kill -INT`` was lost (session 36). Type checkers take the name as typing's.
+# (roomba_bt/_entry.py) can take the signals, and each millisecond here is one more in which
+# a script's ``kill -INT`` is lost. Type checkers take the name as typing's.
 TYPE_CHECKING = False
 
 __version__ = "0.2.0"

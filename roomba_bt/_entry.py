@@ -6,15 +6,15 @@ ms on an idle machine to a second on a loaded one to import, and its handlers we
 only once it had loaded: until then a SIGTERM ended the process with 143, a script's ``kill
 -INT $!`` (SIGINT ignored at start in a shell's background job) was lost and the whole
 mission ran, and a terminal's Ctrl-C printed Python's own traceback. This module imports
-only ``sys`` and ``_signal`` (the C module under ``signal``, which Python itself loaded as it
-started: ``signal`` imports ``enum``, ``functools`` and ``collections``, 15 ms and more
+only ``sys`` and ``_signal`` (the C module under ``signal``, which Python itself loaded as
+it started: ``signal`` imports ``enum``, ``functools`` and ``collections``, 15 ms and more
 where nothing else had loaded them), and the top package before it, which drops the current
-folder off ``sys.path`` (``_safe_path`` stays first) and imports nothing else (session 36:
-it imported ``typing`` and the lazy names' module, and this module ``signal``,
-``contextlib`` and ``typing``, before a handler was in), so its handlers are in a fraction
-of a millisecond after Python's own start-up; ``signal`` itself is imported once they are.
-The CLI's handlers (:func:`roomba_bt.cli._as_the_process`) take their place once it has
-loaded, and a signal before then is ``roomba-bt: interrupted``, exit 130, nothing sent.
+folder off ``sys.path`` (``_safe_path`` stays first) and imports nothing else (not
+``typing`` nor the lazy names' module, and this module not ``signal``, ``contextlib`` nor
+``typing``, before a handler is in), so its handlers are in a fraction of a millisecond
+after Python's own start-up; ``signal`` itself is imported once they are. The CLI's handlers
+(:func:`roomba_bt.cli._as_the_process`) take their place once it has loaded, and a signal
+before then is ``roomba-bt: interrupted``, exit 130, nothing sent.
 
 It also holds what those handlers raise, :class:`Terminated` and the mark of a signal's
 interrupt (:func:`delivered`), which :mod:`roomba_bt.robot.safety` raises too: one class
@@ -38,9 +38,9 @@ else:
 
 #: The signals that end the command from its first line, as they end a run: Ctrl-C, ``kill``
 #: and systemd, the terminal gone, and Ctrl-\ (SIGQUIT: an operator who presses it wants a
-#: stop, never the core dump that is its default, which leaves a robot driving; decided,
-#: session 35). SIGHUP and SIGQUIT exist on POSIX only. Ctrl-Z is not here: a command
-#: suspended in its start-up has sent nothing yet, and a run on the wall clock takes it.
+#: stop, never the core dump that is its default, which leaves a robot driving). SIGHUP and
+#: SIGQUIT exist on POSIX only. Ctrl-Z is not here: a command suspended in its start-up has
+#: sent nothing yet, and a run on the wall clock takes it.
 EARLY_SIGNALS: tuple[int, ...] = tuple(
     getattr(_signal, name)
     for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")

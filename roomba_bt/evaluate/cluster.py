@@ -130,7 +130,8 @@ def _import_distributed() -> Any:
 #: clusters use 0.5 s), the memory monitors of nannies and workers every 1 s, not 0.1 s
 #: (a runaway worker is still paused and restarted), the system monitor every 2 s, not 0.5 s.
 #: Together the submitting process (scheduler, nannies, client) spent 0.43 s of CPU on 48
-#: dock episodes with 2 workers where it spent 0.61 s (docs/performance.md, session 17).
+#: dock episodes with 2 workers where it spent 0.61 s with Dask's defaults
+#: (docs/performance.md).
 #: Its scheduler gives up on an episode at the first death of a worker holding it
 #: (``allowed-failures`` 0, not 3): the episodes that worker held run again alone
 #: (:func:`run_on_client`), which tells the one that killed it from those queued beside it;

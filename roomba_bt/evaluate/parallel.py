@@ -60,7 +60,7 @@ from roomba_bt.runtime.ending import threads_left
 POOL_RESTARTS = 2
 #: How many threads stuck in a behaviour's ``terminate()`` or ``shutdown()`` an evaluation in
 #: its own process (``--jobs 1 --wall-limit none``) lets its episodes leave before it stops
-#: with :class:`ThreadsLeftError` (decided, session 36). The run's end goes on without such a
+#: with :class:`ThreadsLeftError`. The run's end goes on without such a
 #: thread (``runtime/ending.py``), a daemon, so the process still exits; but it lives until
 #: then, holding its episode's tree, connection and simulator: one per episode, without
 #: bound, over a sweep of thousands.
@@ -80,8 +80,8 @@ class WorkerRetired(Exception):
     one and the rest in a new one (:func:`_pool_round`): a worker with stuck threads is
     retired and replaced, the rule of a sweep in its own process
     (:data:`THREADS_LEFT_CAP`), where a process cannot be replaced, made that of each
-    worker, which can (decided, session 37: a worker kept one per such episode, without
-    bound, each holding its episode's tree and simulator until the worker ended)."""
+    worker, which can (else a worker keeps one per such episode, without bound, each
+    holding its episode's tree and simulator until the worker ends)."""
 
 
 class WorkersLostError(RuntimeError):

@@ -23,7 +23,7 @@ read as Passive): the stop's Start is what makes Passive the answer. Silence alo
 a robot switched off) is asked at the run's rate only: a robot a Baud moved streams on at its
 new rate, which reads as garbage.
 
-Decided (session 33): slowest first. A lost opcode's data bytes are most often a speed's or
+Slowest first: a lost opcode's data bytes are most often a speed's or
 a radius' high byte (0, 1, 255), and Baud's codes 0 and 1 are 300 and 600 baud. Zeros are
 capped by time (:data:`HUNT_ZEROS_S`), not the full :data:`~roomba_bt.robot.ending.
 STOP_RESYNC_ZEROS`: 512 zeros take 17 s at 300 baud, a robot driving meanwhile. The search

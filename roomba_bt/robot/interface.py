@@ -301,8 +301,8 @@ class Outbox:
     else): of the states (Drive, Motors, LEDs, the stream...) the last on each channel
     (``CommandSpec.channel``, e.g. ``"wheels"``) in a tick wins; the events (Play, Buttons,
     Song definitions, mode changes, queries) are all kept, in order. Two Plays in one tick
-    are both written, back to back: until session 32 the first was dropped (Play was a
-    state of the "speaker"), and ``play: 0`` then ``play: 1`` played only song 1. The
+    are both written, back to back: Play is no state of a "speaker", whose last would drop
+    the first, so ``play: 0`` then ``play: 1`` plays both songs. The
     order of the flush is the order in which each surviving command was first queued in
     this tick, so a ``safe`` queued before a ``drive`` is written before it; but a state
     that sets something going, queued again after a mode command (``halt``, ``safe``, then
@@ -322,8 +322,8 @@ class Outbox:
     are the same command unless the mode guard refused it (asked for, not written: the
     earlier one stands), the robot fell to Passive by itself since (:meth:`robot_stopped`:
     asked for, no longer standing), or a cycle was ended in the tick it was queued (neither
-    asked for nor written; the command before it may stand). Until session 27 the runner
-    kept its own copy of the second (``last_sent``).
+    asked for nor written; the command before it may stand). Both are kept here, so the
+    runner keeps no copy of its own that could differ.
     """
 
     __slots__ = (
@@ -350,8 +350,8 @@ class Outbox:
     def send(self, command: Command, sender: object = None) -> None:
         """Queue ``command`` for this tick's flush: a state replaces the one queued on its
         channel, an event is added after the rest under a key of its own (an ``object()``:
-        ``(opcode, len(queue))`` was used until session 32 and could meet a key again after
-        :meth:`end_cycle` deleted one). An event's ``sender`` is kept as its channel's (a
+        not ``(opcode, len(queue))``, which can meet a key again after :meth:`end_cycle`
+        deleted one). An event's ``sender`` is kept as its channel's (a
         refusal of either of two Plays names the later one's sender)."""
         spec = command.spec
         channel = spec.channel
@@ -369,8 +369,8 @@ class Outbox:
         command under ``key``? A state that sets something going and replaces one queued
         before a mode command is written after that command, not in the old one's place: a
         plugin that ends with ``halt``, ``safe`` and SUCCESS, and the next leaf's first Drive
-        in the same tick, wrote Drive then Safe, and the Safe stopped the wheels the Drive
-        had just set going (session 37's verifier: a 2 s drive went 4 cm). A stop keeps the
+        in the same tick, would write Drive then Safe, and the Safe would stop the wheels the
+        Drive had just set going (a 2 s drive would go 4 cm). A stop keeps the
         earlier place: a leaf's halt after its Stop (173) is refused in Off, so the halt goes
         first. Only on a replacement, a few commands at most: most ticks queue nothing."""
         after = False

@@ -8,16 +8,16 @@ came there::
     drive 0 written ── drained (tcdrain) ── one slot ──► 19200, listen ──► frames: stay
                        (it leaves at 115200)               nothing, or Ctrl-C ──► 115200
 
-Two ways a listen hurt the robot it was meant to protect (a safety audit, session 29):
+Two ways a listen can hurt the robot it is meant to protect, each guarded here:
 
-* **the rate never came back**: the port was put back only when the listen returned. A
-  Ctrl-C, SIGTERM, SIGHUP, SIGQUIT or SIGTSTP in its ~0.1 s left it at 19200, and the whole
-  safe stop went out there: the robot, at 115200, drove on in Safe with its brushes on, 10
-  runs of 10, and the record showed a well-formed stop. Now the port comes back on every way
-  out of the listen (the signal's exception goes on after), and every write checks the port
-  against the robot's rate first (``CommandWriter.at_robot_rate``), the safe stop's too;
-* **the drive 0 before it was re-clocked**: the switch came right after the watchdog's
-  drive 0 was written, before its bytes had left; the robot heard 3 of 11. Now what was
+* **the rate never comes back**: a port put back only when the listen returns is left at
+  19200 by a Ctrl-C, SIGTERM, SIGHUP, SIGQUIT or SIGTSTP in its ~0.1 s, and the whole safe
+  stop goes out there: the robot, at 115200, drives on in Safe with its brushes on, while
+  the record shows a well-formed stop. So the port comes back on every way out of the
+  listen (the signal's exception goes on after), and every write checks the port against
+  the robot's rate first (``CommandWriter.at_robot_rate``), the safe stop's too;
+* **the drive 0 before it is re-clocked**: a switch right after the watchdog's drive 0 is
+  written, before its bytes have left, loses them (the robot heard 3 of 11). So what was
   written drains first (``StreamLink.switch_rate``), and on the wall clock the port waits
   one 15 ms slot more before it switches (:data:`SETTLE_S`): a drain that returns before the
   bytes are on the wire (a pseudo-terminal, whose far end reads them when it next runs; a

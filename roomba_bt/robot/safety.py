@@ -37,8 +37,8 @@ log = logging.getLogger(__name__)
 #: they end the run with its safe stop (decided): Ctrl-Z (a suspended process cannot stop its
 #: robot, which would drive on with its last Drive until ``fg``). Where nothing drives on the
 #: wall clock (an evaluation, ``--fast``, a replay) it keeps its meaning. POSIX only. Ctrl-\
-#: (SIGQUIT, quit at once with a core dump) was one too until session 35; it now ends every
-#: run and every command as SIGTERM does (:data:`~roomba_bt._entry.EARLY_SIGNALS`): an
+#: (SIGQUIT, quit at once with a core dump) is not one: it ends every run and every
+#: command as SIGTERM does (:data:`~roomba_bt._entry.EARLY_SIGNALS`): an
 #: operator who presses it wants a stop, and a ``--fast`` run's record closed whole.
 WALL_CLOCK_SIGNALS: tuple[int, ...] = tuple(
     getattr(signal, name) for name in ("SIGTSTP",) if hasattr(signal, name)
@@ -101,8 +101,8 @@ ENDING_SIGNALS: tuple[int, ...] = (*EARLY_SIGNALS, *WALL_CLOCK_SIGNALS)
 #: shell without job control (a script's ``roomba-bt run ... &``) starts its background jobs
 #: with SIGINT and SIGQUIT ignored too, by accident of job control; a script's ``kill -INT``
 #: or ``timeout -s INT`` then asks the run to stop, and a stop asked of a process that
-#: drives a robot is taken (session 26's first version kept them ignored: the robot drove on
-#: for the whole mission, and the run exited 0). Never SIGTERM either: ``kill``, systemd and
+#: drives a robot is taken (kept ignored, the robot would drive on for the whole mission,
+#: and the run exit 0). Never SIGTERM either: ``kill``, systemd and
 #: a container's stop send it, and their next word is SIGKILL, which would leave the robot
 #: driving. Read when this module is first imported, before any handler of ours (a run puts
 #: its previous handlers back).
@@ -137,11 +137,11 @@ def _taken(signals: tuple[int, ...]) -> tuple[int, ...]:
 #: How a run's summary names SIGINT: a process cannot tell who sent it, a terminal's Ctrl-C or
 #: another process's ``kill -INT`` (a script's ``kill -INT $!``, ``timeout -s INT``), so the
 #: words are true of both; "Ctrl-C" first, as a run's reason has read since the start, so
-#: ``grep 'INTERRUPTED (Ctrl-C'`` finds such runs still (decided, session 36: it said
-#: ``Ctrl-C`` alone, of a script's ``kill -INT`` too)
+#: ``grep 'INTERRUPTED (Ctrl-C'`` finds such runs still (``Ctrl-C`` alone would be untrue
+#: of a script's ``kill -INT``)
 SIGINT_SAID = "Ctrl-C or kill -INT (SIGINT)"
-#: ... and the other two a key sends, alike (decided, session 37: they named the key alone,
-#: ``Ctrl-\ (SIGQUIT)``, of a script's ``kill -QUIT`` too)
+#: ... and the other two a key sends, alike (the key alone, ``Ctrl-\ (SIGQUIT)``, would be
+#: untrue of a script's ``kill -QUIT``)
 SIGQUIT_SAID = "Ctrl-\\ or kill -QUIT (SIGQUIT)"
 SIGTSTP_SAID = "Ctrl-Z or kill -TSTP (SIGTSTP)"
 
@@ -198,10 +198,10 @@ class InterruptsDeferred:
     signal brings meanwhile is raised where the block ends (its safe point), or at once
     outside one. For a write whose steps must all be done or none: ``GzipFile.write``
     writes the compressed text to the file, then adds its length and CRC-32 to what the
-    gzip trailer says; a SIGTERM that raised between the two (a ``--fast`` run writes its
-    compressed record all the time) left a trailer that did not match the text, and
-    ``gzip -t`` and replay refused the whole record (3 of 17 signalled ``--fast`` ``.gz``
-    records, session 35). A flag the handlers read, not the signals held in the thread's
+    gzip trailer says; a SIGTERM that raises between the two (a ``--fast`` run writes its
+    compressed record all the time) leaves a trailer that does not match the text, and
+    ``gzip -t`` and replay refuse the whole record (3 of 17 signalled ``--fast`` ``.gz``
+    records were so, undeferred). A flag the handlers read, not the signals held in the thread's
     mask (:func:`~roomba_bt.robot.ending.signals_deferred`): that is two system calls a
     block, and a signal already caught whose handler runs as the mask is set raises before
     the block that would give the mask back begins. Only our handlers wait for it (those of
@@ -450,11 +450,11 @@ def answer_given(code: int | None = None) -> None:
     near, the code not given here; a signal's then). From now on the ending signals
     (:data:`ENDING_SIGNALS`, those :data:`IGNORED_AT_START` aside) do not change it: the
     first lets the last words (a run's summary and report, a NO CONNECTION's hint) be
-    written and the command exit with its answer, but no longer than :data:`LAST_WORDS_S`:
-    a thread then ends the process, even while a blocked write holds the stream's lock,
-    which no handler in the main thread can get past, with ``128 + signal``: the last
-    words were cut short by the signal, and the exit code says so (decided, session 39:
-    it was the answer, 0 for a run that succeeded, which told a script its report was
+    written and the command exit with its answer, but no longer than
+    :data:`LAST_WORDS_S`: a thread then ends the process, even while a blocked write
+    holds the stream's lock, which no handler in the main thread can get past, with
+    ``128 + signal``: the last words were cut short by the signal, and the exit code
+    says so (the answer, 0 for a run that succeeded, would tell a script its report was
     whole); the answer is said on stderr if it takes it at once. The others change
     nothing. The terminal's stop (Ctrl-Z) suspends, as ever.
 
@@ -466,14 +466,14 @@ def answer_given(code: int | None = None) -> None:
     reads (a ``less`` left unscrolled, a frozen SSH session) blocks, and signals held then
     left a process only SIGKILL could end.
 
-    One rule, decided in session 37: a NO CONNECTION's first signal put the default actions
-    back, so a second killed the process (status -15 or -2, where the command had said 3),
-    while after a run's end a signal let its report finish and kept its code. Before
-    session 36 the signals' default action here killed the process by SIGINT (status -2,
-    "killed by signal INT" in systemd's log), sometimes before the summary was printed,
-    when an operator's Ctrl-C pressed a few times 0.3 s apart reached the command after its
-    run; and a SIGTERM as a run that never started printed its summary exited 130 or 143,
-    which told a service a run was stopped where none had started and a retry is safe."""
+    One rule for both endings: with two, a NO CONNECTION's first signal putting the default
+    actions back, a second would kill the process (status -15 or -2, where the command had
+    said 3), while after a run's end a signal let its report finish and kept its code. The
+    signals' default action here would kill the process by SIGINT (status -2, "killed by
+    signal INT" in systemd's log), sometimes before the summary was printed, when an
+    operator's Ctrl-C pressed a few times 0.3 s apart reached the command after its run;
+    and a SIGTERM as a run that never started printed its summary would exit 130 or 143,
+    which tells a service a run was stopped where none had started and a retry is safe."""
     if code is not None:
         _ANSWER[:] = [code]
     for signum in _taken(ENDING_SIGNALS):

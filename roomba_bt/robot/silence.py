@@ -138,16 +138,16 @@ def dead_connection(
     for dead (marked lost, so the safe stop closes it and tries a new one, ``PortReturn``);
     None on any other link, or if a byte came since the last frame.
 
-    Decided (session 32): a network connection that carries not a byte for the grace while a
-    stream runs is dead. A bridge that works carries the robot's frame every 15 ms; the
-    stalls of an ordinary Wi-Fi are what ``--grace`` is set for, and the stream was asked for
-    again twice within it (:mod:`~roomba_bt.robot.stall_asks`); a half-open TCP connection
-    (an ESP8266 that rebooted or left Wi-Fi range: no reset reaches us) takes every byte
-    written to it and fails only after minutes of TCP's resends. Asking the robot a Query
-    List there, as on a cable, would only let it drive on 1.6 s more: the query is asked
-    through the new connection after the stop instead (``PortReturn.heard_stop``), where an
-    answer shows the robot heard it. Not a device path nor a pty: their ports fail by
-    themselves when they go, and a silence there is the robot's or its stream's."""
+    A network connection that carries not a byte for the grace while a stream runs is dead.
+    A bridge that works carries the robot's frame every 15 ms; the stalls of an ordinary
+    Wi-Fi are what ``--grace`` is set for, and the stream was asked for again twice within
+    it (:mod:`~roomba_bt.robot.stall_asks`); a half-open TCP connection (an ESP8266 that
+    rebooted or left Wi-Fi range: no reset reaches us) takes every byte written to it and
+    fails only after minutes of TCP's resends. Asking the robot a Query List there, as on a
+    cable, would only let it drive on 1.6 s more: the query is asked through the new
+    connection after the stop instead (``PortReturn.heard_stop``), where an answer shows the
+    robot heard it. Not a device path nor a pty: their ports fail by themselves when they
+    go, and a silence there is the robot's or its stream's."""
     link = connection.link
     if link.bytes_since_frame or link_of(connection.name).kind is not LinkKind.NETWORK:
         return None
@@ -229,12 +229,12 @@ def _asked_again(
     connection: Connection, silent_for: float, grace: float, *, halted: bool, asked: float
 ) -> StreamLost:
     """The robot, last seen in Safe or Full, answered no query: asked once more after
-    :data:`ASK_AGAIN_AFTER_S`, with no BRC pulse. Decided (session 31): Safe and Full never
-    sleep, so a pulse could tell nothing; and on a port without modem lines the pulse is a
-    hang-up, whose speed 0 lost the bytes still queued for a frozen line (the watchdog's
-    drive 0 among them: a robot frozen behind its adapter for 3 s spun on after it came
-    back, and the run called it asleep). One that answers now came back: a frozen adapter
-    or cable, not sleep."""
+    :data:`ASK_AGAIN_AFTER_S`, with no BRC pulse: Safe and Full never sleep, so a pulse
+    could tell nothing; and on a port without modem lines the pulse is a hang-up, whose
+    speed 0 loses the bytes still queued for a frozen line (the watchdog's drive 0 among
+    them: a robot frozen behind its adapter for 3 s would spin on after it came back, and
+    the run call it asleep). One that answers now came back: a frozen adapter or cable, not
+    sleep."""
     link = connection.link
     clock = link.transport.now
     deadline = clock() + ASK_AGAIN_AFTER_S
@@ -373,7 +373,7 @@ def follow_baud(connection: Connection) -> BaudChanged | None:
                                                    nothing: 115200, 100 ms ──► listen again
         115200 ▒▒[19 n id .. bad sum]▒▒ ──► no listen: a noisy line at the robot's rate
 
-    Decided (session 29), from the specs ("Serial Port Settings", Baud (129)): a robot's
+    From the specs ("Serial Port Settings", Baud (129)): a robot's
     rate changes only by Baud, or at power-on (where the OI comes up Off and streams
     nothing). Garbage that holds a damaged frame of the run's stream (its header, length and
     packet ids in place, the checksum or a value wrong: :attr:`StreamLink.damaged_frame_at`)

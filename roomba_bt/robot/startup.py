@@ -88,8 +88,8 @@ def port_not_opened(url: str, exc: TransportError) -> ConnectionFailed:
 
 #: How many times the stream is asked for again when no frame came after its request. Each
 #: try writes the zeros and the request (78 bytes for the dock mission's 23 packets): at 1 %
-#: of bytes lost a request again loses one of its own 22 % of the time, and two tries left
-#: 2 dock runs of 100 without a stream (session 32); each costs the watchdog's 100 ms.
+#: of bytes lost a request again loses one of its own 22 % of the time, and two tries leave
+#: 2 dock runs of 100 without a stream; each costs the watchdog's 100 ms.
 STREAM_ASKS_AGAIN = 4
 
 
