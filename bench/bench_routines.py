@@ -96,13 +96,13 @@ def main() -> None:
 
 #: the commit issue 18 was filed on, and the interleaved rounds ``make bench`` gives it: a
 #: 3-round median moved by 0.13 between runs a minute apart on the 2-core VM, 15 rounds by
-#: a few hundredths (docs/performance.md, session 15); about 2.5 minutes
+#: a few hundredths (docs/performance.md); about 2.5 minutes
 FILED_AT = "626461e"
 AGAINST_ROUNDS = 15
 
 
 #: rounds of the Dask comparison: its ratio moved between 1.59x and 1.83x in three single
-#: rounds a minute apart on the 2-core VM (docs/performance.md, session 16); about 25 s each
+#: rounds a minute apart on the 2-core VM (docs/performance.md); about 25 s each
 DASK_ROUNDS = 5
 
 

@@ -373,7 +373,7 @@ def memory_episodes(episodes: int = 1000) -> list[tuple[int, float]]:
     """RSS (MB) after so many episodes of the shipped ``dock`` mission, each a ``with
     RunStack(...)`` on a simulator of its own (a random start, a seed each), as a program
     that runs thousands in one process has them: a finished run's connection, simulator and
-    tree must be freed (each one stayed alive, 105-140 KB an episode, until session 33).
+    tree must be freed (each one kept alive costs 105-140 KB an episode).
     Sampled after a collector pass at the first episode and every tenth of the rest."""
     import gc
 
@@ -501,7 +501,7 @@ def main() -> None:
         grown = (last - first) * 1024 / max(1, last_at - first_at)
         print(f"   RSS over {last_at} dock episodes in one process (with RunStack, "
               f"random start): {trail}; {grown:+.1f} KB an episode after episode {first_at} "
-              "(target: flat; 105-140 KB before session 33)")  # fmt: skip
+              "(target: flat; 105-140 KB where each run is kept)")  # fmt: skip
 
 
 if __name__ == "__main__":

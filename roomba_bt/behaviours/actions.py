@@ -611,7 +611,7 @@ class Stop(Action):
     and motors already), FAILURE, said, while one may (:meth:`~.base.Action.stopped_already`,
     as ``motors`` off). ``validate`` accepts it where the tree can reach Passive with no
     cycle it started (Clean, Spot, Max, Seek Dock) still driving, and refuses it where one
-    may: decided in sessions 33 and 34 (docs/protocol.md, "Actuators in Passive")."""
+    may (docs/protocol.md, "Actuators in Passive")."""
 
     def update(self) -> Status:
         halt = oi.halt()
@@ -909,8 +909,8 @@ _COLORS_SAID = ", ".join(
 
 def _power_color(value: object) -> int:
     """A colour's name (:data:`POWER_COLORS`) or the spec's byte as a number: the byte.
-    Only a number was taken until session 33, and ``power_color: red`` said "expected an
-    integer" with no word of what 0 and 255 are. Every refusal lists both ways to write it."""
+    A name too, so that ``power_color: red`` is not "expected an integer" with no word of
+    what 0 and 255 are. Every refusal lists both ways to write it."""
     if isinstance(value, str) and value in POWER_COLORS:
         return POWER_COLORS[value]
     if isinstance(value, int) and not isinstance(value, bool):
@@ -1021,9 +1021,9 @@ class Play(Action):
     with, ignoring the Play: a mission that reads ``song_number`` too has that told apart.
 
     So ``play`` then ``wait ... until: {sensor: song_playing == 0}`` waits for the song's
-    end. Until session 32 ``play`` succeeded on the tick it was sent: the wait read that
-    tick's frame, from before the Play, passed at once, and the next ``play`` went out in
-    the same tick. :data:`SONG_START_S` is the 0.25 s; :data:`SHORT_SONG_S` the 45 ms."""
+    end. Were ``play`` to succeed on the tick it is sent, the wait would read that tick's
+    frame, from before the Play, pass at once, and the next ``play`` go out in the same
+    tick. :data:`SONG_START_S` is the 0.25 s; :data:`SHORT_SONG_S` the 45 ms."""
 
     def start(self) -> None:
         self._sent_at: float | None = None

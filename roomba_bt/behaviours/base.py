@@ -100,9 +100,9 @@ class UnkeptDeclaration(TypeError):
     ``sends=``: ``halts_only=True`` and a command that sets something going (a turning
     wheel, a built-in cycle, a running brush), or ``leads_to=`` one mode and a mode command
     leading to another. The Full-mode warning reads ``halts_only`` and the static mode check
-    ``leads_to``, as both read ``sends``: a declaration taken on trust let a leaf drive in
-    Full unwarned (decided, session 36: the behaviour's error at that send, before the
-    command is queued, as :class:`UndeclaredCommand`)."""
+    ``leads_to``, as both read ``sends``: a declaration taken on trust would let a leaf
+    drive in Full unwarned, so the behaviour's error comes at that send, before the command
+    is queued, as :class:`UndeclaredCommand`'s does."""
 
     def __init__(
         self,
@@ -477,10 +477,10 @@ class Action(RobotBehaviour):
         specs say the robot "stops all motors and reverts to the Passive mode" when it
         falls, and ``mode: passive`` switches the wheels and motors off before its Start, so
         what the leaf asks for holds already (the refused bytes, counted as a refusal that
-        fails ``--strict``, said nothing more; ``motors`` off was one until session 34 while
-        ``stop`` was not). FAILURE, said, while a cycle (Clean, Spot, Max, Seek Dock) may be
-        driving: in Passive nothing the host sends stops its wheels, brushes or vacuum;
-        ``mode: safe`` does (docs/protocol.md, "Actuators in Passive")."""
+        fails ``--strict``, said nothing more; ``motors`` off and ``stop`` alike). FAILURE,
+        said, while a cycle (Clean, Spot, Max, Seek Dock) may be driving: in Passive nothing
+        the host sends stops its wheels, brushes or vacuum; ``mode: safe`` does
+        (docs/protocol.md, "Actuators in Passive")."""
         robot = self.robot
         name, mode = self.declaration.name, self.snapshot.mode.label
         refused = f"{command.spec.title} {command.spec.opcode} is refused there"
@@ -500,9 +500,9 @@ class Action(RobotBehaviour):
         """An at-once action's tick for a command that sets nothing going but does nothing
         if refused (the LEDs, the display, a Play): ``command`` queued, SUCCESS; or FAILURE,
         nothing queued, where the guard will refuse it (:meth:`will_be_refused`), saying the
-        command, the mode, the fall and the fix. Until session 33 ``leds`` and ``play`` in
-        Passive (after a cliff) said SUCCESS for LEDs never lit and a song never played: the
-        guard kept the bytes off the wire and the mission went on as if it had not."""
+        command, the mode, the fall and the fix: SUCCESS there would say ``leds`` and ``play``
+        in Passive (after a cliff) lit LEDs and played a song the guard kept off the wire, and
+        the mission would go on as if they had."""
         if self.will_be_refused(command):
             spec = command.spec
             what = f"{self.declaration.name} ({spec.title} {spec.opcode})"
@@ -556,10 +556,10 @@ class Action(RobotBehaviour):
         set turning are still turning, or a built-in cycle it started still runs, what
         :meth:`terminate` does for them is done here, and said once per class
         (:func:`_said_left_going`). py_trees' own ``terminate`` does nothing, so its users
-        override it without calling ``super().terminate()``: the halt was skipped, and the
-        robot drove on after the leaf had ended, with no leaf in charge of it (session 27: at
-        200 mm/s through a whole ``wait: 5s``, and the bump reflex sent the dead action's
-        drive again). Every stop of a leaf comes here: py_trees' ticks and the lean ones
+        override it without calling ``super().terminate()``: the halt would be skipped, and the
+        robot drive on after the leaf had ended, with no leaf in charge of it (at 200 mm/s
+        through a whole ``wait: 5s``, the bump reflex sending the dead action's drive again).
+        Every stop of a leaf comes here: py_trees' ticks and the lean ones
         (:mod:`~roomba_bt.behaviours.lean`), the composites' and decorators' stops of their
         children, and the run's end (:func:`~roomba_bt.runtime.teardown.stop_nodes`)."""
         self._terminated = False

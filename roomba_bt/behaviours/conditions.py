@@ -466,9 +466,9 @@ _CYCLE_STARTED = {"clean": "cleaning cycle", "spot": "spot cycle", "dock": "sear
 def _waits_in_passive(params: Mapping[str, Any]) -> str | None:
     """What waiting in Passive for a button that starts a cycle there (Clean, Spot, Dock, or
     ``any``) meets: the press starts the robot's own cycle (the OI spec), and the run ends
-    at the press (runtime/long_run.py). A maker's "wait for the Clean button, then dance",
-    with no ``mode: safe`` first, validated clean, and the robot drove off cleaning (maker
-    finding 3, session 32)."""
+    at the press (runtime/long_run.py). Unsaid, a maker's "wait for the Clean button, then
+    dance", with no ``mode: safe`` first, validates clean, and the robot drives off
+    cleaning."""
     name = params.get("name", "any")
     if name == "any":
         starts = "Clean, Spot and Dock buttons each start a cycle of its own"

@@ -43,8 +43,8 @@ lanes' axis, so lanes stay parallel to the walls however the heading has drifted
 Every driving step stops for hazards in the tick that shows them (bump, cliff, virtual wall),
 backs off and goes on with the next decision; and short of a drop it knows (a lane, a shift, a
 path's leg, a seek, an arc), slowing near one, while its edge follows a known drop as a wall
-(:mod:`~roomba_bt.behaviours.drops`: it met the apartment's stairs 12-30 times a run, each a
-fall to Passive in Safe mode, until session 27). In Safe mode the firmware stops first at a
+(:mod:`~roomba_bt.behaviours.drops`: else it meets the apartment's stairs 12-30 times a run,
+each a fall to Passive in Safe mode). In Safe mode the firmware stops first at a
 cliff and drops to Passive (the brushes stop too); that fails ``cover`` in the tick it shows
 (``Action.stranded`` with no grace: the cliff is mapped, and nothing brings the robot back
 while it waits; it waited a second, 21 a run by the apartment's stairs), and the mission
@@ -266,10 +266,10 @@ class FloorMap:
         robot knows of it is its own map's frontier left over: at the end of a living-room
         start with exact encoders 0 cells, in the apartment with the error 27-166 before
         the search across ghost walls (:meth:`NoFrontier.path_out`), 16-159 after
-        (session 38; 155 where it ended at 49.6 % of the floor). It cannot say a room
-        was missed, only that its map has floor it found no way to; it said "(a door its
-        map closed?)", a guess that sent a dining room's owner looking for a door
-        where the floor lay past chair legs 1.5 m from the start."""
+        (155 where it ended at 49.6 % of the floor). It cannot say a room was missed, only
+        that its map has floor it found no way to; not "(a door its map closed?)", a guess
+        that would send a dining room's owner looking for a door where the floor lay past
+        chair legs 1.5 m from the start."""
         left = self.unreached_cells()
         if len(left) < UNREACHED_SAID:
             return ""
@@ -671,9 +671,9 @@ class NoFrontier:
 
         Why the second: with the encoders' error each visit draws a wall a few centimetres
         off, across floor it drove, and those cells cut its map in parts; from where it
-        stood the frontier search found none, though its map had open floor beside 141
-        cells elsewhere, and the floor was done: the apartment, seed 2 with 1.5 % error,
-        ended at 852 s with the bedroom never entered (session 38). Over floor it swept or
+        stood the frontier search would find none, though its map had open floor beside 141
+        cells elsewhere, and the floor be done: the apartment, seed 2 with 1.5 % error,
+        would end at 852 s with the bedroom never entered. Over floor it swept or
         drove, crossing only blocked cells its centre has been on, never a drop's; in the
         first pass only (a later pass's cells it has been on are an earlier pass's, in a
         frame drifted since)."""
@@ -997,8 +997,8 @@ class Cover(Action):
         elif kind == "goto":
             if self._why == "drop" and self._achieved < _NO_START_MM:
                 # a known drop kept the leg from starting: that way is not planned again
-                # (after the move clear the same path led back to it, 514 s: apartment seed
-                # 9, 1.5 % error, session 38), and away from the drop first
+                # (after the move clear the same path would lead back to it, 514 s: apartment
+                # seed 9, 1.5 % error), and away from the drop first
                 self._map.avoid.add(self._goto_cell)
                 if self._clear_of_drop():
                     return
@@ -1026,16 +1026,16 @@ class Cover(Action):
         decide again; False when no drop is near (the path goes on as before).
 
         Why: a back-off goes only over floor just driven (:mod:`.reversing`), so the robot
-        is left closer to a drop than when it backed blind (15 cm from the apartment's
-        stairs); every leg of the path to unswept floor that ran along the drop then ended
+        is left closer to a drop than a blind back-off leaves it (15 cm from the apartment's
+        stairs); every leg of the path to unswept floor that runs along the drop then ends
         in its first tick (the drop within a cliff sensor's look-ahead), the path's next leg
-        too, and the same path was planned again: living room seed 2 with 1.5 % encoder
-        error stood 164 s without new floor, 656 s in (session 37).
+        too, and the same path is planned again: living room seed 2 with 1.5 % encoder
+        error would stand 164 s without new floor, 656 s in.
 
         A move clear that a drop ends before it starts too (a drop, or a guess of one, the
-        other way as well) puts the leg's cell in :attr:`FloorMap.avoid`: the path was planned
-        again through it, leg, turn, no move, for 94 s (living room seed 24, exact encoders,
-        by the stairs; session 38)."""
+        other way as well) puts the leg's cell in :attr:`FloorMap.avoid`: else the path is
+        planned again through it, leg, turn, no move, for 94 s (living room seed 24, exact
+        encoders, by the stairs)."""
         away = self._map.drops.away(self._pose)
         if away is None:
             return False
@@ -1119,10 +1119,10 @@ class Cover(Action):
 
         Why: an edge ends by the floor it finds (:data:`_EDGE_NO_YIELD_MM` of path) or after
         ``edge_time``, and neither comes to a robot that does not move. Living room seed 22
-        (exact encoders) stood 180 s with its side against the plant, the wheels driven and
-        held, no bump (session 38); the apartment, seed 0 with 1.5 % error, turned in place
+        (exact encoders) would stand 180 s with its side against the plant, the wheels
+        driven and held, no bump; the apartment, seed 0 with 1.5 % error, would turn in place
         for two edges of 180 s each among the stairs' drops on its map, each a wall to the
-        edge whichever way it faced (the 376 s without new floor of session 37)."""
+        edge whichever way it faced (376 s without new floor)."""
         x, y, angle, turned, since = self._edge_mark
         if math.hypot(odo.x_mm - x, odo.y_mm - y) > driving.PROGRESS_MM:
             self._edge_mark = (odo.x_mm, odo.y_mm, odo.angle_rad, odo.angle_rad, now)

@@ -24,12 +24,12 @@ driving leaves' shared helpers (:mod:`.driving`: ``WHEEL``, ``cycle_may_run``,
 ``left_driving_message``) and the guard's memo of pure conditions (:mod:`.frame_inputs`:
 ``FrameInputs``); ``roomba_bt.behaviours`` names the ones a plugin needs.
 
-Every other public name this module's namespace held at e80f20a (the release before
-session 28) still imports from here, as the very object its home defines: a plugin written
-then imported what it found here (``InvalidStatus``, ``Snapshot``, ``SensorFrame``,
-``DRIVING_MODES``, ``halt``...), not only what was defined here. Each is in :data:`MOVED`
-and warns (a DeprecationWarning naming its home) until 0.3.0 drops it;
-tests/test_moved_names.py holds the whole list, so a name dropped fails a test, not a plugin.
+Every other public name this module's namespace held in 0.1.0 still imports from here, as
+the very object its home defines: a plugin written then imported what it found here
+(``InvalidStatus``, ``Snapshot``, ``SensorFrame``, ``DRIVING_MODES``, ``halt``...), not only
+what was defined here. Each is in :data:`MOVED` and warns (a DeprecationWarning naming its
+home) until 0.3.0 drops it; tests/test_moved_names.py holds the whole list, so a name
+dropped fails a test, not a plugin.
 """
 
 from __future__ import annotations
@@ -55,9 +55,9 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.printable import CONTROL, yaml_written
 from roomba_bt.yamlsource import character_name, quoted
 
-#: The names this module offered that other modules define (each -> its module): moved in
-#: session 28, or only imported here for a declaration's use then, and so found here by
-#: plugins written before (``InvalidStatus`` from lean, ``Snapshot`` from robot.interface,
+#: The names this module offered in 0.1.0 that other modules define (each -> its module):
+#: moved since, or only imported here for a declaration's use then, and so found here by
+#: plugins written for it (``InvalidStatus`` from lean, ``Snapshot`` from robot.interface,
 #: the modules ``logging``...). Each still gives the very object, with a DeprecationWarning
 #: naming its home until 0.3.0 (tests/test_moved_names.py holds the whole list of 0.1.0's).
 MOVED: dict[str, str] = {
@@ -540,8 +540,8 @@ def _powers_down(sends: tuple[int, ...]) -> str | None:
     opcode table's ``Effect.POWER_DOWN``), or None. The robot goes to sleep in Passive and
     its stream stops: the run saw a lost cable (CONNECTION LOST, exit 8, "the robot may have
     moved") where a leaf had sent it, and no leaf after it could run. roomba-bt never sends
-    Power (docs/protocol.md); decided in session 36: refused when declared, not said at the
-    run's end as Stop and Reset are: asleep, the robot answers nothing until it is woken (a
+    Power (docs/protocol.md). Refused when declared, not said at the run's end as Stop and
+    Reset are: asleep, the robot answers nothing until it is woken (a
     BRC pulse, its button), and no mission needs it (its safe stop ends in Passive)."""
     for opcode in sends:
         spec = COMMANDS.get(opcode)
@@ -634,8 +634,8 @@ def _kind_problem(kind: str, cls: type) -> str | None:
     """What is wrong with declaring ``cls`` as ``kind``, or None: a condition is a
     :class:`Condition` and an action an :class:`Action`. The validator believes ``kind``
     (only conditions in a guard, only actions may send), and the runtime the class (an
-    Action's halt, a Condition's short tick): a class of the other kind passed both and ran
-    as neither (session 27)."""
+    Action's halt, a Condition's short tick): a class of the other kind would pass both and
+    run as neither."""
     kinds = {
         "condition": (Condition, "a condition", "its check() says whether it holds"),
         "action": (Action, "an action", "its update() returns a Status"),

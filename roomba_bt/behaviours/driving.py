@@ -117,9 +117,9 @@ def needs_mode_message(what: str, needs: frozenset[OIMode], snap: Snapshot) -> s
     only ``needs`` take while the robot, as ``snap`` has it, is in another mode: the mode,
     since when and why when its fall by itself put it there (the run places the fall in
     mission time), and the fix; on a powered charger that refused Safe, what to do there. A
-    ``turn`` that started after a wheel drop had dropped the robot to Passive sent nothing
-    and waited for ever, its run ending at ``--timeout`` with "ran out in turn", no word of
-    Passive (maker finding 2, session 32): failing lets a ``retry`` or a fallback put the
+    ``turn`` that waited instead, started after a wheel drop had dropped the robot to
+    Passive, would send nothing and wait for ever, its run ending at ``--timeout`` with "ran
+    out in turn", no word of Passive: failing lets a ``retry`` or a fallback put the
     robot back in Safe and go on."""
     change = snap.last_fallback
     why = ""

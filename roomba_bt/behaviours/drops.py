@@ -4,15 +4,14 @@ it keeps off them afterwards.
 Why it matters: in Safe mode (``clean.yaml``'s default) a cliff seen while the robot drives
 forward makes the firmware stop the wheels and the brushes and drop to Passive, each time
 with the front caster over the edge; ``cover`` fails in that tick and the mission's retry
-starts it again (docs/routines.md). Until session 27 ``cover`` marked three cells 23 cm
-ahead of the body at a cliff and took them for a bump. Its edge, with no wall on its right
-along a staircase (the light bumper sees no surface over a drop), curved right into the
-drop again every 20 cm (back 6 cm, 60 deg left, a 24 cm curve to the right, cliff), and
-again on every later edge along it; lanes and paths met it wherever those few cells were
-not: 12 to 30 falls in a 15-minute clean of the apartment, the first 16 within 90 s of one
-start.
+starts it again (docs/routines.md). Marking only three cells 23 cm ahead of the body at a
+cliff and taking them for a bump is not enough: the edge, with no wall on its right along
+a staircase (the light bumper sees no surface over a drop), curves right into the drop
+again every 20 cm (back 6 cm, 60 deg left, a 24 cm curve to the right, cliff), and again on
+every later edge along it; lanes and paths meet it wherever those few cells are not: 12 to
+30 falls in a 15-minute clean of the apartment, the first 16 within 90 s of one start.
 
-What it does now::
+What it does::
 
     a cliff sensor sees a drop      a point where the sensor is (packets 9-12, the profile's
                                     CLIFF_SENSOR_ANGLES_DEG, 150 mm out, + 20 mm), its cell

@@ -15,11 +15,11 @@ closer) give the wheel speeds (mm/s)::
                                           sight (centre signal 200 and up: an inside corner)
 
 The turn in place is the one steering decision that reverses a wheel (the left one). Taken
-and left on one threshold, as until session 26, it flipped with a hard right every 15-45 ms
-along a wall met at a shallow angle: the centre signal hovered at 900, one tick of turning
-took it below, one tick of the PD steering right brought it back (118 reversals a minute in
-the apartment, two thirds of them within 0.1 s of the same wheel's last). The simulator
-has no acceleration limit, so it cost nothing there; on a Create 2 each flip reverses a
+and left on one threshold, it flips with a hard right every 15-45 ms along a wall met at a
+shallow angle: the centre signal hovers at 900, one tick of turning takes it below, one
+tick of the PD steering right brings it back (118 reversals a minute in the apartment, two
+thirds of them within 0.1 s of the same wheel's last). The simulator has no acceleration
+limit, so it costs nothing there; on a Create 2 each flip reverses a
 wheel motor (gearbox strain, current spikes, a robot that shudders along the wall). A real
 light bumper's signal is noisier than the simulator's and depends on the surface (the OI
 spec gives strength only, 0-4095, no distance), which makes one threshold chatter more, not

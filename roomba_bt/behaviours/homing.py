@@ -323,9 +323,9 @@ class HomeByMap(Action):
 def latest_beams(beams: dict[Cell, float]) -> set[Cell]:
     """The beam cells seen within :data:`RECENT_BEAMS_MM` of path before the last sighting
     (``beams``: each cell's path when last seen): the ones the pose has drifted least from
-    since. With exact encoders every beam cell is where the beams are; the nearest of all
-    was the goal until session 27, and with the encoders' error it was often one seen early
-    in the run, by a pose since drifted by metres."""
+    since. With exact encoders every beam cell is where the beams are; not the nearest of
+    all, which with the encoders' error is often one seen early in the run, by a pose since
+    drifted by metres."""
     last = max(beams.values())
     return {cell for cell, seen in beams.items() if seen >= last - RECENT_BEAMS_MM}
 
@@ -372,7 +372,7 @@ _AROUND = tuple(
 def _beside_drop(cells: Any, cell: Cell) -> bool:
     """Is ``cell``, or a cell beside it, a drop's? A path across blocked cells keeps the
     robot's centre a cell off a known drop (a centre beside one puts a cliff sensor over it:
-    session 27's review found such a path along the stairs' edge, 70 mm from it)."""
+    a path along the apartment stairs' edge would pass 70 mm from it)."""
     return any(cells[cell + d] & DROP for d in _AROUND)
 
 

@@ -440,8 +440,8 @@ class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
 
         Written out again, not shared with the sequence's: CPython specializes a code
         object's attribute reads for the one class it sees, and one function ticking both
-        classes measured 2,900 more instructions a dock tick (``bench.tick_replay --icount``,
-        session 11); this is the hottest path of the tree."""
+        classes measured 2,900 more instructions a dock tick (``bench.tick_replay --icount``);
+        this is the hottest path of the tree."""
         child = self.current_child
         if (
             child is None

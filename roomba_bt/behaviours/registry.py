@@ -345,9 +345,9 @@ class Registry:
         """Register what an entry point or a plugin file provides (class, sequence of
         classes, or module); each class that declares itself wrongly, and each item of a list
         that is no behaviour class, becomes a recorded :class:`PluginError` naming it and
-        where it is, and the others still load (one bad class dropped the rest of its module;
-        until session 37 one such item refused its whole list, good classes and all, though a
-        class of the list that declared itself wrongly was refused alone). ``said_as``: the
+        where it is, and the others still load (not one bad class dropping the rest of its
+        module, nor one bad item of a list its good classes, as a class of the list that
+        declared itself wrongly is refused alone). ``said_as``: the
         origin the errors name, when it is not ``origin``; ``entry``: the entry point that
         provides them (its name is among each error's :attr:`PluginError.names`; its
         distribution, the package a mission may name them by)."""

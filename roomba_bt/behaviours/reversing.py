@@ -4,13 +4,13 @@ only over floor just driven, never onto a known drop.
 Why: a Create 2 sees nothing behind it (no bumper, no cliff sensor behind the wheels), and
 ``cover`` backs up in four places (off a bump, a cliff or a virtual wall's beam; off one
 along an edge; started again after the firmware's stop at a cliff; before the arc onto the
-next lane, up to 18 cm of room for its radius). Backing blind, the arc dropped a wheel
-down the apartment's stairs (living room, seed 8, 1.5 % encoder error, in both one and two
-passes, session 36): a lane that ended where it began, at a drop its drifted map had on the
-wrong side, after a turn in place, and the arc's 18 cm back went over the real edge behind.
+next lane, up to 18 cm of room for its radius). Backing blind, the arc drops a wheel down
+the apartment's stairs (living room, seed 8, 1.5 % encoder error, in both one and two
+passes): a lane that ends where it began, at a drop its drifted map has on the wrong side,
+after a turn in place, and the arc's 18 cm back goes over the real edge behind.
 ``home_by_map`` keeps the same :class:`~.coverage_map.Bearings` and backs up by the same
-rule (each of its legs begins with a turn in place: a beam's or a wedge's 10 cm back went
-over floor it had not driven).
+rule (each of its legs begins with a turn in place: a beam's or a wedge's 10 cm back would
+go over floor it had not driven).
 
 What a back-off may cover now::
 

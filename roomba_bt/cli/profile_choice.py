@@ -19,7 +19,7 @@ connect (:func:`roomba_bt.cli.links.auto_profile`); a command that talks to no r
 default. A name that is no profile is a usage error naming the variable, or the project
 file and line, and the names allowed.
 
-The library reads neither (decided, session 31): ``Connection.open``, ``load_mission`` and
+The library reads neither: ``Connection.open``, ``load_mission`` and
 ``RunStack`` take the model from their ``profile=`` argument, ``create2`` when none is given,
 so a program does the same in any shell and any folder (a CI job's ``ROOMBA_BT_PROFILE``
 meant for the command line, a ``pyproject.toml`` in the folder a notebook was started from,

@@ -1128,11 +1128,11 @@ def _recorded_mission(
 ) -> str | int:
     """The mission file a replay compiles: ``--mission`` (``given``), else the record's own,
     a path or a shipped mission's name (``roomba-bt:dock.yaml``, what a record of ``run
-    dock`` holds since session 29). A record made before holds a shipped mission's path in the
-    installation that made it (``.../site-packages/roomba_bt/missions/dock.yaml``), which a
+    dock`` holds). An older record holds a shipped mission's path in the installation that
+    made it (``.../site-packages/roomba_bt/missions/dock.yaml``), which a
     moved venv, a new Python or another machine lacks: this installation's shipped mission of
-    that name is replayed, and said so (its changes since are said as any file's are). It
-    said "not found; pass --mission dock", and an old record of ``run dock`` was refused on
+    that name is replayed, and said so (its changes since are said as any file's are), rather
+    than "not found; pass --mission dock", which would refuse an old record of ``run dock`` on
     every machine but the one that made it. An exit code after saying what is missing."""
     from roomba_bt import __version__
     from roomba_bt.mission.shipped import SHIPPED_PREFIX
@@ -1200,11 +1200,11 @@ def _shipped_file_replayed(
 
 def _from_the_record(record_path: str, header: dict[str, Any]) -> object:
     """The header's mission as a path a replay opens: one relative to the record's folder
-    (``../missions/dock.yaml``, what ``run --record`` writes since session 29) from there, or,
+    (``../missions/dock.yaml``, what ``run --record`` writes) from there, or,
     where the record was moved away from it, its absolute path when recorded (``mission_path``),
-    said on stderr; else as the header says it (a shipped name, a path of a record made
-    before). Relative paths were absolute ones, and a record committed beside its missions
-    was "not found" in every other checkout."""
+    said on stderr; else as the header says it (a shipped name, an older record's path).
+    Relative, so that a record committed beside its missions is found in every other
+    checkout."""
     from roomba_bt.runtime.recording import MISSION_AT, header_text, recorded_path
 
     named = header.get("mission")

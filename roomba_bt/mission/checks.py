@@ -699,8 +699,8 @@ def _still_running(parallel: Node, index: int) -> list[Node]:
     composite or decorator of such) has ended on that tick too, one way or the other: so
     when every other branch waited for is one, the parallel ends on the very tick this one
     succeeds (all succeeded) or has failed before, and nothing is started over
-    (``[drive 20 cm, inverter: {cliff: any}]``, the docs' cliff watcher before session
-    28). A branch the parallel does not wait for (not ``selected``) keeps nothing running,
+    (``[drive 20 cm, inverter: {cliff: any}]``, the cliff watcher 0.1.0's docs advised). A
+    branch the parallel does not wait for (not ``selected``) keeps nothing running,
     and one that could not be built is not known to: its own error is said."""
     return [
         parallel.children[i]
@@ -967,8 +967,8 @@ def pushes_on_walls(root: Node, modes: ModeCheck) -> list[Diagnostic]:
     watch of :func:`blind_in_full`, pointed at :data:`~roomba_bt.mission.ticks.OBSTACLES`).
     Neither mode stops the wheels at a bump: such a drive meets a wall and pushes on it at
     its speed until something else ends it (docs/missions.md's ``held`` example, guarded
-    by the battery alone, pushed on the apartment's first wall for the 2 hours of ``--fast``
-    in session 37)."""
+    by the battery alone, would push on the apartment's first wall for the 2 hours of
+    ``--fast``)."""
     warnings: list[Diagnostic] = []
     seen: set[tuple[str, int, int]] = set()
     pending = [(root, False)]
@@ -1010,8 +1010,8 @@ def _enters_full(decl: Declaration, params: Mapping[str, Any]) -> bool:
     """Whether a leaf's own commands with ``params`` include Full (132, by the opcode
     table's ``leads_to``): one that sends Full and then drives runs its drive in Full
     whatever mode it was entered in, and the mode check's ``entered`` (the modes before it)
-    does not show it (session 36: a plugin's ``sends=opcodes("full", "drive")`` was not
-    warned; the same drive after ``mode: full`` was)."""
+    does not show it (without this, a plugin's ``sends=opcodes("full", "drive")`` would go
+    unwarned where the same drive after ``mode: full`` is warned)."""
     return any(COMMANDS[op].leads_to is OIMode.FULL for op in decl.sent(params))
 
 

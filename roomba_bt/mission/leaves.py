@@ -321,8 +321,8 @@ def leaf_name(
 
     One name for one meaning, however the file wrote it: the parameters in the order the
     declaration gives them (not the file's), and the primary one alone in the short form
-    (``turn: {angle: 45deg}`` is ``turn(45deg)``, as ``turn: 45deg``; until session 36 the
-    one was ``turn(angle=45deg)``). A parameter that declares which way each sign goes
+    (``turn: {angle: 45deg}`` is ``turn(45deg)``, as ``turn: 45deg``, not
+    ``turn(angle=45deg)``). A parameter that declares which way each sign goes
     (:attr:`Param.signs`) says it after the value (``params``, the values read): ``turn(
     -45deg right)``, ``turn(90deg left)``, so a negative angle reads without the convention
     at hand."""

@@ -550,8 +550,8 @@ class NodeParser:
             self._parse_alone(sub, self.global_env)
 
 
-#: What an unknown node's error says is allowed when no known word is close to it (session
-#: 37's stranger read ``unknown node 'wander'`` and found no word of where they are listed).
+#: What an unknown node's error says is allowed when no known word is close to it (``unknown
+#: node 'wander'`` alone says nothing of where the words are listed).
 _WHAT_IS_ALLOWED = "; roomba-bt behaviours lists the actions and conditions there are"
 
 

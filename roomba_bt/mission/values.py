@@ -51,9 +51,8 @@ _FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
 #: (which users know): ``$$``, one literal ``$`` anywhere (so ``$${x}`` is the text ``${x}``,
 #: and ``$$${x}`` a ``$`` and then x's value: a price); ``${name}``, a parameter (group 1);
 #: or a ``${`` that starts neither, unterminated or not a name (group 1 None): an error in
-#: a value. A ``$`` before anything else is itself. (In session 28 before this, ``$${`` was
-#: the escape and ``$$`` elsewhere two dollars, so no ``$`` could come right before a value;
-#: at e80f20a, ``$${x}`` was a ``$`` and x's value: :func:`escaped_parameters` warns.)
+#: a value. A ``$`` before anything else is itself. (0.1.0 read ``$${x}`` as a ``$`` and
+#: x's value: :func:`escaped_parameters` warns where a mission may mean that.)
 _PLACEHOLDER = re.compile(r"\$\$|\$\{(?:([A-Za-z_][A-Za-z0-9_]*)\})?")
 _DOLLAR = "$$"
 #: a parameter's ``{name}`` right after a ``$$``: the text ``${name}``
@@ -87,7 +86,7 @@ def parameters_used(text: str) -> list[str]:
 def escaped_parameters(text: str, names: Collection[str]) -> list[tuple[int, str]]:
     """Each ``$${name}`` in ``text`` whose name is one of ``names`` (the parameters in
     scope): its place and the name. The text ``${name}`` now, it was a ``$`` and the value
-    before session 28 (e80f20a), and such a mission validated and ran with another text:
+    in 0.1.0, and such a mission validates and runs with another text than its author's:
     what :func:`escape_warning` says."""
     found = []
     for match in _PLACEHOLDER.finditer(text):

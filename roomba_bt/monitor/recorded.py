@@ -179,8 +179,8 @@ class QuietReplayStart(_OnLogger):
     streaming [...]``, a mode change by itself) kept off stderr while a record is replayed
     (``replay``, ``monitor RECORD``: :func:`replay_judged`): the summary, the page and its
     banner say them, and a user replaying a record wants a quiet terminal unless something
-    is wrong (docs/monitor.md and docs/runtime.md say what stderr shows; ``replay`` printed
-    the banner for every record until session 39). A warning or worse is said as before,
+    is wrong (docs/monitor.md and docs/runtime.md say what stderr shows), not the banner
+    for every record. A warning or worse is said as before,
     and so is everything at ``-v``."""
 
     LOGGER = "roomba_bt.robot.connection"

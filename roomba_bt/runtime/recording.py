@@ -878,10 +878,10 @@ MISCOUNT = (
 )
 #: What ``replay`` says of a record whose end note of a Ctrl-C or signal that came in a stall
 #: the watchdog rode (after the last frame's tick, the watchdog's drive 0 written since)
-#: counts nothing (``{before}``: the bytes its run wrote before its stop): until session
-#: 39's fix (2e6d3655) such an interrupt was noted without :data:`WRITTEN`, and its replay
-#: ended at the tick, its stop compared with the watchdog's drive 0: "first difference ...
-#: expected Drive (137) 89 00 00 00 00, sent Motors (138) 8a 00", exit 1
+#: counts nothing (``{before}``: the bytes its run wrote before its stop): an older release
+#: noted such an interrupt without :data:`WRITTEN`, and its replay would end at the tick,
+#: its stop compared with the watchdog's drive 0: "first difference ... expected Drive (137)
+#: 89 00 00 00 00, sent Motors (138) 8a 00", exit 1
 UNCOUNTED = (
     "the end note counts no bytes written when the recorded run was interrupted in a stall "
     "its watchdog rode: a known miscount of records made before roomba-bt 0.2.0 (they "

@@ -29,8 +29,8 @@ if TYPE_CHECKING:
 DEFAULT_GRACE = 2.0
 #: The summary's ``safe stop`` first words for a stop written to a robot asleep whose frames
 #: had shown it stopped before it slept (a long pause on a link without keep-awake): it does
-#: not move, and "NOT DELIVERED:" in capitals is kept for a robot that may (decided, session
-#: 39; the exit code is the lost connection's all the same: the run ended on the sleep)
+#: not move, and "NOT DELIVERED:" in capitals is kept for a robot that may (the exit code is
+#: the lost connection's all the same: the run ended on the sleep)
 ASLEEP_STOPPED = "asleep and stopped"
 #: ... and for any other stop not known delivered (the port gone, the robot silent, the port
 #: failed while the stop was listened after) to a robot whose frames, sent after every

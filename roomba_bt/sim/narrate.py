@@ -33,8 +33,8 @@ _TEXT_WIDTH = 60
 #: why bytes the robot awake ignored were ignored
 NO_OPCODE = "no opcode, or sent at another baud rate"
 #: why bytes a robot asleep (the five-minute Passive sleep, ``sim --asleep``) ignored were:
-#: it was said as :data:`NO_OPCODE` of a run's start-up sent to it (session 37), which sent
-#: its user looking at the baud rate of a robot that only slept
+#: not :data:`NO_OPCODE`, which would send a run's user looking at the baud rate of a robot
+#: that only slept
 ASLEEP = (
     "the robot is asleep, deaf to the line until a BRC pulse wakes it (on a pty a hang-up: "
     "roomba-bt doctor or run --baud auto gives one)"

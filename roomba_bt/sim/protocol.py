@@ -242,12 +242,12 @@ class OIProtocol(StreamOutput):
     def _command_mode(self, spec: CommandSpec) -> None:
         """The mode ``spec`` leads to, the wheels stopped and a cycle ended on the way,
         but for Start (128) in Passive while a cycle runs or is paused: it changes nothing.
-        Decided (session 30, docs/protocol.md "What ends a built-in cycle"): neither spec
+        Why (docs/protocol.md "What ends a built-in cycle"): neither spec
         says Start ends a cycle, and Passive is where the robot runs one ("watch Roomba
         perform a cleaning cycle"); Safe and Full end it ("Roomba waits with all motors and
         LEDs off"), Power, Stop and Reset turn the OI off or asleep. The robot layer never
-        relied on Start (it sends Safe first); the simulator ended the cycle at Start, which
-        hid a stop that ended a cycle by Start alone."""
+        relies on Start (it sends Safe first); a simulator that ended the cycle at Start would
+        hide a stop that ended a cycle by Start alone."""
         target = spec.leads_to
         assert target is not None
         if (
@@ -426,9 +426,9 @@ class OIProtocol(StreamOutput):
     def _on_play(self, args: bytes) -> None:
         """Play (141): packets 36/37 show the song for its length. A slot never defined is
         ignored (both specs: "you must add one or more songs ... for the Play command to
-        work"), and so is a Play while a song plays (decided, session 32: the 600 and 500
-        specs are silent, the original Create OI spec says "this command does not work if a
-        song is already playing"; docs/protocol.md), said as event ``refused``."""
+        work"), and so is a Play while a song plays (the 600 and 500 specs are silent, the
+        original Create OI spec says "this command does not work if a song is already
+        playing"; docs/protocol.md), said as event ``refused``."""
         song = self.songs.get(args[0])
         if song is None:
             return

@@ -307,9 +307,9 @@ class World:
 
     def pose_is_free(self, pose: Pose, clearance: float = ROBOT_RADIUS_MM) -> bool:
         """The robot fits here: on the floor, no wall within its radius (touching one fits:
-        :data:`TOUCHING_MM`), not over a drop. Decided (session 30): the docked pose, the
-        bumper on the plate, is a start pose; 0.17 m from a wall was refused and 0.171 m
-        taken."""
+        :data:`TOUCHING_MM`), not over a drop. So the docked pose, the bumper on the plate,
+        is a start pose (without the touching allowance 0.17 m from a wall would be refused
+        and 0.171 m taken)."""
         if not self.on_floor(pose.x, pose.y) or self.over_drop(pose.x, pose.y):
             return False
         limit = (clearance - TOUCHING_MM) ** 2

@@ -487,8 +487,8 @@ class DockApproach(DockingAction):
         omni first saw the band overshot the axis by up to 12 cm, and the robot crossed back
         and forth without ever landing in the band). The edges the turn swept the omni over
         count as seen on this line (:func:`_swept_to_crossing`), so it drives on to the axis
-        rather than back over floor it never drove (session 39: 39 of 283 crossings from
-        fresh empty-room starts backed up, up to 12 cm); only when the turn saw no near edge
+        rather than back over floor it never drove (backing up, 39 of 283 crossings from fresh
+        empty-room starts went back up to 12 cm); only when the turn saw no near edge
         (its side remembered from before) does it back up to find one.
         """
         s = snap.odometry.distance_mm - self._distance_mark
