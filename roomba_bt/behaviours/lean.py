@@ -305,19 +305,12 @@ class Stepped(Direct):
         yield typing.cast(Behaviour, self)
 
     def tick_direct(self) -> None:
-        index = self.tick_start()
-        children = self.children
-        while index != DONE:
-            child = children[index]
-            if isinstance(child, Direct):  # by its direct path when it has one
-                child.tick_direct()
-            else:
-                tick_generator(child)
-            index = self.tick_next(index)
+        self.tick_steps(self.tick_start())
 
     def tick_steps(self, index: int) -> None:
-        """The rest of :meth:`tick_direct` from the child at ``index`` (a shortcut that has
-        ticked a child and called ``tick_next`` goes on with the steps from there)."""
+        """The steps from the child at ``index`` on, each child ticked by its direct path
+        when it has one: the whole tick from ``tick_start``'s child (:meth:`tick_direct`), or
+        the rest of it where a shortcut has ticked a child and called ``tick_next``."""
         children = self.children
         while index != DONE:
             child = children[index]
