@@ -116,6 +116,7 @@ def is_world_file(path: Path) -> bool:
     import yaml
 
     from roomba_bt import yamlsource
+    from roomba_bt.mission.loader import are_world_keys
 
     try:
         text = yamlsource.read_text(path)
@@ -131,7 +132,7 @@ def is_world_file(path: Path) -> bool:
         if not isinstance(root, yaml.MappingNode):
             return False
         keys = {key.value for key, _ in root.value if isinstance(key, yaml.ScalarNode)}
-    return "rooms" in keys and "tree" not in keys
+    return are_world_keys(keys)
 
 
 def world_warnings_text(warnings: Sequence[WorldProblem]) -> list[str]:

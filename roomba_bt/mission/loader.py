@@ -41,7 +41,7 @@ import itertools
 import os
 import re
 import unicodedata
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
@@ -1259,13 +1259,18 @@ def _unreadable(target: Path) -> str | None:
     return None
 
 
+def are_world_keys(keys: Collection[str]) -> bool:
+    """A file's top-level ``keys`` are a simulator world's (sim/world.py), not a mission's:
+    ``rooms:`` and no ``tree:`` (no mission has a ``rooms`` section). The one rule of the
+    loader and of ``validate``, which checks such a file as a world."""
+    return "rooms" in keys and "tree" not in keys
+
+
 def _is_world(root: yaml.Node) -> bool:
-    """A mapping with ``rooms:`` and no ``tree:``: a simulator world (sim/world.py), not a
-    mission (no mission has a ``rooms`` section)."""
+    """A mapping whose keys are a world's (:func:`are_world_keys`)."""
     if not isinstance(root, yaml.MappingNode):
         return False
-    keys = {key.value for key, _ in root.value if isinstance(key, yaml.ScalarNode)}
-    return "rooms" in keys and "tree" not in keys
+    return are_world_keys({key.value for key, _ in root.value if isinstance(key, yaml.ScalarNode)})
 
 
 def _a_library(resolved: Path, path: Path) -> str:
