@@ -490,8 +490,8 @@ def _ends_after_the_last_words(signum: int, frame: FrameType | None) -> None:
 
     No lock: a handler runs in the main thread, between two bytecodes of whatever ran
     there, this handler too, so a second signal's handler can run inside the first's. With
-    a lock it waited for ever for the one the first held (a verifier's three SIGTERMs sent
-    together as a summary printed: 3 of 6 processes never exited). The mark is made before
+    a lock it would wait for ever for the one the first held (three SIGTERMs sent together
+    as a summary prints: 3 of 6 processes never exit). The mark is made before
     anything that can be interrupted; at worst two timers start, and the first ends it."""
     if _LAST_WORDS:
         return

@@ -3,7 +3,7 @@ or a Python call's arguments (for connections what ``mission/wording.py`` is for
 
 A message about keep-awake says how to turn it off (or leave it on) and where the longer
 story is. ``roomba-bt run``'s user types ``--no-keep-awake`` and ``-v``; a program passes
-``keep_awake=False`` and has no ``-v``, and was told both (an embedder's report). The robot
+``keep_awake=False`` and has no ``-v``: told both, neither reads as its own. The robot
 layer cannot take the mission layer's :class:`~roomba_bt.mission.wording.Wording` (it sits
 below it), and a connection is made far from the command that knows whose it is (inside a
 ``RunStack``, ``doctor``, ``sensors``): the process's command sets :data:`current` for as
