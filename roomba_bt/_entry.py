@@ -2,10 +2,10 @@
 the ending signals taken before anything heavy is imported.
 
 The command line's module (argparse, logging, the streams' guard, the wording) takes from 30
-ms on an idle machine to a second on a loaded one to import, and its handlers were put in
-only once it had loaded: until then a SIGTERM ended the process with 143, a script's ``kill
--INT $!`` (SIGINT ignored at start in a shell's background job) was lost and the whole
-mission ran, and a terminal's Ctrl-C printed Python's own traceback. This module imports
+ms on an idle machine to a second on a loaded one to import, and handlers put in only once
+it has loaded leave that time open: a SIGTERM would end the process with 143, a script's
+``kill -INT $!`` (SIGINT ignored at start in a shell's background job) be lost and the whole
+mission run, and a terminal's Ctrl-C print Python's own traceback. This module imports
 only ``sys`` and ``_signal`` (the C module under ``signal``, which Python itself loaded as
 it started: ``signal`` imports ``enum``, ``functools`` and ``collections``, 15 ms and more
 where nothing else had loaded them), and the top package before it, which drops the current

@@ -1,13 +1,13 @@
 """The command's own stdout and stderr, made so that writing to them never ends a command.
 
 Over SSH, from cron, under systemd or into a pipe, the streams fail in ways a terminal never
-does, and each used to end the command at the first ``print``, before or after the run, with
-the wrong exit code: ``| head -5`` closed the pipe (``BrokenPipeError``: exit 0 for a mission
-that never connected, an invalid mission, a replay that differs), ``> /dev/full`` filled the
-disk (``OSError`` traceback, exit 1), ``>&-`` left ``sys.stdout`` None (py_trees read its
-``encoding`` at import: an ``AttributeError`` traceback in every subcommand), and an ASCII or
-Latin-1 stdout could not encode the report's ``✓`` or ``m²`` (``UnicodeEncodeError`` after a
-run that succeeded: exit 1).
+does, and each, unguarded, ends the command at the first ``print``, before or after the
+run, with the wrong exit code: ``| head -5`` closes the pipe (``BrokenPipeError``: exit 0 for
+a mission that never connected, an invalid mission, a replay that differs), ``> /dev/full``
+fills the disk (``OSError`` traceback, exit 1), ``>&-`` leaves ``sys.stdout`` None (py_trees
+reads its ``encoding`` at import: an ``AttributeError`` traceback in every subcommand), and
+an ASCII or Latin-1 stdout cannot encode the report's ``✓`` or ``m²`` (``UnicodeEncodeError``
+after a run that succeeded: exit 1).
 
 :func:`guard_std_streams` wraps both in a :class:`GuardedStream`: a write that fails is noted
 (:attr:`GuardedStream.failure`), the stream's file descriptor is pointed at ``os.devnull`` (so
